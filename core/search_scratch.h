@@ -1,0 +1,92 @@
+// Per-thread search memory reused across queries. Each cell's record carries
+// the id of the search that last wrote it, so starting a new search costs O(1)
+// instead of clearing O(map) memory; memory grows only for a larger map.
+#ifndef PATHD_CORE_SEARCH_SCRATCH_H_
+#define PATHD_CORE_SEARCH_SCRATCH_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace pathd {
+
+// Not thread-safe: one per worker thread (or per caller).
+class SearchScratch {
+ public:
+  static constexpr uint32_t kNoParent = std::numeric_limits<uint32_t>::max();
+  static constexpr int32_t kNotInOpen = -1;
+  static constexpr int32_t kClosed = -2;
+
+  struct Node {
+    double g;
+    uint32_t search_id;
+    uint32_t parent;
+    // Position in the open list, kNotInOpen or kClosed.
+    int32_t open_pos;
+    uint32_t moves;  // number of moves from the root (BFS depth, tie data)
+  };
+
+  // Entry of the open list; f and g are copied in for cache locality.
+  struct OpenEntry {
+    double f;
+    double g;
+    uint32_t index;
+  };
+
+  SearchScratch() = default;
+  SearchScratch(const SearchScratch&) = delete;
+  SearchScratch& operator=(const SearchScratch&) = delete;
+
+  // Starts a new search over `cells` cells. O(1) unless the grid is larger
+  // than any seen before or the 32-bit search id wraps (every 4 billion
+  // searches), in which case the records are reset.
+  void BeginSearch(size_t cells) {
+    if (cells > nodes_.size()) {
+      nodes_.resize(cells, Node{0.0, 0, kNoParent, kNotInOpen, 0});
+    }
+    if (++search_id_ == 0) {
+      for (Node& n : nodes_) n.search_id = 0;
+      search_id_ = 1;
+    }
+    open_.clear();
+    fifo_.clear();
+  }
+
+  // True when the current search has written cell i.
+  bool Seen(size_t i) const { return nodes_[i].search_id == search_id_; }
+
+  // The record of cell i, initialised for this search on first access.
+  Node& At(size_t i) {
+    Node& n = nodes_[i];
+    if (n.search_id != search_id_) {
+      n = Node{std::numeric_limits<double>::infinity(), search_id_, kNoParent,
+               kNotInOpen, 0};
+    }
+    return n;
+  }
+  // Raw access without initialisation; only valid when Seen(i).
+  Node& Raw(size_t i) { return nodes_[i]; }
+  const Node& Raw(size_t i) const { return nodes_[i]; }
+
+  // Storage for the open list (binary heap) and for FIFO queues (BFS).
+  std::vector<OpenEntry>& open() { return open_; }
+  std::vector<uint32_t>& fifo() { return fifo_; }
+
+  // Bytes held, for metrics.
+  size_t MemoryBytes() const {
+    return nodes_.capacity() * sizeof(Node) +
+           open_.capacity() * sizeof(OpenEntry) + fifo_.capacity() * sizeof(uint32_t);
+  }
+  uint32_t search_id() const { return search_id_; }
+
+ private:
+  std::vector<Node> nodes_;
+  std::vector<OpenEntry> open_;
+  std::vector<uint32_t> fifo_;
+  uint32_t search_id_ = 0;
+};
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_SEARCH_SCRATCH_H_
