@@ -51,6 +51,20 @@ absl::StatusOr<std::vector<Scenario>> ParseMovingAiScenarios(std::string_view te
                                                              std::string_view source);
 absl::StatusOr<std::vector<Scenario>> ReadMovingAiScenarioFile(const std::string& path);
 
+// A whole scenario file. The version ("1" or "1.0") decides how precise the
+// stored lengths are; pass it to ScenarioTolerance.
+struct ScenarioFile {
+  std::string version;
+  std::vector<Scenario> scenarios;
+};
+
+// As ParseMovingAiScenarios / ReadMovingAiScenarioFile, also returning the
+// header's version.
+absl::StatusOr<ScenarioFile> ParseMovingAiScenarioFile(std::string_view text,
+                                                       std::string_view source);
+absl::StatusOr<ScenarioFile> ReadMovingAiScenarioFileWithVersion(
+    const std::string& path);
+
 // Tolerance for comparing a computed optimal length with the stored one, per
 // the benchmark README: bg512 ("version 1.0") 2 decimals; 8-decimal files
 // 1e-6; otherwise half a unit in the 6th significant digit plus 1e-5.
@@ -77,7 +91,8 @@ absl::StatusOr<RosMapMetadata> ParseRosMapYaml(std::string_view yaml,
 // occupied_thresh -> kLethalCost, p < free_thresh -> kFreeCost, else
 // kUnknownCost; scale: between the thresholds costs 1..252 linearly; raw: the
 // value itself (clamped to 255). Rows are flipped so row 0 is the image's
-// bottom row (OccupancyGrid convention).
+// bottom row (OccupancyGrid convention). Also checks the metadata (resolution,
+// origin, thresholds), since callers may build it without ParseRosMapYaml.
 absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
                                  std::string_view pgm, std::string_view source,
                                  int64_t max_cells = kDefaultMaxReaderCells);

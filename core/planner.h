@@ -113,7 +113,9 @@ class Planner {
 };
 
 // INVALID_ARGUMENT naming "start" or "goal" when one is off the grid or on a
-// cell that is not traversable under request.cost; OK otherwise.
+// cell that is not traversable under request.cost, or naming the field when
+// the cost parameters are invalid (weight negative or not finite,
+// connectivity not 4/8) or the grid is empty or too large to search.
 absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request);
 
 // Measures a cell path: every consecutive pair must be a legal move (adjacent
