@@ -1,0 +1,117 @@
+// Implementation of the pathd client wrappers.
+#include "client/client.h"
+
+#include <utility>
+
+#include "grpcpp/create_channel.h"
+#include "grpcpp/security/credentials.h"
+
+namespace pathd::client {
+namespace {
+
+// Runs one unary call with a fresh deadline. `call` is the stub method bound
+// to its request: (ClientContext*, Response*) -> grpc::Status.
+template <typename Response, typename Call>
+absl::StatusOr<Response> Invoke(absl::Duration timeout, Call&& call) {
+  std::unique_ptr<grpc::ClientContext> context = MakeContext(timeout);
+  Response response;
+  grpc::Status status = std::forward<Call>(call)(context.get(), &response);
+  if (!status.ok()) return FromGrpcStatus(status);
+  return response;
+}
+
+}  // namespace
+
+std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address) {
+  return grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+}
+
+std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout) {
+  auto context = std::make_unique<grpc::ClientContext>();
+  context->set_deadline(absl::ToChronoTime(absl::Now() + timeout));
+  return context;
+}
+
+absl::Status FromGrpcStatus(const grpc::Status& status) {
+  // grpc::StatusCode and absl::StatusCode use the same numbers (both follow
+  // google.rpc.Code), so the cast keeps the code exactly.
+  return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                      status.error_message());
+}
+
+PathdClient::PathdClient(std::shared_ptr<grpc::ChannelInterface> channel,
+                         absl::Duration timeout)
+    : timeout_(timeout),
+      maps_(v1::MapService::NewStub(channel)),
+      planner_(v1::PlannerService::NewStub(channel)),
+      health_(grpc::health::v1::Health::NewStub(channel)) {}
+
+PathdClient::PathdClient(const std::string& address, absl::Duration timeout)
+    : PathdClient(MakeChannel(address), timeout) {}
+
+absl::StatusOr<v1::CreateMapResponse> PathdClient::CreateMap(
+    const v1::CreateMapRequest& request) const {
+  return Invoke<v1::CreateMapResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::CreateMapResponse* response) {
+        return maps_->CreateMap(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::GetMapResponse> PathdClient::GetMap(
+    const v1::GetMapRequest& request) const {
+  return Invoke<v1::GetMapResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::GetMapResponse* response) {
+        return maps_->GetMap(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::ListMapsResponse> PathdClient::ListMaps() const {
+  return Invoke<v1::ListMapsResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::ListMapsResponse* response) {
+        return maps_->ListMaps(context, v1::ListMapsRequest(), response);
+      });
+}
+
+absl::StatusOr<v1::DeleteMapResponse> PathdClient::DeleteMap(
+    const std::string& name) const {
+  v1::DeleteMapRequest request;
+  request.set_name(name);
+  return Invoke<v1::DeleteMapResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::DeleteMapResponse* response) {
+        return maps_->DeleteMap(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::UpdateMapResponse> PathdClient::UpdateMap(
+    const v1::UpdateMapRequest& request) const {
+  return Invoke<v1::UpdateMapResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::UpdateMapResponse* response) {
+        return maps_->UpdateMap(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::PlanResponse> PathdClient::Plan(
+    const v1::PlanRequest& request) const {
+  return Invoke<v1::PlanResponse>(
+      timeout_, [&](grpc::ClientContext* context, v1::PlanResponse* response) {
+        return planner_->Plan(context, request, response);
+      });
+}
+
+absl::StatusOr<grpc::health::v1::HealthCheckResponse> PathdClient::CheckHealth(
+    const std::string& service) const {
+  grpc::health::v1::HealthCheckRequest request;
+  request.set_service(service);
+  return Invoke<grpc::health::v1::HealthCheckResponse>(
+      timeout_, [&](grpc::ClientContext* context,
+                    grpc::health::v1::HealthCheckResponse* response) {
+        return health_->Check(context, request, response);
+      });
+}
+
+}  // namespace pathd::client

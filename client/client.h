@@ -1,0 +1,78 @@
+// A small C++ client for pathd: channel set-up, per-call deadlines, and typed
+// wrappers around the MapService, PlannerService and gRPC health stubs that
+// return absl::StatusOr instead of grpc::Status + out-parameter.
+#ifndef PATHD_CLIENT_CLIENT_H_
+#define PATHD_CLIENT_CLIENT_H_
+
+#include <memory>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "grpcpp/channel.h"
+#include "grpcpp/client_context.h"
+#include "grpcpp/support/status.h"
+#include "pathd/v1/map_service.grpc.pb.h"
+#include "pathd/v1/planner_service.grpc.pb.h"
+
+namespace pathd::client {
+
+// Address pathctl and the client use when none is given.
+inline constexpr char kDefaultServerAddress[] = "127.0.0.1:50051";
+// Deadline of every call unless the caller picks another.
+inline constexpr absl::Duration kDefaultTimeout = absl::Seconds(10);
+
+// Opens a channel to `address` ("host:port", or any gRPC target URI).
+// Insecure for now: TLS and auth tokens arrive with the server's support.
+std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address);
+
+// A context whose deadline is `timeout` from now. Returned by pointer because
+// grpc::ClientContext can be neither copied nor moved.
+std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout);
+
+// The same code (gRPC and Abseil share numbering) and message.
+absl::Status FromGrpcStatus(const grpc::Status& status);
+
+// Typed calls to one pathd server. Every call gets its own deadline of
+// `timeout`. Thread-safe: the stubs are, and the object is immutable after
+// construction.
+class PathdClient {
+ public:
+  explicit PathdClient(std::shared_ptr<grpc::ChannelInterface> channel,
+                       absl::Duration timeout = kDefaultTimeout);
+  // Connects to `address` with MakeChannel.
+  explicit PathdClient(const std::string& address,
+                       absl::Duration timeout = kDefaultTimeout);
+
+  absl::Duration timeout() const { return timeout_; }
+
+  // MapService. Errors are the server's status, see map_service.proto.
+  absl::StatusOr<v1::CreateMapResponse> CreateMap(
+      const v1::CreateMapRequest& request) const;
+  absl::StatusOr<v1::GetMapResponse> GetMap(
+      const v1::GetMapRequest& request) const;
+  absl::StatusOr<v1::ListMapsResponse> ListMaps() const;
+  absl::StatusOr<v1::DeleteMapResponse> DeleteMap(
+      const std::string& name) const;
+  absl::StatusOr<v1::UpdateMapResponse> UpdateMap(
+      const v1::UpdateMapRequest& request) const;
+
+  // PlannerService. "No path" is an OK response with found = false.
+  absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) const;
+
+  // grpc.health.v1.Health/Check; `service` empty asks about the whole server.
+  absl::StatusOr<grpc::health::v1::HealthCheckResponse> CheckHealth(
+      const std::string& service = "") const;
+
+ private:
+  absl::Duration timeout_;
+  std::unique_ptr<v1::MapService::StubInterface> maps_;
+  std::unique_ptr<v1::PlannerService::StubInterface> planner_;
+  std::unique_ptr<grpc::health::v1::Health::StubInterface> health_;
+};
+
+}  // namespace pathd::client
+
+#endif  // PATHD_CLIENT_CLIENT_H_

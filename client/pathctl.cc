@@ -1,0 +1,635 @@
+// Implementation of the pathctl commands.
+#include "client/pathctl.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <span>
+#include <utility>
+
+#include "absl/flags/commandlineflag.h"
+#include "absl/flags/reflection.h"
+#include "absl/status/status.h"
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/strip.h"
+#include "client/map_source.h"
+#include "google/protobuf/util/json_util.h"
+
+namespace pathd::pathctl {
+namespace {
+
+using Args = std::span<const std::string>;
+
+// Largest map `maps get --cells` renders; beyond this ASCII is unreadable and
+// the response would be megabytes.
+constexpr int32_t kMaxRenderWidth = 1024;
+constexpr int64_t kMaxRenderCells = int64_t{1} << 20;
+
+constexpr char kSynopsis[] =
+    R"(usage:
+  pathctl [flags] maps create NAME --from FILE [--replace] [--resolution R]
+  pathctl [flags] maps list
+  pathctl [flags] maps get NAME [--cells]
+  pathctl [flags] maps delete NAME
+  pathctl [flags] maps set NAME X Y COST [--expected_version V]
+  pathctl [flags] maps rect NAME X0 Y0 X1 Y1 COST [--expected_version V]
+  pathctl [flags] plan NAME SX SY GX GY [--planner P] [--connectivity 4|8]
+                       [--cost_weight W] [--unknown_is_free]
+                       [--max_expansions N] [--world]
+  pathctl [flags] health [SERVICE]
+  pathctl --help
+)";
+
+std::string PlannerNames() {
+  std::vector<absl::string_view> names;
+  for (const PlannerName& p : kPlanners) names.push_back(p.name);
+  return absl::StrJoin(names, ", ");
+}
+
+// Shared state of one command run: where output goes and the lazily made
+// client, so usage errors never touch the network.
+class Env {
+ public:
+  Env(const Options& options, std::ostream& out, std::ostream& err)
+      : options_(options), out_(out), err_(err) {}
+
+  const Options& options() const { return options_; }
+  std::ostream& out() { return out_; }
+
+  const client::PathdClient& client() {
+    if (client_ == nullptr) {
+      client_ = std::make_unique<client::PathdClient>(options_.server,
+                                                      options_.timeout);
+    }
+    return *client_;
+  }
+
+  int Usage(absl::string_view problem) {
+    err_ << "error: " << problem << "\n\n"
+         << kSynopsis << "run 'pathctl --help' for details\n";
+    return kExitUsage;
+  }
+
+  int Fail(const absl::Status& status) {
+    err_ << "error: " << absl::StatusCodeToString(status.code()) << ": "
+         << status.message() << "\n";
+    return kExitError;
+  }
+
+  // Prints `message` with protobuf's canonical proto3 JSON mapping. Default
+  // values are printed too, so `"found": false` is visible to scripts.
+  int PrintJson(const google::protobuf::Message& message) {
+    google::protobuf::util::JsonPrintOptions print_options;
+    print_options.add_whitespace = true;
+    print_options.always_print_primitive_fields = true;
+    std::string json;
+    auto status = google::protobuf::util::MessageToJsonString(message, &json,
+                                                              print_options);
+    if (!status.ok()) {
+      return Fail(absl::InternalError(absl::StrCat(
+          "cannot print the response as JSON: ", status.ToString())));
+    }
+    out_ << json;
+    if (json.empty() || json.back() != '\n') out_ << "\n";
+    return kExitOk;
+  }
+
+ private:
+  const Options& options_;
+  std::ostream& out_;
+  std::ostream& err_;
+  std::unique_ptr<client::PathdClient> client_;
+};
+
+absl::Status BadArg(absl::string_view what, absl::string_view text,
+                    absl::string_view expected) {
+  return absl::InvalidArgumentError(
+      absl::StrCat(what, ": '", text, "' is not ", expected));
+}
+
+// Parses args[i] as the integer named names[i].
+absl::StatusOr<std::vector<int32_t>> ParseInts(
+    Args args, std::span<const char* const> names) {
+  std::vector<int32_t> values;
+  for (size_t i = 0; i < args.size(); ++i) {
+    int32_t value = 0;
+    if (!absl::SimpleAtoi(args[i], &value)) {
+      return BadArg(names[i], args[i], "an integer");
+    }
+    values.push_back(value);
+  }
+  return values;
+}
+
+absl::StatusOr<std::vector<double>> ParseDoubles(
+    Args args, std::span<const char* const> names) {
+  std::vector<double> values;
+  for (size_t i = 0; i < args.size(); ++i) {
+    double value = 0;
+    if (!absl::SimpleAtod(args[i], &value) || !std::isfinite(value)) {
+      return BadArg(names[i], args[i], "a finite number");
+    }
+    values.push_back(value);
+  }
+  return values;
+}
+
+// A cost byte, as a number or as the Nav2 name of a special value.
+absl::StatusOr<uint32_t> ParseCost(absl::string_view text) {
+  static constexpr std::pair<absl::string_view, uint32_t> kNamed[] = {
+      {"free", 0}, {"inscribed", 253}, {"lethal", 254}, {"unknown", 255}};
+  for (const auto& [name, cost] : kNamed) {
+    if (text == name) return cost;
+  }
+  uint32_t cost = 0;
+  if (!absl::SimpleAtoi(text, &cost) || cost > 255) {
+    return BadArg("COST", text, "0..255, free, inscribed, lethal or unknown");
+  }
+  return cost;
+}
+
+std::string FormatCell(const v1::Cell& cell) {
+  return absl::StrFormat("(%d,%d)", cell.x(), cell.y());
+}
+
+void PrintMapInfo(std::ostream& out, const v1::MapInfo& info) {
+  out << absl::StrFormat(
+      "name:        %s\n"
+      "size:        %d x %d cells\n"
+      "resolution:  %g m/cell\n"
+      "origin:      (%g, %g) m, yaw %g rad\n"
+      "version:     %d\n"
+      "free cells:  %d\n"
+      "blocked:     %d\n",
+      info.name(), info.width(), info.height(), info.resolution(),
+      info.origin().x(), info.origin().y(), info.origin().yaw(), info.version(),
+      info.free_cells(), info.blocked_cells());
+}
+
+// --- maps ------------------------------------------------------------------
+
+int MapsCreate(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 1) return env.Usage("maps create takes one NAME");
+  if (options.from.empty()) return env.Usage("maps create needs --from FILE");
+  const client::MapFileKind kind = client::DetectMapFileKind(options.from);
+  if (kind == client::MapFileKind::kUnknown) {
+    return env.Usage(
+        absl::StrCat("--from ", options.from,
+                     ": unknown map file type; expected .map (Moving "
+                     "AI) or .yaml/.yml (ROS map_server)"));
+  }
+  if (options.resolution < 0 || !std::isfinite(options.resolution)) {
+    return env.Usage(
+        "--resolution must be a positive number of metres per cell");
+  }
+  if (kind == client::MapFileKind::kRosYaml && options.resolution != 0) {
+    return env.Usage(
+        "--resolution applies to .map files; a ROS map's YAML sets "
+        "its own resolution");
+  }
+  v1::CreateMapRequest request;
+  request.set_name(args[0]);
+  request.set_replace(options.replace);
+  request.set_resolution(options.resolution);
+  if (absl::Status status =
+          client::SetMapSourceFromFile(options.from, &request);
+      !status.ok()) {
+    return env.Fail(status);
+  }
+  absl::StatusOr<v1::CreateMapResponse> response =
+      env.client().CreateMap(request);
+  if (!response.ok()) return env.Fail(response.status());
+  if (options.json) return env.PrintJson(*response);
+  env.out() << (response->info().version() > 1 ? "replaced" : "created")
+            << " map " << args[0] << "\n";
+  PrintMapInfo(env.out(), response->info());
+  return kExitOk;
+}
+
+int MapsList(Env& env, Args args) {
+  if (!args.empty()) return env.Usage("maps list takes no arguments");
+  absl::StatusOr<v1::ListMapsResponse> response = env.client().ListMaps();
+  if (!response.ok()) return env.Fail(response.status());
+  if (env.options().json) return env.PrintJson(*response);
+  if (response->maps().empty()) {
+    env.out() << "no maps\n";
+    return kExitOk;
+  }
+  constexpr char kRow[] = "%-24s %11s %10s %8s %10s %10s\n";
+  env.out() << absl::StrFormat(kRow, "NAME", "SIZE", "RESOLUTION", "VERSION",
+                               "FREE", "BLOCKED");
+  for (const v1::MapInfo& info : response->maps()) {
+    env.out() << absl::StrFormat(
+        kRow, info.name(),
+        absl::StrFormat("%dx%d", info.width(), info.height()),
+        absl::StrFormat("%g", info.resolution()), absl::StrCat(info.version()),
+        absl::StrCat(info.free_cells()), absl::StrCat(info.blocked_cells()));
+  }
+  return kExitOk;
+}
+
+int MapsGet(Env& env, Args args) {
+  if (args.size() != 1) return env.Usage("maps get takes one NAME");
+  v1::GetMapRequest request;
+  request.set_name(args[0]);
+  request.set_include_cells(env.options().cells);
+  absl::StatusOr<v1::GetMapResponse> response = env.client().GetMap(request);
+  if (!response.ok()) return env.Fail(response.status());
+  if (env.options().json) return env.PrintJson(*response);
+  const v1::MapInfo& info = response->info();
+  PrintMapInfo(env.out(), info);
+  if (!env.options().cells) return kExitOk;
+  const int64_t cell_count = int64_t{info.width()} * info.height();
+  if (info.width() > kMaxRenderWidth || cell_count > kMaxRenderCells) {
+    return env.Usage(absl::StrFormat(
+        "--cells renders maps up to %d columns and %d cells; %s is %dx%d",
+        kMaxRenderWidth, kMaxRenderCells, info.name(), info.width(),
+        info.height()));
+  }
+  if (static_cast<int64_t>(response->cells().size()) != cell_count) {
+    return env.Fail(absl::InternalError(absl::StrFormat(
+        "server sent %d cell bytes for a %dx%d map", response->cells().size(),
+        info.width(), info.height())));
+  }
+  env.out() << "\n"
+            << RenderCells(info.width(), info.height(), response->cells());
+  return kExitOk;
+}
+
+int MapsDelete(Env& env, Args args) {
+  if (args.size() != 1) return env.Usage("maps delete takes one NAME");
+  absl::StatusOr<v1::DeleteMapResponse> response =
+      env.client().DeleteMap(args[0]);
+  if (!response.ok()) return env.Fail(response.status());
+  if (env.options().json) return env.PrintJson(*response);
+  env.out() << "deleted map " << args[0] << " (was at version "
+            << response->last_version() << ")\n";
+  return kExitOk;
+}
+
+int SendUpdate(Env& env, v1::UpdateMapRequest& request) {
+  if (env.options().expected_version.has_value()) {
+    request.set_expected_version(*env.options().expected_version);
+  }
+  absl::StatusOr<v1::UpdateMapResponse> response =
+      env.client().UpdateMap(request);
+  if (!response.ok()) return env.Fail(response.status());
+  if (env.options().json) return env.PrintJson(*response);
+  env.out() << "map " << request.name() << " now at version "
+            << response->version() << " (" << response->cells_changed()
+            << (response->cells_changed() == 1 ? " cell" : " cells")
+            << " changed)\n";
+  return kExitOk;
+}
+
+int MapsSet(Env& env, Args args) {
+  if (args.size() != 4) return env.Usage("maps set takes NAME X Y COST");
+  static constexpr const char* kNames[] = {"X", "Y"};
+  absl::StatusOr<std::vector<int32_t>> xy =
+      ParseInts(args.subspan(1, 2), kNames);
+  if (!xy.ok()) return env.Usage(xy.status().message());
+  absl::StatusOr<uint32_t> cost = ParseCost(args[3]);
+  if (!cost.ok()) return env.Usage(cost.status().message());
+  v1::UpdateMapRequest request;
+  request.set_name(args[0]);
+  v1::CellChange* change = request.add_changes();
+  change->mutable_cell()->set_x((*xy)[0]);
+  change->mutable_cell()->set_y((*xy)[1]);
+  change->set_cost(*cost);
+  return SendUpdate(env, request);
+}
+
+int MapsRect(Env& env, Args args) {
+  if (args.size() != 6)
+    return env.Usage("maps rect takes NAME X0 Y0 X1 Y1 COST");
+  static constexpr const char* kNames[] = {"X0", "Y0", "X1", "Y1"};
+  absl::StatusOr<std::vector<int32_t>> c =
+      ParseInts(args.subspan(1, 4), kNames);
+  if (!c.ok()) return env.Usage(c.status().message());
+  absl::StatusOr<uint32_t> cost = ParseCost(args[5]);
+  if (!cost.ok()) return env.Usage(cost.status().message());
+  v1::UpdateMapRequest request;
+  request.set_name(args[0]);
+  v1::CellChange* change = request.add_changes();
+  // Any two opposite corners name the same rectangle; the wire wants min/max.
+  v1::CellRect* rect = change->mutable_rect();
+  rect->set_x_min(std::min((*c)[0], (*c)[2]));
+  rect->set_y_min(std::min((*c)[1], (*c)[3]));
+  rect->set_x_max(std::max((*c)[0], (*c)[2]));
+  rect->set_y_max(std::max((*c)[1], (*c)[3]));
+  change->set_cost(*cost);
+  return SendUpdate(env, request);
+}
+
+int Maps(Env& env, Args args) {
+  if (args.empty()) {
+    return env.Usage(
+        "maps needs a subcommand: create, list, get, delete, set, rect");
+  }
+  const std::string& sub = args[0];
+  Args rest = args.subspan(1);
+  if (sub == "create") return MapsCreate(env, rest);
+  if (sub == "list") return MapsList(env, rest);
+  if (sub == "get") return MapsGet(env, rest);
+  if (sub == "delete") return MapsDelete(env, rest);
+  if (sub == "set") return MapsSet(env, rest);
+  if (sub == "rect") return MapsRect(env, rest);
+  return env.Usage(
+      absl::StrCat("unknown maps subcommand '", sub,
+                   "'; expected create, list, get, delete, set, rect"));
+}
+
+// --- plan --------------------------------------------------------------------
+
+int Plan(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 5) return env.Usage("plan takes NAME SX SY GX GY");
+  v1::PlanRequest request;
+  request.set_map(args[0]);
+  static constexpr const char* kNames[] = {"SX", "SY", "GX", "GY"};
+  if (options.world) {
+    absl::StatusOr<std::vector<double>> p =
+        ParseDoubles(args.subspan(1), kNames);
+    if (!p.ok()) return env.Usage(p.status().message());
+    request.mutable_start()->mutable_world()->set_x((*p)[0]);
+    request.mutable_start()->mutable_world()->set_y((*p)[1]);
+    request.mutable_goal()->mutable_world()->set_x((*p)[2]);
+    request.mutable_goal()->mutable_world()->set_y((*p)[3]);
+  } else {
+    absl::StatusOr<std::vector<int32_t>> p = ParseInts(args.subspan(1), kNames);
+    if (!p.ok()) {
+      return env.Usage(absl::StrCat(
+          p.status().message(), " (use --world for coordinates in metres)"));
+    }
+    request.mutable_start()->mutable_cell()->set_x((*p)[0]);
+    request.mutable_start()->mutable_cell()->set_y((*p)[1]);
+    request.mutable_goal()->mutable_cell()->set_x((*p)[2]);
+    request.mutable_goal()->mutable_cell()->set_y((*p)[3]);
+  }
+  if (!options.planner.empty()) {
+    absl::StatusOr<v1::Planner> planner = PlannerFromName(options.planner);
+    if (!planner.ok()) return env.Usage(planner.status().message());
+    request.set_planner(*planner);
+  }
+  v1::PlanOptions* plan_options = request.mutable_options();
+  switch (options.connectivity) {
+    case 0:
+      break;
+    case 4:
+      plan_options->set_connectivity(v1::CONNECTIVITY_FOUR);
+      break;
+    case 8:
+      plan_options->set_connectivity(v1::CONNECTIVITY_EIGHT);
+      break;
+    default:
+      return env.Usage(absl::StrCat("--connectivity must be 4 or 8, not ",
+                                    options.connectivity));
+  }
+  if (options.cost_weight.has_value()) {
+    plan_options->set_cost_weight(*options.cost_weight);
+  }
+  plan_options->set_unknown_is_free(options.unknown_is_free);
+  plan_options->set_max_expansions(options.max_expansions);
+
+  absl::StatusOr<v1::PlanResponse> response = env.client().Plan(request);
+  if (!response.ok()) return env.Fail(response.status());
+  const int code = response->found() ? kExitOk : kExitNoPath;
+  if (options.json) {
+    const int print_code = env.PrintJson(*response);
+    return print_code == kExitOk ? code : print_code;
+  }
+  std::ostream& out = env.out();
+  absl::string_view outcome = v1::PlanOutcome_Name(response->outcome());
+  absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
+  out << "found:       " << (response->found() ? "yes" : "no") << "\n"
+      << "outcome:     " << outcome << "\n";
+  if (!response->reason().empty())
+    out << "reason:      " << response->reason() << "\n";
+  out << absl::StrFormat(
+      "planner:     %s\n"
+      "map version: %d\n"
+      "start:       %s\n"
+      "goal:        %s\n",
+      response->planner(), response->map_version(),
+      FormatCell(response->start()), FormatCell(response->goal()));
+  if (response->found()) {
+    out << absl::StrFormat("cost:        %.6f\nlength:      %.6f\n",
+                           response->cost(), response->length());
+  }
+  out << absl::StrFormat("expansions:  %d\ntime:        %d us\n",
+                         response->expansions(), response->planning_time_us());
+  if (response->found()) {
+    std::vector<std::string> cells;
+    for (const v1::Cell& cell : response->path())
+      cells.push_back(FormatCell(cell));
+    out << "path (" << cells.size() << " cells): " << absl::StrJoin(cells, " ")
+        << "\n";
+    if (options.world) {
+      std::vector<std::string> points;
+      for (const v1::WorldPoint& p : response->world_path()) {
+        points.push_back(absl::StrFormat("(%g,%g)", p.x(), p.y()));
+      }
+      out << "world path (m): " << absl::StrJoin(points, " ") << "\n";
+    }
+  }
+  return code;
+}
+
+// --- health ------------------------------------------------------------------
+
+int Health(Env& env, Args args) {
+  if (args.size() > 1) return env.Usage("health takes at most one SERVICE");
+  const std::string service = args.empty() ? "" : args[0];
+  absl::StatusOr<grpc::health::v1::HealthCheckResponse> response =
+      env.client().CheckHealth(service);
+  if (!response.ok()) return env.Fail(response.status());
+  using grpc::health::v1::HealthCheckResponse;
+  if (env.options().json) {
+    if (const int code = env.PrintJson(*response); code != kExitOk) return code;
+  } else {
+    env.out() << HealthCheckResponse::ServingStatus_Name(response->status())
+              << "\n";
+  }
+  // Probes (scripts, container health checks) read the exit code.
+  return response->status() == HealthCheckResponse::SERVING ? kExitOk
+                                                            : kExitError;
+}
+
+bool IsNumber(absl::string_view text) {
+  double unused;
+  return absl::SimpleAtod(text, &unused);
+}
+
+}  // namespace
+
+absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name) {
+  for (const PlannerName& p : kPlanners) {
+    if (p.name == name) return p.planner;
+  }
+  return absl::InvalidArgumentError(
+      absl::StrCat("--planner: unknown planner '", name,
+                   "'; valid planners: ", PlannerNames()));
+}
+
+std::string SynopsisText() { return kSynopsis; }
+
+std::string UsageText() {
+  return absl::StrCat(
+      "pathctl: command-line client of the pathd path-planning daemon.\n\n",
+      kSynopsis, R"(
+flags (anywhere on the line, as --flag=value or --flag value):
+  --server ADDR        pathd address; default $PATHD_SERVER, else 127.0.0.1:50051
+  --timeout D          deadline of the call, e.g. 500ms, 30s (default 10s)
+  --json               print the response message as proto3 JSON
+  --from FILE          maps create: .map is sent as Moving AI text; .yaml/.yml
+                       as a ROS map_server map (the YAML plus the image it
+                       names, relative to the YAML's folder)
+  --replace            maps create: replace an existing map of that name
+  --resolution R       maps create: metres per cell for .map files (default 1)
+  --cells              maps get: also print the cells (maps up to 1024 columns)
+  --expected_version V maps set/rect: apply only if the map is at version V
+  --planner P          plan: )",
+      PlannerNames(), R"( (default: the server's, A*)
+  --connectivity N     plan: 4 or 8 (default 8)
+  --cost_weight W      plan: w in step = length * (1 + w * cost / 252) (default 1)
+  --unknown_is_free    plan: treat unknown cells (255) as free
+  --max_expansions N   plan: stop after N expansions (0: the server's limit)
+  --world              plan: SX SY GX GY are world metres, not cells
+
+arguments:
+  X, Y                 cells: x is the column, y the row, from 0
+  COST                 0..255 (Nav2 costmap values) or free (0), inscribed (253),
+                       lethal (254), unknown (255)
+  X0 Y0 X1 Y1          two opposite corners of a rectangle, both included
+  Numbers such as -3 are arguments, not flags; "--" ends the flags.
+
+maps get --cells prints one character per cell, row 0 first (a .map file's
+first line; a ROS map's bottom image row):
+  .    free (0)
+  1-9  weighted 1..252; digit d covers costs 28(d-1)+1 .. 28d
+  #    inscribed or lethal (253, 254)
+  ?    unknown (255)
+
+exit codes:
+  0  success
+  1  the call failed (server error, or a local file could not be read);
+     stderr says "error: <GRPC_CODE>: <message>"; health: not SERVING
+  2  usage error
+  3  plan ran but found no path (the outcome says why)
+)");
+}
+
+absl::StatusOr<CommandLine> SplitCommandLine(int argc,
+                                             const char* const* argv) {
+  CommandLine line;
+  bool flags_ended = false;
+  for (int i = 1; i < argc; ++i) {
+    const absl::string_view arg = argv[i];
+    if (flags_ended || arg.size() < 2 || arg[0] != '-' || IsNumber(arg)) {
+      line.positional.emplace_back(arg);
+      continue;
+    }
+    if (arg == "--") {
+      flags_ended = true;
+      continue;
+    }
+    absl::string_view body = arg.substr(arg[1] == '-' ? 2 : 1);
+    absl::string_view name = body;
+    std::optional<absl::string_view> value;
+    if (size_t eq = body.find('='); eq != absl::string_view::npos) {
+      name = body.substr(0, eq);
+      value = body.substr(eq + 1);
+    }
+    if (name == "help" || name == "h") {
+      line.help = true;
+      continue;
+    }
+    absl::CommandLineFlag* flag = absl::FindCommandLineFlag(name);
+    if (flag == nullptr && absl::StartsWith(name, "no") && !value.has_value()) {
+      // --nofoo clears boolean flag foo.
+      absl::CommandLineFlag* negated =
+          absl::FindCommandLineFlag(name.substr(2));
+      if (negated != nullptr && negated->IsOfType<bool>()) {
+        line.flags.emplace_back(absl::StrCat("--", name));
+        continue;
+      }
+    }
+    if (flag == nullptr || flag->IsRetired()) {
+      return absl::InvalidArgumentError(absl::StrCat("unknown flag --", name));
+    }
+    if (flag->IsOfType<bool>() && !value.has_value()) {
+      line.flags.emplace_back(absl::StrCat("--", name));
+      continue;
+    }
+    if (!value.has_value()) {
+      if (i + 1 >= argc) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("flag --", name, " needs a value"));
+      }
+      value = argv[++i];
+    }
+    // Parsing here sets the flag to the same value absl::ParseCommandLine will
+    // set it to, so validating is harmless.
+    std::string error;
+    if (!flag->ParseFrom(*value, &error)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("flag --", name, "='", *value, "': ", error));
+    }
+    line.flags.emplace_back(absl::StrCat("--", name, "=", *value));
+  }
+  return line;
+}
+
+std::string ResolveServerAddress(const std::string& flag_value,
+                                 const char* env_value) {
+  if (!flag_value.empty()) return flag_value;
+  if (env_value != nullptr && env_value[0] != '\0') return env_value;
+  return client::kDefaultServerAddress;
+}
+
+char CellGlyph(uint8_t cost) {
+  if (cost == 0) return '.';
+  if (cost <= 252) return static_cast<char>('1' + (cost - 1) / 28);
+  if (cost == 255) return '?';
+  return '#';
+}
+
+std::string RenderCells(int32_t width, int32_t height,
+                        absl::string_view cells) {
+  std::string text;
+  text.reserve(static_cast<size_t>(width + 1) * static_cast<size_t>(height));
+  for (int32_t y = 0; y < height; ++y) {
+    for (int32_t x = 0; x < width; ++x) {
+      text.push_back(CellGlyph(static_cast<uint8_t>(
+          cells[static_cast<size_t>(y) * static_cast<size_t>(width) +
+                static_cast<size_t>(x)])));
+    }
+    text.push_back('\n');
+  }
+  return text;
+}
+
+int Run(const Options& options, const std::vector<std::string>& args,
+        std::ostream& out, std::ostream& err) {
+  Env env(options, out, err);
+  if (args.empty()) return env.Usage("missing command");
+  const std::string& command = args[0];
+  Args rest = Args(args).subspan(1);
+  if (command == "maps") return Maps(env, rest);
+  if (command == "plan") return Plan(env, rest);
+  if (command == "health") return Health(env, rest);
+  if (command == "help") {
+    out << UsageText();
+    return kExitOk;
+  }
+  return env.Usage(absl::StrCat("unknown command '", command,
+                                "'; expected maps, plan or health"));
+}
+
+}  // namespace pathd::pathctl

@@ -1,0 +1,111 @@
+// The pathctl commands: command-line splitting, the planner-name table, cell
+// rendering, and Run(), which executes one command against a pathd server and
+// returns the process exit code. pathctl_main.cc only defines the flags and
+// wires them in, so everything here can be driven from tests.
+#ifndef PATHD_CLIENT_PATHCTL_H_
+#define PATHD_CLIENT_PATHCTL_H_
+
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "absl/time/time.h"
+#include "client/client.h"
+#include "pathd/v1/planner_service.pb.h"
+
+namespace pathd::pathctl {
+
+// Process exit codes; documented in UsageText().
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitError = 1,   // the RPC or server failed, or a local file was unreadable
+  kExitUsage = 2,   // bad command line
+  kExitNoPath = 3,  // plan ran but found no path
+};
+
+// Environment variable naming the server when --server is not given.
+inline constexpr char kServerEnvVar[] = "PATHD_SERVER";
+
+// CLI planner names and their wire values. Adding a planner is one line here;
+// parsing, validation messages and the help text all read this table.
+struct PlannerName {
+  absl::string_view name;
+  v1::Planner planner;
+};
+inline constexpr PlannerName kPlanners[] = {
+    {"astar", v1::PLANNER_ASTAR},
+    {"dijkstra", v1::PLANNER_DIJKSTRA},
+    {"bfs", v1::PLANNER_BFS},
+};
+
+// Looks up a planner by CLI name; INVALID_ARGUMENT listing the valid names.
+absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name);
+
+// Every option a command may read, already parsed from flags.
+struct Options {
+  std::string server = client::kDefaultServerAddress;
+  absl::Duration timeout = client::kDefaultTimeout;
+  bool json = false;
+  // maps create
+  std::string from;
+  bool replace = false;
+  double resolution = 0.0;  // 0: the server's default (1 m per cell)
+  // maps get
+  bool cells = false;
+  // maps set / rect
+  std::optional<uint64_t> expected_version;
+  // plan
+  std::string planner;   // empty: the server's default
+  int connectivity = 0;  // 0: the server's default (8)
+  std::optional<double> cost_weight;
+  bool world = false;
+  bool unknown_is_free = false;
+  int64_t max_expansions = 0;
+};
+
+// The full --help text: commands, flags, cell glyphs and exit codes.
+std::string UsageText();
+// The command synopsis alone, shown after a usage error.
+std::string SynopsisText();
+
+// argv split into flag arguments (normalised to "--name=value" / "--name" /
+// "--noname") and positional arguments, so flags may appear anywhere.
+struct CommandLine {
+  std::vector<std::string> flags;
+  std::vector<std::string> positional;
+  bool help = false;  // --help, -h or -help was given
+};
+
+// Splits argv using the process's registered Abseil flags, validating each
+// flag name and value up front. absl::ParseCommandLine would exit(1) on a bad
+// flag, but pathctl promises exit code 2 for every usage error. Arguments
+// that parse as numbers (e.g. "-3") are positional, not flags; "--" ends
+// flags. INVALID_ARGUMENT names the offending argument.
+absl::StatusOr<CommandLine> SplitCommandLine(int argc, const char* const* argv);
+
+// The server address: `flag_value` if non-empty, else `env_value` if non-null
+// and non-empty, else client::kDefaultServerAddress.
+std::string ResolveServerAddress(const std::string& flag_value,
+                                 const char* env_value);
+
+// One character per cell: '.' free (0); '1'..'9' weighted 1..252, digit d
+// covering costs 28(d-1)+1 .. 28d; '#' inscribed or lethal (253, 254); '?'
+// unknown (255).
+char CellGlyph(uint8_t cost);
+// Renders row-major cells as `height` lines of `width` glyphs, row 0 first.
+// Precondition: cells.size() == width * height.
+std::string RenderCells(int32_t width, int32_t height, absl::string_view cells);
+
+// Runs the command in `args` (positional arguments, e.g. {"maps", "list"}).
+// Output goes to `out`; errors ("error: <CODE>: <message>") and usage go to
+// `err`. Returns an ExitCode.
+int Run(const Options& options, const std::vector<std::string>& args,
+        std::ostream& out, std::ostream& err);
+
+}  // namespace pathd::pathctl
+
+#endif  // PATHD_CLIENT_PATHCTL_H_

@@ -1,0 +1,80 @@
+// Translation between the pathd.v1 wire types and core's value types. The
+// server is the only place that does this, so core never sees protobuf and
+// every field check (with the field's name in the message) lives here.
+#ifndef PATHD_SERVER_CONVERT_H_
+#define PATHD_SERVER_CONVERT_H_
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/grid.h"
+#include "core/planner.h"
+#include "pathd/v1/common.pb.h"
+#include "pathd/v1/map_service.pb.h"
+#include "pathd/v1/planner_service.pb.h"
+#include "server/map_store.h"
+
+namespace pathd::server {
+
+inline v1::Cell ToProto(Cell c) {
+  v1::Cell out;
+  out.set_x(c.x);
+  out.set_y(c.y);
+  return out;
+}
+inline Cell FromProto(const v1::Cell& c) { return Cell{c.x(), c.y()}; }
+
+// The cell a request position denotes. A cell is passed through unchecked
+// (ValidateEndpoints reports it off the map); a world point is converted with
+// Grid::WorldToCell. INVALID_ARGUMENT naming `what` ("start"/"goal") when the
+// position is unset, or the world point is not finite or off the map.
+absl::StatusOr<Cell> CellFromPosition(const v1::Position& position,
+                                      const Grid& grid, std::string_view what);
+
+// Cost model parameters from request options. INVALID_ARGUMENT for an unknown
+// connectivity, or a cost_weight that is negative or not finite. An unset
+// cost_weight means 1.0.
+absl::StatusOr<CostParams> CostParamsFromOptions(const v1::PlanOptions& options);
+
+// The expansion budget for a request: options.max_expansions capped by the
+// server's limit (0 = none on either side). INVALID_ARGUMENT when negative.
+absl::StatusOr<int64_t> EffectiveMaxExpansions(const v1::PlanOptions& options,
+                                               int64_t server_limit);
+
+// Registry name of a wire planner value (UNSPECIFIED means A*).
+// INVALID_ARGUMENT "unknown planner 17" for a value the enum does not define.
+absl::StatusOr<std::string_view> PlannerName(int planner);
+
+// Fills a response from a core result: path cells and their world centres,
+// cost, length, expansions, time, outcome, and a reason when nothing was found.
+// `max_expansions` is the budget that applied, for the reason text.
+void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
+                      const Grid& grid, int64_t max_expansions,
+                      v1::PlanResponse* response);
+
+v1::PlanOutcome ToProto(PlanOutcome outcome);
+
+// Metadata of one map version.
+void FillMapInfo(const MapSnapshot& snapshot, v1::MapInfo* info);
+
+// Update changes in wire order. INVALID_ARGUMENT "change N: ..." for a change
+// with neither cell nor rect; bounds and costs are checked by MapStore.
+absl::StatusOr<std::vector<MapChange>> MapChangesFromProto(
+    const google::protobuf::RepeatedPtrField<v1::CellChange>& changes);
+
+// Resolution for raw and Moving AI maps: 0 means 1.0; otherwise it must be
+// finite and > 0 (INVALID_ARGUMENT naming "resolution").
+absl::StatusOr<double> ResolutionFromProto(double resolution);
+// World pose; every component must be finite (INVALID_ARGUMENT naming it).
+absl::StatusOr<GridOrigin> OriginFromProto(const v1::Origin& origin);
+
+// A grid from raw cells, checking width * height == len(cells) before copying
+// and refusing maps over the store's --max_map_cells with RESOURCE_EXHAUSTED.
+absl::StatusOr<Grid> GridFromRawCells(const v1::RawCells& raw, const MapStore& store);
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_CONVERT_H_

@@ -1,0 +1,54 @@
+// pathd.v1.MapService: create, inspect, update and delete the maps held by
+// the MapStore. Every call is cheap enough (at most one parse or one map
+// copy) to answer inline on gRPC's callback thread.
+#ifndef PATHD_SERVER_MAP_SERVICE_H_
+#define PATHD_SERVER_MAP_SERVICE_H_
+
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "pathd/v1/map_service.grpc.pb.h"
+#include "server/map_store.h"
+
+namespace pathd::server {
+
+// Thread-safe (all state lives in the MapStore). `store` must outlive it.
+class MapServiceImpl final : public v1::MapService::CallbackService {
+ public:
+  // map_dir: the --map_dir used for CreateMap.map_dir_file; empty = none.
+  MapServiceImpl(MapStore& store, std::string map_dir);
+
+  grpc::ServerUnaryReactor* CreateMap(grpc::CallbackServerContext* context,
+                                      const v1::CreateMapRequest* request,
+                                      v1::CreateMapResponse* response) override;
+  grpc::ServerUnaryReactor* GetMap(grpc::CallbackServerContext* context,
+                                   const v1::GetMapRequest* request,
+                                   v1::GetMapResponse* response) override;
+  grpc::ServerUnaryReactor* ListMaps(grpc::CallbackServerContext* context,
+                                     const v1::ListMapsRequest* request,
+                                     v1::ListMapsResponse* response) override;
+  grpc::ServerUnaryReactor* DeleteMap(grpc::CallbackServerContext* context,
+                                      const v1::DeleteMapRequest* request,
+                                      v1::DeleteMapResponse* response) override;
+  grpc::ServerUnaryReactor* UpdateMap(grpc::CallbackServerContext* context,
+                                      const v1::UpdateMapRequest* request,
+                                      v1::UpdateMapResponse* response) override;
+
+ private:
+  // The grid a CreateMap request describes, with resolution and origin set.
+  absl::StatusOr<Grid> BuildGrid(const v1::CreateMapRequest& request) const;
+  absl::Status DoCreateMap(const v1::CreateMapRequest& request,
+                           v1::CreateMapResponse* response);
+  absl::Status DoGetMap(const v1::GetMapRequest& request,
+                        v1::GetMapResponse* response) const;
+  absl::Status DoUpdateMap(const v1::UpdateMapRequest& request,
+                           v1::UpdateMapResponse* response);
+
+  MapStore& store_;
+  const std::string map_dir_;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_MAP_SERVICE_H_

@@ -1,0 +1,127 @@
+// The daemon's in-memory maps: each name holds a sequence of immutable
+// versions handed out as shared_ptr<const MapSnapshot>, so planning keeps the
+// version it started on while updates install new ones.
+#ifndef PATHD_SERVER_MAP_STORE_H_
+#define PATHD_SERVER_MAP_STORE_H_
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/types/span.h"
+#include "core/grid.h"
+
+namespace pathd::server {
+
+// One version of one map. Immutable once published.
+struct MapSnapshot {
+  std::string name;
+  // 1 at creation, +1 per update (a replacing create continues the count).
+  uint64_t version = 0;
+  std::shared_ptr<const Grid> grid;
+};
+
+// One change of an update batch: every cell of the inclusive rectangle
+// [x_min, x_max] x [y_min, y_max] gets `cost`. A single cell is a 1x1
+// rectangle with is_rect false (only used to word error messages).
+struct MapChange {
+  int32_t x_min = 0;
+  int32_t y_min = 0;
+  int32_t x_max = 0;
+  int32_t y_max = 0;
+  // Checked against 0..255 by MapStore::Update; wider here because the wire
+  // type is uint32 and the store owns the validation.
+  uint32_t cost = 0;
+  bool is_rect = false;
+
+  static MapChange ForCell(int32_t x, int32_t y, uint32_t cost) {
+    return MapChange{x, y, x, y, cost, false};
+  }
+  static MapChange ForRect(int32_t x_min, int32_t y_min, int32_t x_max,
+                           int32_t y_max, uint32_t cost) {
+    return MapChange{x_min, y_min, x_max, y_max, cost, true};
+  }
+};
+
+struct MapUpdateResult {
+  std::shared_ptr<const MapSnapshot> snapshot;
+  // Cells whose cost differs between the old and the new version.
+  int64_t cells_changed = 0;
+};
+
+// Thread-safe. Readers (Get/List) hold the store lock only to copy a pointer;
+// the O(map) work of an update happens outside it, serialised per map name, so
+// planning and reads of other maps never wait for a copy.
+class MapStore {
+ public:
+  static constexpr size_t kMaxNameLength = 128;
+
+  // max_cells bounds width * height of any stored map (--max_map_cells).
+  explicit MapStore(int64_t max_cells);
+  MapStore(const MapStore&) = delete;
+  MapStore& operator=(const MapStore&) = delete;
+
+  // OK when `name` is 1..128 characters of [A-Za-z0-9._-] not starting with
+  // '.'; otherwise INVALID_ARGUMENT naming the problem.
+  static absl::Status ValidateName(std::string_view name);
+
+  // RESOURCE_EXHAUSTED naming the limit when a width x height map would exceed
+  // max_cells; OK otherwise. Lets callers refuse before parsing/allocating.
+  absl::Status CheckSize(int64_t width, int64_t height) const;
+  int64_t max_cells() const { return max_cells_; }
+
+  // Stores `grid` as version 1 of `name`. When the name exists: ALREADY_EXISTS
+  // unless `replace`, in which case the new map becomes the old version + 1.
+  // INVALID_ARGUMENT for a bad name or an empty grid, RESOURCE_EXHAUSTED when
+  // it exceeds max_cells.
+  absl::StatusOr<std::shared_ptr<const MapSnapshot>> Create(std::string_view name,
+                                                            Grid grid,
+                                                            bool replace);
+
+  // The current version of `name`; NOT_FOUND "map 'x' not found".
+  absl::StatusOr<std::shared_ptr<const MapSnapshot>> Get(std::string_view name) const;
+
+  // The current version of every map, sorted by name.
+  std::vector<std::shared_ptr<const MapSnapshot>> List() const;
+
+  // Removes `name` and returns its last version; NOT_FOUND when unknown.
+  // Snapshots already handed out stay valid.
+  absl::StatusOr<uint64_t> Delete(std::string_view name);
+
+  // Applies `changes` in order to a copy of the current version and installs
+  // it as version + 1; all or nothing. Errors: NOT_FOUND for an unknown map;
+  // ABORTED when expected_version is set and differs from the current version;
+  // INVALID_ARGUMENT for an empty batch, a cost > 255, a rectangle with
+  // min > max, or a change reaching off the map (naming the change index).
+  absl::StatusOr<MapUpdateResult> Update(std::string_view name,
+                                         absl::Span<const MapChange> changes,
+                                         std::optional<uint64_t> expected_version);
+
+  size_t size() const;
+
+ private:
+  struct Entry {
+    std::shared_ptr<const MapSnapshot> current;
+    // Serialises updates of this name so two writers do not both copy the
+    // map only for one to lose; shared so an updater can hold it without the
+    // store lock while a concurrent Delete drops the entry.
+    std::shared_ptr<absl::Mutex> update_mu;
+  };
+
+  const int64_t max_cells_;
+  mutable absl::Mutex mu_;
+  // std::map keeps List() sorted without a sort per call.
+  std::map<std::string, Entry, std::less<>> maps_ ABSL_GUARDED_BY(mu_);
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_MAP_STORE_H_

@@ -1,0 +1,41 @@
+// pathd.v1.PlannerService: validates a plan request on the gRPC thread, then
+// runs the planner on the worker pool against the map snapshot current when
+// the request arrived, and answers from the worker.
+#ifndef PATHD_SERVER_PLANNER_SERVICE_H_
+#define PATHD_SERVER_PLANNER_SERVICE_H_
+
+#include <cstdint>
+
+#include "pathd/v1/planner_service.grpc.pb.h"
+#include "server/map_store.h"
+#include "server/worker_pool.h"
+
+namespace pathd::server {
+
+// Thread-safe. `store` and `pool` must outlive the service, and the pool must
+// be shut down (so every accepted job has answered) before the service and the
+// gRPC server that owns the calls go away.
+class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
+ public:
+  struct Options {
+    // Cap on expansions per request (--max_expansions); 0 = unlimited.
+    int64_t max_expansions = 0;
+  };
+
+  PlannerServiceImpl(const MapStore& store, WorkerPool& pool, Options options);
+
+  // Errors as documented in planner_service.proto; the job is dropped without
+  // running when the deadline passed or the client cancelled while queued.
+  grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context,
+                                 const v1::PlanRequest* request,
+                                 v1::PlanResponse* response) override;
+
+ private:
+  const MapStore& store_;
+  WorkerPool& pool_;
+  const Options options_;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_PLANNER_SERVICE_H_

@@ -1,0 +1,147 @@
+// PathdServer: wiring, start-up map loading, listening and shutdown order.
+#include "server/server.h"
+
+#include <algorithm>
+#include <climits>
+#include <filesystem>
+#include <utility>
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/security/server_credentials.h>
+#include <grpcpp/server_builder.h>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "core/status_macros.h"
+#include "server/map_dir.h"
+#include "spdlog/spdlog.h"
+
+namespace pathd::server {
+namespace {
+
+// Room for the non-cell fields of a CreateMap request (name, YAML text).
+constexpr int64_t kMessageOverheadBytes = int64_t{1} << 20;
+
+}  // namespace
+
+std::string ReplacePort(const std::string& address, int port) {
+  const size_t colon = address.rfind(':');
+  // A bare IPv6 literal has colons but no port; only "]:" or a single colon
+  // marks one.
+  const bool has_port =
+      colon != std::string::npos &&
+      (address.find(':') == colon || (colon > 0 && address[colon - 1] == ']'));
+  const std::string host = has_port ? address.substr(0, colon) : address;
+  return absl::StrCat(host, ":", port);
+}
+
+PathdServer::PathdServer(ServerOptions options)
+    : options_(std::move(options)), store_(options_.max_map_cells) {}
+
+PathdServer::~PathdServer() { Shutdown(); }
+
+absl::StatusOr<int> PathdServer::LoadMapDir() {
+  PATHD_ASSIGN_OR_RETURN(const std::vector<std::string> files,
+                         ListMapDirFiles(options_.map_dir));
+  int loaded = 0;
+  for (const std::string& file : files) {
+    const std::string name = std::filesystem::path(file).stem().string();
+    const absl::Time start = absl::Now();
+    absl::StatusOr<Grid> grid =
+        LoadMapDirFile(options_.map_dir, file, store_.max_cells());
+    if (!grid.ok()) {
+      // One bad file should not keep the daemon (and every other map) down.
+      spdlog::error("skipping map file {}: {}", file, grid.status().ToString());
+      continue;
+    }
+    absl::StatusOr<std::shared_ptr<const MapSnapshot>> snapshot =
+        store_.Create(name, *std::move(grid), /*replace=*/false);
+    if (!snapshot.ok()) {
+      spdlog::error("skipping map file {}: {}", file, snapshot.status().ToString());
+      continue;
+    }
+    const Grid& g = *(*snapshot)->grid;
+    spdlog::info("loaded map '{}' from {}: {} x {} cells, {} free, {} blocked ({} ms)",
+                 name, file, g.width(), g.height(), g.CountFree(), g.CountBlocked(),
+                 absl::ToInt64Milliseconds(absl::Now() - start));
+    ++loaded;
+  }
+  return loaded;
+}
+
+absl::Status PathdServer::Start() {
+  if (!options_.map_dir.empty()) {
+    PATHD_ASSIGN_OR_RETURN(const int loaded, LoadMapDir());
+    spdlog::info("loaded {} map(s) from --map_dir {}", loaded, options_.map_dir);
+  }
+
+  pool_ = std::make_unique<WorkerPool>(
+      WorkerPool::Options{options_.threads, options_.queue_depth});
+  map_service_ = std::make_unique<MapServiceImpl>(store_, options_.map_dir);
+  planner_service_ = std::make_unique<PlannerServiceImpl>(
+      store_, *pool_, PlannerServiceImpl::Options{options_.max_expansions});
+
+  // Both are process-wide switches read when the builder is created.
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options_.address, grpc::InsecureServerCredentials(),
+                           &port_);
+  builder.RegisterService(map_service_.get());
+  builder.RegisterService(planner_service_.get());
+  // A raw CreateMap of the largest allowed map must fit in one message; gRPC's
+  // default receive limit (4 MiB) would refuse maps over ~2000 x 2000.
+  builder.SetMaxReceiveMessageSize(static_cast<int>(
+      std::min<int64_t>(INT_MAX, options_.max_map_cells + kMessageOverheadBytes)));
+  server_ = builder.BuildAndStart();
+  if (server_ == nullptr || port_ == 0) {
+    server_.reset();
+    pool_->Shutdown(WorkerPool::ShutdownMode::kDrop);
+    return absl::UnavailableError(
+        absl::StrFormat("cannot listen on %s", options_.address));
+  }
+  if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
+    health->SetServingStatus(true);
+  }
+  spdlog::info("serving on {} with {} worker thread(s), queue depth {}",
+               listen_address(), pool_->threads(), pool_->queue_depth());
+  return absl::OkStatus();
+}
+
+void PathdServer::Shutdown() {
+  {
+    absl::MutexLock lock(&shutdown_mu_);
+    if (shut_down_) return;
+    shut_down_ = true;
+  }
+  if (server_ != nullptr) {
+    spdlog::info("shutting down (grace {})", absl::FormatDuration(options_.shutdown_grace));
+    // Probes see NOT_SERVING first so a load balancer stops sending work.
+    if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
+      health->SetServingStatus(false);
+    }
+    // The pool keeps running during the grace period so accepted plans can
+    // answer; after it gRPC cancels what is left, which reaches running
+    // planners through their cancel flag.
+    server_->Shutdown(absl::ToChronoTime(absl::Now() + options_.shutdown_grace));
+  }
+  if (pool_ != nullptr) {
+    // Anything still queued answers UNAVAILABLE; joining guarantees no job
+    // touches a call after the server below is gone.
+    pool_->Shutdown(WorkerPool::ShutdownMode::kDrop);
+  }
+  if (server_ != nullptr) {
+    server_->Wait();
+    server_.reset();
+    spdlog::info("shut down");
+  }
+}
+
+std::string PathdServer::listen_address() const {
+  return ReplacePort(options_.address, port_);
+}
+
+}  // namespace pathd::server

@@ -1,0 +1,92 @@
+// PathdServer: owns the map store, the worker pool and the gRPC services,
+// loads --map_dir at start-up, listens, and shuts everything down in the
+// order that lets in-flight calls answer.
+#ifndef PATHD_SERVER_SERVER_H_
+#define PATHD_SERVER_SERVER_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <grpcpp/server.h>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "server/map_service.h"
+#include "server/map_store.h"
+#include "server/planner_service.h"
+#include "server/worker_pool.h"
+
+namespace pathd::server {
+
+struct ServerOptions {
+  // host:port to listen on; port 0 picks a free port (see PathdServer::port).
+  std::string address = "127.0.0.1:50051";
+  // Worker threads; 0 = hardware threads.
+  int threads = 0;
+  // Plan jobs that may wait for a worker before RESOURCE_EXHAUSTED.
+  size_t queue_depth = 256;
+  // Largest map accepted, in cells.
+  int64_t max_map_cells = int64_t{64} << 20;
+  // Per-request expansion cap; 0 = unlimited.
+  int64_t max_expansions = 0;
+  // Directory of maps loaded at start-up and readable via map_dir_file;
+  // empty = none.
+  std::string map_dir;
+  // How long Shutdown lets in-flight calls finish before cancelling them.
+  absl::Duration shutdown_grace = absl::Seconds(5);
+};
+
+// Start() once, Shutdown() once (the destructor calls it). Shutdown may be
+// called from any thread except a gRPC or pool thread.
+class PathdServer {
+ public:
+  explicit PathdServer(ServerOptions options);
+  ~PathdServer();
+  PathdServer(const PathdServer&) = delete;
+  PathdServer& operator=(const PathdServer&) = delete;
+
+  // Loads every .map/.yaml in map_dir (a bad file is logged and skipped),
+  // starts the pool and listens. UNAVAILABLE when the address cannot be bound;
+  // NOT_FOUND / INVALID_ARGUMENT when map_dir is missing or not a directory.
+  absl::Status Start();
+
+  // Health NOT_SERVING, stop accepting, give in-flight calls the grace
+  // period, cancel the rest, drop queued plan jobs (UNAVAILABLE) and join the
+  // workers. Idempotent.
+  void Shutdown();
+
+  // The bound port (the chosen one when the address said 0); 0 before Start.
+  int port() const { return port_; }
+  // "host:port" with the bound port, for the "listening" line and clients.
+  std::string listen_address() const;
+
+  MapStore& store() { return store_; }
+  const ServerOptions& options() const { return options_; }
+
+ private:
+  // Loads map_dir's maps into the store; returns how many loaded.
+  absl::StatusOr<int> LoadMapDir();
+
+  const ServerOptions options_;
+  MapStore store_;
+  std::unique_ptr<WorkerPool> pool_;
+  std::unique_ptr<MapServiceImpl> map_service_;
+  std::unique_ptr<PlannerServiceImpl> planner_service_;
+  std::unique_ptr<grpc::Server> server_;
+  int port_ = 0;
+
+  absl::Mutex shutdown_mu_;
+  bool shut_down_ ABSL_GUARDED_BY(shutdown_mu_) = false;
+};
+
+// Splits "host:port" ("[v6]:port" too) at the last colon; returns the host
+// part with the port replaced. Exposed for tests.
+std::string ReplacePort(const std::string& address, int port);
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_SERVER_H_

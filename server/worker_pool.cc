@@ -1,0 +1,110 @@
+// WorkerPool: fixed threads, bounded FIFO queue, per-worker scratch.
+#include "server/worker_pool.h"
+
+#include <algorithm>
+#include <exception>
+#include <utility>
+
+#include "absl/strings/str_format.h"
+#include "spdlog/spdlog.h"
+
+namespace pathd::server {
+namespace {
+
+thread_local bool on_worker_thread = false;
+
+class FunctionJob : public Job {
+ public:
+  FunctionJob(std::function<void(SearchScratch&)> run, std::function<void()> drop)
+      : run_(std::move(run)), drop_(std::move(drop)) {}
+  void Run(SearchScratch& scratch) override { run_(scratch); }
+  void Drop() override {
+    if (drop_) drop_();
+  }
+
+ private:
+  std::function<void(SearchScratch&)> run_;
+  std::function<void()> drop_;
+};
+
+int ThreadCount(int requested) {
+  if (requested > 0) return requested;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+}  // namespace
+
+std::unique_ptr<Job> MakeJob(std::function<void(SearchScratch&)> run,
+                             std::function<void()> drop) {
+  return std::make_unique<FunctionJob>(std::move(run), std::move(drop));
+}
+
+WorkerPool::WorkerPool(const Options& options)
+    : queue_depth_(std::max<size_t>(1, options.queue_depth)) {
+  const int n = ThreadCount(options.threads);
+  threads_.reserve(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) threads_.emplace_back([this] { WorkerLoop(); });
+}
+
+WorkerPool::~WorkerPool() { Shutdown(ShutdownMode::kDrop); }
+
+absl::Status WorkerPool::Submit(std::unique_ptr<Job> job) {
+  absl::MutexLock lock(&mu_);
+  if (stopping_) return absl::UnavailableError("server is shutting down");
+  if (queue_.size() >= queue_depth_) {
+    return absl::ResourceExhaustedError(
+        absl::StrFormat("work queue full (depth %d)", queue_depth_));
+  }
+  queue_.push_back(std::move(job));
+  return absl::OkStatus();
+}
+
+void WorkerPool::Shutdown(ShutdownMode mode) {
+  absl::MutexLock join_lock(&join_mu_);
+  if (joined_) return;
+  std::deque<std::unique_ptr<Job>> dropped;
+  {
+    absl::MutexLock lock(&mu_);
+    stopping_ = true;
+    if (mode == ShutdownMode::kDrop) dropped.swap(queue_);
+  }
+  // Outside mu_: a Drop() answers an RPC, which must not hold the pool lock.
+  for (auto& job : dropped) job->Drop();
+  for (std::thread& t : threads_) t.join();
+  joined_ = true;
+}
+
+size_t WorkerPool::queued() const {
+  absl::MutexLock lock(&mu_);
+  return queue_.size();
+}
+
+bool WorkerPool::OnWorkerThread() { return on_worker_thread; }
+
+void WorkerPool::WorkerLoop() {
+  on_worker_thread = true;
+  // Per-worker: search memory grows to the largest map this thread has
+  // planned on and is then reused without clearing (SearchScratch ids).
+  SearchScratch scratch;
+  for (;;) {
+    std::unique_ptr<Job> job;
+    {
+      absl::MutexLock lock(&mu_,
+                           absl::Condition(this, &WorkerPool::HasWorkOrStopping));
+      if (queue_.empty()) return;  // stopping, nothing left to drain
+      job = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    try {
+      job->Run(scratch);
+    } catch (const std::exception& e) {
+      // Jobs are expected to answer their own errors; this only keeps one bad
+      // job from taking the worker (and with it the daemon) down.
+      spdlog::error("worker job threw: {}", e.what());
+    } catch (...) {
+      spdlog::error("worker job threw a non-standard exception");
+    }
+  }
+}
+
+}  // namespace pathd::server

@@ -1,0 +1,724 @@
+// End-to-end test: starts the real pathd binary on a free loopback port and
+// drives it with the real pathctl binary, checking exit codes, stderr and the
+// --json output exactly as a user or script would see them. Each test gets
+// its own daemon, stopped with SIGTERM in TearDown (which also checks the
+// graceful exit status), so a failing test never leaves a daemon behind.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+#include "google/protobuf/util/json_util.h"
+#include "gtest/gtest.h"
+#include "pathd/v1/map_service.pb.h"
+#include "pathd/v1/planner_service.pb.h"
+
+extern char** environ;
+
+namespace pathd {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// Hang guards, not timing assertions: generous enough for a loaded CI
+// machine, there only so a broken binary fails the test instead of hanging it.
+constexpr auto kStartupBound = std::chrono::seconds(60);
+constexpr auto kShutdownBound = std::chrono::seconds(60);
+constexpr auto kCommandBound = std::chrono::seconds(120);
+
+constexpr char kListeningPrefix[] = "pathd listening on ";
+const double kSqrt2 = std::sqrt(2.0);
+
+// A 10x10 open room in Moving AI format.
+std::string OpenRoomMap(int width = 10, int height = 10) {
+  std::string text = absl::StrCat("type octile\nheight ", height, "\nwidth ",
+                                  width, "\nmap\n");
+  for (int y = 0; y < height; ++y) text += std::string(width, '.') + "\n";
+  return text;
+}
+
+void WriteFile(const fs::path& path, const std::string& contents) {
+  std::ofstream out(path, std::ios::binary);
+  out << contents;
+  ASSERT_TRUE(out.good()) << "cannot write " << path;
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+struct ProcessResult {
+  int exit_code = -1;  // -1: killed by a signal
+  std::string out;
+  std::string err;
+};
+
+std::ostream& operator<<(std::ostream& os, const ProcessResult& r) {
+  return os << "exit " << r.exit_code << "\n--- stdout ---\n"
+            << r.out << "--- stderr ---\n"
+            << r.err;
+}
+
+// Starts argv[0] with the test's environment minus PATHD_SERVER plus
+// `extra_env` ("NAME=value"), stdout/stderr redirected to the given fds (or
+// inherited when -1). With `die_with_parent` the kernel kills the child if the
+// test process dies, so even a crashed test leaves no daemon running.
+pid_t Spawn(const std::vector<std::string>& argv,
+            const std::vector<std::string>& extra_env, int stdout_fd,
+            int stderr_fd, bool die_with_parent) {
+  // Everything the child needs is built before fork: after it only
+  // async-signal-safe calls are allowed.
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e != nullptr; ++e) {
+    if (!absl::StartsWith(*e, "PATHD_SERVER=")) env_strings.emplace_back(*e);
+  }
+  env_strings.insert(env_strings.end(), extra_env.begin(), extra_env.end());
+  std::vector<char*> envp;
+  for (std::string& s : env_strings) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  std::vector<std::string> argv_copy = argv;
+  std::vector<char*> args;
+  for (std::string& s : argv_copy) args.push_back(s.data());
+  args.push_back(nullptr);
+  const pid_t parent = getpid();
+  sigset_t empty_mask;
+  sigemptyset(&empty_mask);
+
+  const pid_t pid = fork();
+  if (pid != 0) return pid;
+  // Child.
+  if (die_with_parent) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(127);
+  }
+  sigprocmask(SIG_SETMASK, &empty_mask, nullptr);
+  signal(SIGTERM, SIG_DFL);
+  signal(SIGPIPE, SIG_DFL);
+  if (stdout_fd >= 0) dup2(stdout_fd, STDOUT_FILENO);
+  if (stderr_fd >= 0) dup2(stderr_fd, STDERR_FILENO);
+  execve(args[0], args.data(), envp.data());
+  _exit(127);
+}
+
+void MakePipe(int fds[2]) {
+  ASSERT_EQ(pipe2(fds, O_CLOEXEC), 0) << strerror(errno);
+}
+
+// Blocks until `pid` exits; returns its exit code, or -1 for a signal.
+int WaitForExit(pid_t pid) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Runs pathctl with `args` and returns its exit code and output.
+ProcessResult RunPathctl(const std::vector<std::string>& args,
+                         const std::vector<std::string>& extra_env = {}) {
+  ProcessResult result;
+  int out_pipe[2], err_pipe[2];
+  MakePipe(out_pipe);
+  MakePipe(err_pipe);
+  std::vector<std::string> argv = {PATHCTL_BIN};
+  argv.insert(argv.end(), args.begin(), args.end());
+  const pid_t pid = Spawn(argv, extra_env, out_pipe[1], err_pipe[1], true);
+  close(out_pipe[1]);
+  close(err_pipe[1]);
+  if (pid < 0) {
+    ADD_FAILURE() << "fork failed: " << strerror(errno);
+    close(out_pipe[0]);
+    close(err_pipe[0]);
+    return result;
+  }
+  // Both pipes are read together so neither can fill up and block pathctl.
+  pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+  std::string* sinks[2] = {&result.out, &result.err};
+  int open_count = 2;
+  const Clock::time_point bound = Clock::now() + kCommandBound;
+  while (open_count > 0) {
+    if (Clock::now() > bound) {
+      ADD_FAILURE() << "pathctl did not finish; killing it";
+      kill(pid, SIGKILL);
+      break;
+    }
+    if (poll(fds, 2, 1000) < 0 && errno != EINTR) break;
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd < 0 || fds[i].revents == 0) continue;
+      char buffer[4096];
+      const ssize_t n = read(fds[i].fd, buffer, sizeof(buffer));
+      if (n > 0) {
+        sinks[i]->append(buffer, static_cast<size_t>(n));
+      } else if (n == 0 || errno != EINTR) {
+        close(fds[i].fd);
+        fds[i].fd = -1;
+        --open_count;
+      }
+    }
+  }
+  for (const pollfd& p : fds) {
+    if (p.fd >= 0) close(p.fd);
+  }
+  result.exit_code = WaitForExit(pid);
+  return result;
+}
+
+template <typename Message>
+Message ParseJson(const std::string& json) {
+  Message message;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = true;
+  auto status =
+      google::protobuf::util::JsonStringToMessage(json, &message, options);
+  EXPECT_TRUE(status.ok()) << status.ToString() << "\n" << json;
+  return message;
+}
+
+std::vector<std::pair<int, int>> PathCells(const v1::PlanResponse& response) {
+  std::vector<std::pair<int, int>> cells;
+  for (const v1::Cell& c : response.path()) cells.emplace_back(c.x(), c.y());
+  return cells;
+}
+
+class E2eTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char dir_template[] = "/tmp/pathd_e2e_XXXXXX";
+    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
+    temp_dir_ = dir_template;
+    // map_dir stays empty: the daemon preloads whatever it finds there, and
+    // the tests want to create every map themselves.
+    map_dir_ = temp_dir_ / "map_dir";
+    fs::create_directory(map_dir_);
+    ASSERT_NO_FATAL_FAILURE(StartDaemon());
+  }
+
+  void TearDown() override {
+    if (daemon_pid_ > 0) {
+      const int exit_code = StopDaemon();
+      EXPECT_EQ(exit_code, 0) << "pathd did not exit cleanly on SIGTERM";
+    }
+    std::error_code ignored;
+    fs::remove_all(temp_dir_, ignored);
+  }
+
+  void StartDaemon() {
+    int out_pipe[2];
+    MakePipe(out_pipe);
+    // stderr is inherited so the daemon's log shows up in the test output.
+    daemon_pid_ = Spawn({PATHD_BIN, "--address=127.0.0.1:0",
+                         absl::StrCat("--map_dir=", map_dir_.string())},
+                        {}, out_pipe[1], -1, true);
+    close(out_pipe[1]);
+    ASSERT_GT(daemon_pid_, 0) << "fork failed: " << strerror(errno);
+    daemon_stdout_ = out_pipe[0];
+
+    std::string line;
+    const Clock::time_point bound = Clock::now() + kStartupBound;
+    while (line.empty() || line.back() != '\n') {
+      ASSERT_LT(Clock::now(), bound)
+          << "pathd printed no listening line; got '" << line << "'";
+      pollfd p = {daemon_stdout_, POLLIN, 0};
+      if (poll(&p, 1, 1000) <= 0) continue;
+      char c;
+      const ssize_t n = read(daemon_stdout_, &c, 1);
+      if (n < 0 && errno == EINTR) continue;
+      ASSERT_EQ(n, 1) << "pathd closed stdout before listening; got '" << line
+                      << "'";
+      line.push_back(c);
+    }
+    line.pop_back();
+    absl::string_view address = line;
+    ASSERT_TRUE(absl::ConsumePrefix(&address, kListeningPrefix))
+        << "unexpected first stdout line: '" << line << "'";
+    address_ = std::string(address);
+    // Keep draining stdout so the daemon can never block on a full pipe; the
+    // contract is that nothing more arrives, checked in StopDaemon.
+    drain_ = std::thread([this] {
+      char buffer[4096];
+      while (true) {
+        const ssize_t n = read(daemon_stdout_, buffer, sizeof(buffer));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        std::lock_guard<std::mutex> lock(extra_stdout_mu_);
+        extra_stdout_.append(buffer, static_cast<size_t>(n));
+      }
+    });
+  }
+
+  // Sends SIGTERM and returns the daemon's exit code (-1: killed by a signal).
+  int StopDaemon() {
+    kill(daemon_pid_, SIGTERM);
+    int status = 0;
+    pid_t waited = 0;
+    const Clock::time_point bound = Clock::now() + kShutdownBound;
+    while ((waited = waitpid(daemon_pid_, &status, WNOHANG)) == 0 &&
+           Clock::now() < bound) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    if (waited == 0) {
+      ADD_FAILURE() << "pathd ignored SIGTERM; killing it";
+      kill(daemon_pid_, SIGKILL);
+      waitpid(daemon_pid_, &status, 0);
+    }
+    daemon_pid_ = -1;
+    if (drain_.joinable()) drain_.join();
+    close(daemon_stdout_);
+    daemon_stdout_ = -1;
+    {
+      std::lock_guard<std::mutex> lock(extra_stdout_mu_);
+      EXPECT_EQ(extra_stdout_, "")
+          << "pathd must print only the listening line on stdout";
+    }
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+  // Runs pathctl against this test's daemon.
+  ProcessResult Ctl(std::vector<std::string> args) {
+    args.insert(args.begin(), absl::StrCat("--server=", address_));
+    return RunPathctl(args);
+  }
+
+  // Writes a map file into the temp folder and returns its path.
+  std::string MapFile(const std::string& name, const std::string& contents) {
+    const fs::path path = temp_dir_ / name;
+    WriteFile(path, contents);
+    return path.string();
+  }
+
+  // Creates `name` from Moving AI text; fails the test unless it worked.
+  void CreateMap(const std::string& name, const std::string& text,
+                 std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"maps", "create", name, "--from",
+                                     MapFile(name + ".map", text)};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ProcessResult r = Ctl(args);
+    ASSERT_EQ(r.exit_code, 0) << r;
+  }
+
+  // Runs `plan ... --json` and parses the response; `expected_exit` is 0 for
+  // a found path and 3 for none.
+  v1::PlanResponse PlanJson(std::vector<std::string> args,
+                            int expected_exit = 0) {
+    args.insert(args.begin(), "plan");
+    args.push_back("--json");
+    const ProcessResult r = Ctl(args);
+    EXPECT_EQ(r.exit_code, expected_exit) << r;
+    return ParseJson<v1::PlanResponse>(r.out);
+  }
+
+  // Expects pathctl to fail with exit 1 and "error: <code>: ..." on stderr
+  // containing every one of `words`.
+  void ExpectRpcError(const std::vector<std::string>& args,
+                      const std::string& code,
+                      const std::vector<std::string>& words = {}) {
+    const ProcessResult r = Ctl(args);
+    EXPECT_EQ(r.exit_code, 1) << r;
+    EXPECT_TRUE(absl::StartsWith(r.err, absl::StrCat("error: ", code, ": ")))
+        << r;
+    for (const std::string& word : words) {
+      EXPECT_TRUE(absl::StrContains(r.err, word))
+          << "missing '" << word << "'\n"
+          << r;
+    }
+  }
+
+  fs::path temp_dir_;
+  fs::path map_dir_;
+  pid_t daemon_pid_ = -1;
+  int daemon_stdout_ = -1;
+  std::string address_;
+  std::thread drain_;
+  std::mutex extra_stdout_mu_;
+  std::string extra_stdout_;
+};
+
+TEST_F(E2eTest, HealthReportsServing) {
+  const ProcessResult r = Ctl({"health"});
+  EXPECT_EQ(r.exit_code, 0) << r;
+  EXPECT_EQ(r.out, "SERVING\n");
+}
+
+TEST_F(E2eTest, ServerAddressFromEnvironment) {
+  const ProcessResult r =
+      RunPathctl({"health"}, {absl::StrCat("PATHD_SERVER=", address_)});
+  EXPECT_EQ(r.exit_code, 0) << r;
+  EXPECT_EQ(r.out, "SERVING\n");
+}
+
+TEST_F(E2eTest, CreateListGetDelete) {
+  const ProcessResult created =
+      Ctl({"maps", "create", "room", "--from",
+           MapFile("room.map", OpenRoomMap()), "--json"});
+  ASSERT_EQ(created.exit_code, 0) << created;
+  const auto create = ParseJson<v1::CreateMapResponse>(created.out);
+  EXPECT_EQ(create.info().name(), "room");
+  EXPECT_EQ(create.info().width(), 10);
+  EXPECT_EQ(create.info().height(), 10);
+  EXPECT_EQ(create.info().version(), 1u);
+  EXPECT_EQ(create.info().free_cells(), 100);
+  EXPECT_EQ(create.info().blocked_cells(), 0);
+
+  const ProcessResult list = Ctl({"maps", "list"});
+  ASSERT_EQ(list.exit_code, 0) << list;
+  EXPECT_TRUE(absl::StrContains(list.out, "room")) << list;
+  EXPECT_TRUE(absl::StrContains(list.out, "10x10")) << list;
+
+  const ProcessResult list_json = Ctl({"maps", "list", "--json"});
+  ASSERT_EQ(list_json.exit_code, 0) << list_json;
+  const auto maps = ParseJson<v1::ListMapsResponse>(list_json.out);
+  ASSERT_EQ(maps.maps_size(), 1) << list_json;
+  EXPECT_EQ(maps.maps(0).name(), "room");
+
+  const ProcessResult get = Ctl({"maps", "get", "room"});
+  ASSERT_EQ(get.exit_code, 0) << get;
+  EXPECT_TRUE(absl::StrContains(get.out, "10 x 10 cells")) << get;
+  EXPECT_TRUE(absl::StrContains(get.out, "version:     1")) << get;
+
+  ASSERT_EQ(Ctl({"maps", "set", "room", "3", "2", "lethal"}).exit_code, 0);
+  ASSERT_EQ(Ctl({"maps", "set", "room", "4", "2", "100"}).exit_code, 0);
+  ASSERT_EQ(Ctl({"maps", "set", "room", "5", "2", "unknown"}).exit_code, 0);
+  const ProcessResult cells = Ctl({"maps", "get", "room", "--cells"});
+  ASSERT_EQ(cells.exit_code, 0) << cells;
+  // Row 2 holds lethal, cost 100 (digit 4: 85..112) and unknown.
+  EXPECT_TRUE(
+      absl::StrContains(cells.out, "\n..........\n..........\n...#4?....\n"))
+      << cells;
+
+  const ProcessResult deleted = Ctl({"maps", "delete", "room"});
+  ASSERT_EQ(deleted.exit_code, 0) << deleted;
+  EXPECT_TRUE(absl::StrContains(deleted.out, "version 4")) << deleted;
+  ExpectRpcError({"maps", "get", "room"}, "NOT_FOUND", {"room"});
+  const ProcessResult empty = Ctl({"maps", "list"});
+  EXPECT_EQ(empty.exit_code, 0) << empty;
+  EXPECT_EQ(empty.out, "no maps\n");
+}
+
+TEST_F(E2eTest, CreateFromRosMap) {
+  // The image lives beside the YAML, which names it relatively: pathctl must
+  // resolve it against the YAML's folder, not its own working directory.
+  const fs::path ros_dir = temp_dir_ / "ros";
+  fs::create_directory(ros_dir);
+  // 4x3 P2 image: 254 white (free), 0 black (occupied), 128 grey (unknown).
+  WriteFile(ros_dir / "room.pgm",
+            "P2\n4 3\n255\n"
+            "0 254 254 254\n"
+            "254 128 254 254\n"
+            "254 254 254 0\n");
+  WriteFile(ros_dir / "room.yaml",
+            "image: room.pgm\nresolution: 0.05\norigin: [1.0, 2.0, 0.0]\n"
+            "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n");
+  const ProcessResult created =
+      Ctl({"maps", "create", "ros_room", "--from",
+           (ros_dir / "room.yaml").string(), "--json"});
+  ASSERT_EQ(created.exit_code, 0) << created;
+  const auto info = ParseJson<v1::CreateMapResponse>(created.out).info();
+  EXPECT_EQ(info.width(), 4);
+  EXPECT_EQ(info.height(), 3);
+  EXPECT_DOUBLE_EQ(info.resolution(), 0.05);
+  EXPECT_DOUBLE_EQ(info.origin().x(), 1.0);
+  EXPECT_DOUBLE_EQ(info.origin().y(), 2.0);
+
+  // Row 0 is the image's bottom row (OccupancyGrid convention).
+  const ProcessResult cells = Ctl({"maps", "get", "ros_room", "--cells"});
+  ASSERT_EQ(cells.exit_code, 0) << cells;
+  EXPECT_TRUE(absl::EndsWith(cells.out, "\n...#\n.?..\n#...\n")) << cells;
+
+  // A YAML carries its own resolution.
+  const ProcessResult r =
+      Ctl({"maps", "create", "ros_room2", "--from",
+           (ros_dir / "room.yaml").string(), "--resolution=2"});
+  EXPECT_EQ(r.exit_code, 2) << r;
+}
+
+TEST_F(E2eTest, EveryPlannerFindsTheDiagonal) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  // From corner to corner of an open room the only shortest path is the
+  // diagonal: 9 moves of sqrt(2), whatever the planner.
+  for (const char* planner : {"astar", "dijkstra", "bfs"}) {
+    SCOPED_TRACE(planner);
+    const v1::PlanResponse plan = PlanJson(
+        {"room", "0", "0", "9", "9", absl::StrCat("--planner=", planner)});
+    EXPECT_TRUE(plan.found());
+    EXPECT_EQ(plan.outcome(), v1::PLAN_OUTCOME_FOUND);
+    EXPECT_EQ(plan.planner(), planner);
+    EXPECT_NEAR(plan.cost(), 9 * kSqrt2, 1e-9);
+    EXPECT_NEAR(plan.length(), 9 * kSqrt2, 1e-9);
+    EXPECT_EQ(plan.path_size(), 10);
+    EXPECT_EQ(plan.map_version(), 1u);
+    EXPECT_GT(plan.expansions(), 0);
+  }
+  // 4-connected, the same trip is 18 straight moves.
+  const v1::PlanResponse four =
+      PlanJson({"room", "0", "0", "9", "9", "--planner", "astar",
+                "--connectivity", "4"});
+  EXPECT_NEAR(four.cost(), 18.0, 1e-9);
+  EXPECT_EQ(four.path_size(), 19);
+
+  // The human-readable form carries the same facts.
+  const ProcessResult text = Ctl({"plan", "room", "0", "0", "9", "9"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "found:       yes")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "cost:        12.727922")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "map version: 1")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "path (10 cells): (0,0) (1,1)"))
+      << text;
+}
+
+TEST_F(E2eTest, BlockingAPathCellChangesThePlan) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse before = PlanJson({"room", "0", "0", "9", "9"});
+  ASSERT_TRUE(before.found());
+  ASSERT_GE(before.path_size(), 3);
+  const v1::Cell blocked = before.path(before.path_size() / 2);
+
+  const ProcessResult set =
+      Ctl({"maps", "set", "room", absl::StrCat(blocked.x()),
+           absl::StrCat(blocked.y()), "254"});
+  ASSERT_EQ(set.exit_code, 0) << set;
+  EXPECT_TRUE(absl::StrContains(set.out, "now at version 2")) << set;
+
+  const v1::PlanResponse after = PlanJson({"room", "0", "0", "9", "9"});
+  ASSERT_TRUE(after.found());
+  EXPECT_GT(after.map_version(), before.map_version());
+  EXPECT_NE(PathCells(after), PathCells(before));
+  for (const v1::Cell& c : after.path()) {
+    EXPECT_FALSE(c.x() == blocked.x() && c.y() == blocked.y())
+        << "path still crosses the blocked cell (" << c.x() << "," << c.y()
+        << ")";
+  }
+  // The diagonal was the unique optimum, so any detour costs more.
+  EXPECT_GT(after.cost(), before.cost() + 1e-9);
+}
+
+TEST_F(E2eTest, WallingOffTheGoalExitsThree) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const ProcessResult rect =
+      Ctl({"maps", "rect", "room", "9", "5", "0", "5", "lethal"});
+  ASSERT_EQ(rect.exit_code, 0) << rect;
+  EXPECT_TRUE(absl::StrContains(rect.out, "(10 cells changed)")) << rect;
+
+  const v1::PlanResponse plan = PlanJson({"room", "0", "0", "9", "9"}, 3);
+  EXPECT_FALSE(plan.found());
+  EXPECT_EQ(plan.outcome(), v1::PLAN_OUTCOME_NO_PATH);
+  EXPECT_EQ(plan.path_size(), 0);
+
+  const ProcessResult text = Ctl({"plan", "room", "0", "0", "9", "9"});
+  EXPECT_EQ(text.exit_code, 3) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "found:       no")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "outcome:     NO_PATH")) << text;
+}
+
+TEST_F(E2eTest, PlansBetweenWorldPoints) {
+  ASSERT_NO_FATAL_FAILURE(
+      CreateMap("room", OpenRoomMap(), {"--resolution=0.5"}));
+  // With 0.5 m cells and the origin at 0, (0.3, 0.2) m lies in cell (0,0) and
+  // (4.9, 0.1) m in cell (9,0).
+  const v1::PlanResponse plan =
+      PlanJson({"room", "0.3", "0.2", "4.9", "0.1", "--world"});
+  ASSERT_TRUE(plan.found());
+  EXPECT_EQ(plan.start().x(), 0);
+  EXPECT_EQ(plan.start().y(), 0);
+  EXPECT_EQ(plan.goal().x(), 9);
+  EXPECT_EQ(plan.goal().y(), 0);
+  EXPECT_NEAR(plan.length(), 9.0, 1e-9);
+  ASSERT_EQ(plan.world_path_size(), plan.path_size());
+  EXPECT_NEAR(plan.world_path(0).x(), 0.25, 1e-9);
+  EXPECT_NEAR(plan.world_path(0).y(), 0.25, 1e-9);
+
+  const ProcessResult text =
+      Ctl({"plan", "room", "0.3", "0.2", "4.9", "0.1", "--world"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "world path (m): (0.25,0.25)"))
+      << text;
+}
+
+TEST_F(E2eTest, ServerErrorsReachTheUser) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+
+  ExpectRpcError({"plan", "nosuch", "0", "0", "1", "1"}, "NOT_FOUND",
+                 {"nosuch"});
+  ExpectRpcError({"maps", "delete", "nosuch"}, "NOT_FOUND");
+  ExpectRpcError({"maps", "set", "nosuch", "0", "0", "0"}, "NOT_FOUND");
+
+  ExpectRpcError({"plan", "room", "20", "20", "0", "0"}, "INVALID_ARGUMENT",
+                 {"start"});
+  ExpectRpcError({"plan", "room", "-1", "0", "0", "0"}, "INVALID_ARGUMENT",
+                 {"start"});
+  ASSERT_EQ(Ctl({"maps", "set", "room", "9", "9", "lethal"}).exit_code, 0);
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9"}, "INVALID_ARGUMENT",
+                 {"goal"});
+  ExpectRpcError({"maps", "set", "room", "10", "0", "0"}, "INVALID_ARGUMENT");
+
+  // The server parses map files; its message names the problem.
+  ExpectRpcError(
+      {"maps", "create", "bad", "--from",
+       MapFile("bad.map", "type octile\nheight 2\nwidth 3\nmap\n..x\n...\n")},
+      "INVALID_ARGUMENT");
+  ExpectRpcError(
+      {"maps", "create", "room", "--from", MapFile("room2.map", OpenRoomMap())},
+      "ALREADY_EXISTS");
+  const ProcessResult replaced =
+      Ctl({"maps", "create", "room", "--from",
+           MapFile("room3.map", OpenRoomMap(5, 5)), "--replace", "--json"});
+  ASSERT_EQ(replaced.exit_code, 0) << replaced;
+  const auto info = ParseJson<v1::CreateMapResponse>(replaced.out).info();
+  EXPECT_EQ(info.width(), 5);
+  EXPECT_GT(info.version(), 2u) << "a replaced map's version continues";
+
+  // Optimistic concurrency: an update based on a stale version is refused.
+  const uint64_t version = info.version();
+  ExpectRpcError({"maps", "set", "room", "1", "1", "lethal",
+                  absl::StrCat("--expected_version=", version - 1)},
+                 "ABORTED");
+  const ProcessResult fresh =
+      Ctl({"maps", "set", "room", "1", "1", "lethal", "--expected_version",
+           absl::StrCat(version)});
+  EXPECT_EQ(fresh.exit_code, 0) << fresh;
+  EXPECT_TRUE(
+      absl::StrContains(fresh.out, absl::StrCat("version ", version + 1)))
+      << fresh;
+
+  // A local file that does not exist never reaches the server.
+  const ProcessResult missing = Ctl(
+      {"maps", "create", "x", "--from", (temp_dir_ / "missing.map").string()});
+  EXPECT_EQ(missing.exit_code, 1) << missing;
+  EXPECT_TRUE(absl::StrContains(missing.err, "missing.map")) << missing;
+}
+
+TEST_F(E2eTest, UsageErrorsExitTwo) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const std::string txt = MapFile("room.txt", OpenRoomMap());
+  const std::vector<Case> cases = {
+      {{}, "missing command"},
+      {{"frobnicate"}, "unknown command 'frobnicate'"},
+      {{"maps"}, "maps needs a subcommand"},
+      {{"maps", "shred", "x"}, "unknown maps subcommand 'shred'"},
+      {{"maps", "create", "room"}, "--from"},
+      {{"maps", "create", "room", "--from", txt}, "unknown map file type"},
+      {{"maps", "get"}, "maps get takes one NAME"},
+      {{"maps", "set", "room", "0", "0"}, "maps set takes NAME X Y COST"},
+      {{"maps", "set", "room", "0", "zero", "0"},
+       "Y: 'zero' is not an integer"},
+      {{"maps", "set", "room", "0", "0", "300"}, "COST: '300'"},
+      {{"maps", "rect", "room", "0", "0", "1", "1"}, "maps rect takes"},
+      {{"plan", "room", "0", "0"}, "plan takes NAME SX SY GX GY"},
+      {{"plan", "room", "0", "0", "1", "x"}, "GY: 'x' is not an integer"},
+      {{"plan", "room", "0", "0", "1", "1", "--planner=warp"},
+       "unknown planner 'warp'; valid planners: astar, dijkstra, bfs"},
+      {{"plan", "room", "0", "0", "1", "1", "--connectivity=6"},
+       "--connectivity"},
+      {{"--bogus", "maps", "list"}, "unknown flag --bogus"},
+      {{"maps", "list", "--timeout=soon"}, "--timeout"},
+      {{"maps", "list", "--server"}, "--server needs a value"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(absl::StrJoin(c.args, " "));
+    const ProcessResult r = Ctl(c.args);
+    EXPECT_EQ(r.exit_code, 2) << r;
+    EXPECT_TRUE(absl::StartsWith(r.err, "error: ")) << r;
+    EXPECT_TRUE(absl::StrContains(r.err, c.says)) << r;
+    EXPECT_TRUE(absl::StrContains(r.err, "usage:")) << r;
+    EXPECT_EQ(r.out, "") << r;
+  }
+
+  const ProcessResult help = RunPathctl({"--help"});
+  EXPECT_EQ(help.exit_code, 0) << help;
+  EXPECT_TRUE(absl::StrContains(help.out, "exit codes:")) << help;
+  EXPECT_TRUE(absl::StrContains(help.out, "3  plan ran but found no path"))
+      << help;
+}
+
+// Plans a spread of the benchmark's own scenarios on the bundled map and
+// checks the optimal lengths it publishes.
+TEST_F(E2eTest, Arena2ScenariosHaveTheirOptimalLengths) {
+  const std::string source_dir = PATHD_SOURCE_DIR;
+  const ProcessResult created = Ctl(
+      {"maps", "create", "arena2", "--from", source_dir + "/maps/arena2.map"});
+  ASSERT_EQ(created.exit_code, 0) << created;
+  EXPECT_TRUE(absl::StrContains(created.out, "281 x 209 cells")) << created;
+
+  const std::vector<std::string> lines =
+      absl::StrSplit(ReadFile(source_dir + "/maps/arena2.map.scen"), '\n',
+                     absl::SkipWhitespace());
+  ASSERT_GT(lines.size(), 100u);
+  std::vector<size_t> picks;
+  for (size_t i = 1; i < lines.size(); i += 97) picks.push_back(i);
+  picks.push_back(lines.size() - 1);  // the longest
+  for (size_t i : picks) {
+    SCOPED_TRACE(lines[i]);
+    // bucket, map, width, height, start x, start y, goal x, goal y, length
+    const std::vector<std::string> f =
+        absl::StrSplit(lines[i], absl::ByAnyChar(" \t"), absl::SkipEmpty());
+    ASSERT_EQ(f.size(), 9u);
+    double optimal = 0;
+    ASSERT_TRUE(absl::SimpleAtod(f[8], &optimal));
+    // Half a unit in the last stored decimal, plus float slack.
+    const size_t dot = f[8].find('.');
+    const int decimals =
+        dot == std::string::npos ? 0 : static_cast<int>(f[8].size() - dot - 1);
+    const double tolerance = 0.5 * std::pow(10.0, -decimals) + 1e-6;
+
+    const v1::PlanResponse astar = PlanJson({"arena2", f[4], f[5], f[6], f[7]});
+    ASSERT_TRUE(astar.found()) << astar.reason();
+    EXPECT_NEAR(astar.length(), optimal, tolerance);
+    // Every cell is free or lethal, so cost equals length.
+    EXPECT_NEAR(astar.cost(), astar.length(), 1e-6);
+    EXPECT_EQ(astar.path(0).x(), std::stoi(f[4]));
+    EXPECT_EQ(astar.path(0).y(), std::stoi(f[5]));
+    EXPECT_EQ(astar.path(astar.path_size() - 1).x(), std::stoi(f[6]));
+    EXPECT_EQ(astar.path(astar.path_size() - 1).y(), std::stoi(f[7]));
+  }
+  const std::vector<std::string> longest =
+      absl::StrSplit(lines.back(), absl::ByAnyChar(" \t"), absl::SkipEmpty());
+  const v1::PlanResponse dijkstra =
+      PlanJson({"arena2", longest[4], longest[5], longest[6], longest[7],
+                "--planner=dijkstra"});
+  double optimal = 0;
+  ASSERT_TRUE(absl::SimpleAtod(longest[8], &optimal));
+  EXPECT_NEAR(dijkstra.length(), optimal, 1e-3);
+}
+
+TEST_F(E2eTest, SigtermExitsCleanly) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_EQ(Ctl({"plan", "room", "0", "0", "9", "9"}).exit_code, 0);
+  const std::string address = address_;
+  EXPECT_EQ(StopDaemon(), 0);
+  // With the daemon gone the client reports the transport error, exit 1.
+  const ProcessResult r = RunPathctl(
+      {absl::StrCat("--server=", address), "--timeout=5s", "maps", "list"});
+  EXPECT_EQ(r.exit_code, 1) << r;
+  EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE: ")) << r;
+}
+
+}  // namespace
+}  // namespace pathd

@@ -1,0 +1,307 @@
+// MapStore: versions, optimistic concurrency, batch atomicity, snapshot
+// immutability, name and size validation, concurrent readers and writers.
+#include "server/map_store.h"
+
+#include <atomic>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+
+namespace pathd::server {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+Grid FreeGrid(int32_t w, int32_t h) { return *Grid::Create(w, h, kFreeCost); }
+
+TEST(MapStoreTest, CreateStartsAtVersionOneAndReplaceContinuesIt) {
+  MapStore store(1 << 20);
+  auto a = store.Create("a", FreeGrid(4, 3), false);
+  ASSERT_TRUE(a.ok()) << a.status();
+  EXPECT_EQ((*a)->version, 1u);
+  EXPECT_EQ((*a)->name, "a");
+  EXPECT_EQ((*a)->grid->width(), 4);
+
+  auto again = store.Create("a", FreeGrid(2, 2), false);
+  EXPECT_EQ(again.status().code(), absl::StatusCode::kAlreadyExists);
+  EXPECT_THAT(again.status().message(), HasSubstr("'a'"));
+
+  ASSERT_TRUE(store.Update("a", {MapChange::ForCell(0, 0, 7)}, std::nullopt).ok());
+  auto replaced = store.Create("a", FreeGrid(2, 2), true);
+  ASSERT_TRUE(replaced.ok()) << replaced.status();
+  EXPECT_EQ((*replaced)->version, 3u);
+  EXPECT_EQ((*store.Get("a"))->grid->width(), 2);
+}
+
+TEST(MapStoreTest, UpdateMakesNewVersionAndLeavesOldSnapshotAlone) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(5, 5), false).ok());
+  const std::shared_ptr<const MapSnapshot> v1 = *store.Get("m");
+
+  auto result = store.Update(
+      "m", {MapChange::ForCell(1, 2, 254), MapChange::ForRect(3, 3, 4, 4, 100)},
+      std::nullopt);
+  ASSERT_TRUE(result.ok()) << result.status();
+  EXPECT_EQ(result->snapshot->version, 2u);
+  EXPECT_EQ(result->cells_changed, 5);
+  EXPECT_EQ(result->snapshot->grid->cost(1, 2), 254);
+  EXPECT_EQ(result->snapshot->grid->cost(4, 4), 100);
+
+  // The snapshot taken before the update is untouched.
+  EXPECT_EQ(v1->version, 1u);
+  EXPECT_EQ(v1->grid->cost(1, 2), kFreeCost);
+  EXPECT_EQ(v1->grid->cost(4, 4), kFreeCost);
+  EXPECT_EQ((*store.Get("m"))->version, 2u);
+}
+
+TEST(MapStoreTest, CellsChangedCountsAgainstThePreviousVersion) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(4, 4), false).ok());
+  // Set then restore (0,0); set (1,1) to its current value; change (2,2).
+  auto result = store.Update("m",
+                             {MapChange::ForCell(0, 0, 9), MapChange::ForCell(0, 0, 0),
+                              MapChange::ForCell(1, 1, 0), MapChange::ForCell(2, 2, 3)},
+                             std::nullopt);
+  ASSERT_TRUE(result.ok()) << result.status();
+  EXPECT_EQ(result->cells_changed, 1);
+  EXPECT_EQ(result->snapshot->version, 2u);
+}
+
+TEST(MapStoreTest, StaleExpectedVersionIsAborted) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("x", FreeGrid(3, 3), false).ok());
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(store.Update("x", {MapChange::ForCell(0, 0, i)}, std::nullopt).ok());
+  }
+  auto stale = store.Update("x", {MapChange::ForCell(1, 1, 1)}, 4);
+  EXPECT_EQ(stale.status().code(), absl::StatusCode::kAborted);
+  EXPECT_EQ(stale.status().message(), "map 'x' is at version 5, expected 4");
+  EXPECT_EQ((*store.Get("x"))->grid->cost(1, 1), kFreeCost);
+
+  auto fresh = store.Update("x", {MapChange::ForCell(1, 1, 1)}, 5);
+  ASSERT_TRUE(fresh.ok()) << fresh.status();
+  EXPECT_EQ(fresh->snapshot->version, 6u);
+}
+
+TEST(MapStoreTest, BatchWithOneBadChangeAppliesNothing) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(10, 10), false).ok());
+  auto bad = store.Update("m",
+                          {MapChange::ForCell(0, 0, 254), MapChange::ForRect(0, 0, 9, 9, 50),
+                           MapChange::ForCell(10, 3, 254)},
+                          std::nullopt);
+  EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(bad.status().message(), HasSubstr("change 2"));
+  EXPECT_THAT(bad.status().message(), HasSubstr("(10, 3)"));
+
+  const auto current = *store.Get("m");
+  EXPECT_EQ(current->version, 1u);
+  for (uint8_t c : current->grid->cells()) ASSERT_EQ(c, kFreeCost);
+}
+
+TEST(MapStoreTest, RejectsBadChanges) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(10, 10), false).ok());
+
+  auto empty = store.Update("m", {}, std::nullopt);
+  EXPECT_EQ(empty.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(empty.status().message(), HasSubstr("no changes"));
+
+  auto cost = store.Update("m", {MapChange::ForCell(1, 1, 256)}, std::nullopt);
+  EXPECT_EQ(cost.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(cost.status().message(), HasSubstr("cost 256"));
+
+  auto inverted = store.Update("m", {MapChange::ForRect(5, 1, 2, 3, 1)}, std::nullopt);
+  EXPECT_EQ(inverted.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(inverted.status().message(), HasSubstr("min > max"));
+
+  auto off = store.Update("m", {MapChange::ForRect(5, 5, 10, 6, 1)}, std::nullopt);
+  EXPECT_EQ(off.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(off.status().message(), HasSubstr("change 0"));
+  EXPECT_THAT(off.status().message(), HasSubstr("outside the 10 x 10 map"));
+
+  auto negative = store.Update("m", {MapChange::ForCell(-1, 0, 1)}, std::nullopt);
+  EXPECT_EQ(negative.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*store.Get("m"))->version, 1u);
+}
+
+TEST(MapStoreTest, UnknownMapsAreNotFound) {
+  MapStore store(1 << 20);
+  EXPECT_EQ(store.Get("nope").status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(store.Get("nope").status().message(), "map 'nope' not found");
+  EXPECT_EQ(store.Delete("nope").status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(store.Update("nope", {MapChange::ForCell(0, 0, 1)}, std::nullopt)
+                .status()
+                .code(),
+            absl::StatusCode::kNotFound);
+}
+
+TEST(MapStoreTest, DeleteReturnsLastVersionAndKeepsHeldSnapshots) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("d", FreeGrid(3, 3), false).ok());
+  ASSERT_TRUE(store.Update("d", {MapChange::ForCell(0, 0, 1)}, std::nullopt).ok());
+  const auto held = *store.Get("d");
+  auto last = store.Delete("d");
+  ASSERT_TRUE(last.ok()) << last.status();
+  EXPECT_EQ(*last, 2u);
+  EXPECT_EQ(store.Get("d").status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(held->grid->cost(0, 0), 1);
+  // The name is free again and starts over.
+  auto again = store.Create("d", FreeGrid(1, 1), false);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ((*again)->version, 1u);
+}
+
+TEST(MapStoreTest, ListIsSortedByName) {
+  MapStore store(1 << 20);
+  for (const char* name : {"zeta", "Alpha", "beta", "alpha-2"}) {
+    ASSERT_TRUE(store.Create(name, FreeGrid(1, 1), false).ok());
+  }
+  std::vector<std::string> names;
+  for (const auto& s : store.List()) names.push_back(s->name);
+  EXPECT_THAT(names, ElementsAre("Alpha", "alpha-2", "beta", "zeta"));
+  EXPECT_EQ(store.size(), 4u);
+}
+
+TEST(MapStoreTest, ValidatesNames) {
+  EXPECT_TRUE(MapStore::ValidateName("a").ok());
+  EXPECT_TRUE(MapStore::ValidateName("Warehouse_2.floor-1").ok());
+  EXPECT_TRUE(MapStore::ValidateName(std::string(128, 'n')).ok());
+
+  const auto empty = MapStore::ValidateName("");
+  EXPECT_EQ(empty.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(empty.message(), HasSubstr("empty"));
+
+  const auto too_long = MapStore::ValidateName(std::string(129, 'n'));
+  EXPECT_EQ(too_long.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(too_long.message(), HasSubstr("128"));
+
+  const auto dot = MapStore::ValidateName(".hidden");
+  EXPECT_EQ(dot.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(dot.message(), HasSubstr("start with '.'"));
+
+  for (const char* bad : {"a b", "a/b", "x/../y", "caf\xc3\xa9", "x:y"}) {
+    const auto s = MapStore::ValidateName(bad);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << bad;
+    EXPECT_THAT(s.message(), HasSubstr("position")) << bad;
+  }
+
+  MapStore store(1 << 20);
+  EXPECT_EQ(store.Create("bad name", FreeGrid(1, 1), false).status().code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+TEST(MapStoreTest, MaxCellsIsEnforced) {
+  MapStore store(100);
+  EXPECT_TRUE(store.Create("fits", FreeGrid(10, 10), false).ok());
+  auto big = store.Create("big", FreeGrid(11, 10), false);
+  EXPECT_EQ(big.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(big.status().message(), HasSubstr("max_map_cells"));
+  EXPECT_THAT(big.status().message(), HasSubstr("100"));
+  // Overflowing products are refused, not wrapped.
+  EXPECT_EQ(store.CheckSize(int64_t{1} << 40, int64_t{1} << 40).code(),
+            absl::StatusCode::kResourceExhausted);
+}
+
+// Writers repaint the whole map with one value per update; readers must only
+// ever see uniform maps (no half-applied batch) with non-decreasing versions,
+// and every successful compare-and-set update must count.
+TEST(MapStoreTest, ConcurrentReadersAndWritersSeeWholeVersions) {
+  constexpr int kWriters = 3;
+  constexpr int kReaders = 3;
+  constexpr int kUpdatesPerWriter = 60;
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("shared", FreeGrid(64, 64), false).ok());
+
+  std::atomic<bool> done{false};
+  std::atomic<int> reader_failures{0};
+  std::atomic<int> cas_successes{0};
+  std::vector<std::thread> threads;
+  for (int r = 0; r < kReaders; ++r) {
+    threads.emplace_back([&] {
+      uint64_t last_version = 0;
+      while (!done.load()) {
+        auto snap = store.Get("shared");
+        if (!snap.ok()) {
+          ++reader_failures;
+          continue;
+        }
+        const auto& cells = (*snap)->grid->cells();
+        for (uint8_t c : cells) {
+          if (c != cells.front()) {
+            ++reader_failures;
+            break;
+          }
+        }
+        if ((*snap)->version < last_version) ++reader_failures;
+        last_version = (*snap)->version;
+        // Listing and reading another name must not interfere either.
+        if (store.List().empty()) ++reader_failures;
+      }
+    });
+  }
+  std::vector<std::thread> writers;
+  for (int w = 0; w < kWriters; ++w) {
+    writers.emplace_back([&, w] {
+      for (int i = 0; i < kUpdatesPerWriter; ++i) {
+        const uint32_t value = static_cast<uint32_t>(1 + (w * kUpdatesPerWriter + i) % 250);
+        if (i % 2 == 0) {
+          ASSERT_TRUE(store.Update("shared", {MapChange::ForRect(0, 0, 63, 63, value)},
+                                   std::nullopt)
+                          .ok());
+        } else {
+          const uint64_t seen = (*store.Get("shared"))->version;
+          auto r = store.Update("shared", {MapChange::ForRect(0, 0, 63, 63, value)}, seen);
+          if (r.ok()) {
+            ++cas_successes;
+          } else {
+            ASSERT_EQ(r.status().code(), absl::StatusCode::kAborted) << r.status();
+          }
+        }
+      }
+    });
+  }
+  for (auto& t : writers) t.join();
+  done.store(true);
+  for (auto& t : threads) t.join();
+
+  EXPECT_EQ(reader_failures.load(), 0);
+  const uint64_t unconditional = kWriters * ((kUpdatesPerWriter + 1) / 2);
+  EXPECT_EQ((*store.Get("shared"))->version,
+            1 + unconditional + static_cast<uint64_t>(cas_successes.load()));
+}
+
+// Create(replace) and Delete racing with updates must never lose the map's
+// invariants: versions only grow while the name exists, and nothing crashes.
+TEST(MapStoreTest, ConcurrentReplaceDeleteAndUpdate) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("churn", FreeGrid(16, 16), false).ok());
+  std::atomic<bool> done{false};
+  std::thread updater([&] {
+    while (!done.load()) {
+      auto r = store.Update("churn", {MapChange::ForCell(1, 1, 5)}, std::nullopt);
+      if (!r.ok()) {
+        ASSERT_EQ(r.status().code(), absl::StatusCode::kNotFound);
+      }
+    }
+  });
+  for (int i = 0; i < 200; ++i) {
+    if (i % 3 == 0) {
+      (void)store.Delete("churn");
+      ASSERT_TRUE(store.Create("churn", FreeGrid(16, 16), false).ok());
+    } else {
+      ASSERT_TRUE(store.Create("churn", FreeGrid(8, 8), true).ok());
+    }
+  }
+  done.store(true);
+  updater.join();
+  EXPECT_TRUE(store.Get("churn").ok());
+}
+
+}  // namespace
+}  // namespace pathd::server
