@@ -23,16 +23,13 @@
 #include "core/grid.h"
 #include "core/map_io.h"
 #include "core/status_macros.h"
+#include "core/text_util.h"
 
 namespace pathd {
 namespace {
 
-// Abseil here is built with its own string_view
-// (ABSL_OPTION_USE_STD_STRING_VIEW is 0), so the std::string_view of the public
-// API is converted once at entry.
-absl::string_view ToAbsl(std::string_view s) {
-  return absl::string_view(s.data(), s.size());
-}
+using internal::Quote;
+using internal::ToAbsl;
 
 // Yields the lines of a text one at a time, dropping one trailing '\r' per
 // line so CRLF files (the street maps) read like LF ones. A missing final
@@ -69,16 +66,6 @@ absl::Status Error(absl::string_view source, int64_t line,
                    absl::string_view problem) {
   return absl::InvalidArgumentError(
       absl::StrCat(source, ":", line, ": ", problem));
-}
-
-// Quotes untrusted text for an error message: escaped, and cut short so a
-// binary file fed to the parser cannot produce a megabyte-long message.
-std::string Quote(absl::string_view text) {
-  constexpr size_t kMaxQuoted = 40;
-  if (text.size() <= kMaxQuoted)
-    return absl::StrCat("'", absl::CHexEscape(text), "'");
-  return absl::StrCat("'", absl::CHexEscape(text.substr(0, kMaxQuoted)),
-                      "...'");
 }
 
 std::vector<absl::string_view> SplitFields(absl::string_view line) {

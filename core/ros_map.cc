@@ -23,16 +23,13 @@
 #include "core/grid.h"
 #include "core/map_io.h"
 #include "core/status_macros.h"
+#include "core/text_util.h"
 
 namespace pathd {
 namespace {
 
-// Abseil here is built with its own string_view
-// (ABSL_OPTION_USE_STD_STRING_VIEW is 0), so the std::string_view of the public
-// API is converted once at entry.
-absl::string_view ToAbsl(std::string_view s) {
-  return absl::string_view(s.data(), s.size());
-}
+using internal::Quote;
+using internal::ToAbsl;
 
 // ---------------------------------------------------------------- YAML ----
 
@@ -47,14 +44,6 @@ absl::Status KeyError(absl::string_view source, const YAML::Node& node,
                       absl::string_view key, absl::string_view problem) {
   return absl::InvalidArgumentError(
       absl::StrCat(Where(source, node), ": '", key, "' ", problem));
-}
-
-std::string Quote(absl::string_view text) {
-  constexpr size_t kMaxQuoted = 40;
-  if (text.size() <= kMaxQuoted)
-    return absl::StrCat("'", absl::CHexEscape(text), "'");
-  return absl::StrCat("'", absl::CHexEscape(text.substr(0, kMaxQuoted)),
-                      "...'");
 }
 
 // A finite number from a scalar node. absl::SimpleAtod rather than
