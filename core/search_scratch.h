@@ -24,7 +24,6 @@ class SearchScratch {
     uint32_t parent;
     // Position in the open list, kNotInOpen or kClosed.
     int32_t open_pos;
-    uint32_t moves;  // number of moves from the root (BFS depth, tie data)
   };
 
   // Entry of the open list; f and g are copied in for cache locality.
@@ -43,7 +42,7 @@ class SearchScratch {
   // searches), in which case the records are reset.
   void BeginSearch(size_t cells) {
     if (cells > nodes_.size()) {
-      nodes_.resize(cells, Node{0.0, 0, kNoParent, kNotInOpen, 0});
+      nodes_.resize(cells, Node{0.0, 0, kNoParent, kNotInOpen});
     }
     if (++search_id_ == 0) {
       for (Node& n : nodes_) n.search_id = 0;
@@ -61,7 +60,7 @@ class SearchScratch {
     Node& n = nodes_[i];
     if (n.search_id != search_id_) {
       n = Node{std::numeric_limits<double>::infinity(), search_id_, kNoParent,
-               kNotInOpen, 0};
+               kNotInOpen};
     }
     return n;
   }

@@ -1,6 +1,5 @@
 // A* (Hart, Nilsson & Raphael 1968) and Dijkstra's algorithm on the shared
 // best-first loop.
-#include <cmath>
 #include <memory>
 
 #include "absl/status/status.h"
@@ -18,12 +17,9 @@ using internal::BestFirstSearch;
 // are admissible and consistent.
 struct GridHeuristic {
   Cell goal;
-  bool four_connected;
+  Connectivity connectivity;
   double operator()(int32_t x, int32_t y) const {
-    const double dx = std::abs(x - goal.x);
-    const double dy = std::abs(y - goal.y);
-    if (four_connected) return dx + dy;
-    return dx > dy ? dx + (kSqrt2 - 1.0) * dy : dy + (kSqrt2 - 1.0) * dx;
+    return GridDistance(Cell{x, y}, goal, connectivity);
   }
 };
 
@@ -45,8 +41,7 @@ class AStarPlanner final : public Planner {
                                   const StopCondition& stop,
                                   SearchScratch& scratch) const override {
     PATHD_RETURN_IF_ERROR(ValidateEndpoints(grid, request));
-    const GridHeuristic h{request.goal,
-                          request.cost.connectivity == Connectivity::kFour};
+    const GridHeuristic h{request.goal, request.cost.connectivity};
     return BestFirstSearch(grid, request, stop, scratch, h);
   }
 };

@@ -32,7 +32,7 @@ class BfsPlanner final : public Planner {
 
     const uint32_t start = view.Index(request.start.x, request.start.y);
     const uint32_t goal = view.Index(request.goal.x, request.goal.y);
-    scratch.At(start).moves = 0;
+    scratch.At(start);  // marks the start seen
     queue.push_back(start);
 
     PlanResult result;
@@ -52,12 +52,10 @@ class BfsPlanner final : public Planner {
         break;
       }
       const Cell at = view.CellOf(current);
-      const uint32_t depth = scratch.Raw(current).moves + 1;
       view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t, int32_t, double) {
         if (scratch.Seen(next)) return;
         SearchScratch::Node& node = scratch.At(next);
         node.parent = current;
-        node.moves = depth;
         queue.push_back(next);
       });
     }
