@@ -30,6 +30,13 @@ struct Cell {
   friend bool operator==(const Cell&, const Cell&) = default;
 };
 
+// A point in continuous cell coordinates: cell (x, y) covers [x, x+1) x
+// [y, y+1), so its centre is (x + 0.5, y + 0.5).
+struct CellPoint {
+  double x = 0.0;
+  double y = 0.0;
+};
+
 // A point in the world frame, metres.
 struct WorldPoint {
   double x = 0.0;

@@ -19,28 +19,100 @@
 
 namespace pathd {
 
+// Attractive potential shape of the potential-field planner.
+enum class AttractiveShape {
+  // U = 1/2 k d^2 within switch_distance, conic (k * switch_distance * d - ...)
+  // beyond it, so the pull does not grow without bound far from the goal
+  // (Choset's combined quadratic/conic potential).
+  kQuadratic,
+  // U = k d everywhere: constant pull.
+  kConic,
+};
+
+// Parameters of the artificial potential field planner (seeds 001/003/004).
+// Distances are in cells.
+struct PotentialFieldParams {
+  AttractiveShape attractive = AttractiveShape::kQuadratic;
+  // Attractive gain k_att.
+  double attractive_gain = 1.0;
+  // Distance to the goal where the quadratic potential turns conic.
+  double switch_distance = 10.0;
+  // Repulsive gain eta: U_rep = 1/2 eta (1/d - 1/Q*)^2 for d <= Q*.
+  double repulsive_gain = 100.0;
+  // Influence distance Q* of obstacles.
+  double influence_distance = 4.0;
+  // Gradient descent step, cells.
+  double step_size = 0.5;
+  // Give up (EXPANSION_LIMIT) after this many descent steps; 0: 4 * (width +
+  // height) / step_size.
+  int64_t max_steps = 0;
+};
+
 // One planning query.
 struct PlanRequest {
   Cell start;
   Cell goal;
   CostParams cost;
+  // Weighted A*: f = g + w * h with w >= 1; the path costs at most w times
+  // the optimum. Other planners ignore it.
+  double heuristic_weight = 1.0;
+  // Real-time planners (RTAA*, LRTA*): expansions of each search episode
+  // (>= 1); 0 means the planner's default.
+  int32_t lookahead = 0;
+  // Planners with PlannerTraits::cost_to_go fill PlanResult::cost_to_go.
+  bool want_cost_to_go = false;
+  PotentialFieldParams potential;
+
+  // A request with every option at its default.
+  static PlanRequest Between(Cell start, Cell goal, CostParams cost = {}) {
+    PlanRequest r;
+    r.start = start;
+    r.goal = goal;
+    r.cost = cost;
+    return r;
+  }
 };
 
-// Why a search ended. kFound and kNoPath are answers; the rest mean the stop
-// condition fired first.
-enum class PlanOutcome { kFound, kNoPath, kExpansionLimit, kTimeout, kCancelled };
+// Why a search ended. kFound and kNoPath are answers; kLocalMinimum is the
+// potential field's "stuck" (descent stalled away from the goal); the rest
+// mean the stop condition fired first.
+enum class PlanOutcome {
+  kFound,
+  kNoPath,
+  kExpansionLimit,
+  kTimeout,
+  kCancelled,
+  kLocalMinimum,
+};
 
 std::string_view PlanOutcomeName(PlanOutcome outcome);
 
 struct PlanResult {
   PlanOutcome outcome = PlanOutcome::kNoPath;
-  // Start to goal inclusive; empty unless outcome == kFound.
+  // Start to goal inclusive; empty unless outcome == kFound. Consecutive cells
+  // are one legal move apart, unless any_angle is set.
   std::vector<Cell> path;
-  // Sum of step costs under the cost model.
+  // Consecutive path cells are joined by straight segments between their
+  // centres that pass line of sight (core/line_of_sight.h) instead of single
+  // moves: any-angle planners and simplified paths.
+  bool any_angle = false;
+  // Cost under the cost model: sum of step costs, or of SegmentCost() for
+  // any-angle paths.
   double cost = 0.0;
-  // Geometric length: 1 per straight move, sqrt(2) per diagonal.
+  // Geometric length in cells: 1 per straight move, sqrt(2) per diagonal, or
+  // the Euclidean length of any-angle segments.
   double length = 0.0;
   int64_t expansions = 0;
+  // Real-time planners: search episodes run (one per look-ahead search).
+  int64_t episodes = 0;
+  // Potential field: the continuous descent trajectory, start to where it
+  // ended; `path` holds the cells it passes through.
+  std::vector<CellPoint> trajectory;
+  // kLocalMinimum: where the descent stalled.
+  CellPoint stall_point;
+  // When requested and supported: cost-to-go to the goal of every cell,
+  // row-major; +infinity for cells that cannot reach it.
+  std::vector<double> cost_to_go;
   absl::Duration planning_time;
   bool found() const { return outcome == PlanOutcome::kFound; }
 };
@@ -90,9 +162,28 @@ struct PlannerTraits {
   bool any_angle = false;
   // Keeps state between queries (explicit session objects).
   bool incremental = false;
+  // Cost at most heuristic_weight times the optimum (weighted A*).
+  bool bounded = false;
+  // Interleaves bounded look-ahead searches with moves (RTAA*, LRTA*); the
+  // path is the executed trajectory and may revisit cells.
+  bool real_time = false;
+  // Finds a path whenever one exists (given enough budget). False for the
+  // potential field, which can stall in a local minimum.
+  bool complete = true;
+  // Refuses (FAILED_PRECONDITION) maps whose traversable cells do not all
+  // cost the same under the request (JPS).
+  bool needs_uniform_cost = false;
+  // Refuses (FAILED_PRECONDITION) 4-connected requests (JPS).
+  bool needs_eight_connected = false;
+  // Can return the full cost-to-go field (PlanRequest::want_cost_to_go).
+  bool cost_to_go = false;
   // One line for --help and the README.
   std::string_view description;
 };
+
+// "optimal", "fewest moves", "bounded", "any-angle", "real-time" or
+// "heuristic": what a planner's paths guarantee, for listings.
+std::string_view GuaranteeName(const PlannerTraits& traits);
 
 // A planning algorithm. Plan() is a pure function of the grid, the request and
 // scratch memory: an instance holds no per-query state, so one may be shared
@@ -115,13 +206,31 @@ class Planner {
 // INVALID_ARGUMENT naming "start" or "goal" when one is off the grid or on a
 // cell that is not traversable under request.cost, or naming the field when
 // the cost parameters are invalid (weight negative or not finite,
-// connectivity not 4/8) or the grid is empty or too large to search.
+// connectivity not 4/8, heuristic_weight < 1, lookahead < 0, potential-field
+// parameters not positive and finite) or the grid is empty or too large to
+// search.
 absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request);
+
+// ValidateEndpoints plus the planner's own preconditions from its traits:
+// FAILED_PRECONDITION naming the planner and the first weighted cell when it
+// needs uniform cost, or when it needs 8-connectivity. Every planner's Plan()
+// calls this first.
+absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
+                             std::string_view planner, const PlannerTraits& traits);
 
 // Measures a cell path: every consecutive pair must be a legal move (adjacent
 // under the connectivity, traversable, no corner cutting).
 PathMeasure MeasurePath(const Grid& grid, const std::vector<Cell>& path,
                         const CostParams& cost);
+
+// Measures an any-angle path: every consecutive pair must have line of sight
+// (core/line_of_sight.h); cost sums SegmentCost, length the Euclidean lengths.
+PathMeasure MeasureAnyAnglePath(const Grid& grid, const std::vector<Cell>& path,
+                                const CostParams& cost);
+
+// MeasureAnyAnglePath when result.any_angle, else MeasurePath.
+PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
+                              const CostParams& cost);
 
 // Name -> factory registry. Thread-safe after start-up: registration happens
 // in RegisterBuiltinPlanners() before any lookup.

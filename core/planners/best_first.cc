@@ -40,7 +40,7 @@ class AStarPlanner final : public Planner {
   absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
                                   const StopCondition& stop,
                                   SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateEndpoints(grid, request));
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
     const GridHeuristic h{request.goal, request.cost.connectivity};
     return BestFirstSearch(grid, request, stop, scratch, h);
   }
@@ -59,7 +59,7 @@ class DijkstraPlanner final : public Planner {
   absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
                                   const StopCondition& stop,
                                   SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateEndpoints(grid, request));
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
     return BestFirstSearch(grid, request, stop, scratch, ZeroHeuristic{});
   }
 };

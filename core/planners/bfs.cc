@@ -24,7 +24,7 @@ class BfsPlanner final : public Planner {
   absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
                                   const StopCondition& stop,
                                   SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateEndpoints(grid, request));
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
     const absl::Time started = absl::Now();
     const internal::GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());

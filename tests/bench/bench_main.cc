@@ -49,7 +49,7 @@ Figures Run(const pathd::Planner& planner, const pathd::Grid& grid,
   micros.reserve(scenarios.size());
   double total_expansions = 0, total_seconds = 0, total_cost = 0;
   for (const pathd::Scenario& s : scenarios) {
-    const pathd::PlanRequest request{s.start, s.goal, {}};
+    const pathd::PlanRequest request = pathd::PlanRequest::Between(s.start, s.goal);
     double best_cost = 0;
     const absl::Time t0 = absl::Now();
     int64_t expansions = 0;

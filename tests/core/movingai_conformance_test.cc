@@ -101,7 +101,7 @@ TEST_P(MovingAiConformance, OptimalLengthsAndFewestMoves) {
   for (size_t i = 0; i < file->scenarios.size(); i += stride) {
     const Scenario& s = file->scenarios[i];
     const double tolerance = ScenarioTolerance(s, file->version);
-    const PlanRequest request{s.start, s.goal, {}};
+    const PlanRequest request = PlanRequest::Between(s.start, s.goal);
     for (const Planner* planner : {astar, dijkstra}) {
       auto r = planner->Plan(*grid, request, StopCondition::None(), scratch);
       ASSERT_TRUE(r.ok()) << r.status();

@@ -108,7 +108,7 @@ class EveryPlanner : public ::testing::TestWithParam<std::string> {
   absl::StatusOr<PlanResult> Plan(const Grid& grid, Cell s, Cell g,
                                   CostParams params = {},
                                   StopCondition stop = StopCondition::None()) {
-    return planner().Plan(grid, PlanRequest{s, g, params}, stop, scratch_);
+    return planner().Plan(grid, PlanRequest::Between(s, g, params), stop, scratch_);
   }
   SearchScratch scratch_;
 };
@@ -322,7 +322,7 @@ TEST(AStar, WeightedCellsAreAvoidedWhenCheaper) {
   const Planner* astar = PlannerRegistry::Default().Get("astar");
   CostParams heavy;
   heavy.cost_weight = 3.0;
-  auto r = astar->Plan(grid, PlanRequest{{0, 2}, {8, 2}, heavy}, StopCondition::None(),
+  auto r = astar->Plan(grid, PlanRequest::Between({0, 2}, {8, 2}, heavy), StopCondition::None(),
                        scratch);
   ASSERT_TRUE(r.ok() && r->found());
   for (Cell c : r->path) EXPECT_NE(grid.cost(c), 9 * 28) << CellToString(c);
@@ -330,7 +330,7 @@ TEST(AStar, WeightedCellsAreAvoidedWhenCheaper) {
   // Ignoring costs, straight through is shortest.
   CostParams flat;
   flat.cost_weight = 0.0;
-  r = astar->Plan(grid, PlanRequest{{0, 2}, {8, 2}, flat}, StopCondition::None(),
+  r = astar->Plan(grid, PlanRequest::Between({0, 2}, {8, 2}, flat), StopCondition::None(),
                   scratch);
   ASSERT_TRUE(r.ok() && r->found());
   EXPECT_DOUBLE_EQ(r->cost, 8.0);
@@ -339,7 +339,7 @@ TEST(AStar, WeightedCellsAreAvoidedWhenCheaper) {
 TEST(AStar, ExpandsNoMoreThanDijkstra) {
   Grid grid = Grid::Create(64, 64).value();
   SearchScratch scratch;
-  const PlanRequest req{{3, 5}, {60, 50}, {}};
+  const PlanRequest req = PlanRequest::Between({3, 5}, {60, 50});
   auto a = PlannerRegistry::Default().Get("astar")->Plan(grid, req,
                                                           StopCondition::None(), scratch);
   auto d = PlannerRegistry::Default().Get("dijkstra")->Plan(
