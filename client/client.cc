@@ -23,7 +23,11 @@ absl::StatusOr<Response> Invoke(absl::Duration timeout, Call&& call) {
 }  // namespace
 
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address) {
-  return grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  grpc::ChannelArguments args;
+  // Responses carrying a whole cost-to-go field (8 bytes per cell) or a whole
+  // map exceed gRPC's default 4 MiB receive limit.
+  args.SetMaxReceiveMessageSize(-1);
+  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
 }
 
 std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <span>
 #include <utility>
@@ -40,7 +41,10 @@ constexpr char kSynopsis[] =
   pathctl [flags] maps rect NAME X0 Y0 X1 Y1 COST [--expected_version V]
   pathctl [flags] plan NAME SX SY GX GY [--planner P] [--connectivity 4|8]
                        [--cost_weight W] [--unknown_is_free]
-                       [--max_expansions N] [--world]
+                       [--max_expansions N] [--world] [--simplify]
+                       [--robot_radius M | --robot_radius_cells C]
+                       [--heuristic_weight W] [--lookahead N]
+                       [--cost_to_go_file F] [--pf_* ...]
   pathctl [flags] health [SERVICE]
   pathctl --help
 )";
@@ -60,6 +64,7 @@ class Env {
 
   const Options& options() const { return options_; }
   std::ostream& out() { return out_; }
+  std::ostream& err() { return err_; }
 
   const client::PathdClient& client() {
     if (client_ == nullptr) {
@@ -396,10 +401,52 @@ int Plan(Env& env, Args args) {
   }
   plan_options->set_unknown_is_free(options.unknown_is_free);
   plan_options->set_max_expansions(options.max_expansions);
+  if (options.heuristic_weight.has_value()) {
+    plan_options->set_heuristic_weight(*options.heuristic_weight);
+  }
+  if (options.robot_radius_m.has_value() && options.robot_radius_cells.has_value()) {
+    return env.Usage("give --robot_radius (metres) or --robot_radius_cells, not both");
+  }
+  if (options.robot_radius_m.has_value()) {
+    plan_options->set_robot_radius_m(*options.robot_radius_m);
+  }
+  if (options.robot_radius_cells.has_value()) {
+    plan_options->set_robot_radius_cells(*options.robot_radius_cells);
+  }
+  plan_options->set_simplify(options.simplify);
+  plan_options->set_lookahead(options.lookahead);
+  plan_options->set_return_cost_to_go(!options.cost_to_go_file.empty());
+  v1::PotentialFieldOptions* pf = plan_options->mutable_potential_field();
+  if (options.pf_attractive == "quadratic") {
+    pf->set_attractive(v1::ATTRACTIVE_POTENTIAL_QUADRATIC);
+  } else if (options.pf_attractive == "conic") {
+    pf->set_attractive(v1::ATTRACTIVE_POTENTIAL_CONIC);
+  } else if (!options.pf_attractive.empty()) {
+    return env.Usage(absl::StrCat("--pf_attractive must be quadratic or conic, not '",
+                                  options.pf_attractive, "'"));
+  }
+  pf->set_attractive_gain(options.pf_attractive_gain);
+  pf->set_switch_distance(options.pf_switch_distance);
+  pf->set_repulsive_gain(options.pf_repulsive_gain);
+  pf->set_influence_distance(options.pf_influence);
+  pf->set_step_size(options.pf_step);
+  pf->set_max_steps(options.pf_max_steps);
 
   absl::StatusOr<v1::PlanResponse> response = env.client().Plan(request);
   if (!response.ok()) return env.Fail(response.status());
   const int code = response->found() ? kExitOk : kExitNoPath;
+  if (!options.cost_to_go_file.empty()) {
+    if (response->cost_to_go().empty()) {
+      env.err() << "warning: planner " << response->planner()
+                << " returned no cost-to-go field (only distance_transform and "
+                   "distance_transform_exact do); nothing written\n";
+    } else if (absl::Status s = WriteCostToGoCsv(options.cost_to_go_file,
+                                                 response->cost_to_go_width(),
+                                                 response->cost_to_go());
+               !s.ok()) {
+      return env.Fail(s);
+    }
+  }
   if (options.json) {
     const int print_code = env.PrintJson(*response);
     return print_code == kExitOk ? code : print_code;
@@ -418,18 +465,36 @@ int Plan(Env& env, Args args) {
       "goal:        %s\n",
       response->planner(), response->map_version(),
       FormatCell(response->start()), FormatCell(response->goal()));
+  if (response->robot_radius_cells() > 0) {
+    out << absl::StrFormat("robot radius: %g cells\n", response->robot_radius_cells());
+  }
   if (response->found()) {
     out << absl::StrFormat("cost:        %.6f\nlength:      %.6f\n",
                            response->cost(), response->length());
   }
-  out << absl::StrFormat("expansions:  %d\ntime:        %d us\n",
-                         response->expansions(), response->planning_time_us());
+  out << absl::StrFormat("expansions:  %d\n", response->expansions());
+  if (response->episodes() > 0) {
+    out << absl::StrFormat("episodes:    %d\n", response->episodes());
+  }
+  if (response->outcome() == v1::PLAN_OUTCOME_LOCAL_MINIMUM) {
+    out << absl::StrFormat("stalled at:  (%.3f, %.3f)\n", response->stall_point().x(),
+                           response->stall_point().y());
+  }
+  if (!response->trajectory().empty()) {
+    out << "trajectory (" << response->trajectory().size() << " points)\n";
+  }
+  if (!response->cost_to_go().empty() && !options.cost_to_go_file.empty()) {
+    out << "cost-to-go:  " << response->cost_to_go().size() << " cells written to "
+        << options.cost_to_go_file << "\n";
+  }
+  out << absl::StrFormat("time:        %d us\n", response->planning_time_us());
   if (response->found()) {
     std::vector<std::string> cells;
     for (const v1::Cell& cell : response->path())
       cells.push_back(FormatCell(cell));
-    out << "path (" << cells.size() << " cells): " << absl::StrJoin(cells, " ")
-        << "\n";
+    out << "path (" << cells.size()
+        << (response->any_angle() ? " vertices, any-angle" : " cells")
+        << "): " << absl::StrJoin(cells, " ") << "\n";
     if (options.world) {
       std::vector<std::string> points;
       for (const v1::WorldPoint& p : response->world_path()) {
@@ -460,6 +525,33 @@ int Health(Env& env, Args args) {
   return response->status() == HealthCheckResponse::SERVING ? kExitOk
                                                             : kExitError;
 }
+
+}  // namespace
+
+absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
+                              const google::protobuf::RepeatedField<double>& field) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) {
+    return absl::PermissionDeniedError(absl::StrCat("cannot write ", path));
+  }
+  std::string line;
+  for (int i = 0; i < field.size(); ++i) {
+    const double v = field.Get(i);
+    if (i % width != 0) line.push_back(',');
+    absl::StrAppend(&line, std::isfinite(v) ? absl::StrFormat("%.6f", v) : "inf");
+    if (i % width == width - 1) {
+      line.push_back('\n');
+      file << line;
+      line.clear();
+    }
+  }
+  file << line;
+  file.flush();
+  if (!file) return absl::DataLossError(absl::StrCat("error writing ", path));
+  return absl::OkStatus();
+}
+
+namespace {
 
 bool IsNumber(absl::string_view text) {
   double unused;
@@ -501,6 +593,18 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --unknown_is_free    plan: treat unknown cells (255) as free
   --max_expansions N   plan: stop after N expansions (0: the server's limit)
   --world              plan: SX SY GX GY are world metres, not cells
+  --simplify           plan: keep only the turning points (ray-shooting line of
+                       sight); the path becomes any-angle, never longer
+  --robot_radius M     plan: inflate lethal cells by the robot radius in metres
+  --robot_radius_cells C  plan: the same in cells
+  --heuristic_weight W plan: weighted_astar's w >= 1 (default 1.5)
+  --lookahead N        plan: rtaa_star / lrta_star expansions per episode (64)
+  --cost_to_go_file F  plan: distance_transform*: write the cost-to-go field
+                       as CSV (one map row per line, inf = unreachable)
+  --pf_attractive S    plan: potential_field: quadratic (default) or conic
+  --pf_attractive_gain K, --pf_switch_distance D, --pf_repulsive_gain ETA,
+  --pf_influence Q, --pf_step S, --pf_max_steps N
+                       plan: potential_field parameters (cells; 0 = default)
 
 arguments:
   X, Y                 cells: x is the column, y the row, from 0

@@ -40,6 +40,18 @@ inline constexpr PlannerName kPlanners[] = {
     {"astar", v1::PLANNER_ASTAR},
     {"dijkstra", v1::PLANNER_DIJKSTRA},
     {"bfs", v1::PLANNER_BFS},
+    {"dfs", v1::PLANNER_DFS},
+    {"greedy", v1::PLANNER_GREEDY},
+    {"weighted_astar", v1::PLANNER_WEIGHTED_ASTAR},
+    {"wavefront", v1::PLANNER_WAVEFRONT},
+    {"distance_transform", v1::PLANNER_DISTANCE_TRANSFORM},
+    {"distance_transform_exact", v1::PLANNER_DISTANCE_TRANSFORM_EXACT},
+    {"jps", v1::PLANNER_JPS},
+    {"theta_star", v1::PLANNER_THETA_STAR},
+    {"lazy_theta_star", v1::PLANNER_LAZY_THETA_STAR},
+    {"rtaa_star", v1::PLANNER_RTAA_STAR},
+    {"lrta_star", v1::PLANNER_LRTA_STAR},
+    {"potential_field", v1::PLANNER_POTENTIAL_FIELD},
 };
 
 // Looks up a planner by CLI name; INVALID_ARGUMENT listing the valid names.
@@ -65,7 +77,27 @@ struct Options {
   bool world = false;
   bool unknown_is_free = false;
   int64_t max_expansions = 0;
+  std::optional<double> heuristic_weight;
+  std::optional<double> robot_radius_m;
+  std::optional<double> robot_radius_cells;
+  bool simplify = false;
+  int lookahead = 0;
+  // Non-empty: request the cost-to-go field and write it here as CSV.
+  std::string cost_to_go_file;
+  // Potential field; empty / 0 keep the server's defaults.
+  std::string pf_attractive;
+  double pf_attractive_gain = 0.0;
+  double pf_switch_distance = 0.0;
+  double pf_repulsive_gain = 0.0;
+  double pf_influence = 0.0;
+  double pf_step = 0.0;
+  int64_t pf_max_steps = 0;
 };
+
+// Writes a row-major cost-to-go field as CSV, one map row per line, "inf"
+// for unreachable cells. Precondition: width > 0.
+absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
+                              const google::protobuf::RepeatedField<double>& field);
 
 // The full --help text: commands, flags, cell glyphs and exit codes.
 std::string UsageText();

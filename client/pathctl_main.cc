@@ -32,6 +32,26 @@ ABSL_FLAG(std::optional<double>, cost_weight, std::nullopt,
 ABSL_FLAG(bool, world, false, "plan: coordinates are world metres");
 ABSL_FLAG(bool, unknown_is_free, false, "plan: unknown cells are free");
 ABSL_FLAG(int64_t, max_expansions, 0, "plan: expansion budget (0: server's)");
+ABSL_FLAG(std::optional<double>, heuristic_weight, std::nullopt,
+          "plan: weighted_astar heuristic weight w >= 1 (default 1.5)");
+ABSL_FLAG(std::optional<double>, robot_radius, std::nullopt,
+          "plan: inflate obstacles by this robot radius in metres");
+ABSL_FLAG(std::optional<double>, robot_radius_cells, std::nullopt,
+          "plan: inflate obstacles by this robot radius in cells");
+ABSL_FLAG(bool, simplify, false, "plan: simplify the path by ray-shooting");
+ABSL_FLAG(int, lookahead, 0, "plan: rtaa_star/lrta_star look-ahead (0: 64)");
+ABSL_FLAG(std::string, cost_to_go_file, "",
+          "plan: write the distance transform's cost-to-go field as CSV");
+ABSL_FLAG(std::string, pf_attractive, "",
+          "plan: potential_field attractive potential, quadratic or conic");
+ABSL_FLAG(double, pf_attractive_gain, 0.0, "plan: potential_field k_att");
+ABSL_FLAG(double, pf_switch_distance, 0.0,
+          "plan: potential_field quadratic-to-conic distance, cells");
+ABSL_FLAG(double, pf_repulsive_gain, 0.0, "plan: potential_field eta");
+ABSL_FLAG(double, pf_influence, 0.0,
+          "plan: potential_field obstacle influence distance, cells");
+ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
+ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
@@ -75,6 +95,19 @@ int main(int argc, char** argv) {
   options.world = absl::GetFlag(FLAGS_world);
   options.unknown_is_free = absl::GetFlag(FLAGS_unknown_is_free);
   options.max_expansions = absl::GetFlag(FLAGS_max_expansions);
+  options.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
+  options.robot_radius_m = absl::GetFlag(FLAGS_robot_radius);
+  options.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
+  options.simplify = absl::GetFlag(FLAGS_simplify);
+  options.lookahead = absl::GetFlag(FLAGS_lookahead);
+  options.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
+  options.pf_attractive = absl::GetFlag(FLAGS_pf_attractive);
+  options.pf_attractive_gain = absl::GetFlag(FLAGS_pf_attractive_gain);
+  options.pf_switch_distance = absl::GetFlag(FLAGS_pf_switch_distance);
+  options.pf_repulsive_gain = absl::GetFlag(FLAGS_pf_repulsive_gain);
+  options.pf_influence = absl::GetFlag(FLAGS_pf_influence);
+  options.pf_step = absl::GetFlag(FLAGS_pf_step);
+  options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
 
   return pathctl::Run(
       options,

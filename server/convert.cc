@@ -6,6 +6,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/status_macros.h"
 
 namespace pathd::server {
 namespace {
@@ -83,19 +84,129 @@ absl::StatusOr<int64_t> EffectiveMaxExpansions(const v1::PlanOptions& options,
   return std::min(requested, server_limit);
 }
 
-absl::StatusOr<std::string_view> PlannerName(int planner) {
-  switch (planner) {
-    case v1::PLANNER_UNSPECIFIED:
-    case v1::PLANNER_ASTAR:
-      return "astar";
-    case v1::PLANNER_DIJKSTRA:
-      return "dijkstra";
-    case v1::PLANNER_BFS:
-      return "bfs";
-    default:
-      return absl::InvalidArgumentError(
-          absl::StrFormat("unknown planner %d", planner));
+namespace {
+
+// The one table between wire planner values and registry names.
+struct PlannerEntry {
+  v1::Planner wire;
+  std::string_view name;
+};
+constexpr PlannerEntry kPlanners[] = {
+    {v1::PLANNER_ASTAR, "astar"},
+    {v1::PLANNER_DIJKSTRA, "dijkstra"},
+    {v1::PLANNER_BFS, "bfs"},
+    {v1::PLANNER_DFS, "dfs"},
+    {v1::PLANNER_GREEDY, "greedy"},
+    {v1::PLANNER_WEIGHTED_ASTAR, "weighted_astar"},
+    {v1::PLANNER_WAVEFRONT, "wavefront"},
+    {v1::PLANNER_DISTANCE_TRANSFORM, "distance_transform"},
+    {v1::PLANNER_DISTANCE_TRANSFORM_EXACT, "distance_transform_exact"},
+    {v1::PLANNER_JPS, "jps"},
+    {v1::PLANNER_THETA_STAR, "theta_star"},
+    {v1::PLANNER_LAZY_THETA_STAR, "lazy_theta_star"},
+    {v1::PLANNER_RTAA_STAR, "rtaa_star"},
+    {v1::PLANNER_LRTA_STAR, "lrta_star"},
+    {v1::PLANNER_POTENTIAL_FIELD, "potential_field"},
+};
+
+// Checks a potential-field option: 0 (unset) keeps the default, otherwise it
+// must be finite and > 0.
+absl::Status SetPositive(double value, std::string_view field, double* out) {
+  if (value == 0.0) return absl::OkStatus();
+  if (!std::isfinite(value) || value < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.potential_field.%s %s must be finite and > 0", field, Num(value)));
   }
+  *out = value;
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<std::string_view> PlannerName(int planner) {
+  if (planner == v1::PLANNER_UNSPECIFIED) return std::string_view("astar");
+  for (const PlannerEntry& e : kPlanners) {
+    if (e.wire == planner) return e.name;
+  }
+  return absl::InvalidArgumentError(absl::StrFormat("unknown planner %d", planner));
+}
+
+absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
+                                        const Grid& grid) {
+  double radius = 0.0;
+  std::string_view field;
+  switch (options.robot_radius_case()) {
+    case v1::PlanOptions::kRobotRadiusM:
+      field = "robot_radius_m";
+      radius = options.robot_radius_m();
+      break;
+    case v1::PlanOptions::kRobotRadiusCells:
+      field = "robot_radius_cells";
+      radius = options.robot_radius_cells();
+      break;
+    case v1::PlanOptions::ROBOT_RADIUS_NOT_SET:
+      return 0.0;
+  }
+  if (!std::isfinite(radius) || radius < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.%s %s must be finite and >= 0", field, Num(radius)));
+  }
+  if (options.robot_radius_case() == v1::PlanOptions::kRobotRadiusM) {
+    radius /= grid.resolution();
+  }
+  // Beyond the map's diagonal every cell is within the radius of any obstacle;
+  // a bigger value means nothing more and would only slow the transform.
+  const double diagonal = std::hypot(grid.width(), grid.height());
+  if (radius > diagonal) radius = diagonal;
+  return radius;
+}
+
+absl::Status PlanOptionsToRequest(const v1::PlanOptions& options,
+                                  PlanRequest* request) {
+  PATHD_ASSIGN_OR_RETURN(request->cost, CostParamsFromOptions(options));
+  request->heuristic_weight =
+      options.has_heuristic_weight() ? options.heuristic_weight() : 1.5;
+  if (!std::isfinite(request->heuristic_weight) || request->heuristic_weight < 1.0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("options.heuristic_weight %s must be finite and >= 1",
+                        Num(request->heuristic_weight)));
+  }
+  if (options.lookahead() < 0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.lookahead %d must be >= 0", options.lookahead()));
+  }
+  request->lookahead = options.lookahead();
+  request->want_cost_to_go = options.return_cost_to_go();
+  const v1::PotentialFieldOptions& pf = options.potential_field();
+  PotentialFieldParams& params = request->potential;
+  switch (pf.attractive()) {
+    case v1::ATTRACTIVE_POTENTIAL_UNSPECIFIED:
+    case v1::ATTRACTIVE_POTENTIAL_QUADRATIC:
+      params.attractive = AttractiveShape::kQuadratic;
+      break;
+    case v1::ATTRACTIVE_POTENTIAL_CONIC:
+      params.attractive = AttractiveShape::kConic;
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "options.potential_field.attractive: unknown shape %d",
+          static_cast<int>(pf.attractive())));
+  }
+  PATHD_RETURN_IF_ERROR(
+      SetPositive(pf.attractive_gain(), "attractive_gain", &params.attractive_gain));
+  PATHD_RETURN_IF_ERROR(
+      SetPositive(pf.switch_distance(), "switch_distance", &params.switch_distance));
+  PATHD_RETURN_IF_ERROR(
+      SetPositive(pf.repulsive_gain(), "repulsive_gain", &params.repulsive_gain));
+  PATHD_RETURN_IF_ERROR(SetPositive(pf.influence_distance(), "influence_distance",
+                                    &params.influence_distance));
+  PATHD_RETURN_IF_ERROR(SetPositive(pf.step_size(), "step_size", &params.step_size));
+  if (pf.max_steps() < 0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.potential_field.max_steps %d must be >= 0", pf.max_steps()));
+  }
+  params.max_steps = pf.max_steps();
+  return absl::OkStatus();
 }
 
 v1::PlanOutcome ToProto(PlanOutcome outcome) {
@@ -110,6 +221,8 @@ v1::PlanOutcome ToProto(PlanOutcome outcome) {
       return v1::PLAN_OUTCOME_TIMEOUT;
     case PlanOutcome::kCancelled:
       return v1::PLAN_OUTCOME_CANCELLED;
+    case PlanOutcome::kLocalMinimum:
+      return v1::PLAN_OUTCOME_LOCAL_MINIMUM;
   }
   return v1::PLAN_OUTCOME_UNSPECIFIED;
 }
@@ -142,8 +255,28 @@ void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
     case PlanOutcome::kCancelled:
       response->set_reason("cancelled");
       break;
+    case PlanOutcome::kLocalMinimum:
+      response->set_reason(absl::StrFormat(
+          "potential field descent stalled in a local minimum at (%.2f, %.2f)",
+          result.stall_point.x, result.stall_point.y));
+      response->mutable_stall_point()->set_x(result.stall_point.x);
+      response->mutable_stall_point()->set_y(result.stall_point.y);
+      break;
+  }
+  response->set_episodes(result.episodes);
+  response->mutable_trajectory()->Reserve(static_cast<int>(result.trajectory.size()));
+  for (const CellPoint& p : result.trajectory) {
+    v1::CellPoint* out = response->add_trajectory();
+    out->set_x(p.x);
+    out->set_y(p.y);
+  }
+  if (!result.cost_to_go.empty()) {
+    response->set_cost_to_go_width(grid.width());
+    response->mutable_cost_to_go()->Add(result.cost_to_go.begin(),
+                                        result.cost_to_go.end());
   }
   if (!result.found()) return;
+  response->set_any_angle(result.any_angle);
   response->set_cost(result.cost);
   response->set_length(result.length);
   response->mutable_path()->Reserve(static_cast<int>(result.path.size()));

@@ -44,6 +44,18 @@ absl::StatusOr<CostParams> CostParamsFromOptions(const v1::PlanOptions& options)
 absl::StatusOr<int64_t> EffectiveMaxExpansions(const v1::PlanOptions& options,
                                                int64_t server_limit);
 
+// Everything in PlanOptions except the expansion budget and robot radius:
+// cost parameters, heuristic weight (unset: 1.5), look-ahead, cost-to-go,
+// potential-field parameters (0 keeps each default). INVALID_ARGUMENT naming
+// the field for a bad value.
+absl::Status PlanOptionsToRequest(const v1::PlanOptions& options, PlanRequest* request);
+
+// The robot radius in cells (0 when unset): robot_radius_cells as given, or
+// robot_radius_m / resolution, capped at the map's diagonal. INVALID_ARGUMENT
+// naming the field when negative or not finite.
+absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
+                                        const Grid& grid);
+
 // Registry name of a wire planner value (UNSPECIFIED means A*).
 // INVALID_ARGUMENT "unknown planner 17" for a value the enum does not define.
 absl::StatusOr<std::string_view> PlannerName(int planner);

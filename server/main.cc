@@ -34,6 +34,8 @@ ABSL_FLAG(std::string, map_dir, "",
           "directory whose .map/.yaml files are loaded at start-up (named after "
           "the file stem) and readable via CreateMap map_dir_file; empty = none");
 ABSL_FLAG(std::string, log_level, "info", "trace|debug|info|warn|error");
+ABSL_FLAG(int, inflation_cache_entries, 16,
+          "Inflated map versions (per robot radius) kept in memory");
 ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(5),
           "on SIGINT/SIGTERM, time in-flight calls get before they are cancelled");
 
@@ -90,6 +92,11 @@ pathd::server::ServerOptions OptionsFromFlags() {
   options.max_expansions = absl::GetFlag(FLAGS_max_expansions);
   options.map_dir = absl::GetFlag(FLAGS_map_dir);
   options.shutdown_grace = absl::GetFlag(FLAGS_shutdown_grace);
+  if (absl::GetFlag(FLAGS_inflation_cache_entries) < 1) {
+    UsageError("--inflation_cache_entries must be >= 1");
+  }
+  options.inflation_cache_entries =
+      static_cast<size_t>(absl::GetFlag(FLAGS_inflation_cache_entries));
   if (threads < 0) UsageError("--threads must be >= 0");
   if (queue_depth < 1) UsageError("--queue_depth must be >= 1");
   if (options.max_map_cells < 1) UsageError("--max_map_cells must be >= 1");

@@ -13,6 +13,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/path_simplify.h"
 #include "core/planner.h"
 #include "core/status_macros.h"
 #include "server/convert.h"
@@ -42,6 +43,9 @@ struct PlanCall {
   const Planner* planner = nullptr;
   PlanRequest core_request;
   int64_t max_expansions = 0;
+  // 0: plan on the map as stored.
+  double robot_radius_cells = 0.0;
+  bool simplify = false;
 };
 
 class PlanReactor final : public grpc::ServerUnaryReactor {
@@ -87,8 +91,10 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
                          CellFromPosition(request.start(), grid, "start"));
   PATHD_ASSIGN_OR_RETURN(call.core_request.goal,
                          CellFromPosition(request.goal(), grid, "goal"));
-  PATHD_ASSIGN_OR_RETURN(call.core_request.cost,
-                         CostParamsFromOptions(request.options()));
+  PATHD_RETURN_IF_ERROR(PlanOptionsToRequest(request.options(), &call.core_request));
+  PATHD_ASSIGN_OR_RETURN(call.robot_radius_cells,
+                         RobotRadiusCells(request.options(), grid));
+  call.simplify = request.options().simplify();
   PATHD_ASSIGN_OR_RETURN(call.max_expansions,
                          EffectiveMaxExpansions(request.options(),
                                                 server_max_expansions));
@@ -103,7 +109,8 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
 
 class PlanJob final : public Job {
  public:
-  explicit PlanJob(std::shared_ptr<PlanCall> call) : call_(std::move(call)) {}
+  PlanJob(std::shared_ptr<PlanCall> call, InflationCache& inflation)
+      : call_(std::move(call)), inflation_(inflation) {}
 
   void Run(SearchScratch& scratch) override {
     PlanCall& call = *call_;
@@ -121,9 +128,9 @@ class PlanJob final : public Job {
     }
     const StopCondition stop(call.deadline, &call.cancelled, call.max_expansions);
     absl::StatusOr<PlanResult> result;
+    std::shared_ptr<const Grid> grid = call.snapshot->grid;
     try {
-      result = call.planner->Plan(*call.snapshot->grid, call.core_request, stop,
-                                  scratch);
+      result = PlanOn(call, scratch, stop, grid);
     } catch (const std::bad_alloc&) {
       result = absl::ResourceExhaustedError("out of memory while planning");
     } catch (const std::exception& e) {
@@ -148,11 +155,36 @@ class PlanJob final : public Job {
       return;
     }
     v1::PlanResponse* response = call.response;
-    FillPlanResponse(*result, call.core_request, *call.snapshot->grid,
-                     call.max_expansions, response);
+    FillPlanResponse(*result, call.core_request, *grid, call.max_expansions, response);
+    response->set_robot_radius_cells(call.robot_radius_cells);
     response->set_map_version(call.snapshot->version);
     response->set_planner(std::string(call.planner_name));
     FinishCall(call, absl::OkStatus(), outcome);
+  }
+
+  // Inflates (cached), plans and simplifies. `grid` is set to the grid the
+  // path was planned on, for the response's world points.
+  absl::StatusOr<PlanResult> PlanOn(const PlanCall& call, SearchScratch& scratch,
+                                    const StopCondition& stop,
+                                    std::shared_ptr<const Grid>& grid) {
+    if (call.robot_radius_cells > 0.0) {
+      PATHD_ASSIGN_OR_RETURN(grid, inflation_.Get(grid, call.robot_radius_cells));
+      for (const auto& [cell, what] : {std::pair{call.core_request.start, "start"},
+                                       std::pair{call.core_request.goal, "goal"}}) {
+        if (grid->InBounds(cell) && grid->cost(cell) == kInscribedCost &&
+            call.snapshot->grid->cost(cell) != kInscribedCost) {
+          return absl::InvalidArgumentError(absl::StrFormat(
+              "%s %s is within the robot radius (%g cells) of an obstacle", what,
+              CellToString(cell), call.robot_radius_cells));
+        }
+      }
+    }
+    PATHD_ASSIGN_OR_RETURN(PlanResult result,
+                           call.planner->Plan(*grid, call.core_request, stop, scratch));
+    if (call.simplify && result.found()) {
+      SimplifyPath(*grid, call.core_request.cost, &result);
+    }
+    return result;
   }
 
   void Drop() override {
@@ -162,13 +194,14 @@ class PlanJob final : public Job {
 
  private:
   std::shared_ptr<PlanCall> call_;
+  InflationCache& inflation_;
 };
 
 }  // namespace
 
 PlannerServiceImpl::PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
-                                       Options options)
-    : store_(store), pool_(pool), options_(options) {}
+                                       InflationCache& inflation, Options options)
+    : store_(store), pool_(pool), inflation_(inflation), options_(options) {}
 
 grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
     grpc::CallbackServerContext* context, const v1::PlanRequest* request,
@@ -187,7 +220,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
   }
   // Once submitted, the job owns the answer and may already have finished the
   // call on a worker, so nothing below may touch `call` on success.
-  if (absl::Status s = pool_.Submit(std::make_unique<PlanJob>(call)); !s.ok()) {
+  if (absl::Status s = pool_.Submit(std::make_unique<PlanJob>(call, inflation_)); !s.ok()) {
     FinishCall(*call, s, "REJECTED");
   }
   return reactor;

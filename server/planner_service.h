@@ -7,12 +7,13 @@
 #include <cstdint>
 
 #include "pathd/v1/planner_service.grpc.pb.h"
+#include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/worker_pool.h"
 
 namespace pathd::server {
 
-// Thread-safe. `store` and `pool` must outlive the service, and the pool must
+// Thread-safe. `store`, `pool` and `inflation` must outlive the service, and the pool must
 // be shut down (so every accepted job has answered) before the service and the
 // gRPC server that owns the calls go away.
 class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
@@ -22,7 +23,8 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     int64_t max_expansions = 0;
   };
 
-  PlannerServiceImpl(const MapStore& store, WorkerPool& pool, Options options);
+  PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
+                     InflationCache& inflation, Options options);
 
   // Errors as documented in planner_service.proto; the job is dropped without
   // running when the deadline passed or the client cancelled while queued.
@@ -33,6 +35,7 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
  private:
   const MapStore& store_;
   WorkerPool& pool_;
+  InflationCache& inflation_;
   const Options options_;
 };
 

@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/inflation.h"
 #include "core/status_macros.h"
 #include "server/map_dir.h"
 #include "spdlog/spdlog.h"
@@ -38,7 +39,9 @@ std::string ReplacePort(const std::string& address, int port) {
 }
 
 PathdServer::PathdServer(ServerOptions options)
-    : options_(std::move(options)), store_(options_.max_map_cells) {}
+    : options_(std::move(options)),
+      store_(options_.max_map_cells),
+      inflation_(&InflateObstacles, options_.inflation_cache_entries) {}
 
 PathdServer::~PathdServer() { Shutdown(); }
 
@@ -81,7 +84,7 @@ absl::Status PathdServer::Start() {
       WorkerPool::Options{options_.threads, options_.queue_depth});
   map_service_ = std::make_unique<MapServiceImpl>(store_, options_.map_dir);
   planner_service_ = std::make_unique<PlannerServiceImpl>(
-      store_, *pool_, PlannerServiceImpl::Options{options_.max_expansions});
+      store_, *pool_, inflation_, PlannerServiceImpl::Options{options_.max_expansions});
 
   // Both are process-wide switches read when the builder is created.
   grpc::EnableDefaultHealthCheckService(true);

@@ -38,6 +38,8 @@ struct ServerOptions {
   std::string map_dir;
   // How long Shutdown lets in-flight calls finish before cancelling them.
   absl::Duration shutdown_grace = absl::Seconds(5);
+  // Inflated map versions kept for robot_radius requests.
+  size_t inflation_cache_entries = 16;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -65,6 +67,7 @@ class PathdServer {
   std::string listen_address() const;
 
   MapStore& store() { return store_; }
+  const InflationCache& inflation_cache() const { return inflation_; }
   const ServerOptions& options() const { return options_; }
 
  private:
@@ -73,6 +76,7 @@ class PathdServer {
 
   const ServerOptions options_;
   MapStore store_;
+  InflationCache inflation_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<MapServiceImpl> map_service_;
   std::unique_ptr<PlannerServiceImpl> planner_service_;

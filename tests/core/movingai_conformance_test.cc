@@ -1,16 +1,19 @@
-// Conformance against the Moving AI benchmarks in ../shared: A* and Dijkstra
-// reproduce every scenario's stored optimal length within the precision the
-// file stores it with, and BFS paths have the fewest moves (checked against a
-// separate reference BFS in this file). Skips, saying so, when the benchmark
-// folder is absent. Set PATHD_MOVINGAI_DIR to point elsewhere, and
-// PATHD_CONFORMANCE_STRIDE=N to check every N-th scenario only (for slow
-// sanitizer builds; the default checks every scenario).
+// Conformance of every registered planner against the Moving AI benchmarks in
+// ../shared: Dijkstra reproduces every scenario's stored optimal length within
+// the precision the file stores it with, the other optimal planners match
+// Dijkstra, fewest-move planners match a separate reference BFS in this file,
+// and the rest are checked by what their traits promise (PlannerStride says
+// how often). Skips, saying so, when the benchmark folder is absent. Set
+// PATHD_MOVINGAI_DIR to point elsewhere, PATHD_CONFORMANCE_STRIDE=N to check
+// every N-th scenario only (slow sanitizer builds), PATHD_CONFORMANCE_FULL=1
+// to check every planner on every scenario.
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "absl/strings/str_format.h"
+#include "absl/time/time.h"
 #include "core/map_io.h"
 #include "core/planner.h"
 #include "gtest/gtest.h"
@@ -75,15 +78,57 @@ int ReferenceMoves(const Grid& grid, Cell start, Cell goal, std::vector<int>& de
   return -1;
 }
 
-int Stride() {
-  const char* env = std::getenv("PATHD_CONFORMANCE_STRIDE");
-  const int stride = env != nullptr ? std::atoi(env) : 1;
-  return stride > 0 ? stride : 1;
+int EnvInt(const char* name, int fallback) {
+  const char* env = std::getenv(name);
+  const int value = env != nullptr ? std::atoi(env) : fallback;
+  return value > 0 ? value : fallback;
 }
+
+// How often each planner is checked: every scenario for the searches that
+// stop at the goal, every n-th for planners that cost a whole-map sweep per
+// query (the distance transforms) or that wander (real-time, potential field),
+// so the suite stays within minutes on 2 cores.
+// PATHD_CONFORMANCE_STRIDE=N multiplies every stride (sanitizer builds);
+// PATHD_CONFORMANCE_FULL=1 checks every planner on every scenario.
+int PlannerStride(const Planner& planner) {
+  if (std::getenv("PATHD_CONFORMANCE_FULL") != nullptr) return 1;
+  const PlannerTraits& t = planner.traits();
+  int stride = 1;
+  if (t.cost_to_go) {
+    stride = 20;
+  } else if (t.any_angle) {
+    stride = 4;
+  } else if (t.real_time || !t.complete) {
+    stride = 25;
+  } else if (!t.optimal && !t.fewest_moves && !t.bounded) {
+    stride = 5;
+  }
+  return stride * EnvInt("PATHD_CONFORMANCE_STRIDE", 1);
+}
+
+// Budget for the planners that may wander: far more than any optimal search
+// of these maps needs.
+constexpr int64_t kWanderBudget = 4'000'000;
+
+struct PlannerTally {
+  const Planner* planner = nullptr;
+  int stride = 1;
+  int checked = 0;
+  int found = 0;
+  // Sum of cost / optimal over found paths, for the non-optimal planners.
+  double ratio_sum = 0.0;
+};
 
 class MovingAiConformance : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(MovingAiConformance, OptimalLengthsAndFewestMoves) {
+// Every registered planner against the stored optimal lengths: optimal
+// planners match Dijkstra (and Dijkstra the file) within the file's precision;
+// fewest-move planners match a reference BFS; weighted A* stays within its
+// bound; any-angle paths have line of sight and are never longer than the
+// optimum; every other planner's paths are legal and collision-free whenever
+// it reports success, and complete ones always succeed on these solvable
+// scenarios.
+TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
   const fs::path map_path = BenchmarkDir() / GetParam();
   auto grid = ReadMovingAiMapFile(map_path.string());
   ASSERT_TRUE(grid.ok()) << grid.status();
@@ -91,37 +136,83 @@ TEST_P(MovingAiConformance, OptimalLengthsAndFewestMoves) {
   ASSERT_TRUE(file.ok()) << file.status();
   ASSERT_FALSE(file->scenarios.empty());
 
-  const Planner* astar = PlannerRegistry::Default().Get("astar");
-  const Planner* dijkstra = PlannerRegistry::Default().Get("dijkstra");
-  const Planner* bfs = PlannerRegistry::Default().Get("bfs");
+  const PlannerRegistry& registry = PlannerRegistry::Default();
+  const Planner* dijkstra = registry.Get("dijkstra");
+  ASSERT_NE(dijkstra, nullptr);
+  std::vector<PlannerTally> tallies;
+  for (const std::string& name : registry.Names()) {
+    const Planner* p = registry.Get(name);
+    if (p != dijkstra) tallies.push_back({p, PlannerStride(*p)});
+  }
+  constexpr double kWeight = 1.5;
   SearchScratch scratch;
   std::vector<int> depth(grid->size()), stamp(grid->size(), -1);
+  const int base_stride = EnvInt("PATHD_CONFORMANCE_STRIDE", 1);
   int checked = 0;
-  const int stride = Stride();
-  for (size_t i = 0; i < file->scenarios.size(); i += stride) {
+  for (size_t i = 0; i < file->scenarios.size(); i += base_stride) {
     const Scenario& s = file->scenarios[i];
     const double tolerance = ScenarioTolerance(s, file->version);
-    const PlanRequest request = PlanRequest::Between(s.start, s.goal);
-    for (const Planner* planner : {astar, dijkstra}) {
-      auto r = planner->Plan(*grid, request, StopCondition::None(), scratch);
-      ASSERT_TRUE(r.ok()) << r.status();
-      ASSERT_TRUE(r->found()) << planner->name() << " line " << s.line;
-      ASSERT_NEAR(r->cost, s.optimal_length, tolerance)
-          << planner->name() << " " << GetParam() << " line " << s.line;
-      // On a 0/254 map cost and length coincide.
-      ASSERT_DOUBLE_EQ(r->cost, r->length);
-    }
-    auto b = bfs->Plan(*grid, request, StopCondition::None(), scratch);
-    ASSERT_TRUE(b.ok() && b->found()) << "bfs line " << s.line;
-    ASSERT_TRUE(MeasurePath(*grid, b->path, request.cost).valid) << "bfs line " << s.line;
-    ASSERT_EQ(static_cast<int>(b->path.size()) - 1,
-              ReferenceMoves(*grid, s.start, s.goal, depth, stamp, s.line))
-        << "bfs " << GetParam() << " line " << s.line;
+    PlanRequest request = PlanRequest::Between(s.start, s.goal);
+    request.heuristic_weight = kWeight;
+    auto d = dijkstra->Plan(*grid, request, StopCondition::None(), scratch);
+    ASSERT_TRUE(d.ok()) << d.status();
+    ASSERT_TRUE(d->found()) << "dijkstra line " << s.line;
+    ASSERT_NEAR(d->cost, s.optimal_length, tolerance)
+        << "dijkstra " << GetParam() << " line " << s.line;
+    // On a 0/254 map cost and length coincide.
+    ASSERT_DOUBLE_EQ(d->cost, d->length);
+    const double optimum = d->cost;
     ++checked;
+
+    for (PlannerTally& tally : tallies) {
+      if (i % (static_cast<size_t>(tally.stride) * base_stride) != 0) continue;
+      const Planner& planner = *tally.planner;
+      const PlannerTraits& t = planner.traits();
+      const bool wanders = t.real_time || !t.complete;
+      const StopCondition stop =
+          wanders ? StopCondition(absl::InfiniteFuture(), nullptr, kWanderBudget)
+                  : StopCondition::None();
+      auto r = planner.Plan(*grid, request, stop, scratch);
+      ASSERT_TRUE(r.ok()) << planner.name() << ": " << r.status();
+      const std::string where =
+          absl::StrFormat("%s %s line %d", planner.name(), GetParam(), s.line);
+      ++tally.checked;
+      if (!r->found()) {
+        ASSERT_TRUE(wanders) << where << ": " << PlanOutcomeName(r->outcome);
+        ASSERT_TRUE(r->outcome == PlanOutcome::kExpansionLimit ||
+                    r->outcome == PlanOutcome::kLocalMinimum)
+            << where << ": " << PlanOutcomeName(r->outcome);
+        continue;
+      }
+      ++tally.found;
+      ASSERT_EQ(r->path.front(), s.start) << where;
+      ASSERT_EQ(r->path.back(), s.goal) << where;
+      const PathMeasure m = MeasureResultPath(*grid, *r, request.cost);
+      ASSERT_TRUE(m.valid) << where << ": illegal step " << m.first_invalid;
+      ASSERT_NEAR(r->cost, m.cost, 1e-9 * (1 + m.cost)) << where;
+      ASSERT_NEAR(r->length, m.length, 1e-9 * (1 + m.length)) << where;
+      tally.ratio_sum += r->cost / (optimum > 0 ? optimum : 1.0);
+      if (t.optimal) {
+        ASSERT_NEAR(r->cost, optimum, 1e-9 * (1 + optimum)) << where;
+      } else if (t.fewest_moves) {
+        ASSERT_EQ(static_cast<int>(r->path.size()) - 1,
+                  ReferenceMoves(*grid, s.start, s.goal, depth, stamp, s.line))
+            << where;
+      } else if (t.bounded) {
+        ASSERT_LE(r->cost, kWeight * optimum + 1e-9 * (1 + optimum)) << where;
+      } else if (t.any_angle) {
+        ASSERT_LE(r->length, optimum + 1e-9 * (1 + optimum)) << where;
+      }
+    }
   }
-  std::printf("%s: %d of %zu scenarios checked, A* and Dijkstra optimal, BFS "
-              "fewest moves\n",
+  std::printf("%s: %d of %zu scenarios, dijkstra matches the file\n",
               GetParam().c_str(), checked, file->scenarios.size());
+  for (const PlannerTally& tally : tallies) {
+    std::printf("  %-26s every %3d: %5d checked, %5d found, mean cost/optimal %.4f\n",
+                std::string(tally.planner->name()).c_str(), tally.stride * base_stride,
+                tally.checked, tally.found,
+                tally.found > 0 ? tally.ratio_sum / tally.found : 0.0);
+  }
 }
 
 std::string TestName(const ::testing::TestParamInfo<std::string>& info) {

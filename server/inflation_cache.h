@@ -1,0 +1,71 @@
+// Inflated copies of map versions, computed once per (map version, robot
+// radius) and shared by every request that asks for that radius.
+#ifndef PATHD_SERVER_INFLATION_CACHE_H_
+#define PATHD_SERVER_INFLATION_CACHE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <memory>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "core/grid.h"
+
+namespace pathd::server {
+
+// Thread-safe LRU cache. Entries are keyed by the identity of the source grid
+// (the shared_ptr<const Grid> of a map version, held weakly so a cached entry
+// never keeps an old version alive and a freed version can never be matched
+// by a new grid at the same address) and the radius. Concurrent requests for
+// a missing entry compute it once: the first computes, the others wait.
+class InflationCache {
+ public:
+  using InflateFn = std::function<absl::StatusOr<Grid>(const Grid&, double radius_cells)>;
+
+  struct Stats {
+    int64_t hits = 0;
+    int64_t misses = 0;
+    size_t entries = 0;
+    size_t bytes = 0;
+  };
+
+  // Keeps at most `max_entries` inflated grids (at least 1).
+  InflationCache(InflateFn inflate, size_t max_entries);
+
+  // The inflation of `source` by `radius_cells` (> 0), computing it on a miss.
+  // Errors from the inflate function are returned and not cached.
+  absl::StatusOr<std::shared_ptr<const Grid>> Get(
+      const std::shared_ptr<const Grid>& source, double radius_cells);
+
+  Stats stats() const;
+
+ private:
+  struct Entry {
+    std::weak_ptr<const Grid> source;
+    const Grid* source_address = nullptr;
+    double radius_cells = 0.0;
+    // Set once by the computing thread; `done` guards the fields below.
+    bool done = false;
+    absl::Status status;
+    std::shared_ptr<const Grid> inflated;
+  };
+
+  // Drops entries whose source version is gone, then the least recently used
+  // ones beyond the capacity (never one still being computed).
+  void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+
+  const InflateFn inflate_;
+  const size_t max_entries_;
+  mutable absl::Mutex mu_;
+  // Most recently used first.
+  std::list<std::shared_ptr<Entry>> entries_ ABSL_GUARDED_BY(mu_);
+  int64_t hits_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t misses_ ABSL_GUARDED_BY(mu_) = 0;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_INFLATION_CACHE_H_
