@@ -12,6 +12,9 @@ namespace pathd {
 std::unique_ptr<Planner> MakeAStarPlanner();
 std::unique_ptr<Planner> MakeDijkstraPlanner();
 std::unique_ptr<Planner> MakeBfsPlanner();
+std::unique_ptr<Planner> MakeWavefrontPlanner();
+std::unique_ptr<Planner> MakeDistanceTransformPlanner();
+std::unique_ptr<Planner> MakeDistanceTransformExactPlanner();
 
 }  // namespace pathd
 

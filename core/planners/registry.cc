@@ -18,6 +18,9 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeAStarPlanner),
              PlannerRegistry::Factory(&MakeDijkstraPlanner),
              PlannerRegistry::Factory(&MakeBfsPlanner),
+             PlannerRegistry::Factory(&MakeWavefrontPlanner),
+             PlannerRegistry::Factory(&MakeDistanceTransformPlanner),
+             PlannerRegistry::Factory(&MakeDistanceTransformExactPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
