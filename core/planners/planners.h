@@ -15,6 +15,7 @@ std::unique_ptr<Planner> MakeBfsPlanner();
 std::unique_ptr<Planner> MakeWavefrontPlanner();
 std::unique_ptr<Planner> MakeDistanceTransformPlanner();
 std::unique_ptr<Planner> MakeDistanceTransformExactPlanner();
+std::unique_ptr<Planner> MakePotentialFieldPlanner();
 
 }  // namespace pathd
 

@@ -21,6 +21,7 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeWavefrontPlanner),
              PlannerRegistry::Factory(&MakeDistanceTransformPlanner),
              PlannerRegistry::Factory(&MakeDistanceTransformExactPlanner),
+             PlannerRegistry::Factory(&MakePotentialFieldPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

@@ -1,8 +1,10 @@
 // pathd_bench: runs the registered planners over Moving AI maps and their
-// scenario files and prints, per map and planner, the number of queries, mean
-// and p95 microseconds per query, mean expansions and expansions per second,
-// plus the speed ratio against A* measured in the same run. Figures, not
-// assertions: the README records them with the command that produced them.
+// scenario files and prints, per map and planner, the number of queries and
+// how many found a path, mean and p95 microseconds per query, mean expansions
+// and expansions per second, the mean path length over the scenario's optimal
+// length, and the speed-up over A* measured in the same run (A* runs first
+// when listed). Figures, not assertions: the README records them with the
+// command that produced them.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -28,6 +30,11 @@ ABSL_FLAG(std::string, planners, "astar,dijkstra,bfs",
           "comma-separated planner names");
 ABSL_FLAG(int, limit, 1000, "use at most the first N scenarios of each map (0 = all)");
 ABSL_FLAG(int, repeat, 1, "run each query this many times (reports the per-query mean)");
+ABSL_FLAG(double, heuristic_weight, 1.5, "weighted_astar's w");
+ABSL_FLAG(int, lookahead, 64, "rtaa_star / lrta_star expansions per episode");
+ABSL_FLAG(int64_t, max_expansions, 0,
+          "expansion budget per query (0: none); planners that wander "
+          "(real-time, potential field) get 4000000 when this is 0");
 
 namespace fs = std::filesystem;
 
@@ -35,6 +42,9 @@ namespace {
 
 struct Figures {
   int queries = 0;
+  int found = 0;
+  // Mean of length / optimal length over the found paths.
+  double length_ratio = 0;
   double mean_us = 0;
   double p95_us = 0;
   double mean_expansions = 0;
@@ -47,37 +57,47 @@ Figures Run(const pathd::Planner& planner, const pathd::Grid& grid,
             pathd::SearchScratch& scratch) {
   std::vector<double> micros;
   micros.reserve(scenarios.size());
-  double total_expansions = 0, total_seconds = 0, total_cost = 0;
+  double total_expansions = 0, total_seconds = 0, total_cost = 0, total_ratio = 0;
+  int found = 0;
+  const pathd::PlannerTraits& traits = planner.traits();
+  int64_t budget = absl::GetFlag(FLAGS_max_expansions);
+  if (budget == 0 && (traits.real_time || !traits.complete)) budget = 4'000'000;
+  const pathd::StopCondition stop(absl::InfiniteFuture(), nullptr, budget);
   for (const pathd::Scenario& s : scenarios) {
-    const pathd::PlanRequest request = pathd::PlanRequest::Between(s.start, s.goal);
-    double best_cost = 0;
+    pathd::PlanRequest request = pathd::PlanRequest::Between(s.start, s.goal);
+    request.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
+    request.lookahead = absl::GetFlag(FLAGS_lookahead);
     const absl::Time t0 = absl::Now();
-    int64_t expansions = 0;
+    absl::StatusOr<pathd::PlanResult> result;
     for (int r = 0; r < repeat; ++r) {
-      auto result = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
-      if (!result.ok() || !result->found()) {
-        std::fprintf(stderr, "%s failed on line %d\n", std::string(planner.name()).c_str(),
-                     s.line);
-        continue;
-      }
-      expansions = result->expansions;
-      best_cost = result->cost;
+      result = planner.Plan(grid, request, stop, scratch);
     }
     const double seconds = absl::ToDoubleSeconds(absl::Now() - t0) / repeat;
+    if (!result.ok()) {
+      std::fprintf(stderr, "%s: %s\n", std::string(planner.name()).c_str(),
+                   std::string(result.status().message()).c_str());
+      return Figures{};
+    }
     micros.push_back(seconds * 1e6);
     total_seconds += seconds;
-    total_expansions += static_cast<double>(expansions);
-    total_cost += best_cost;
+    total_expansions += static_cast<double>(result->expansions);
+    if (result->found()) {
+      ++found;
+      total_cost += result->cost;
+      total_ratio += s.optimal_length > 0 ? result->length / s.optimal_length : 1.0;
+    }
   }
   Figures f;
   f.queries = static_cast<int>(micros.size());
+  f.found = found;
   if (micros.empty()) return f;
+  if (found > 0) f.length_ratio = total_ratio / found;
   std::sort(micros.begin(), micros.end());
   f.mean_us = total_seconds * 1e6 / f.queries;
   f.p95_us = micros[std::min(micros.size() - 1, micros.size() * 95 / 100)];
   f.mean_expansions = total_expansions / f.queries;
   f.expansions_per_second = total_seconds > 0 ? total_expansions / total_seconds : 0;
-  f.mean_cost = total_cost / f.queries;
+  f.mean_cost = found > 0 ? total_cost / found : 0;
   return f;
 }
 
@@ -86,8 +106,10 @@ Figures Run(const pathd::Planner& planner, const pathd::Grid& grid,
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "pathd_bench [--movingai_dir DIR] [--maps a.map,b.map] [--planners astar,...] "
-      "[--limit N]\nPrints per map and planner: queries, mean/p95 us per query, "
-      "expansions per query and per second, and time relative to A*.");
+      "[--limit N] [--heuristic_weight W] [--lookahead N] [--max_expansions N]\n"
+      "Prints per map and planner: queries, paths found, mean/p95 us per query, "
+      "expansions per query and per second, mean length / optimal length, and "
+      "the speed-up over A* (astar/x: A*'s mean time over this planner's).");
   absl::ParseCommandLine(argc, argv);
   const fs::path root = absl::GetFlag(FLAGS_movingai_dir);
   std::vector<std::string> maps;
@@ -105,16 +127,20 @@ int main(int argc, char** argv) {
     }
     std::sort(maps.begin(), maps.end());
   }
-  const std::vector<std::string> planners =
+  std::vector<std::string> planners =
       absl::StrSplit(absl::GetFlag(FLAGS_planners), ',', absl::SkipEmpty());
+  // A* first, so every other planner's speed-up is against this run's A*.
+  std::stable_partition(planners.begin(), planners.end(),
+                        [](const std::string& p) { return p == "astar"; });
   const int limit = absl::GetFlag(FLAGS_limit);
   const int repeat = std::max(1, absl::GetFlag(FLAGS_repeat));
 
   std::printf("pathd_bench: %u hardware threads, single-threaded queries, limit %d, "
               "repeat %d\n",
               std::thread::hardware_concurrency(), limit, repeat);
-  std::printf("%-28s %-10s %7s %10s %10s %12s %12s %9s\n", "map", "planner", "queries",
-              "mean_us", "p95_us", "expansions", "exp_per_s", "vs_astar");
+  std::printf("%-28s %-24s %7s %6s %10s %10s %12s %10s %8s %9s\n", "map", "planner",
+              "queries", "found", "mean_us", "p95_us", "expansions", "exp_per_s",
+              "len/opt", "astar/x");
   pathd::SearchScratch scratch;
   for (const std::string& name : maps) {
     const fs::path map_path = root / name;
@@ -139,14 +165,16 @@ int main(int argc, char** argv) {
         return 2;
       }
       const Figures f = Run(*planner, *grid, scenarios, repeat, scratch);
+      if (f.queries == 0) continue;  // refused the map (reason printed)
       if (planner_name == "astar") astar_mean = f.mean_us;
       char ratio[32] = "-";
       if (astar_mean > 0 && f.mean_us > 0) {
-        std::snprintf(ratio, sizeof ratio, "%.2fx", f.mean_us / astar_mean);
+        std::snprintf(ratio, sizeof ratio, "%.2f", astar_mean / f.mean_us);
       }
-      std::printf("%-28s %-10s %7d %10.1f %10.1f %12.0f %12.3g %9s\n", name.c_str(),
-                  planner_name.c_str(), f.queries, f.mean_us, f.p95_us,
-                  f.mean_expansions, f.expansions_per_second, ratio);
+      std::printf("%-28s %-24s %7d %6d %10.1f %10.1f %12.0f %10.3g %8.4f %9s\n",
+                  name.c_str(), planner_name.c_str(), f.queries, f.found, f.mean_us,
+                  f.p95_us, f.mean_expansions, f.expansions_per_second, f.length_ratio,
+                  ratio);
       std::fflush(stdout);
     }
   }

@@ -33,6 +33,7 @@
 #include "absl/strings/strip.h"
 #include "google/protobuf/util/json_util.h"
 #include "gtest/gtest.h"
+#include "client/pathctl.h"
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
 
@@ -489,6 +490,154 @@ TEST_F(E2eTest, EveryPlannerFindsTheDiagonal) {
   EXPECT_TRUE(absl::StrContains(text.out, "map version: 1")) << text;
   EXPECT_TRUE(absl::StrContains(text.out, "path (10 cells): (0,0) (1,1)"))
       << text;
+}
+
+// A 20 x 12 room split by a wall at x = 10 with a gap in rows 8..9, so no
+// planner gets there in a straight line.
+std::string WalledRoomMap() {
+  std::string text = "type octile\nheight 12\nwidth 20\nmap\n";
+  for (int y = 0; y < 12; ++y) {
+    std::string row(20, '.');
+    if (y < 8 || y > 9) row[10] = '@';
+    text += row + "\n";
+  }
+  return text;
+}
+
+TEST_F(E2eTest, EveryPlannerRunsThroughPathctl) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  for (const pathctl::PlannerName& entry : pathctl::kPlanners) {
+    const std::string planner(entry.name);
+    SCOPED_TRACE(planner);
+    const ProcessResult r = Ctl({"plan", "walled", "2", "2", "17", "3",
+                                 absl::StrCat("--planner=", planner), "--json"});
+    // The potential field may stall behind the wall (exit 3, LOCAL_MINIMUM);
+    // every complete planner must find the gap.
+    ASSERT_TRUE(r.exit_code == 0 || (planner == "potential_field" && r.exit_code == 3))
+        << r;
+    const auto plan = ParseJson<v1::PlanResponse>(r.out);
+    EXPECT_EQ(plan.planner(), planner);
+    if (!plan.found()) {
+      EXPECT_EQ(plan.outcome(), v1::PLAN_OUTCOME_LOCAL_MINIMUM);
+      continue;
+    }
+    ASSERT_GE(plan.path_size(), 2);
+    EXPECT_EQ(plan.path(0).x(), 2);
+    EXPECT_EQ(plan.path(0).y(), 2);
+    EXPECT_EQ(plan.path(plan.path_size() - 1).x(), 17);
+    EXPECT_EQ(plan.path(plan.path_size() - 1).y(), 3);
+    // Through the gap: the wall column is only crossed in rows 8..9.
+    for (const v1::Cell& c : plan.path()) {
+      if (c.x() == 10) EXPECT_TRUE(c.y() == 8 || c.y() == 9) << c.y();
+    }
+    // Never shorter than the straight line, and A*'s optimum bounds every
+    // optimal planner.
+    EXPECT_GE(plan.length(), std::hypot(15.0, 1.0) - 1e-9);
+    if (planner == "rtaa_star" || planner == "lrta_star") {
+      EXPECT_GT(plan.episodes(), 0);
+    }
+  }
+}
+
+TEST_F(E2eTest, RobotRadiusKeepsThePathAwayFromWalls) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap(), {"--resolution=0.5"}));
+  // With a 1-cell radius the two-row gap narrows to nothing: cells of rows 8
+  // and 9 next to the wall ends are within 1 cell of a lethal cell.
+  const v1::PlanResponse blocked =
+      PlanJson({"walled", "2", "2", "17", "3", "--robot_radius_cells=1"}, 3);
+  EXPECT_EQ(blocked.outcome(), v1::PLAN_OUTCOME_NO_PATH);
+  EXPECT_DOUBLE_EQ(blocked.robot_radius_cells(), 1.0);
+  // 0.25 m at 0.5 m per cell is half a cell: only lethal cells' centres are
+  // within it, so the plan is the plain one.
+  const v1::PlanResponse thin =
+      PlanJson({"walled", "2", "2", "17", "3", "--robot_radius=0.25"});
+  const v1::PlanResponse plain = PlanJson({"walled", "2", "2", "17", "3"});
+  EXPECT_DOUBLE_EQ(thin.robot_radius_cells(), 0.5);
+  EXPECT_NEAR(thin.cost(), plain.cost(), 1e-9);
+  // A start inside the inflated band is refused with the reason.
+  ExpectRpcError({"plan", "walled", "9", "2", "17", "3", "--robot_radius_cells=1.5"},
+                 "INVALID_ARGUMENT", {"start", "robot radius"});
+  ExpectRpcError({"plan", "walled", "2", "2", "17", "3", "--robot_radius_cells=-1"},
+                 "INVALID_ARGUMENT", {"robot_radius_cells"});
+  const ProcessResult both =
+      Ctl({"plan", "walled", "2", "2", "17", "3", "--robot_radius=1",
+           "--robot_radius_cells=1"});
+  EXPECT_EQ(both.exit_code, 2) << both;
+}
+
+TEST_F(E2eTest, SimplifyKeepsOnlyTheTurns) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  const v1::PlanResponse plain = PlanJson({"walled", "2", "2", "17", "3"});
+  const v1::PlanResponse simple =
+      PlanJson({"walled", "2", "2", "17", "3", "--simplify"});
+  EXPECT_FALSE(plain.any_angle());
+  EXPECT_TRUE(simple.any_angle());
+  EXPECT_LT(simple.path_size(), plain.path_size());
+  EXPECT_LE(simple.length(), plain.length() + 1e-9);
+  EXPECT_LE(simple.cost(), plain.cost() + 1e-9);
+  const ProcessResult text = Ctl({"plan", "walled", "2", "2", "17", "3", "--simplify"});
+  EXPECT_TRUE(absl::StrContains(text.out, "vertices, any-angle")) << text;
+}
+
+TEST_F(E2eTest, DistanceTransformWritesItsCostToGoField) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  const std::string csv = (temp_dir_ / "ctg.csv").string();
+  const ProcessResult r =
+      Ctl({"plan", "walled", "2", "2", "17", "3", "--planner=distance_transform",
+           "--cost_to_go_file", csv});
+  ASSERT_EQ(r.exit_code, 0) << r;
+  std::ifstream in(csv);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    rows.push_back(absl::StrSplit(line, ','));
+  }
+  ASSERT_EQ(rows.size(), 12u);
+  for (const auto& row : rows) ASSERT_EQ(row.size(), 20u);
+  EXPECT_EQ(rows[3][17], "0.000000");  // the goal
+  EXPECT_EQ(rows[0][10], "inf");       // a wall cell
+  double start_cost = 0;
+  ASSERT_TRUE(absl::SimpleAtod(rows[2][2], &start_cost));
+  const v1::PlanResponse astar = PlanJson({"walled", "2", "2", "17", "3"});
+  EXPECT_NEAR(start_cost, astar.cost(), 1e-5);
+}
+
+TEST_F(E2eTest, PotentialFieldReportsWhereItStalled) {
+  // A cup open towards the start: the goal's pull holds the robot inside it.
+  std::string text = "type octile\nheight 15\nwidth 15\nmap\n";
+  for (int y = 0; y < 15; ++y) {
+    std::string row(15, '.');
+    if (y >= 4 && y <= 10) row[10] = '@';
+    if (y == 4 || y == 10) {
+      for (int x = 6; x <= 10; ++x) row[x] = '@';
+    }
+    text += row + "\n";
+  }
+  ASSERT_NO_FATAL_FAILURE(CreateMap("cup", text));
+  const ProcessResult r =
+      Ctl({"plan", "cup", "2", "7", "13", "7", "--planner=potential_field"});
+  EXPECT_EQ(r.exit_code, 3) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "outcome:     LOCAL_MINIMUM")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "stalled at:")) << r;
+  const v1::PlanResponse plan =
+      PlanJson({"cup", "2", "7", "13", "7", "--planner=potential_field"}, 3);
+  EXPECT_GT(plan.stall_point().x(), 5.0);
+  EXPECT_LT(plan.stall_point().x(), 10.0);
+  // Around the cup's back the field leads straight to the goal.
+  const v1::PlanResponse open =
+      PlanJson({"cup", "2", "1", "13", "1", "--planner=potential_field"});
+  EXPECT_GT(open.trajectory_size(), 1);
+}
+
+TEST_F(E2eTest, JpsRefusesWeightedMaps) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const ProcessResult set = Ctl({"maps", "set", "room", "4", "4", "100"});
+  ASSERT_EQ(set.exit_code, 0) << set;
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--planner=jps"},
+                 "FAILED_PRECONDITION", {"jps", "(4, 4)", "cost_weight 0"});
+  // Ignoring cell costs the map is uniform again.
+  const v1::PlanResponse flat =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=jps", "--cost_weight=0"});
+  EXPECT_NEAR(flat.cost(), 9 * kSqrt2, 1e-9);
 }
 
 TEST_F(E2eTest, BlockingAPathCellChangesThePlan) {
