@@ -48,7 +48,7 @@ struct PotentialFieldParams {
   // Gradient descent step, cells.
   double step_size = 0.5;
   // Give up (EXPANSION_LIMIT) after this many descent steps; 0: 4 * (width +
-  // height) / step_size.
+  // height) / step_size, and at least 8 stall-test windows on small maps.
   int64_t max_steps = 0;
 };
 

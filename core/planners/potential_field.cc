@@ -285,20 +285,23 @@ class PotentialFieldPlanner final : public Planner {
     const PotentialField field(params, goal_point, obstacles);
 
     const double step = params.step_size;
-    int64_t max_steps = params.max_steps;
-    if (max_steps == 0) {
-      const double default_steps = std::ceil(
-          4.0 * static_cast<double>(grid.width() + grid.height()) / step);
-      max_steps = default_steps >= static_cast<double>(kStepCeiling)
-                      ? kStepCeiling
-                      : static_cast<int64_t>(default_steps);
-    }
-    max_steps = std::min(max_steps, kStepCeiling);
     const double window_steps = std::ceil(kStallTravel / step);
     const int64_t stall_window =
         window_steps >= static_cast<double>(kStepCeiling)
             ? kStepCeiling
             : std::max(kMinStallSteps, static_cast<int64_t>(window_steps));
+    int64_t max_steps = params.max_steps;
+    if (max_steps == 0) {
+      // Room to cross the map four times, and on small maps enough steps for
+      // the stall test to see a local minimum before the limit cuts in.
+      const double default_steps = std::max(
+          std::ceil(4.0 * static_cast<double>(grid.width() + grid.height()) / step),
+          8.0 * static_cast<double>(stall_window));
+      max_steps = default_steps >= static_cast<double>(kStepCeiling)
+                      ? kStepCeiling
+                      : static_cast<int64_t>(default_steps);
+    }
+    max_steps = std::min(max_steps, kStepCeiling);
 
     // A segment is clear when every cell it meets, including cells touched
     // only at a corner, is on the map and traversable: no corner cutting.

@@ -187,7 +187,10 @@ TEST_P(EveryPlanner, UnknownCellsFollowTheOption) {
   CostParams params;
   auto r = Plan(grid, {0, 0}, {0, 2}, params);
   ASSERT_TRUE(r.ok());
-  EXPECT_EQ(r->outcome, PlanOutcome::kNoPath);
+  EXPECT_FALSE(r->found());
+  if (traits().complete) {
+    EXPECT_EQ(r->outcome, PlanOutcome::kNoPath);
+  }
   params.unknown_is_free = true;
   r = Plan(grid, {0, 0}, {0, 2}, params);
   ASSERT_TRUE(r.ok());
@@ -322,10 +325,13 @@ TEST_P(EveryPlanner, SearchScratchIsReusedAcrossMapSizes) {
   for (int i = 0; i < 3; ++i) {
     auto a = Plan(big, {0, 0}, {49, 0});
     ASSERT_TRUE(a.ok() && a->found()) << (a.ok() ? "" : a.status().ToString());
-    auto b = Plan(small, {0, 0}, {2, 2});
+    // Around the centre obstacle: the potential field stalls on its axis of
+    // symmetry, so it gets a goal it can see.
+    const Cell goal = traits().complete ? Cell{2, 2} : Cell{2, 0};
+    auto b = Plan(small, {0, 0}, goal);
     ASSERT_TRUE(b.ok() && b->found());
     EXPECT_EQ(b->path.front(), (Cell{0, 0}));
-    EXPECT_EQ(b->path.back(), (Cell{2, 2}));
+    EXPECT_EQ(b->path.back(), goal);
   }
 }
 
