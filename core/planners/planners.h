@@ -12,6 +12,11 @@ namespace pathd {
 std::unique_ptr<Planner> MakeAStarPlanner();
 std::unique_ptr<Planner> MakeDijkstraPlanner();
 std::unique_ptr<Planner> MakeBfsPlanner();
+std::unique_ptr<Planner> MakeDfsPlanner();
+std::unique_ptr<Planner> MakeGreedyPlanner();
+std::unique_ptr<Planner> MakeWeightedAStarPlanner();
+std::unique_ptr<Planner> MakeRtaaStarPlanner();
+std::unique_ptr<Planner> MakeLrtaStarPlanner();
 
 }  // namespace pathd
 

@@ -18,6 +18,11 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeAStarPlanner),
              PlannerRegistry::Factory(&MakeDijkstraPlanner),
              PlannerRegistry::Factory(&MakeBfsPlanner),
+             PlannerRegistry::Factory(&MakeDfsPlanner),
+             PlannerRegistry::Factory(&MakeGreedyPlanner),
+             PlannerRegistry::Factory(&MakeWeightedAStarPlanner),
+             PlannerRegistry::Factory(&MakeRtaaStarPlanner),
+             PlannerRegistry::Factory(&MakeLrtaStarPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
