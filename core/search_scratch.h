@@ -72,10 +72,43 @@ class SearchScratch {
   std::vector<OpenEntry>& open() { return open_; }
   std::vector<uint32_t>& fifo() { return fifo_; }
 
+  // Per-cell state that outlives BeginSearch(), for one query of a real-time
+  // planner: the heuristic it learns over its many look-ahead searches, and
+  // a few mark bits. BeginLearning() forgets all of it in O(1), stamped like
+  // the nodes.
+  void BeginLearning(size_t cells) {
+    if (cells > learned_.size()) learned_.resize(cells, Learned{0.0, 0, 0});
+    if (++learning_id_ == 0) {
+      for (Learned& l : learned_) l.learning_id = 0;
+      learning_id_ = 1;
+    }
+  }
+  // True when cell i has a value since the last BeginLearning().
+  bool HasLearned(size_t i) const {
+    return learned_[i].learning_id == learning_id_ && (learned_[i].bits & kHasValue);
+  }
+  // The value of cell i, or `fallback` when it has none.
+  double LearnedOr(size_t i, double fallback) const {
+    return HasLearned(i) ? learned_[i].value : fallback;
+  }
+  void SetLearned(size_t i, double value) {
+    Learned& l = FreshLearned(i);
+    l.value = value;
+    l.bits |= kHasValue;
+  }
+  // Mark bits 0..6 of cell i, all clear after BeginLearning().
+  uint8_t LearnedMarks(size_t i) const {
+    return learned_[i].learning_id == learning_id_ ? learned_[i].bits >> 1 : 0;
+  }
+  void AddLearnedMarks(size_t i, uint8_t marks) {
+    FreshLearned(i).bits |= static_cast<uint8_t>(marks << 1);
+  }
+
   // Bytes held, for metrics.
   size_t MemoryBytes() const {
     return nodes_.capacity() * sizeof(Node) +
-           open_.capacity() * sizeof(OpenEntry) + fifo_.capacity() * sizeof(uint32_t);
+           open_.capacity() * sizeof(OpenEntry) + fifo_.capacity() * sizeof(uint32_t) +
+           learned_.capacity() * sizeof(Learned);
   }
   uint32_t search_id() const { return search_id_; }
 
@@ -84,6 +117,21 @@ class SearchScratch {
   std::vector<OpenEntry> open_;
   std::vector<uint32_t> fifo_;
   uint32_t search_id_ = 0;
+
+  struct Learned {
+    double value;
+    uint32_t learning_id;
+    // kHasValue, then the mark bits.
+    uint8_t bits;
+  };
+  static constexpr uint8_t kHasValue = 1;
+  Learned& FreshLearned(size_t i) {
+    Learned& l = learned_[i];
+    if (l.learning_id != learning_id_) l = Learned{0.0, learning_id_, 0};
+    return l;
+  }
+  std::vector<Learned> learned_;
+  uint32_t learning_id_ = 0;
 };
 
 }  // namespace pathd

@@ -1,5 +1,6 @@
-// A* (Hart, Nilsson & Raphael 1968) and Dijkstra's algorithm on the shared
-// best-first loop.
+// A* (Hart, Nilsson & Raphael 1968), Dijkstra's algorithm, weighted A* (Pohl
+// 1970) and greedy best-first search on the shared best-first loop: each is
+// an open-list priority policy.
 #include <memory>
 
 #include "absl/status/status.h"
@@ -23,8 +24,29 @@ struct GridHeuristic {
   }
 };
 
-struct ZeroHeuristic {
-  double operator()(int32_t, int32_t) const { return 0.0; }
+// Open-list keys for BestFirstSearch.
+struct AStarPriority {
+  GridHeuristic h;
+  double operator()(double g, int32_t x, int32_t y) const { return g + h(x, y); }
+};
+
+struct DijkstraPriority {
+  double operator()(double g, int32_t, int32_t) const { return g; }
+};
+
+// f = g + w * h: w > 1 trades path cost (at most w times the optimum) for
+// fewer expansions, as the search is pulled towards the goal.
+struct WeightedAStarPriority {
+  GridHeuristic h;
+  double w;
+  double operator()(double g, int32_t x, int32_t y) const { return g + w * h(x, y); }
+};
+
+// f = h: expands whatever looks closest to the goal, whatever it cost to
+// reach. Ties on h still go to the larger g, the search's current direction.
+struct GreedyPriority {
+  GridHeuristic h;
+  double operator()(double, int32_t x, int32_t y) const { return h(x, y); }
 };
 
 class AStarPlanner final : public Planner {
@@ -41,8 +63,8 @@ class AStarPlanner final : public Planner {
                                   const StopCondition& stop,
                                   SearchScratch& scratch) const override {
     PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const GridHeuristic h{request.goal, request.cost.connectivity};
-    return BestFirstSearch(grid, request, stop, scratch, h);
+    const AStarPriority priority{{request.goal, request.cost.connectivity}};
+    return BestFirstSearch(grid, request, stop, scratch, priority);
   }
 };
 
@@ -60,7 +82,45 @@ class DijkstraPlanner final : public Planner {
                                   const StopCondition& stop,
                                   SearchScratch& scratch) const override {
     PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    return BestFirstSearch(grid, request, stop, scratch, ZeroHeuristic{});
+    return BestFirstSearch(grid, request, stop, scratch, DijkstraPriority{});
+  }
+};
+
+class WeightedAStarPlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "weighted_astar"; }
+  const PlannerTraits& traits() const override {
+    static const PlannerTraits kTraits{
+        .bounded = true,
+        .description = "weighted A* (f = g + w * h, w = heuristic_weight); cost "
+                       "at most w times the optimum, fewer expansions"};
+    return kTraits;
+  }
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch& scratch) const override {
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+    const WeightedAStarPriority priority{{request.goal, request.cost.connectivity},
+                                         request.heuristic_weight};
+    return BestFirstSearch(grid, request, stop, scratch, priority);
+  }
+};
+
+class GreedyPlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "greedy"; }
+  const PlannerTraits& traits() const override {
+    static const PlannerTraits kTraits{
+        .description = "greedy best-first search on the heuristic alone (f = h); "
+                       "complete, fast, not optimal"};
+    return kTraits;
+  }
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch& scratch) const override {
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+    const GreedyPriority priority{{request.goal, request.cost.connectivity}};
+    return BestFirstSearch(grid, request, stop, scratch, priority);
   }
 };
 
@@ -70,5 +130,9 @@ std::unique_ptr<Planner> MakeAStarPlanner() { return std::make_unique<AStarPlann
 std::unique_ptr<Planner> MakeDijkstraPlanner() {
   return std::make_unique<DijkstraPlanner>();
 }
+std::unique_ptr<Planner> MakeWeightedAStarPlanner() {
+  return std::make_unique<WeightedAStarPlanner>();
+}
+std::unique_ptr<Planner> MakeGreedyPlanner() { return std::make_unique<GreedyPlanner>(); }
 
 }  // namespace pathd

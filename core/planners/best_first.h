@@ -1,8 +1,8 @@
-// The one best-first search loop behind A*, Dijkstra (and later weighted A*,
-// greedy best-first): a binary-heap open list with decrease-key over the
-// per-thread SearchScratch, parameterised by a heuristic functor and an
-// expansion listener that compiles away when unused (after warthog's
-// unidirectional_search<H, E, Q, L>).
+// The one best-first search loop behind A*, Dijkstra, weighted A* and greedy
+// best-first: a binary-heap open list with decrease-key over the per-thread
+// SearchScratch, parameterised by a priority policy (the open-list key of a
+// node from its g and cell) and an expansion listener that compiles away when
+// unused (after warthog's unidirectional_search<H, E, Q, L>).
 #ifndef PATHD_CORE_PLANNERS_BEST_FIRST_H_
 #define PATHD_CORE_PLANNERS_BEST_FIRST_H_
 
@@ -29,13 +29,21 @@ class OpenList {
   bool empty() const { return heap_.empty(); }
   size_t size() const { return heap_.size(); }
 
-  // Inserts `index` or lowers its key if it is already open.
+  // Inserts `index` or changes its key if it is already open. A lower g
+  // usually lowers f, but not under every priority (greedy's f = h keeps f and
+  // loses the larger-g tie-break), so the entry may have to move either way.
   void Push(uint32_t index, double f, double g) {
     SearchScratch::Node& node = scratch_.Raw(index);
     if (node.open_pos >= 0) {
-      heap_[node.open_pos].f = f;
-      heap_[node.open_pos].g = g;
-      SiftUp(node.open_pos);
+      SearchScratch::OpenEntry& entry = heap_[node.open_pos];
+      const SearchScratch::OpenEntry updated{f, g, index};
+      const bool better = Before(updated, entry);
+      entry = updated;
+      if (better) {
+        SiftUp(node.open_pos);
+      } else {
+        SiftDown(node.open_pos);
+      }
       return;
     }
     heap_.push_back({f, g, index});
@@ -97,14 +105,16 @@ class OpenList {
   std::vector<SearchScratch::OpenEntry>& heap_;
 };
 
-// Runs best-first search from request.start to request.goal. `h(x, y)` must
-// be consistent for the result to be optimal (closed nodes are never
-// reopened). Precondition: ValidateEndpoints passed and the grid has fewer
-// than 2^32 - 1 cells.
-template <typename Heuristic, typename Listener = NullListener>
+// Runs best-first search from request.start to request.goal, expanding nodes
+// in increasing order of `priority(g, x, y)` (ties to the larger g). Closed
+// nodes are never reopened, so the path is optimal only for a priority
+// g + h(x, y) with h consistent, and within w times the optimum for
+// g + w * h(x, y) (Likhachev, Gordon & Thrun 2003). Precondition:
+// ValidateEndpoints passed and the grid has fewer than 2^32 - 1 cells.
+template <typename Priority, typename Listener = NullListener>
 PlanResult BestFirstSearch(const Grid& grid, const PlanRequest& request,
                            const StopCondition& stop, SearchScratch& scratch,
-                           Heuristic&& h, Listener&& listener = Listener()) {
+                           Priority&& priority, Listener&& listener = Listener()) {
   const absl::Time started = absl::Now();
   const GridView view(grid, request.cost);
   scratch.BeginSearch(grid.size());
@@ -114,7 +124,7 @@ PlanResult BestFirstSearch(const Grid& grid, const PlanRequest& request,
   const uint32_t goal = view.Index(request.goal.x, request.goal.y);
   SearchScratch::Node& root = scratch.At(start);
   root.g = 0.0;
-  open.Push(start, h(request.start.x, request.start.y), 0.0);
+  open.Push(start, priority(0.0, request.start.x, request.start.y), 0.0);
 
   PlanResult result;
   result.outcome = PlanOutcome::kNoPath;
@@ -141,7 +151,7 @@ PlanResult BestFirstSearch(const Grid& grid, const PlanRequest& request,
       if (next_g >= node.g) return;
       node.g = next_g;
       node.parent = best.index;
-      open.Push(next, next_g + h(nx, ny), next_g);
+      open.Push(next, priority(next_g, nx, ny), next_g);
     });
   }
 

@@ -16,6 +16,11 @@ std::unique_ptr<Planner> MakeWavefrontPlanner();
 std::unique_ptr<Planner> MakeDistanceTransformPlanner();
 std::unique_ptr<Planner> MakeDistanceTransformExactPlanner();
 std::unique_ptr<Planner> MakePotentialFieldPlanner();
+std::unique_ptr<Planner> MakeDfsPlanner();
+std::unique_ptr<Planner> MakeGreedyPlanner();
+std::unique_ptr<Planner> MakeWeightedAStarPlanner();
+std::unique_ptr<Planner> MakeRtaaStarPlanner();
+std::unique_ptr<Planner> MakeLrtaStarPlanner();
 
 }  // namespace pathd
 

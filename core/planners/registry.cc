@@ -22,6 +22,11 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeDistanceTransformPlanner),
              PlannerRegistry::Factory(&MakeDistanceTransformExactPlanner),
              PlannerRegistry::Factory(&MakePotentialFieldPlanner),
+             PlannerRegistry::Factory(&MakeDfsPlanner),
+             PlannerRegistry::Factory(&MakeGreedyPlanner),
+             PlannerRegistry::Factory(&MakeWeightedAStarPlanner),
+             PlannerRegistry::Factory(&MakeRtaaStarPlanner),
+             PlannerRegistry::Factory(&MakeLrtaStarPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
