@@ -12,6 +12,8 @@ namespace pathd {
 std::unique_ptr<Planner> MakeAStarPlanner();
 std::unique_ptr<Planner> MakeDijkstraPlanner();
 std::unique_ptr<Planner> MakeBfsPlanner();
+std::unique_ptr<Planner> MakeThetaStarPlanner();
+std::unique_ptr<Planner> MakeLazyThetaStarPlanner();
 
 }  // namespace pathd
 

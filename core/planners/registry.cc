@@ -18,6 +18,8 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeAStarPlanner),
              PlannerRegistry::Factory(&MakeDijkstraPlanner),
              PlannerRegistry::Factory(&MakeBfsPlanner),
+             PlannerRegistry::Factory(&MakeThetaStarPlanner),
+             PlannerRegistry::Factory(&MakeLazyThetaStarPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
