@@ -159,8 +159,7 @@ PathMeasure MeasureAnyAnglePath(const Grid& grid, const std::vector<Cell>& path,
       m.first_invalid = i;
       return m;
     }
-    m.length += std::hypot(static_cast<double>(path[i].x - path[i - 1].x),
-                           static_cast<double>(path[i].y - path[i - 1].y));
+    m.length += SegmentLength(path[i - 1], path[i]);
     m.cost += SegmentCost(grid, path[i - 1], path[i], cost);
   }
   m.valid = true;

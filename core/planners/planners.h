@@ -21,6 +21,8 @@ std::unique_ptr<Planner> MakeGreedyPlanner();
 std::unique_ptr<Planner> MakeWeightedAStarPlanner();
 std::unique_ptr<Planner> MakeRtaaStarPlanner();
 std::unique_ptr<Planner> MakeLrtaStarPlanner();
+std::unique_ptr<Planner> MakeThetaStarPlanner();
+std::unique_ptr<Planner> MakeLazyThetaStarPlanner();
 
 }  // namespace pathd
 

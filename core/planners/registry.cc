@@ -27,6 +27,8 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeWeightedAStarPlanner),
              PlannerRegistry::Factory(&MakeRtaaStarPlanner),
              PlannerRegistry::Factory(&MakeLrtaStarPlanner),
+             PlannerRegistry::Factory(&MakeThetaStarPlanner),
+             PlannerRegistry::Factory(&MakeLazyThetaStarPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

@@ -38,6 +38,8 @@ class GridView {
     return x >= 0 && y >= 0 && x < width_ && y < height_ &&
            passable_[cells_[Index(x, y)]];
   }
+  // Passable(x, y) for the cell at an index known to be on the grid.
+  bool PassableAt(uint32_t index) const { return passable_[cells_[index]]; }
   uint32_t Index(int32_t x, int32_t y) const {
     return static_cast<uint32_t>(y) * static_cast<uint32_t>(width_) +
            static_cast<uint32_t>(x);
