@@ -528,7 +528,9 @@ TEST_F(E2eTest, EveryPlannerRunsThroughPathctl) {
     EXPECT_EQ(plan.path(plan.path_size() - 1).y(), 3);
     // Through the gap: the wall column is only crossed in rows 8..9.
     for (const v1::Cell& c : plan.path()) {
-      if (c.x() == 10) EXPECT_TRUE(c.y() == 8 || c.y() == 9) << c.y();
+      if (c.x() == 10) {
+        EXPECT_TRUE(c.y() == 8 || c.y() == 9) << c.y();
+      }
     }
     // Never shorter than the straight line, and A*'s optimum bounds every
     // optimal planner.

@@ -20,6 +20,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
+#include "core/inflation.h"
 #include "server/map_store.h"
 #include "server/planner_service.h"
 #include "server/server.h"
@@ -37,7 +38,7 @@ class PlanAdmissionTest : public ::testing::Test {
     spdlog::set_level(spdlog::level::debug);  // exercise the request log line
     ASSERT_TRUE(store_.Create("open", *Grid::Create(32, 32), false).ok());
     pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{1, 1});
-    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_,
+    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_,
                                                     PlannerServiceImpl::Options{});
     grpc::ServerBuilder builder;
     int port = 0;
@@ -74,6 +75,10 @@ class PlanAdmissionTest : public ::testing::Test {
   void WaitUntilQueued(size_t n) {
     while (pool_->queued() < n) std::this_thread::yield();
   }
+  // The worker has taken every queued job, so the next call finds room.
+  void WaitUntilQueueEmpty() {
+    while (pool_->queued() > 0) std::this_thread::yield();
+  }
 
   static v1::PlanRequest Request() {
     v1::PlanRequest request;
@@ -102,6 +107,7 @@ class PlanAdmissionTest : public ::testing::Test {
   }
 
   MapStore store_{1 << 20};
+  InflationCache inflation_{&InflateObstacles, 4};
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<PlannerServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
@@ -164,6 +170,7 @@ TEST_F(PlanAdmissionTest, CancelledWhileQueuedIsAnsweredAndDoesNotCrash) {
   // The job now runs after its reactor may already be done; the shared call
   // state must keep it safe.
   Release();
+  WaitUntilQueueEmpty();
   // A later call still works, proving the worker survived.
   v1::PlanResponse response;
   grpc::ClientContext context;
@@ -180,6 +187,7 @@ TEST_F(PlanAdmissionTest, DeadlinePassedWhileQueuedIsDeadlineExceeded) {
   EXPECT_EQ(queued->done.get_future().get().error_code(),
             grpc::StatusCode::DEADLINE_EXCEEDED);
   Release();
+  WaitUntilQueueEmpty();
   v1::PlanResponse response;
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
