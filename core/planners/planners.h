@@ -12,6 +12,7 @@ namespace pathd {
 std::unique_ptr<Planner> MakeAStarPlanner();
 std::unique_ptr<Planner> MakeDijkstraPlanner();
 std::unique_ptr<Planner> MakeBfsPlanner();
+std::unique_ptr<Planner> MakeJpsPlanner();
 
 }  // namespace pathd
 

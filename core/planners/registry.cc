@@ -18,6 +18,7 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeAStarPlanner),
              PlannerRegistry::Factory(&MakeDijkstraPlanner),
              PlannerRegistry::Factory(&MakeBfsPlanner),
+             PlannerRegistry::Factory(&MakeJpsPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
