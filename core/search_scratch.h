@@ -7,6 +7,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace pathd {
@@ -31,6 +34,17 @@ class SearchScratch {
     double f;
     double g;
     uint32_t index;
+  };
+
+  // State a planner derives from a map and keeps between queries on this
+  // thread (JPS: bit-packed passability). Before each use the planner must
+  // check that it still describes the grid it is given: the same Grid object
+  // may have been edited since.
+  class Extension {
+   public:
+    virtual ~Extension() = default;
+    // Bytes held, for MemoryBytes().
+    virtual size_t MemoryBytes() const = 0;
   };
 
   SearchScratch() = default;
@@ -104,11 +118,27 @@ class SearchScratch {
     FreshLearned(i).bits |= static_cast<uint8_t>(marks << 1);
   }
 
+  // This scratch's instance of T (an Extension), default-constructed on first
+  // use. A linear lookup: a scratch holds one per planner kind at most.
+  template <typename T>
+  T& extension() {
+    static_assert(std::is_base_of_v<Extension, T>);
+    const void* const key = &extension_key_<T>;
+    for (auto& [k, e] : extensions_) {
+      if (k == key) return static_cast<T&>(*e);
+    }
+    extensions_.emplace_back(key, std::make_unique<T>());
+    return static_cast<T&>(*extensions_.back().second);
+  }
+
   // Bytes held, for metrics.
   size_t MemoryBytes() const {
-    return nodes_.capacity() * sizeof(Node) +
-           open_.capacity() * sizeof(OpenEntry) + fifo_.capacity() * sizeof(uint32_t) +
-           learned_.capacity() * sizeof(Learned);
+    size_t bytes = nodes_.capacity() * sizeof(Node) +
+                   open_.capacity() * sizeof(OpenEntry) +
+                   fifo_.capacity() * sizeof(uint32_t) +
+                   learned_.capacity() * sizeof(Learned);
+    for (const auto& [key, e] : extensions_) bytes += e->MemoryBytes();
+    return bytes;
   }
   uint32_t search_id() const { return search_id_; }
 
@@ -132,6 +162,11 @@ class SearchScratch {
   }
   std::vector<Learned> learned_;
   uint32_t learning_id_ = 0;
+  // One distinct address per extension type (not const, so no linker can fold
+  // two of them into one).
+  template <typename T>
+  static inline char extension_key_ = 0;
+  std::vector<std::pair<const void*, std::unique_ptr<Extension>>> extensions_;
 };
 
 }  // namespace pathd

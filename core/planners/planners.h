@@ -23,6 +23,7 @@ std::unique_ptr<Planner> MakeRtaaStarPlanner();
 std::unique_ptr<Planner> MakeLrtaStarPlanner();
 std::unique_ptr<Planner> MakeThetaStarPlanner();
 std::unique_ptr<Planner> MakeLazyThetaStarPlanner();
+std::unique_ptr<Planner> MakeJpsPlanner();
 
 }  // namespace pathd
 

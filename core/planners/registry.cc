@@ -29,6 +29,7 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeLrtaStarPlanner),
              PlannerRegistry::Factory(&MakeThetaStarPlanner),
              PlannerRegistry::Factory(&MakeLazyThetaStarPlanner),
+             PlannerRegistry::Factory(&MakeJpsPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
