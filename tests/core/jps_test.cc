@@ -16,27 +16,10 @@
 #include "core/planner.h"
 #include "core/planners/bit_grid.h"
 #include "gtest/gtest.h"
+#include "tests/core/test_grids.h"
 
 namespace pathd {
 namespace {
-
-// '.' free, '#' lethal, '?' unknown, digit d cost 28 * d.
-Grid MakeGrid(const std::vector<std::string>& rows) {
-  const auto h = static_cast<int32_t>(rows.size());
-  const auto w = static_cast<int32_t>(rows[0].size());
-  Grid grid = Grid::Create(w, h).value();
-  for (int32_t y = 0; y < h; ++y) {
-    for (int32_t x = 0; x < w; ++x) {
-      const char c = rows[y][x];
-      uint8_t v = kFreeCost;
-      if (c == '#') v = kLethalCost;
-      if (c == '?') v = kUnknownCost;
-      if (c >= '1' && c <= '9') v = static_cast<uint8_t>(28 * (c - '0'));
-      grid.set_cost(x, y, v);
-    }
-  }
-  return grid;
-}
 
 // One of the eight symmetries of the square: bit 0 mirrors x, bit 1 mirrors
 // y, bit 2 swaps the axes (applied last).

@@ -13,27 +13,10 @@
 #include "core/line_of_sight.h"
 #include "core/planner.h"
 #include "gtest/gtest.h"
+#include "tests/core/test_grids.h"
 
 namespace pathd {
 namespace {
-
-Grid MakeGrid(const std::vector<std::string>& rows) {
-  // '.' free, '#' lethal, '?' unknown, digits d -> cost d * 28.
-  const auto h = static_cast<int32_t>(rows.size());
-  const auto w = static_cast<int32_t>(rows[0].size());
-  Grid grid = Grid::Create(w, h).value();
-  for (int32_t y = 0; y < h; ++y) {
-    for (int32_t x = 0; x < w; ++x) {
-      const char c = rows[y][x];
-      uint8_t v = kFreeCost;
-      if (c == '#') v = kLethalCost;
-      if (c == '?') v = kUnknownCost;
-      if (c >= '1' && c <= '9') v = static_cast<uint8_t>((c - '0') * 28);
-      grid.set_cost(x, y, v);
-    }
-  }
-  return grid;
-}
 
 // The U opens towards the start (west); the goal is behind its closed side.
 const std::vector<std::string> kUMap = {

@@ -18,6 +18,7 @@
 #include "core/planner.h"
 #include "core/planners/best_first.h"
 #include "gtest/gtest.h"
+#include "tests/core/test_grids.h"
 
 namespace pathd {
 namespace {
@@ -29,23 +30,6 @@ const Planner& Get(std::string_view name) {
     std::abort();
   }
   return *planner;
-}
-
-Grid MakeGrid(const std::vector<std::string>& rows) {
-  // '.' free, '#' lethal, digits d -> cost d * 28.
-  const int32_t h = static_cast<int32_t>(rows.size());
-  const int32_t w = static_cast<int32_t>(rows[0].size());
-  Grid grid = Grid::Create(w, h).value();
-  for (int32_t y = 0; y < h; ++y) {
-    for (int32_t x = 0; x < w; ++x) {
-      const char c = rows[y][x];
-      uint8_t v = kFreeCost;
-      if (c == '#') v = kLethalCost;
-      if (c >= '1' && c <= '9') v = static_cast<uint8_t>((c - '0') * 28);
-      grid.set_cost(x, y, v);
-    }
-  }
-  return grid;
 }
 
 // A random query on a random weighted grid; endpoints always traversable.
