@@ -530,6 +530,10 @@ int Health(Env& env, Args args) {
 
 absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
                               const google::protobuf::RepeatedField<double>& field) {
+  if (width <= 0 || field.size() % width != 0) {
+    return absl::DataLossError(absl::StrCat("cost-to-go field of ", field.size(),
+                                            " values does not fill rows of ", width));
+  }
   std::ofstream file(path, std::ios::binary | std::ios::trunc);
   if (!file) {
     return absl::PermissionDeniedError(absl::StrCat("cannot write ", path));

@@ -95,7 +95,7 @@ struct Options {
 };
 
 // Writes a row-major cost-to-go field as CSV, one map row per line, "inf"
-// for unreachable cells. Precondition: width > 0.
+// for unreachable cells. DATA_LOSS when the values do not fill whole rows.
 absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
                               const google::protobuf::RepeatedField<double>& field);
 

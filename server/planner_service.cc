@@ -95,6 +95,15 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
   PATHD_ASSIGN_OR_RETURN(call.robot_radius_cells,
                          RobotRadiusCells(request.options(), grid));
   call.simplify = request.options().simplify();
+  // A whole field is 8 bytes per cell in one message; beyond this it would
+  // take hundreds of megabytes.
+  constexpr size_t kMaxCostToGoCells = size_t{1} << 22;
+  if (call.core_request.want_cost_to_go && grid.size() > kMaxCostToGoCells) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.return_cost_to_go: the map has %d cells; whole cost-to-go "
+        "fields are returned for maps of up to %d cells (32 MiB)",
+        grid.size(), kMaxCostToGoCells));
+  }
   PATHD_ASSIGN_OR_RETURN(call.max_expansions,
                          EffectiveMaxExpansions(request.options(),
                                                 server_max_expansions));
