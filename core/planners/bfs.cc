@@ -62,10 +62,9 @@ class BfsPlanner final : public Planner {
 
     result.expansions = expansions;
     if (result.found()) {
-      result.path = internal::TracePath(view, scratch, goal, grid.size());
-      const PathMeasure measure = MeasurePath(grid, result.path, request.cost);
-      result.cost = measure.cost;
-      result.length = measure.length;
+      internal::SetMeasuredPath(grid, request.cost,
+                                internal::TracePath(view, scratch, goal, grid.size()),
+                                &result);
     }
     result.planning_time = absl::Now() - started;
     return result;

@@ -22,6 +22,7 @@ namespace pathd {
 namespace {
 
 using internal::GridView;
+using internal::SetMeasuredPath;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr uint32_t kNoCell = SearchScratch::kNoParent;
@@ -197,13 +198,12 @@ PlanResult FinishFromField(const Grid& grid, const PlanRequest& request,
   result.outcome = field.outcome;
   result.expansions = field.expansions;
   if (result.found()) {
-    result.path = DescendCostToGo(grid, request.cost, field.values, request.start);
-    if (result.path.empty()) {
+    std::vector<Cell> path =
+        DescendCostToGo(grid, request.cost, field.values, request.start);
+    if (path.empty()) {
       result.outcome = PlanOutcome::kNoPath;
     } else {
-      const PathMeasure measure = MeasurePath(grid, result.path, request.cost);
-      result.cost = measure.cost;
-      result.length = measure.length;
+      SetMeasuredPath(grid, request.cost, std::move(path), &result);
     }
     if (request.want_cost_to_go) result.cost_to_go = std::move(field.values);
   }

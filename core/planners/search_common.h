@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/cost_model.h"
@@ -96,6 +97,17 @@ inline std::vector<Cell> TracePath(const GridView& view, const SearchScratch& sc
   }
   std::reverse(path.begin(), path.end());
   return path;
+}
+
+// Sets result->path and its cost and length measured under the cost model, for
+// planners whose search does not track cost (BFS, wave-front, descents of a
+// cost-to-go field). Precondition: `path` is a legal move chain.
+inline void SetMeasuredPath(const Grid& grid, const CostParams& cost,
+                            std::vector<Cell> path, PlanResult* result) {
+  const PathMeasure measure = MeasurePath(grid, path, cost);
+  result->path = std::move(path);
+  result->cost = measure.cost;
+  result->length = measure.length;
 }
 
 // Geometric length of a path of adjacent cells.

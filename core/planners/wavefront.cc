@@ -19,6 +19,7 @@ namespace pathd {
 namespace {
 
 using internal::GridView;
+using internal::SetMeasuredPath;
 
 constexpr uint32_t kNoCell = SearchScratch::kNoParent;
 
@@ -111,10 +112,7 @@ class WavefrontPlanner final : public Planner {
     result.outcome = end.outcome;
     result.expansions = end.expansions;
     if (result.found()) {
-      result.path = Descend(view, scratch, start);
-      const PathMeasure measure = MeasurePath(grid, result.path, request.cost);
-      result.cost = measure.cost;
-      result.length = measure.length;
+      SetMeasuredPath(grid, request.cost, Descend(view, scratch, start), &result);
     }
     result.planning_time = absl::Now() - started;
     return result;
