@@ -20,6 +20,7 @@
 #include "absl/time/clock.h"
 #include "core/map_io.h"
 #include "core/planner.h"
+#include "tests/bench/movingai_maps.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
           "folder holding <set>/<map>.map and <map>.map.scen files");
@@ -112,21 +113,13 @@ int main(int argc, char** argv) {
       "the speed-up over A* (astar/x: A*'s mean time over this planner's).");
   absl::ParseCommandLine(argc, argv);
   const fs::path root = absl::GetFlag(FLAGS_movingai_dir);
-  std::vector<std::string> maps;
-  if (!absl::GetFlag(FLAGS_maps).empty()) {
-    maps = absl::StrSplit(absl::GetFlag(FLAGS_maps), ',', absl::SkipEmpty());
-  } else {
-    std::error_code ec;
-    if (!fs::is_directory(root, ec)) {
-      std::printf("Moving AI benchmarks not found at %s; nothing to measure\n",
-                  root.c_str());
-      return 0;
-    }
-    for (const auto& e : fs::recursive_directory_iterator(root, ec)) {
-      if (e.path().extension() == ".map") maps.push_back(fs::relative(e.path(), root));
-    }
-    std::sort(maps.begin(), maps.end());
+  if (absl::GetFlag(FLAGS_maps).empty() && !fs::is_directory(root)) {
+    std::printf("Moving AI benchmarks not found at %s; nothing to measure\n",
+                root.c_str());
+    return 0;
   }
+  const std::vector<std::string> maps =
+      pathd::bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps));
   std::vector<std::string> planners =
       absl::StrSplit(absl::GetFlag(FLAGS_planners), ',', absl::SkipEmpty());
   // A* first, so every other planner's speed-up is against this run's A*.

@@ -19,6 +19,7 @@
 #include "absl/strings/str_split.h"
 #include "core/map_io.h"
 #include "core/planner.h"
+#include "tests/bench/movingai_maps.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
           "folder holding <set>/<map>.map and <map>.map.scen files");
@@ -40,20 +41,11 @@ int main(int argc, char** argv) {
       "the stored optimal length.");
   absl::ParseCommandLine(argc, argv);
   const fs::path root = absl::GetFlag(FLAGS_movingai_dir);
-  std::vector<std::string> maps;
-  if (!absl::GetFlag(FLAGS_maps).empty()) {
-    maps = absl::StrSplit(absl::GetFlag(FLAGS_maps), ',', absl::SkipEmpty());
-  } else {
-    std::error_code ec;
-    for (const auto& e : fs::recursive_directory_iterator(root, ec)) {
-      if (e.path().extension() == ".map")
-        maps.push_back(fs::relative(e.path(), root));
-    }
-    std::sort(maps.begin(), maps.end());
-    if (maps.empty()) {
-      std::fprintf(stderr, "no Moving AI maps under %s\n", root.c_str());
-      return 2;
-    }
+  const std::vector<std::string> maps =
+      pathd::bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps));
+  if (maps.empty()) {
+    std::fprintf(stderr, "no Moving AI maps under %s\n", root.c_str());
+    return 2;
   }
   std::vector<const pathd::Planner*> planners;
   const std::vector<std::string> names =

@@ -54,33 +54,6 @@ std::vector<double> BellmanFord(const Grid& grid, Cell start, const CostParams& 
   return dist;
 }
 
-// Fewest moves from start to every cell (unit cost per legal move).
-std::vector<int> MoveCounts(const Grid& grid, Cell start, const CostParams& p) {
-  std::vector<int> moves(grid.size(), -1);
-  std::vector<Cell> frontier{start};
-  moves[grid.Index(start)] = 0;
-  auto ok = [&](int x, int y) {
-    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), p.unknown_is_free);
-  };
-  for (int depth = 1; !frontier.empty(); ++depth) {
-    std::vector<Cell> next;
-    for (Cell c : frontier) {
-      for (int m = 0; m < MoveCount(p.connectivity); ++m) {
-        const int nx = c.x + kMoves[m].dx, ny = c.y + kMoves[m].dy;
-        if (!ok(nx, ny) || moves[grid.Index(nx, ny)] >= 0) continue;
-        if (kMoves[m].dx != 0 && kMoves[m].dy != 0 &&
-            (!ok(c.x + kMoves[m].dx, c.y) || !ok(c.x, c.y + kMoves[m].dy))) {
-          continue;
-        }
-        moves[grid.Index(nx, ny)] = depth;
-        next.push_back({nx, ny});
-      }
-    }
-    frontier = std::move(next);
-  }
-  return moves;
-}
-
 // True when the planner's traits say it refuses this query with
 // FAILED_PRECONDITION (JPS on weighted maps or 4-connectivity).
 bool Refuses(const PlannerTraits& traits, const Grid& grid, const CostParams& p) {

@@ -1,11 +1,13 @@
-// Small grids written as text for the core tests.
+// Small grids written as text, and a reference search, for the core tests.
 #ifndef PATHD_TESTS_CORE_TEST_GRIDS_H_
 #define PATHD_TESTS_CORE_TEST_GRIDS_H_
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/cost_model.h"
 #include "core/grid.h"
 
 namespace pathd {
@@ -27,6 +29,35 @@ inline Grid MakeGrid(const std::vector<std::string>& rows) {
     }
   }
   return grid;
+}
+
+// Fewest legal moves from `start` to every cell (-1 where unreachable), by a
+// plain breadth-first search over the cost model's move table that shares no
+// code with the planners.
+inline std::vector<int> MoveCounts(const Grid& grid, Cell start, const CostParams& p) {
+  std::vector<int> moves(grid.size(), -1);
+  std::vector<Cell> frontier{start};
+  moves[grid.Index(start)] = 0;
+  auto ok = [&](int x, int y) {
+    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), p.unknown_is_free);
+  };
+  for (int depth = 1; !frontier.empty(); ++depth) {
+    std::vector<Cell> next;
+    for (Cell c : frontier) {
+      for (int m = 0; m < MoveCount(p.connectivity); ++m) {
+        const int nx = c.x + kMoves[m].dx, ny = c.y + kMoves[m].dy;
+        if (!ok(nx, ny) || moves[grid.Index(nx, ny)] >= 0) continue;
+        if (kMoves[m].dx != 0 && kMoves[m].dy != 0 &&
+            (!ok(c.x + kMoves[m].dx, c.y) || !ok(c.x, c.y + kMoves[m].dy))) {
+          continue;
+        }
+        moves[grid.Index(nx, ny)] = depth;
+        next.push_back({nx, ny});
+      }
+    }
+    frontier = std::move(next);
+  }
+  return moves;
 }
 
 }  // namespace pathd

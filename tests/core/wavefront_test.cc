@@ -14,6 +14,7 @@
 #include "core/map_io.h"
 #include "core/planner.h"
 #include "gtest/gtest.h"
+#include "tests/core/test_grids.h"
 
 namespace pathd {
 namespace {
@@ -174,41 +175,13 @@ TEST(WavefrontSeedExample, PathDescendsTheLabelsFromStartToGoal) {
   EXPECT_DOUBLE_EQ(r->length, 48.0);
 }
 
-// Fewest moves from `from` to every cell by a plain breadth-first search that
-// shares no code with the planner (only the move table).
-std::vector<int> ReferenceMoves(const Grid& grid, Cell from, const CostParams& p) {
-  std::vector<int> moves(grid.size(), -1);
-  auto ok = [&](int x, int y) {
-    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), p.unknown_is_free);
-  };
-  std::vector<Cell> frontier{from};
-  moves[grid.Index(from)] = 0;
-  for (int depth = 1; !frontier.empty(); ++depth) {
-    std::vector<Cell> next;
-    for (Cell c : frontier) {
-      for (int m = 0; m < MoveCount(p.connectivity); ++m) {
-        const int nx = c.x + kMoves[m].dx, ny = c.y + kMoves[m].dy;
-        if (!ok(nx, ny) || moves[grid.Index(nx, ny)] >= 0) continue;
-        if (kMoves[m].dx != 0 && kMoves[m].dy != 0 &&
-            (!ok(c.x + kMoves[m].dx, c.y) || !ok(c.x, c.y + kMoves[m].dy))) {
-          continue;
-        }
-        moves[grid.Index(nx, ny)] = depth;
-        next.push_back({nx, ny});
-      }
-    }
-    frontier = std::move(next);
-  }
-  return moves;
-}
-
 TEST(WavefrontSeedExample, EightConnectedFloodCountsDiagonalMoves) {
   const Grid grid = SeedMap();
   const CostParams eight;
   const WavefrontLabelling w = WavefrontLabels(grid, kSeedGoal, eight, kSeedStart);
   ASSERT_EQ(w.outcome, PlanOutcome::kFound);
   EXPECT_EQ(w.labels[grid.Index(14, 1)], 3);  // one diagonal move from the goal
-  const int start_moves = ReferenceMoves(grid, kSeedGoal, eight)[grid.Index(kSeedStart)];
+  const int start_moves = MoveCounts(grid, kSeedGoal, eight)[grid.Index(kSeedStart)];
   EXPECT_EQ(w.labels[grid.Index(kSeedStart)], kWavefrontGoal + start_moves);
   EXPECT_LT(start_moves, 48);  // the 4-connected count
 }
@@ -239,7 +212,7 @@ TEST(Wavefront, RandomGridsMatchAReferenceBreadthFirstSearch) {
     const Cell start{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
     grid.set_cost(goal, kFreeCost);
     grid.set_cost(start, kFreeCost);
-    const std::vector<int> reference = ReferenceMoves(grid, goal, cost);
+    const std::vector<int> reference = MoveCounts(grid, goal, cost);
 
     // Without a start the flood labels everything reachable.
     const WavefrontLabelling all = WavefrontLabels(grid, goal, cost, std::nullopt);
