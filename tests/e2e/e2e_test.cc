@@ -642,6 +642,32 @@ TEST_F(E2eTest, JpsRefusesWeightedMaps) {
   EXPECT_NEAR(flat.cost(), 9 * kSqrt2, 1e-9);
 }
 
+TEST_F(E2eTest, BadPlannerOptionsNameTheField) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--planner=weighted_astar",
+                  "--heuristic_weight=0.5"},
+                 "INVALID_ARGUMENT", {"heuristic_weight", "0.5"});
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--planner=rtaa_star",
+                  "--lookahead=-1"},
+                 "INVALID_ARGUMENT", {"lookahead"});
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--planner=potential_field",
+                  "--pf_step=-1"},
+                 "INVALID_ARGUMENT", {"potential_field.step_size"});
+  const ProcessResult shape = Ctl({"plan", "room", "0", "0", "9", "9",
+                                   "--planner=potential_field", "--pf_attractive=cubic"});
+  EXPECT_EQ(shape.exit_code, 2) << shape;
+  // A whole cost-to-go field is refused for maps over 4 Mi cells.
+  std::string big = "type octile\nheight 2100\nwidth 2100\nmap\n";
+  const std::string row = std::string(2100, '.') + "\n";
+  for (int y = 0; y < 2100; ++y) big += row;
+  ASSERT_NO_FATAL_FAILURE(CreateMap("big", big));
+  ExpectRpcError({"plan", "big", "0", "0", "9", "9", "--planner=distance_transform",
+                  "--cost_to_go_file", (temp_dir_ / "big.csv").string()},
+                 "INVALID_ARGUMENT", {"return_cost_to_go", "4194304"});
+  // The server keeps serving.
+  EXPECT_TRUE(PlanJson({"room", "0", "0", "9", "9"}).found());
+}
+
 TEST_F(E2eTest, BlockingAPathCellChangesThePlan) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
   const v1::PlanResponse before = PlanJson({"room", "0", "0", "9", "9"});
