@@ -103,7 +103,8 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
   if (absl::Status s = CheckSize(grid.width(), grid.height()); !s.ok()) return s;
 
   auto shared_grid = std::make_shared<const Grid>(std::move(grid));
-  absl::MutexLock lock(&mu_);
+  bool replaced = false;
+  absl::ReleasableMutexLock lock(&mu_);
   auto it = maps_.find(name);
   if (it != maps_.end() && !replace) {
     return absl::AlreadyExistsError(absl::StrFormat(
@@ -123,8 +124,12 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
     // accident.
     snapshot->version = it->second.current->version + 1;
     it->second.current = snapshot;
+    replaced = true;
   }
-  return std::shared_ptr<const MapSnapshot>(std::move(snapshot));
+  lock.Release();
+  std::shared_ptr<const MapSnapshot> published = std::move(snapshot);
+  if (replaced) Notify(name, published);
+  return published;
 }
 
 absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Get(
@@ -154,6 +159,7 @@ absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
     removed = std::move(it->second.current);
     maps_.erase(it);
   }
+  Notify(name, nullptr);
   return removed->version;
 }
 
@@ -216,14 +222,24 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     // Counting against the old version (not per change) makes a batch that
     // sets a cell and later restores it count zero, as the contract says
     // "actually changed". Only the batch's bounding box can differ.
+    auto snapshot = std::make_shared<MapSnapshot>();
+    const size_t track_limit = std::min(kMaxTrackedChanges, old_grid.size() / 8 + 1);
+    snapshot->changes_known = true;
     int64_t cells_changed = 0;
     for (int32_t y = y_lo; y <= y_hi; ++y) {
       for (int32_t x = x_lo; x <= x_hi; ++x) {
-        if (grid->cost(x, y) != old_grid.cost(x, y)) ++cells_changed;
+        if (grid->cost(x, y) == old_grid.cost(x, y)) continue;
+        ++cells_changed;
+        if (!snapshot->changes_known) continue;
+        if (snapshot->changed_cells.size() == track_limit) {
+          snapshot->changes_known = false;
+          snapshot->changed_cells = {};
+          continue;
+        }
+        snapshot->changed_cells.push_back(Cell{x, y});
       }
     }
 
-    auto snapshot = std::make_shared<MapSnapshot>();
     snapshot->name = base->name;
     snapshot->version = base->version + 1;
     snapshot->grid = std::move(grid);
@@ -235,8 +251,19 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
       if (it->second.current != base) continue;  // replaced meanwhile
       it->second.current = snapshot;
     }
+    // Still under update_mu: listeners see this map's versions in order.
+    Notify(name, snapshot);
     return MapUpdateResult{std::move(snapshot), cells_changed};
   }
+}
+
+void MapStore::AddListener(Listener listener) {
+  listeners_.push_back(std::move(listener));
+}
+
+void MapStore::Notify(std::string_view name,
+                      const std::shared_ptr<const MapSnapshot>& snapshot) const {
+  for (const Listener& listener : listeners_) listener(name, snapshot);
 }
 
 size_t MapStore::size() const {

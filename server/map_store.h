@@ -5,6 +5,7 @@
 #define PATHD_SERVER_MAP_STORE_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -27,6 +28,14 @@ struct MapSnapshot {
   // 1 at creation, +1 per update (a replacing create continues the count).
   uint64_t version = 0;
   std::shared_ptr<const Grid> grid;
+  // For a version made by Update: every cell whose cost differs from the
+  // previous version, in row-major order, so incremental state (D* Lite,
+  // shortest path maps) can repair in O(changed). Empty with
+  // changes_known = false for a created or replaced map and for updates that
+  // changed more than kMaxTrackedChanges cells or 1/8 of the map (consumers
+  // then compare grids).
+  std::vector<Cell> changed_cells;
+  bool changes_known = false;
 };
 
 // One change of an update batch: every cell of the inclusive rectangle
@@ -63,6 +72,14 @@ struct MapUpdateResult {
 class MapStore {
  public:
   static constexpr size_t kMaxNameLength = 128;
+  static constexpr size_t kMaxTrackedChanges = 1 << 20;
+
+  // Called after a map got a new version (snapshot set) or was deleted
+  // (snapshot null). Calls for one name arrive in version order for updates;
+  // a listener must return quickly (queue work, do not plan) and must not call
+  // back into the store's writers.
+  using Listener = std::function<void(std::string_view name,
+                                      const std::shared_ptr<const MapSnapshot>& snapshot)>;
 
   // max_cells bounds width * height of any stored map (--max_map_cells).
   explicit MapStore(int64_t max_cells);
@@ -107,7 +124,14 @@ class MapStore {
 
   size_t size() const;
 
+  // Registers a listener for every later Create (replacing), Update and
+  // Delete. Not thread-safe with respect to writers: register at start-up.
+  void AddListener(Listener listener);
+
  private:
+  void Notify(std::string_view name,
+              const std::shared_ptr<const MapSnapshot>& snapshot) const;
+
   struct Entry {
     std::shared_ptr<const MapSnapshot> current;
     // Serialises updates of this name so two writers do not both copy the
@@ -120,6 +144,7 @@ class MapStore {
   mutable absl::Mutex mu_;
   // std::map keeps List() sorted without a sort per call.
   std::map<std::string, Entry, std::less<>> maps_ ABSL_GUARDED_BY(mu_);
+  std::vector<Listener> listeners_;
 };
 
 }  // namespace pathd::server
