@@ -38,6 +38,11 @@ ABSL_FLAG(int, inflation_cache_entries, 16,
           "Inflated map versions (per robot radius) kept in memory");
 ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(5),
           "on SIGINT/SIGTERM, time in-flight calls get before they are cancelled");
+ABSL_FLAG(absl::Duration, session_idle_timeout, absl::Minutes(10),
+          "a Navigate session without a client message for this long ends "
+          "with DEADLINE_EXCEEDED");
+ABSL_FLAG(int, max_sessions, 1024,
+          "Navigate sessions open at once; more get RESOURCE_EXHAUSTED");
 
 namespace {
 
@@ -104,6 +109,12 @@ pathd::server::ServerOptions OptionsFromFlags() {
   if (options.shutdown_grace < absl::ZeroDuration()) {
     UsageError("--shutdown_grace must not be negative");
   }
+  options.session_idle_timeout = absl::GetFlag(FLAGS_session_idle_timeout);
+  if (options.session_idle_timeout <= absl::ZeroDuration()) {
+    UsageError("--session_idle_timeout must be positive");
+  }
+  if (absl::GetFlag(FLAGS_max_sessions) < 1) UsageError("--max_sessions must be >= 1");
+  options.max_sessions = static_cast<size_t>(absl::GetFlag(FLAGS_max_sessions));
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
   return options;
@@ -132,10 +143,12 @@ int main(int argc, char** argv) {
 
   spdlog::info(
       "pathd starting: address={} threads={} queue_depth={} max_map_cells={} "
-      "max_expansions={} map_dir='{}' log_level={} shutdown_grace={}",
+      "max_expansions={} map_dir='{}' log_level={} shutdown_grace={} "
+      "session_idle_timeout={} max_sessions={}",
       options.address, options.threads, options.queue_depth, options.max_map_cells,
       options.max_expansions, options.map_dir, absl::GetFlag(FLAGS_log_level),
-      absl::FormatDuration(options.shutdown_grace));
+      absl::FormatDuration(options.shutdown_grace),
+      absl::FormatDuration(options.session_idle_timeout), options.max_sessions);
 
   pathd::server::PathdServer server(options);
   if (absl::Status status = server.Start(); !status.ok()) {

@@ -20,10 +20,12 @@ absl::Status NotFound(std::string_view name) {
   return absl::NotFoundError(absl::StrFormat("map '%s' not found", name));
 }
 
-// Checks one change against the grid's bounds and the cost range. Every check
-// runs before the copy is made, which is what makes a batch all-or-nothing.
-absl::Status ValidateChange(const MapChange& change, size_t index,
-                            const Grid& grid) {
+}  // namespace
+
+// Every check runs before the copy is made, which is what makes a batch
+// all-or-nothing.
+absl::Status MapStore::ValidateChange(const MapChange& change, size_t index,
+                                      const Grid& grid) {
   if (change.cost > 255) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "change %d: cost %d is out of range 0..255", index, change.cost));
@@ -50,8 +52,6 @@ absl::Status ValidateChange(const MapChange& change, size_t index,
   }
   return absl::OkStatus();
 }
-
-}  // namespace
 
 MapStore::MapStore(int64_t max_cells) : max_cells_(max_cells) {}
 

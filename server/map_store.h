@@ -90,6 +90,10 @@ class MapStore {
   // '.'; otherwise INVALID_ARGUMENT naming the problem.
   static absl::Status ValidateName(std::string_view name);
 
+  // INVALID_ARGUMENT "change N: ..." when `change` (the index-th of a batch)
+  // has a cost over 255, a rectangle with min > max, or reaches off `grid`.
+  static absl::Status ValidateChange(const MapChange& change, size_t index,
+                                     const Grid& grid);
   // RESOURCE_EXHAUSTED naming the limit when a width x height map would exceed
   // max_cells; OK otherwise. Lets callers refuse before parsing/allocating.
   absl::Status CheckSize(int64_t width, int64_t height) const;

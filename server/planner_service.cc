@@ -209,8 +209,18 @@ class PlanJob final : public Job {
 }  // namespace
 
 PlannerServiceImpl::PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
-                                       InflationCache& inflation, Options options)
-    : store_(store), pool_(pool), inflation_(inflation), options_(options) {}
+                                       InflationCache& inflation,
+                                       NavigationSessions& sessions, Options options)
+    : store_(store),
+      pool_(pool),
+      inflation_(inflation),
+      sessions_(sessions),
+      options_(options) {}
+
+grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>*
+PlannerServiceImpl::Navigate(grpc::CallbackServerContext* context) {
+  return sessions_.Start(context);
+}
 
 grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
     grpc::CallbackServerContext* context, const v1::PlanRequest* request,

@@ -9,6 +9,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
+#include "server/navigation.h"
 #include "server/worker_pool.h"
 
 namespace pathd::server {
@@ -24,7 +25,8 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
-                     InflationCache& inflation, Options options);
+                     InflationCache& inflation, NavigationSessions& sessions,
+                     Options options);
 
   // Errors as documented in planner_service.proto; the job is dropped without
   // running when the deadline passed or the client cancelled while queued.
@@ -32,10 +34,15 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
                                  const v1::PlanRequest* request,
                                  v1::PlanResponse* response) override;
 
+  // A D* Lite session (server/navigation.h).
+  grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>* Navigate(
+      grpc::CallbackServerContext* context) override;
+
  private:
   const MapStore& store_;
   WorkerPool& pool_;
   InflationCache& inflation_;
+  NavigationSessions& sessions_;
   const Options options_;
 };
 

@@ -83,8 +83,13 @@ absl::Status PathdServer::Start() {
   pool_ = std::make_unique<WorkerPool>(
       WorkerPool::Options{options_.threads, options_.queue_depth});
   map_service_ = std::make_unique<MapServiceImpl>(store_, options_.map_dir);
+  sessions_ = std::make_unique<NavigationSessions>(
+      store_, *pool_, inflation_,
+      NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
+                                  options_.max_expansions});
   planner_service_ = std::make_unique<PlannerServiceImpl>(
-      store_, *pool_, inflation_, PlannerServiceImpl::Options{options_.max_expansions});
+      store_, *pool_, inflation_, *sessions_,
+      PlannerServiceImpl::Options{options_.max_expansions});
 
   // Both are process-wide switches read when the builder is created.
   grpc::EnableDefaultHealthCheckService(true);
@@ -126,6 +131,8 @@ void PathdServer::Shutdown() {
     if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
       health->SetServingStatus(false);
     }
+    // Open sessions would otherwise hold the shutdown for the whole grace.
+    sessions_->Shutdown();
     // The pool keeps running during the grace period so accepted plans can
     // answer; after it gRPC cancels what is left, which reaches running
     // planners through their cancel flag.

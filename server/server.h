@@ -17,6 +17,7 @@
 #include "absl/time/time.h"
 #include "server/map_service.h"
 #include "server/map_store.h"
+#include "server/navigation.h"
 #include "server/planner_service.h"
 #include "server/worker_pool.h"
 
@@ -40,6 +41,9 @@ struct ServerOptions {
   absl::Duration shutdown_grace = absl::Seconds(5);
   // Inflated map versions kept for robot_radius requests.
   size_t inflation_cache_entries = 16;
+  // Navigate sessions: idle expiry and the most open at once.
+  absl::Duration session_idle_timeout = absl::Minutes(10);
+  size_t max_sessions = 1024;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -78,6 +82,8 @@ class PathdServer {
   MapStore store_;
   InflationCache inflation_;
   std::unique_ptr<WorkerPool> pool_;
+  // Registers a store listener: lives while the store can change.
+  std::unique_ptr<NavigationSessions> sessions_;
   std::unique_ptr<MapServiceImpl> map_service_;
   std::unique_ptr<PlannerServiceImpl> planner_service_;
   std::unique_ptr<grpc::Server> server_;

@@ -38,7 +38,9 @@ class PlanAdmissionTest : public ::testing::Test {
     spdlog::set_level(spdlog::level::debug);  // exercise the request log line
     ASSERT_TRUE(store_.Create("open", *Grid::Create(32, 32), false).ok());
     pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{1, 1});
-    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_,
+    sessions_ = std::make_unique<NavigationSessions>(store_, *pool_, inflation_,
+                                                     NavigationSessions::Options{});
+    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_, *sessions_,
                                                     PlannerServiceImpl::Options{});
     grpc::ServerBuilder builder;
     int port = 0;
@@ -109,6 +111,7 @@ class PlanAdmissionTest : public ::testing::Test {
   MapStore store_{1 << 20};
   InflationCache inflation_{&InflateObstacles, 4};
   std::unique_ptr<WorkerPool> pool_;
+  std::unique_ptr<NavigationSessions> sessions_;
   std::unique_ptr<PlannerServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<v1::PlannerService::Stub> stub_;
