@@ -88,8 +88,10 @@ int EnvInt(const char* name, int fallback) {
 // stop at the goal and for the exact distance transform (a whole-map Dijkstra
 // sweep per query, ~5-20 ms), every n-th for the raster distance transform
 // (hundreds of passes per query on the mazes, ~150 ms), the any-angle
-// searches, and the planners that wander (real-time, potential field), so the
-// suite stays within minutes on 2 cores.
+// searches, the incremental searches (LPA*, D* Lite, shortest path map: run
+// here from scratch per query, their repairs are checked against fresh
+// searches by incremental_test), and the planners that wander (real-time,
+// potential field), so the suite stays within minutes on 2 cores.
 // PATHD_CONFORMANCE_STRIDE=N multiplies every stride (sanitizer builds);
 // PATHD_CONFORMANCE_FULL=1 checks every planner on every scenario.
 int PlannerStride(const Planner& planner) {
@@ -98,7 +100,7 @@ int PlannerStride(const Planner& planner) {
   int stride = 1;
   if (planner.name() == "distance_transform") {
     stride = 20;
-  } else if (t.any_angle) {
+  } else if (t.any_angle || t.incremental) {
     stride = 4;
   } else if (t.real_time || !t.complete) {
     stride = 25;
