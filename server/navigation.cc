@@ -541,6 +541,12 @@ NavigationSessions::~NavigationSessions() {
   {
     absl::MutexLock lock(&mu_);
     stopping_ = true;
+    // gRPC runs OnDone (which unregisters) before Server::Wait returns; the
+    // bounded wait only guards against a caller that skipped the shutdown.
+    auto none_left = [this]() ABSL_SHARED_LOCKS_REQUIRED(mu_) { return sessions_.empty(); };
+    if (!mu_.AwaitWithTimeout(absl::Condition(&none_left), absl::Seconds(10))) {
+      spdlog::error("{} navigation session(s) still open at destruction", sessions_.size());
+    }
   }
   reaper_.join();
 }
