@@ -107,6 +107,30 @@ absl::StatusOr<v1::PlanResponse> PathdClient::Plan(
       });
 }
 
+absl::StatusOr<v1::CostToGoResponse> PathdClient::CostToGo(
+    const v1::CostToGoRequest& request) const {
+  return Invoke<v1::CostToGoResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::CostToGoResponse* response) {
+        return planner_->CostToGo(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::GetCacheStatsResponse> PathdClient::GetCacheStats() const {
+  return Invoke<v1::GetCacheStatsResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::GetCacheStatsResponse* response) {
+        return planner_->GetCacheStats(context, v1::GetCacheStatsRequest(),
+                                       response);
+      });
+}
+
+std::unique_ptr<
+    grpc::ClientReaderWriterInterface<v1::NavigateRequest, v1::NavigateResponse>>
+PathdClient::Navigate(grpc::ClientContext* context) const {
+  return planner_->Navigate(context);
+}
+
 absl::StatusOr<grpc::health::v1::HealthCheckResponse> PathdClient::CheckHealth(
     const std::string& service) const {
   grpc::health::v1::HealthCheckRequest request;

@@ -14,6 +14,7 @@
 #include "grpcpp/channel.h"
 #include "grpcpp/client_context.h"
 #include "grpcpp/support/status.h"
+#include "grpcpp/support/sync_stream.h"
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 
@@ -61,6 +62,17 @@ class PathdClient {
 
   // PlannerService. "No path" is an OK response with found = false.
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) const;
+  absl::StatusOr<v1::CostToGoResponse> CostToGo(
+      const v1::CostToGoRequest& request) const;
+  absl::StatusOr<v1::GetCacheStatsResponse> GetCacheStats() const;
+
+  // Opens a Navigate stream on `context`, which the caller owns and must keep
+  // alive until the stream's Finish() returned. Unlike the unary calls no
+  // deadline is set: a session lasts as long as the robot drives, so the
+  // caller bounds each wait itself (and cancels through `context`).
+  std::unique_ptr<grpc::ClientReaderWriterInterface<v1::NavigateRequest,
+                                                    v1::NavigateResponse>>
+  Navigate(grpc::ClientContext* context) const;
 
   // grpc.health.v1.Health/Check; `service` empty asks about the whole server.
   absl::StatusOr<grpc::health::v1::HealthCheckResponse> CheckHealth(

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <memory>
 #include <span>
+#include <sstream>
 #include <utility>
 
 #include "absl/flags/commandlineflag.h"
@@ -17,8 +18,11 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "client/map_source.h"
+#include "client/navigate_script.h"
+#include "client/navigate_session.h"
 #include "google/protobuf/util/json_util.h"
 
 namespace pathd::pathctl {
@@ -45,6 +49,10 @@ constexpr char kSynopsis[] =
                        [--robot_radius M | --robot_radius_cells C]
                        [--heuristic_weight W] [--lookahead N]
                        [--cost_to_go_file F] [--pf_* ...]
+  pathctl [flags] navigate NAME SX SY GX GY [--script FILE] [cost options]
+  pathctl [flags] cost-to-go NAME GX GY [--window X,Y,W,H]
+                       [--cost_to_go_file F] [--world] [cost options]
+  pathctl [flags] cache-stats
   pathctl [flags] health [SERVICE]
   pathctl --help
 )";
@@ -142,20 +150,6 @@ absl::StatusOr<std::vector<double>> ParseDoubles(
     values.push_back(value);
   }
   return values;
-}
-
-// A cost byte, as a number or as the Nav2 name of a special value.
-absl::StatusOr<uint32_t> ParseCost(absl::string_view text) {
-  static constexpr std::pair<absl::string_view, uint32_t> kNamed[] = {
-      {"free", 0}, {"inscribed", 253}, {"lethal", 254}, {"unknown", 255}};
-  for (const auto& [name, cost] : kNamed) {
-    if (text == name) return cost;
-  }
-  uint32_t cost = 0;
-  if (!absl::SimpleAtoi(text, &cost) || cost > 255) {
-    return BadArg("COST", text, "0..255, free, inscribed, lethal or unknown");
-  }
-  return cost;
 }
 
 std::string FormatCell(const v1::Cell& cell) {
@@ -352,6 +346,40 @@ int Maps(Env& env, Args args) {
 
 // --- plan --------------------------------------------------------------------
 
+// The options every planning command takes: connectivity, cost weight,
+// unknown cells and robot radius. INVALID_ARGUMENT (a usage error) for a bad
+// combination.
+absl::Status SetCostOptions(const Options& options, v1::PlanOptions* plan_options) {
+  switch (options.connectivity) {
+    case 0:
+      break;
+    case 4:
+      plan_options->set_connectivity(v1::CONNECTIVITY_FOUR);
+      break;
+    case 8:
+      plan_options->set_connectivity(v1::CONNECTIVITY_EIGHT);
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat(
+          "--connectivity must be 4 or 8, not ", options.connectivity));
+  }
+  if (options.cost_weight.has_value()) {
+    plan_options->set_cost_weight(*options.cost_weight);
+  }
+  plan_options->set_unknown_is_free(options.unknown_is_free);
+  if (options.robot_radius_m.has_value() && options.robot_radius_cells.has_value()) {
+    return absl::InvalidArgumentError(
+        "give --robot_radius (metres) or --robot_radius_cells, not both");
+  }
+  if (options.robot_radius_m.has_value()) {
+    plan_options->set_robot_radius_m(*options.robot_radius_m);
+  }
+  if (options.robot_radius_cells.has_value()) {
+    plan_options->set_robot_radius_cells(*options.robot_radius_cells);
+  }
+  return absl::OkStatus();
+}
+
 int Plan(Env& env, Args args) {
   const Options& options = env.options();
   if (args.size() != 5) return env.Usage("plan takes NAME SX SY GX GY");
@@ -383,35 +411,12 @@ int Plan(Env& env, Args args) {
     request.set_planner(*planner);
   }
   v1::PlanOptions* plan_options = request.mutable_options();
-  switch (options.connectivity) {
-    case 0:
-      break;
-    case 4:
-      plan_options->set_connectivity(v1::CONNECTIVITY_FOUR);
-      break;
-    case 8:
-      plan_options->set_connectivity(v1::CONNECTIVITY_EIGHT);
-      break;
-    default:
-      return env.Usage(absl::StrCat("--connectivity must be 4 or 8, not ",
-                                    options.connectivity));
+  if (absl::Status s = SetCostOptions(options, plan_options); !s.ok()) {
+    return env.Usage(s.message());
   }
-  if (options.cost_weight.has_value()) {
-    plan_options->set_cost_weight(*options.cost_weight);
-  }
-  plan_options->set_unknown_is_free(options.unknown_is_free);
   plan_options->set_max_expansions(options.max_expansions);
   if (options.heuristic_weight.has_value()) {
     plan_options->set_heuristic_weight(*options.heuristic_weight);
-  }
-  if (options.robot_radius_m.has_value() && options.robot_radius_cells.has_value()) {
-    return env.Usage("give --robot_radius (metres) or --robot_radius_cells, not both");
-  }
-  if (options.robot_radius_m.has_value()) {
-    plan_options->set_robot_radius_m(*options.robot_radius_m);
-  }
-  if (options.robot_radius_cells.has_value()) {
-    plan_options->set_robot_radius_cells(*options.robot_radius_cells);
   }
   plan_options->set_simplify(options.simplify);
   plan_options->set_lookahead(options.lookahead);
@@ -473,6 +478,12 @@ int Plan(Env& env, Args args) {
                            response->cost(), response->length());
   }
   out << absl::StrFormat("expansions:  %d\n", response->expansions());
+  // Only the caching planners fill these; elsewhere "no" would mislead.
+  if (request.planner() == v1::PLANNER_DSTAR_LITE ||
+      request.planner() == v1::PLANNER_SPM) {
+    out << "cache hit:   " << (response->cache_hit() ? "yes" : "no") << "\n"
+        << absl::StrFormat("repaired:    %d cells\n", response->repaired_cells());
+  }
   if (response->episodes() > 0) {
     out << absl::StrFormat("episodes:    %d\n", response->episodes());
   }
@@ -489,12 +500,9 @@ int Plan(Env& env, Args args) {
   }
   out << absl::StrFormat("time:        %d us\n", response->planning_time_us());
   if (response->found()) {
-    std::vector<std::string> cells;
-    for (const v1::Cell& cell : response->path())
-      cells.push_back(FormatCell(cell));
-    out << "path (" << cells.size()
+    out << "path (" << response->path_size()
         << (response->any_angle() ? " vertices, any-angle" : " cells")
-        << "): " << absl::StrJoin(cells, " ") << "\n";
+        << "): " << FormatPath(response->path()) << "\n";
     if (options.world) {
       std::vector<std::string> points;
       for (const v1::WorldPoint& p : response->world_path()) {
@@ -504,6 +512,206 @@ int Plan(Env& env, Args args) {
     }
   }
   return code;
+}
+
+// --- navigate ----------------------------------------------------------------
+
+absl::StatusOr<std::string> ReadTextFile(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) return absl::NotFoundError(absl::StrCat("cannot read ", path));
+  std::stringstream text;
+  text << file.rdbuf();
+  if (file.bad()) return absl::DataLossError(absl::StrCat("error reading ", path));
+  return text.str();
+}
+
+int Navigate(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 5) return env.Usage("navigate takes NAME SX SY GX GY");
+  if (options.world) {
+    return env.Usage("navigate takes cells (a script moves the robot cell by "
+                     "cell); --world does not apply");
+  }
+  static constexpr const char* kNames[] = {"SX", "SY", "GX", "GY"};
+  absl::StatusOr<std::vector<int32_t>> p = ParseInts(args.subspan(1), kNames);
+  if (!p.ok()) return env.Usage(p.status().message());
+  v1::NavigateOpen open;
+  open.set_map(args[0]);
+  open.mutable_start()->mutable_cell()->set_x((*p)[0]);
+  open.mutable_start()->mutable_cell()->set_y((*p)[1]);
+  open.mutable_goal()->mutable_cell()->set_x((*p)[2]);
+  open.mutable_goal()->mutable_cell()->set_y((*p)[3]);
+  if (absl::Status s = SetCostOptions(options, open.mutable_options()); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  std::vector<ScriptStep> script;
+  if (!options.script.empty()) {
+    absl::StatusOr<std::string> text = ReadTextFile(options.script);
+    if (!text.ok()) return env.Fail(text.status());
+    absl::StatusOr<std::vector<ScriptStep>> parsed =
+        ParseNavigateScript(*text, options.script);
+    if (!parsed.ok()) {
+      // The message already says where; the command synopsis would not help.
+      env.err() << "error: " << parsed.status().message() << "\n";
+      return kExitUsage;
+    }
+    script = *std::move(parsed);
+  }
+  if (absl::Status s =
+          RunNavigateSession(env.client(), open, script, options.json, env.out());
+      !s.ok()) {
+    return env.Fail(s);
+  }
+  return kExitOk;
+}
+
+// --- cost-to-go --------------------------------------------------------------
+
+// Largest window printed as a table; bigger ones go to --cost_to_go_file.
+constexpr int32_t kMaxTableColumns = 16;
+constexpr int32_t kMaxTableRows = 64;
+
+// "X,Y,W,H" as a CellWindow.
+absl::StatusOr<v1::CellWindow> ParseWindow(absl::string_view text) {
+  const std::vector<std::string> parts = absl::StrSplit(text, ',');
+  static constexpr const char* kNames[] = {"--window X", "--window Y",
+                                           "--window W", "--window H"};
+  if (parts.size() != 4) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--window takes X,Y,W,H (first column, first row, width, height), not '",
+        text, "'"));
+  }
+  absl::StatusOr<std::vector<int32_t>> v = ParseInts(parts, kNames);
+  if (!v.ok()) return v.status();
+  if ((*v)[2] <= 0 || (*v)[3] <= 0) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--window width and height must be positive, not ", (*v)[2], "x", (*v)[3]));
+  }
+  v1::CellWindow window;
+  window.set_x((*v)[0]);
+  window.set_y((*v)[1]);
+  window.set_width((*v)[2]);
+  window.set_height((*v)[3]);
+  return window;
+}
+
+// The field as rows of numbers with column and row labels, "inf" where the
+// goal cannot be reached.
+std::string FormatCostTable(const v1::CostToGoResponse& response) {
+  const v1::CellWindow& w = response.window();
+  std::string text = "  y\\x";
+  for (int32_t x = 0; x < w.width(); ++x) {
+    absl::StrAppendFormat(&text, " %7d", w.x() + x);
+  }
+  text.push_back('\n');
+  for (int32_t y = 0; y < w.height(); ++y) {
+    absl::StrAppendFormat(&text, "%5d", w.y() + y);
+    for (int32_t x = 0; x < w.width(); ++x) {
+      const float v = response.cost(y * w.width() + x);
+      absl::StrAppend(&text, std::isfinite(v) ? absl::StrFormat(" %7.2f", v)
+                                              : std::string("     inf"));
+    }
+    text.push_back('\n');
+  }
+  return text;
+}
+
+int CostToGo(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 3) return env.Usage("cost-to-go takes NAME GX GY");
+  v1::CostToGoRequest request;
+  request.set_map(args[0]);
+  static constexpr const char* kNames[] = {"GX", "GY"};
+  if (options.world) {
+    absl::StatusOr<std::vector<double>> g = ParseDoubles(args.subspan(1), kNames);
+    if (!g.ok()) return env.Usage(g.status().message());
+    request.mutable_goal()->mutable_world()->set_x((*g)[0]);
+    request.mutable_goal()->mutable_world()->set_y((*g)[1]);
+  } else {
+    absl::StatusOr<std::vector<int32_t>> g = ParseInts(args.subspan(1), kNames);
+    if (!g.ok()) {
+      return env.Usage(absl::StrCat(g.status().message(),
+                                    " (use --world for coordinates in metres)"));
+    }
+    request.mutable_goal()->mutable_cell()->set_x((*g)[0]);
+    request.mutable_goal()->mutable_cell()->set_y((*g)[1]);
+  }
+  if (absl::Status s = SetCostOptions(options, request.mutable_options());
+      !s.ok()) {
+    return env.Usage(s.message());
+  }
+  if (!options.window.empty()) {
+    absl::StatusOr<v1::CellWindow> window = ParseWindow(options.window);
+    if (!window.ok()) return env.Usage(window.status().message());
+    *request.mutable_window() = *window;
+  }
+  absl::StatusOr<v1::CostToGoResponse> response = env.client().CostToGo(request);
+  if (!response.ok()) return env.Fail(response.status());
+  const v1::CellWindow& w = response->window();
+  if (int64_t{w.width()} * w.height() != response->cost_size()) {
+    return env.Fail(absl::InternalError(absl::StrFormat(
+        "server sent %d costs for a %dx%d window", response->cost_size(),
+        w.width(), w.height())));
+  }
+  if (!options.cost_to_go_file.empty()) {
+    if (absl::Status s =
+            WriteCostToGoCsv(options.cost_to_go_file, w.width(), response->cost());
+        !s.ok()) {
+      return env.Fail(s);
+    }
+  }
+  if (options.json) return env.PrintJson(*response);
+  const int64_t reachable =
+      std::count_if(response->cost().begin(), response->cost().end(),
+                    [](float v) { return std::isfinite(v); });
+  std::ostream& out = env.out();
+  out << absl::StrFormat(
+      "map version: %d\n"
+      "goal:        %s\n"
+      "window:      x %d..%d, y %d..%d (%dx%d cells)\n"
+      "reachable:   %d of %d cells\n"
+      "cache hit:   %s\n"
+      "expansions:  %d\n",
+      response->map_version(), FormatCell(response->goal()), w.x(),
+      w.x() + w.width() - 1, w.y(), w.y() + w.height() - 1, w.width(),
+      w.height(), reachable, response->cost_size(),
+      response->cache_hit() ? "yes" : "no", response->expansions());
+  if (!options.cost_to_go_file.empty()) {
+    out << "cost-to-go:  " << response->cost_size() << " cells written to "
+        << options.cost_to_go_file << "\n";
+  } else if (w.width() <= kMaxTableColumns && w.height() <= kMaxTableRows) {
+    out << "\n" << FormatCostTable(*response);
+  } else {
+    out << absl::StrFormat(
+        "(tables go up to %dx%d cells: give --cost_to_go_file F for the CSV, "
+        "or a smaller --window)\n",
+        kMaxTableColumns, kMaxTableRows);
+  }
+  return kExitOk;
+}
+
+// --- cache-stats -------------------------------------------------------------
+
+int CacheStats(Env& env, Args args) {
+  if (!args.empty()) return env.Usage("cache-stats takes no arguments");
+  absl::StatusOr<v1::GetCacheStatsResponse> response =
+      env.client().GetCacheStats();
+  if (!response.ok()) return env.Fail(response.status());
+  if (env.options().json) return env.PrintJson(*response);
+  constexpr char kRow[] = "%-12s %8s %12s %12s %8s %8s %9s %8s %8s\n";
+  env.out() << absl::StrFormat(kRow, "CACHE", "ENTRIES", "BYTES", "BUDGET",
+                               "HITS", "MISSES", "EVICTIONS", "REPAIRS",
+                               "REBUILDS");
+  for (const v1::CacheStats& c : response->caches()) {
+    env.out() << absl::StrFormat(
+        kRow, c.name(), absl::StrCat(c.entries()), absl::StrCat(c.bytes()),
+        absl::StrCat(c.budget_bytes()), absl::StrCat(c.hits()),
+        absl::StrCat(c.misses()), absl::StrCat(c.evictions()),
+        absl::StrCat(c.repairs()), absl::StrCat(c.rebuilds()));
+  }
+  env.out() << absl::StrFormat("sessions:    %d open, %d bytes of D* Lite state\n",
+                               response->sessions(), response->session_bytes());
+  return kExitOk;
 }
 
 // --- health ------------------------------------------------------------------
@@ -528,8 +736,32 @@ int Health(Env& env, Args args) {
 
 }  // namespace
 
-absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
-                              const google::protobuf::RepeatedField<double>& field) {
+absl::StatusOr<uint32_t> ParseCost(absl::string_view text) {
+  static constexpr std::pair<absl::string_view, uint32_t> kNamed[] = {
+      {"free", 0}, {"inscribed", 253}, {"lethal", 254}, {"unknown", 255}};
+  for (const auto& [name, cost] : kNamed) {
+    if (text == name) return cost;
+  }
+  uint32_t cost = 0;
+  if (!absl::SimpleAtoi(text, &cost) || cost > 255) {
+    return BadArg("COST", text, "0..255, free, inscribed, lethal or unknown");
+  }
+  return cost;
+}
+
+std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells) {
+  std::vector<std::string> parts;
+  parts.reserve(cells.size());
+  for (const v1::Cell& cell : cells) parts.push_back(FormatCell(cell));
+  return absl::StrJoin(parts, " ");
+}
+
+namespace {
+
+// Plan returns doubles, CostToGo the 4-byte floats the server stores.
+template <typename T>
+absl::Status WriteCsv(const std::string& path, int32_t width,
+                      const google::protobuf::RepeatedField<T>& field) {
   if (width <= 0 || field.size() % width != 0) {
     return absl::DataLossError(absl::StrCat("cost-to-go field of ", field.size(),
                                             " values does not fill rows of ", width));
@@ -540,7 +772,7 @@ absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
   }
   std::string line;
   for (int i = 0; i < field.size(); ++i) {
-    const double v = field.Get(i);
+    const double v = static_cast<double>(field.Get(i));
     if (i % width != 0) line.push_back(',');
     absl::StrAppend(&line, std::isfinite(v) ? absl::StrFormat("%.6f", v) : "inf");
     if (i % width == width - 1) {
@@ -553,6 +785,18 @@ absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
   file.flush();
   if (!file) return absl::DataLossError(absl::StrCat("error writing ", path));
   return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
+                              const google::protobuf::RepeatedField<double>& field) {
+  return WriteCsv(path, width, field);
+}
+
+absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
+                              const google::protobuf::RepeatedField<float>& field) {
+  return WriteCsv(path, width, field);
 }
 
 namespace {
@@ -592,23 +836,33 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --expected_version V maps set/rect: apply only if the map is at version V
   --planner P          plan: )",
       PlannerNames(), R"( (default: the server's, A*)
-  --connectivity N     plan: 4 or 8 (default 8)
-  --cost_weight W      plan: w in step = length * (1 + w * cost / 252) (default 1)
-  --unknown_is_free    plan: treat unknown cells (255) as free
   --max_expansions N   plan: stop after N expansions (0: the server's limit)
-  --world              plan: SX SY GX GY are world metres, not cells
+  --world              plan, cost-to-go: coordinates are world metres, not cells
   --simplify           plan: keep only the turning points (ray-shooting line of
                        sight); the path becomes any-angle, never longer
-  --robot_radius M     plan: inflate lethal cells by the robot radius in metres
-  --robot_radius_cells C  plan: the same in cells
   --heuristic_weight W plan: weighted_astar's w >= 1 (default 1.5)
   --lookahead N        plan: rtaa_star / lrta_star expansions per episode (64)
-  --cost_to_go_file F  plan: distance_transform*: write the cost-to-go field
-                       as CSV (one map row per line, inf = unreachable)
+  --cost_to_go_file F  plan (distance_transform*), cost-to-go: write the
+                       cost-to-go field as CSV (one row per line, inf =
+                       unreachable); cost-to-go prints a table otherwise
+  --window X,Y,W,H     cost-to-go: only columns X..X+W-1, rows Y..Y+H-1
+  --script FILE        navigate: replay this robot run (format below); without
+                       it navigate prints the first path and closes
   --pf_attractive S    plan: potential_field: quadratic (default) or conic
   --pf_attractive_gain K, --pf_switch_distance D, --pf_repulsive_gain ETA,
   --pf_influence Q, --pf_step S, --pf_max_steps N
                        plan: potential_field parameters (cells; 0 = default)
+
+cost options (plan, navigate, cost-to-go):
+  --connectivity N     4 or 8 (default 8)
+  --cost_weight W      w in step = length * (1 + w * cost / 252) (default 1)
+  --unknown_is_free    treat unknown cells (255) as free
+  --robot_radius M     inflate lethal cells by the robot radius in metres
+  --robot_radius_cells C  the same in cells
+
+With --json, navigate prints each NavigateResponse as one line of JSON. Its
+--timeout bounds each wait for an answer and for the server's close, not the
+whole session.
 
 arguments:
   X, Y                 cells: x is the column, y the row, from 0
@@ -627,10 +881,13 @@ first line; a ROS map's bottom image row):
 exit codes:
   0  success
   1  the call failed (server error, or a local file could not be read);
-     stderr says "error: <GRPC_CODE>: <message>"; health: not SERVING
-  2  usage error
+     stderr says "error: <GRPC_CODE>: <message>"; health: not SERVING;
+     navigate: a script's expect-push or follow failed
+  2  usage error, also a bad navigate script line (FILE:LINE: problem)
   3  plan ran but found no path (the outcome says why)
-)");
+
+)",
+      kNavigateScriptHelp);
 }
 
 absl::StatusOr<CommandLine> SplitCommandLine(int argc,
@@ -731,13 +988,17 @@ int Run(const Options& options, const std::vector<std::string>& args,
   Args rest = Args(args).subspan(1);
   if (command == "maps") return Maps(env, rest);
   if (command == "plan") return Plan(env, rest);
+  if (command == "navigate") return Navigate(env, rest);
+  if (command == "cost-to-go") return CostToGo(env, rest);
+  if (command == "cache-stats") return CacheStats(env, rest);
   if (command == "health") return Health(env, rest);
   if (command == "help") {
     out << UsageText();
     return kExitOk;
   }
   return env.Usage(absl::StrCat("unknown command '", command,
-                                "'; expected maps, plan or health"));
+                                "'; expected maps, plan, navigate, cost-to-go, "
+                                "cache-stats or health"));
 }
 
 }  // namespace pathd::pathctl

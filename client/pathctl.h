@@ -52,6 +52,9 @@ inline constexpr PlannerName kPlanners[] = {
     {"rtaa_star", v1::PLANNER_RTAA_STAR},
     {"lrta_star", v1::PLANNER_LRTA_STAR},
     {"potential_field", v1::PLANNER_POTENTIAL_FIELD},
+    {"lpa_star", v1::PLANNER_LPA_STAR},
+    {"dstar_lite", v1::PLANNER_DSTAR_LITE},
+    {"spm", v1::PLANNER_SPM},
 };
 
 // Looks up a planner by CLI name; INVALID_ARGUMENT listing the valid names.
@@ -92,12 +95,26 @@ struct Options {
   double pf_influence = 0.0;
   double pf_step = 0.0;
   int64_t pf_max_steps = 0;
+  // navigate: the script to replay; empty: open, print the path, close.
+  std::string script;
+  // cost-to-go: "X,Y,W,H"; empty: the whole map.
+  std::string window;
 };
 
 // Writes a row-major cost-to-go field as CSV, one map row per line, "inf"
 // for unreachable cells. DATA_LOSS when the values do not fill whole rows.
 absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
                               const google::protobuf::RepeatedField<double>& field);
+// The same for CostToGo's 4-byte field.
+absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
+                              const google::protobuf::RepeatedField<float>& field);
+
+// A cost byte as a number 0..255 or the Nav2 name of a special value (free,
+// inscribed, lethal, unknown); INVALID_ARGUMENT "COST: ..." otherwise.
+absl::StatusOr<uint32_t> ParseCost(absl::string_view text);
+
+// Cells as "(x,y) (x,y) ...".
+std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells);
 
 // The full --help text: commands, flags, cell glyphs and exit codes.
 std::string UsageText();

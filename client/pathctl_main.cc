@@ -26,22 +26,22 @@ ABSL_FLAG(bool, cells, false, "maps get: print the cells as ASCII");
 ABSL_FLAG(std::optional<uint64_t>, expected_version, std::nullopt,
           "maps set/rect: apply only at this map version");
 ABSL_FLAG(std::string, planner, "", "plan: planner name (default: server's)");
-ABSL_FLAG(int, connectivity, 0, "plan: 4 or 8 (default: server's, 8)");
+ABSL_FLAG(int, connectivity, 0, "plan, navigate, cost-to-go: 4 or 8 (default 8)");
 ABSL_FLAG(std::optional<double>, cost_weight, std::nullopt,
-          "plan: cell cost weight (default: server's, 1)");
-ABSL_FLAG(bool, world, false, "plan: coordinates are world metres");
-ABSL_FLAG(bool, unknown_is_free, false, "plan: unknown cells are free");
+          "plan, navigate, cost-to-go: cell cost weight (default 1)");
+ABSL_FLAG(bool, world, false, "plan, cost-to-go: coordinates are world metres");
+ABSL_FLAG(bool, unknown_is_free, false, "plan, navigate, cost-to-go: unknown cells are free");
 ABSL_FLAG(int64_t, max_expansions, 0, "plan: expansion budget (0: server's)");
 ABSL_FLAG(std::optional<double>, heuristic_weight, std::nullopt,
           "plan: weighted_astar heuristic weight w >= 1 (default 1.5)");
 ABSL_FLAG(std::optional<double>, robot_radius, std::nullopt,
-          "plan: inflate obstacles by this robot radius in metres");
+          "plan, navigate, cost-to-go: robot radius in metres");
 ABSL_FLAG(std::optional<double>, robot_radius_cells, std::nullopt,
-          "plan: inflate obstacles by this robot radius in cells");
+          "plan, navigate, cost-to-go: robot radius in cells");
 ABSL_FLAG(bool, simplify, false, "plan: simplify the path by ray-shooting");
 ABSL_FLAG(int, lookahead, 0, "plan: rtaa_star/lrta_star look-ahead (0: 64)");
 ABSL_FLAG(std::string, cost_to_go_file, "",
-          "plan: write the distance transform's cost-to-go field as CSV");
+          "plan, cost-to-go: write the cost-to-go field as CSV");
 ABSL_FLAG(std::string, pf_attractive, "",
           "plan: potential_field attractive potential, quadratic or conic");
 ABSL_FLAG(double, pf_attractive_gain, 0.0, "plan: potential_field k_att");
@@ -52,6 +52,8 @@ ABSL_FLAG(double, pf_influence, 0.0,
           "plan: potential_field obstacle influence distance, cells");
 ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
 ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
+ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
+ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
@@ -108,6 +110,8 @@ int main(int argc, char** argv) {
   options.pf_influence = absl::GetFlag(FLAGS_pf_influence);
   options.pf_step = absl::GetFlag(FLAGS_pf_step);
   options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
+  options.script = absl::GetFlag(FLAGS_script);
+  options.window = absl::GetFlag(FLAGS_window);
 
   return pathctl::Run(
       options,

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <string>
@@ -140,54 +141,116 @@ int WaitForExit(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-// Runs pathctl with `args` and returns its exit code and output.
-ProcessResult RunPathctl(const std::vector<std::string>& args,
-                         const std::vector<std::string>& extra_env = {}) {
-  ProcessResult result;
-  int out_pipe[2], err_pipe[2];
-  MakePipe(out_pipe);
-  MakePipe(err_pipe);
-  std::vector<std::string> argv = {PATHCTL_BIN};
-  argv.insert(argv.end(), args.begin(), args.end());
-  const pid_t pid = Spawn(argv, extra_env, out_pipe[1], err_pipe[1], true);
-  close(out_pipe[1]);
-  close(err_pipe[1]);
-  if (pid < 0) {
-    ADD_FAILURE() << "fork failed: " << strerror(errno);
-    close(out_pipe[0]);
-    close(err_pipe[0]);
-    return result;
-  }
-  // Both pipes are read together so neither can fill up and block pathctl.
-  pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
-  std::string* sinks[2] = {&result.out, &result.err};
-  int open_count = 2;
-  const Clock::time_point bound = Clock::now() + kCommandBound;
-  while (open_count > 0) {
-    if (Clock::now() > bound) {
-      ADD_FAILURE() << "pathctl did not finish; killing it";
-      kill(pid, SIGKILL);
-      break;
+// A pathctl process whose stdout and stderr are collected as they arrive, so
+// a test can act while it runs (a navigate session waiting for a push) and
+// wait for what it prints.
+class PathctlProcess {
+ public:
+  explicit PathctlProcess(const std::vector<std::string>& args,
+                          const std::vector<std::string>& extra_env = {}) {
+    int out_pipe[2], err_pipe[2];
+    MakePipe(out_pipe);
+    MakePipe(err_pipe);
+    std::vector<std::string> argv = {PATHCTL_BIN};
+    argv.insert(argv.end(), args.begin(), args.end());
+    pid_ = Spawn(argv, extra_env, out_pipe[1], err_pipe[1], true);
+    close(out_pipe[1]);
+    close(err_pipe[1]);
+    fds_[0] = {out_pipe[0], POLLIN, 0};
+    fds_[1] = {err_pipe[0], POLLIN, 0};
+    if (pid_ < 0) {
+      ADD_FAILURE() << "fork failed: " << strerror(errno);
+      CloseAll();
     }
-    if (poll(fds, 2, 1000) < 0 && errno != EINTR) break;
+  }
+
+  PathctlProcess(const PathctlProcess&) = delete;
+  PathctlProcess& operator=(const PathctlProcess&) = delete;
+
+  ~PathctlProcess() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      WaitForExit(pid_);
+    }
+    CloseAll();
+  }
+
+  // Reads until stdout holds a whole line containing `text` (true) or the
+  // process closed its output or ran past kCommandBound (false).
+  bool WaitForLine(const std::string& text) {
+    const Clock::time_point bound = Clock::now() + kCommandBound;
+    while (true) {
+      const size_t at = result_.out.find(text);
+      if (at != std::string::npos &&
+          result_.out.find('\n', at) != std::string::npos) {
+        return true;
+      }
+      if (open_count_ == 0 || Clock::now() > bound) return false;
+      Pump();
+    }
+  }
+
+  // Reads everything and waits for the exit.
+  ProcessResult Finish() {
+    const Clock::time_point bound = Clock::now() + kCommandBound;
+    while (open_count_ > 0) {
+      if (Clock::now() > bound) {
+        ADD_FAILURE() << "pathctl did not finish; killing it";
+        kill(pid_, SIGKILL);
+        break;
+      }
+      Pump();
+    }
+    CloseAll();
+    if (pid_ > 0) {
+      result_.exit_code = WaitForExit(pid_);
+      pid_ = -1;
+    }
+    return result_;
+  }
+
+  const std::string& out() const { return result_.out; }
+
+ private:
+  // Both pipes are read together so neither can fill up and block pathctl.
+  void Pump() {
+    if (poll(fds_, 2, 1000) < 0 && errno != EINTR) {
+      CloseAll();
+      return;
+    }
+    std::string* sinks[2] = {&result_.out, &result_.err};
     for (int i = 0; i < 2; ++i) {
-      if (fds[i].fd < 0 || fds[i].revents == 0) continue;
+      if (fds_[i].fd < 0 || fds_[i].revents == 0) continue;
       char buffer[4096];
-      const ssize_t n = read(fds[i].fd, buffer, sizeof(buffer));
+      const ssize_t n = read(fds_[i].fd, buffer, sizeof(buffer));
       if (n > 0) {
         sinks[i]->append(buffer, static_cast<size_t>(n));
       } else if (n == 0 || errno != EINTR) {
-        close(fds[i].fd);
-        fds[i].fd = -1;
-        --open_count;
+        close(fds_[i].fd);
+        fds_[i].fd = -1;
+        --open_count_;
       }
     }
   }
-  for (const pollfd& p : fds) {
-    if (p.fd >= 0) close(p.fd);
+
+  void CloseAll() {
+    for (pollfd& p : fds_) {
+      if (p.fd >= 0) close(p.fd);
+      p.fd = -1;
+    }
+    open_count_ = 0;
   }
-  result.exit_code = WaitForExit(pid);
-  return result;
+
+  pid_t pid_ = -1;
+  pollfd fds_[2] = {{-1, POLLIN, 0}, {-1, POLLIN, 0}};
+  int open_count_ = 2;
+  ProcessResult result_;
+};
+
+// Runs pathctl with `args` and returns its exit code and output.
+ProcessResult RunPathctl(const std::vector<std::string>& args,
+                         const std::vector<std::string>& extra_env = {}) {
+  return PathctlProcess(args, extra_env).Finish();
 }
 
 template <typename Message>
@@ -304,6 +367,12 @@ class E2eTest : public ::testing::Test {
   ProcessResult Ctl(std::vector<std::string> args) {
     args.insert(args.begin(), absl::StrCat("--server=", address_));
     return RunPathctl(args);
+  }
+
+  // Starts pathctl against this test's daemon without waiting for it.
+  std::unique_ptr<PathctlProcess> StartCtl(std::vector<std::string> args) {
+    args.insert(args.begin(), absl::StrCat("--server=", address_));
+    return std::make_unique<PathctlProcess>(args);
   }
 
   // Writes a map file into the temp folder and returns its path.
@@ -817,6 +886,14 @@ TEST_F(E2eTest, UsageErrorsExitTwo) {
       {{"--bogus", "maps", "list"}, "unknown flag --bogus"},
       {{"maps", "list", "--timeout=soon"}, "--timeout"},
       {{"maps", "list", "--server"}, "--server needs a value"},
+      {{"navigate", "room", "0", "0", "1"}, "navigate takes NAME SX SY GX GY"},
+      {{"navigate", "room", "0", "0", "1", "1", "--world"}, "--world"},
+      {{"cost-to-go", "room", "1"}, "cost-to-go takes NAME GX GY"},
+      {{"cost-to-go", "room", "1", "1", "--window=1,2,3"},
+       "--window takes X,Y,W,H"},
+      {{"cost-to-go", "room", "1", "1", "--window=0,0,0,4"},
+       "--window width and height must be positive"},
+      {{"cache-stats", "spm"}, "cache-stats takes no arguments"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(absl::StrJoin(c.args, " "));
@@ -833,6 +910,211 @@ TEST_F(E2eTest, UsageErrorsExitTwo) {
   EXPECT_TRUE(absl::StrContains(help.out, "exit codes:")) << help;
   EXPECT_TRUE(absl::StrContains(help.out, "3  plan ran but found no path"))
       << help;
+}
+
+// Path lines of `pathctl navigate` output ("  path (N cells): (x,y) ..."),
+// without the prefix.
+std::vector<std::string> NavigatePaths(const std::string& out) {
+  std::vector<std::string> paths;
+  for (absl::string_view line : absl::StrSplit(out, '\n')) {
+    if (!absl::ConsumePrefix(&line, "  path (")) continue;
+    const size_t colon = line.find("): ");
+    if (colon != absl::string_view::npos) {
+      paths.emplace_back(line.substr(colon + 3));
+    }
+  }
+  return paths;
+}
+
+// The seed's D* Lite example, shipped as maps/dstar_example.map and
+// examples/navigate/dstar_example.nav: the robot steps from (4,2) to (3,2),
+// an obstacle appears at (2,2), the robot drives the repaired path.
+TEST_F(E2eTest, NavigateReplaysTheDstarLiteDemo) {
+  const std::string source_dir = PATHD_SOURCE_DIR;
+  ASSERT_EQ(Ctl({"maps", "create", "dstar_example", "--from",
+                 source_dir + "/maps/dstar_example.map"})
+                .exit_code,
+            0);
+  const ProcessResult r =
+      Ctl({"navigate", "dstar_example", "4", "2", "0", "0", "--script",
+           source_dir + "/examples/navigate/dstar_example.nav"});
+  ASSERT_EQ(r.exit_code, 0) << r;
+  const std::vector<std::string> paths = NavigatePaths(r.out);
+  // OPENED, MOVED, OBSERVED, then one answer per step.
+  ASSERT_GE(paths.size(), 4u) << r;
+  EXPECT_EQ(paths[0], "(4,2) (3,2) (2,2) (1,2) (0,2) (0,1) (0,0)") << r;
+  EXPECT_EQ(paths[1], "(3,2) (2,2) (1,2) (0,2) (0,1) (0,0)") << r;
+  // The only optimal detour: no corner cutting past (2,2) or (1,1).
+  EXPECT_EQ(paths[2], "(3,2) (3,3) (2,3) (1,3) (0,2) (0,1) (0,0)") << r;
+  for (size_t i = 2; i < paths.size(); ++i) {
+    EXPECT_FALSE(absl::StrContains(paths[i], "(2,2)")) << paths[i];
+  }
+  EXPECT_TRUE(absl::StrContains(r.out, "[OPENED] seq 1")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "found, cost 6.000000, 7 cells")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "found, cost 6.414214, 7 cells")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "at the goal (0,0)")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "closed: ")) << r;
+  // The demo's observation is private: the shared map is untouched.
+  const ProcessResult get = Ctl({"maps", "get", "dstar_example"});
+  EXPECT_TRUE(absl::StrContains(get.out, "version:     1")) << get;
+
+  // Without a script: the first path, then a clean close.
+  const ProcessResult open =
+      Ctl({"navigate", "dstar_example", "4", "2", "0", "0"});
+  ASSERT_EQ(open.exit_code, 0) << open;
+  EXPECT_EQ(NavigatePaths(open.out),
+            std::vector<std::string>{"(4,2) (3,2) (2,2) (1,2) (0,2) (0,1) (0,0)"})
+      << open;
+}
+
+// The headline: a robot driven by pathctl navigate sees its path
+// change when another client blocks a cell on it, without asking.
+TEST_F(E2eTest, NavigateSessionReceivesAPushWhenAnotherClientBlocksItsPath) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const std::string script = MapFile("push.nav", "expect-push 1000\n");
+  std::unique_ptr<PathctlProcess> robot =
+      StartCtl({"navigate", "room", "0", "0", "9", "9", "--script", script});
+  ASSERT_TRUE(robot->WaitForLine(" cells): ")) << robot->Finish();
+  const std::vector<std::string> first = NavigatePaths(robot->out());
+  ASSERT_EQ(first.size(), 1u) << robot->out();
+  // The open room's only shortest path is the diagonal; block its middle.
+  ASSERT_TRUE(absl::StrContains(first[0], "(4,4)")) << first[0];
+  const ProcessResult set = Ctl({"maps", "set", "room", "4", "4", "lethal"});
+  ASSERT_EQ(set.exit_code, 0) << set;
+
+  const ProcessResult r = robot->Finish();
+  ASSERT_EQ(r.exit_code, 0) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "[MAP_CHANGED, unasked] seq 0")) << r;
+  const std::vector<std::string> paths = NavigatePaths(r.out);
+  ASSERT_EQ(paths.size(), 2u) << r;
+  EXPECT_FALSE(absl::StrContains(paths[1], "(4,4)")) << paths[1];
+  EXPECT_TRUE(absl::StartsWith(paths[1], "(0,0) ")) << paths[1];
+  EXPECT_TRUE(absl::EndsWith(paths[1], " (9,9)")) << paths[1];
+}
+
+TEST_F(E2eTest, NavigateScriptErrorsAndFailedExpectations) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  // A bad line is reported with its place before anything is sent.
+  const std::string bad = MapFile("bad.nav", "move 1 1\njump 2 2\n");
+  const ProcessResult r =
+      Ctl({"navigate", "room", "0", "0", "9", "9", "--script", bad});
+  EXPECT_EQ(r.exit_code, 2) << r;
+  EXPECT_EQ(r.err, absl::StrCat("error: ", bad,
+                                ":2: unknown command 'jump'; expected move, "
+                                "follow, block, free, cost, rect, private, "
+                                "wait or expect-push\n"));
+  EXPECT_EQ(r.out, "") << r;
+  // Nobody else updates the map, so no push comes.
+  const std::string lonely = MapFile("lonely.nav", "move 1 1\nexpect-push 50\n");
+  ExpectRpcError({"navigate", "room", "0", "0", "9", "9", "--script", lonely},
+                 "DEADLINE_EXCEEDED", {"lonely.nav:2: expect-push"});
+  // A move off the map ends the session with the server's reason.
+  const std::string off = MapFile("off.nav", "move 40 1\n");
+  ExpectRpcError({"navigate", "room", "0", "0", "9", "9", "--script", off},
+                 "INVALID_ARGUMENT");
+  ExpectRpcError({"navigate", "nosuch", "0", "0", "9", "9"}, "NOT_FOUND",
+                 {"nosuch"});
+}
+
+TEST_F(E2eTest, CostToGoPrintsAWindowOrWritesItsCsv) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  // Columns 9..11 of rows 0..1 straddle the wall at x = 10.
+  const ProcessResult table =
+      Ctl({"cost-to-go", "walled", "17", "3", "--window", "9,0,3,2"});
+  ASSERT_EQ(table.exit_code, 0) << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "goal:        (17,3)")) << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "window:      x 9..11, y 0..1 (3x2 cells)"))
+      << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "reachable:   4 of 6 cells")) << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "  y\\x       9      10      11\n"))
+      << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "     inf ")) << table;
+
+  const std::string csv = (temp_dir_ / "window.csv").string();
+  const ProcessResult written = Ctl({"cost-to-go", "walled", "17", "3", "--window",
+                                     "15,2,4,3", "--cost_to_go_file", csv});
+  ASSERT_EQ(written.exit_code, 0) << written;
+  EXPECT_TRUE(absl::StrContains(written.out, "12 cells written to")) << written;
+  std::ifstream in(csv);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    rows.push_back(absl::StrSplit(line, ','));
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  for (const auto& row : rows) ASSERT_EQ(row.size(), 4u);
+  EXPECT_EQ(rows[1][2], "0.000000");  // the goal (17,3)
+  EXPECT_EQ(rows[0][1], "1.414214");  // (16,2), one diagonal away
+  EXPECT_EQ(rows[1][3], "1.000000");  // (18,3)
+
+  // The whole field agrees with A* from a far start.
+  const std::string whole = (temp_dir_ / "whole.csv").string();
+  ASSERT_EQ(Ctl({"cost-to-go", "walled", "17", "3", "--cost_to_go_file", whole})
+                .exit_code,
+            0);
+  std::ifstream whole_in(whole);
+  std::vector<std::vector<std::string>> field;
+  for (std::string line; std::getline(whole_in, line);) {
+    field.push_back(absl::StrSplit(line, ','));
+  }
+  ASSERT_EQ(field.size(), 12u);
+  double start_cost = 0;
+  ASSERT_TRUE(absl::SimpleAtod(field[2][2], &start_cost));
+  const v1::PlanResponse astar = PlanJson({"walled", "2", "2", "17", "3"});
+  EXPECT_NEAR(start_cost, astar.cost(), 1e-4);  // the field holds floats
+
+  ExpectRpcError({"cost-to-go", "walled", "17", "3", "--window", "18,0,5,5"},
+                 "INVALID_ARGUMENT", {"window"});
+  ExpectRpcError({"cost-to-go", "walled", "10", "0"}, "INVALID_ARGUMENT",
+                 {"goal"});
+}
+
+TEST_F(E2eTest, CacheStatsCountSpmHits) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse first =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=spm"});
+  EXPECT_FALSE(first.cache_hit());
+  // Another start, the same goal and cost options: the cached field answers.
+  const v1::PlanResponse second =
+      PlanJson({"room", "0", "5", "9", "9", "--planner=spm"});
+  EXPECT_TRUE(second.cache_hit());
+  EXPECT_NEAR(second.cost(), 5 + 4 * kSqrt2, 1e-9);
+
+  const ProcessResult stats = Ctl({"cache-stats", "--json"});
+  ASSERT_EQ(stats.exit_code, 0) << stats;
+  const auto response = ParseJson<v1::GetCacheStatsResponse>(stats.out);
+  const v1::CacheStats* spm = nullptr;
+  for (const v1::CacheStats& c : response.caches()) {
+    if (c.name() == "spm") spm = &c;
+  }
+  ASSERT_NE(spm, nullptr) << stats;
+  EXPECT_GE(spm->hits(), 1) << stats;
+  EXPECT_GE(spm->misses(), 1) << stats;
+  EXPECT_GE(spm->entries(), 1) << stats;
+  EXPECT_GT(spm->bytes(), 0) << stats;
+
+  const ProcessResult text = Ctl({"cache-stats"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StartsWith(text.out, "CACHE ")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "\nspm ")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "\nsessions:    0 open")) << text;
+}
+
+TEST_F(E2eTest, DstarLitePlansFromAMovingStartReuseTheirState) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse first =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=dstar_lite"});
+  EXPECT_FALSE(first.cache_hit());
+  EXPECT_NEAR(first.cost(), 9 * kSqrt2, 1e-9);
+  // The robot moved one step along its path.
+  const ProcessResult moved =
+      Ctl({"plan", "room", "1", "1", "9", "9", "--planner=dstar_lite"});
+  ASSERT_EQ(moved.exit_code, 0) << moved;
+  EXPECT_TRUE(absl::StrContains(moved.out, "cache hit:   yes\n")) << moved;
+  EXPECT_TRUE(absl::StrContains(moved.out, "repaired:    0 cells\n")) << moved;
+  EXPECT_TRUE(absl::StrContains(moved.out, "cost:        11.313708")) << moved;
+  // Other planners do not claim a cache.
+  const ProcessResult astar = Ctl({"plan", "room", "1", "1", "9", "9"});
+  EXPECT_FALSE(absl::StrContains(astar.out, "cache hit")) << astar;
 }
 
 // Plans a spread of the benchmark's own scenarios on the bundled map and
