@@ -5,37 +5,55 @@
 #define PATHD_SERVER_PLANNER_SERVICE_H_
 
 #include <cstdint>
+#include <functional>
 
 #include "pathd/v1/planner_service.grpc.pb.h"
+#include "server/incremental_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/worker_pool.h"
 
 namespace pathd::server {
 
-// Thread-safe. `store`, `pool` and `inflation` must outlive the service, and the pool must
-// be shut down (so every accepted job has answered) before the service and the
-// gRPC server that owns the calls go away.
+// Thread-safe. `store`, `pool`, `inflation` and `cache` must outlive the
+// service, and the pool must be shut down (so every accepted job has answered)
+// before the service and the gRPC server that owns the calls go away.
 class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
  public:
   struct Options {
     // Cap on expansions per request (--max_expansions); 0 = unlimited.
     int64_t max_expansions = 0;
+    // Fills GetCacheStatsResponse's session fields (open Navigate sessions
+    // and their bytes); unset leaves them 0. Called on a gRPC thread.
+    std::function<void(v1::GetCacheStatsResponse&)> session_stats;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
-                     InflationCache& inflation, Options options);
+                     InflationCache& inflation, IncrementalCache& cache,
+                     Options options);
 
   // Errors as documented in planner_service.proto; the job is dropped without
   // running when the deadline passed or the client cancelled while queued.
+  // PLANNER_SPM and PLANNER_DSTAR_LITE go through the incremental cache.
   grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context,
                                  const v1::PlanRequest* request,
                                  v1::PlanResponse* response) override;
+
+  // The cached shortest path map's field, on a worker like Plan.
+  grpc::ServerUnaryReactor* CostToGo(grpc::CallbackServerContext* context,
+                                     const v1::CostToGoRequest* request,
+                                     v1::CostToGoResponse* response) override;
+
+  // Answers on the gRPC thread: it only copies counters.
+  grpc::ServerUnaryReactor* GetCacheStats(grpc::CallbackServerContext* context,
+                                          const v1::GetCacheStatsRequest* request,
+                                          v1::GetCacheStatsResponse* response) override;
 
  private:
   const MapStore& store_;
   WorkerPool& pool_;
   InflationCache& inflation_;
+  IncrementalCache& cache_;
   const Options options_;
 };
 

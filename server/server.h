@@ -15,6 +15,7 @@
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "server/incremental_cache.h"
 #include "server/map_service.h"
 #include "server/map_store.h"
 #include "server/planner_service.h"
@@ -40,6 +41,9 @@ struct ServerOptions {
   absl::Duration shutdown_grace = absl::Seconds(5);
   // Inflated map versions kept for robot_radius requests.
   size_t inflation_cache_entries = 16;
+  // Byte budget of the incremental-state caches (shortest path maps and D*
+  // Lite searches, half each).
+  size_t cache_bytes = size_t{1} << 30;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -68,6 +72,7 @@ class PathdServer {
 
   MapStore& store() { return store_; }
   const InflationCache& inflation_cache() const { return inflation_; }
+  const IncrementalCache& incremental_cache() const { return cache_; }
   const ServerOptions& options() const { return options_; }
 
  private:
@@ -77,6 +82,7 @@ class PathdServer {
   const ServerOptions options_;
   MapStore store_;
   InflationCache inflation_;
+  IncrementalCache cache_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<MapServiceImpl> map_service_;
   std::unique_ptr<PlannerServiceImpl> planner_service_;

@@ -21,6 +21,7 @@
 #include "gtest/gtest.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "core/inflation.h"
+#include "server/incremental_cache.h"
 #include "server/map_store.h"
 #include "server/planner_service.h"
 #include "server/server.h"
@@ -38,7 +39,7 @@ class PlanAdmissionTest : public ::testing::Test {
     spdlog::set_level(spdlog::level::debug);  // exercise the request log line
     ASSERT_TRUE(store_.Create("open", *Grid::Create(32, 32), false).ok());
     pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{1, 1});
-    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_,
+    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_, cache_,
                                                     PlannerServiceImpl::Options{});
     grpc::ServerBuilder builder;
     int port = 0;
@@ -108,6 +109,7 @@ class PlanAdmissionTest : public ::testing::Test {
 
   MapStore store_{1 << 20};
   InflationCache inflation_{&InflateObstacles, 4};
+  IncrementalCache cache_{inflation_, size_t{1} << 20};
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<PlannerServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
