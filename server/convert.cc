@@ -107,6 +107,9 @@ constexpr PlannerEntry kPlanners[] = {
     {v1::PLANNER_RTAA_STAR, "rtaa_star"},
     {v1::PLANNER_LRTA_STAR, "lrta_star"},
     {v1::PLANNER_POTENTIAL_FIELD, "potential_field"},
+    {v1::PLANNER_LPA_STAR, "lpa_star"},
+    {v1::PLANNER_DSTAR_LITE, "dstar_lite"},
+    {v1::PLANNER_SPM, "spm"},
 };
 
 // Checks a potential-field option: 0 (unset) keeps the default, otherwise it

@@ -36,6 +36,10 @@ ABSL_FLAG(std::string, map_dir, "",
 ABSL_FLAG(std::string, log_level, "info", "trace|debug|info|warn|error");
 ABSL_FLAG(int, inflation_cache_entries, 16,
           "Inflated map versions (per robot radius) kept in memory");
+ABSL_FLAG(int64_t, cache_bytes, int64_t{1} << 30,
+          "byte budget of the cached incremental state (shortest path maps and "
+          "D* Lite searches get half each); least recently used entries are "
+          "evicted beyond it");
 ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(5),
           "on SIGINT/SIGTERM, time in-flight calls get before they are cancelled");
 ABSL_FLAG(absl::Duration, session_idle_timeout, absl::Minutes(10),
@@ -102,6 +106,8 @@ pathd::server::ServerOptions OptionsFromFlags() {
   }
   options.inflation_cache_entries =
       static_cast<size_t>(absl::GetFlag(FLAGS_inflation_cache_entries));
+  if (absl::GetFlag(FLAGS_cache_bytes) < 0) UsageError("--cache_bytes must be >= 0");
+  options.cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_cache_bytes));
   if (threads < 0) UsageError("--threads must be >= 0");
   if (queue_depth < 1) UsageError("--queue_depth must be >= 1");
   if (options.max_map_cells < 1) UsageError("--max_map_cells must be >= 1");
@@ -143,11 +149,11 @@ int main(int argc, char** argv) {
 
   spdlog::info(
       "pathd starting: address={} threads={} queue_depth={} max_map_cells={} "
-      "max_expansions={} map_dir='{}' log_level={} shutdown_grace={} "
+      "max_expansions={} map_dir='{}' log_level={} shutdown_grace={} cache_bytes={} "
       "session_idle_timeout={} max_sessions={}",
       options.address, options.threads, options.queue_depth, options.max_map_cells,
       options.max_expansions, options.map_dir, absl::GetFlag(FLAGS_log_level),
-      absl::FormatDuration(options.shutdown_grace),
+      absl::FormatDuration(options.shutdown_grace), options.cache_bytes,
       absl::FormatDuration(options.session_idle_timeout), options.max_sessions);
 
   pathd::server::PathdServer server(options);

@@ -113,6 +113,7 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
   }
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->name = std::string(name);
+  snapshot->map_id = ++last_map_id_;
   snapshot->grid = std::move(shared_grid);
   if (it == maps_.end()) {
     snapshot->version = 1;
@@ -241,6 +242,7 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     }
 
     snapshot->name = base->name;
+    snapshot->map_id = base->map_id;
     snapshot->version = base->version + 1;
     snapshot->grid = std::move(grid);
     {

@@ -27,6 +27,12 @@ struct MapSnapshot {
   std::string name;
   // 1 at creation, +1 per update (a replacing create continues the count).
   uint64_t version = 0;
+  // Which map this is a version of: every Create (a replacing one too) draws
+  // a new id from the store, Update keeps it. Versions of one id differ only
+  // by Update, so incremental state may be repaired across them; a deleted
+  // and re-created map starts again at version 1 with a new id, which is how
+  // caches tell it from the map they were built on.
+  uint64_t map_id = 0;
   std::shared_ptr<const Grid> grid;
   // For a version made by Update: every cell whose cost differs from the
   // previous version, in row-major order, so incremental state (D* Lite,
@@ -148,6 +154,7 @@ class MapStore {
   mutable absl::Mutex mu_;
   // std::map keeps List() sorted without a sort per call.
   std::map<std::string, Entry, std::less<>> maps_ ABSL_GUARDED_BY(mu_);
+  uint64_t last_map_id_ ABSL_GUARDED_BY(mu_) = 0;
   std::vector<Listener> listeners_;
 };
 

@@ -26,6 +26,7 @@
 #include "core/status_macros.h"
 #include "server/convert.h"
 #include "server/grpc_status.h"
+#include "server/incremental_cache.h"
 #include "server/request_log.h"
 
 namespace pathd::server {
@@ -423,14 +424,10 @@ class NavigationSession final : public NavigateReactor {
           snapshot_->name, (*latest)->grid->width(), (*latest)->grid->height()));
     }
     PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> after, EffectiveGrid(**latest));
-    std::vector<Cell> changed;
-    const bool plain = overlay_.empty() && radius_cells_ <= 0.0 && !overlay_changed;
-    if (plain && (*latest)->changes_known &&
-        (*latest)->version == snapshot_->version + 1) {
-      changed = (*latest)->changed_cells;
-    } else {
-      PATHD_ASSIGN_OR_RETURN(changed, ChangedCells(before, *after));
-    }
+    // A replaced map (new map_id) has no change list, so this compares.
+    PATHD_ASSIGN_OR_RETURN(
+        const std::vector<Cell> changed,
+        ChangesBetween(before, snapshot_->version, *after, **latest));
     PATHD_RETURN_IF_ERROR(search_->UpdateMap(after, changed));
     repaired_cells_ += static_cast<int64_t>(changed.size());
     snapshot_ = *std::move(latest);

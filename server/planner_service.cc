@@ -1,18 +1,22 @@
 // PlannerService implementation: per-call shared state, the reactor that
-// forwards cancellation, and the pool job that plans and answers.
+// forwards cancellation, the pool jobs that plan (or read a cached field) and
+// answer, and the cache counters.
 #include "server/planner_service.h"
 
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <initializer_list>
 #include <memory>
 #include <new>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/cost_model.h"
 #include "core/path_simplify.h"
 #include "core/planner.h"
 #include "core/status_macros.h"
@@ -40,7 +44,10 @@ struct PlanCall {
   // Filled by Prepare().
   std::shared_ptr<const MapSnapshot> snapshot;
   std::string_view planner_name = "-";
+  // Set for registry planners; PLANNER_SPM and PLANNER_DSTAR_LITE set
+  // `cached` instead and keep their state in the IncrementalCache.
   const Planner* planner = nullptr;
+  std::optional<IncrementalCache::Kind> cached;
   PlanRequest core_request;
   int64_t max_expansions = 0;
   // 0: plan on the map as stored.
@@ -48,9 +55,12 @@ struct PlanCall {
   bool simplify = false;
 };
 
-class PlanReactor final : public grpc::ServerUnaryReactor {
+// The reactor of a unary call that runs on the pool: forwards cancellation to
+// the call's flag. `Call` has `std::atomic<bool> cancelled`.
+template <typename Call>
+class CancellableReactor final : public grpc::ServerUnaryReactor {
  public:
-  explicit PlanReactor(std::shared_ptr<PlanCall> call) : call_(std::move(call)) {}
+  explicit CancellableReactor(std::shared_ptr<Call> call) : call_(std::move(call)) {}
 
   // The planner polls the flag every StopCondition::kPollInterval expansions;
   // a queued job sees it before it starts.
@@ -58,8 +68,48 @@ class PlanReactor final : public grpc::ServerUnaryReactor {
   void OnDone() override { delete this; }
 
  private:
-  std::shared_ptr<PlanCall> call_;
+  std::shared_ptr<Call> call_;
 };
+
+// Why a job that waited in the queue should not start: CANCELLED or
+// DEADLINE_EXCEEDED, OK when it should.
+absl::Status StillWanted(const std::atomic<bool>& cancelled, absl::Time deadline) {
+  if (cancelled.load(std::memory_order_relaxed)) {
+    return absl::CancelledError("cancelled before planning started");
+  }
+  if (absl::Now() >= deadline) {
+    return absl::DeadlineExceededError(
+        "deadline passed while the request waited for a worker");
+  }
+  return absl::OkStatus();
+}
+
+// INVALID_ARGUMENT when one of `endpoints` became inscribed by the robot
+// radius (it is traversable on the stored map, so the request was accepted).
+absl::Status CheckRadiusEndpoints(
+    const Grid& stored, const Grid& inflated, double radius_cells,
+    std::initializer_list<std::pair<Cell, const char*>> endpoints) {
+  for (const auto& [cell, what] : endpoints) {
+    if (inflated.InBounds(cell) && inflated.cost(cell) == kInscribedCost &&
+        stored.cost(cell) != kInscribedCost) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s %s is within the robot radius (%g cells) of an obstacle", what,
+          CellToString(cell), radius_cells));
+    }
+  }
+  return absl::OkStatus();
+}
+
+// A cache key from validated request parts.
+IncrementalCache::Key CacheKey(const std::string& map, Cell goal, const CostParams& cost,
+                               double robot_radius_cells) {
+  IncrementalCache::Key key;
+  key.map = map;
+  key.goal = goal;
+  key.cost = cost;
+  key.robot_radius_cells = robot_radius_cells;
+  return key;
+}
 
 // Answers the call. Must be the last use of call.request/response/reactor.
 void FinishCall(PlanCall& call, const absl::Status& status, std::string_view outcome) {
@@ -79,6 +129,10 @@ absl::Time DeadlineOf(const grpc::CallbackServerContext& context) {
   return absl::FromChrono(deadline);
 }
 
+// A whole field is 8 bytes per cell in one Plan message and 4 in a CostToGo
+// message; beyond this either would take tens of megabytes.
+constexpr int64_t kMaxCostToGoCells = int64_t{1} << 22;
+
 // Resolves everything that can fail before planning, on the gRPC thread, so
 // a bad request never takes a queue slot.
 absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
@@ -95,10 +149,8 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
   PATHD_ASSIGN_OR_RETURN(call.robot_radius_cells,
                          RobotRadiusCells(request.options(), grid));
   call.simplify = request.options().simplify();
-  // A whole field is 8 bytes per cell in one message; beyond this it would
-  // take hundreds of megabytes.
-  constexpr size_t kMaxCostToGoCells = size_t{1} << 22;
-  if (call.core_request.want_cost_to_go && grid.size() > kMaxCostToGoCells) {
+  if (call.core_request.want_cost_to_go &&
+      grid.size() > static_cast<size_t>(kMaxCostToGoCells)) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "options.return_cost_to_go: the map has %d cells; whole cost-to-go "
         "fields are returned for maps of up to %d cells (32 MiB)",
@@ -108,6 +160,14 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
                          EffectiveMaxExpansions(request.options(),
                                                 server_max_expansions));
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(grid, call.core_request));
+  if (request.planner() == v1::PLANNER_SPM) {
+    call.cached = IncrementalCache::Kind::kSpm;
+    return absl::OkStatus();
+  }
+  if (request.planner() == v1::PLANNER_DSTAR_LITE) {
+    call.cached = IncrementalCache::Kind::kDStarLite;
+    return absl::OkStatus();
+  }
   call.planner = PlannerRegistry::Default().Get(call.planner_name);
   if (call.planner == nullptr) {
     return absl::UnimplementedError(absl::StrFormat(
@@ -116,30 +176,33 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
   return absl::OkStatus();
 }
 
+// Where a plan came from, for the response.
+struct PlanSource {
+  // The grid the path was planned on (inflated for a robot radius), for the
+  // simplification and the response's world points.
+  std::shared_ptr<const Grid> grid;
+  uint64_t map_version = 0;
+  bool cache_hit = false;
+  int64_t repaired_cells = 0;
+};
+
 class PlanJob final : public Job {
  public:
-  PlanJob(std::shared_ptr<PlanCall> call, InflationCache& inflation)
-      : call_(std::move(call)), inflation_(inflation) {}
+  PlanJob(std::shared_ptr<PlanCall> call, InflationCache& inflation,
+          IncrementalCache& cache)
+      : call_(std::move(call)), inflation_(inflation), cache_(cache) {}
 
   void Run(SearchScratch& scratch) override {
     PlanCall& call = *call_;
-    if (call.cancelled.load(std::memory_order_relaxed)) {
-      FinishCall(call, absl::CancelledError("cancelled before planning started"),
-                 "CANCELLED");
-      return;
-    }
-    if (absl::Now() >= call.deadline) {
-      FinishCall(call,
-                 absl::DeadlineExceededError(
-                     "deadline passed while the request waited for a worker"),
-                 "TIMEOUT");
+    if (absl::Status s = StillWanted(call.cancelled, call.deadline); !s.ok()) {
+      FinishCall(call, s, absl::IsCancelled(s) ? "CANCELLED" : "TIMEOUT");
       return;
     }
     const StopCondition stop(call.deadline, &call.cancelled, call.max_expansions);
     absl::StatusOr<PlanResult> result;
-    std::shared_ptr<const Grid> grid = call.snapshot->grid;
+    PlanSource source{call.snapshot->grid, call.snapshot->version};
     try {
-      result = PlanOn(call, scratch, stop, grid);
+      result = PlanOn(call, scratch, stop, source);
     } catch (const std::bad_alloc&) {
       result = absl::ResourceExhaustedError("out of memory while planning");
     } catch (const std::exception& e) {
@@ -164,35 +227,74 @@ class PlanJob final : public Job {
       return;
     }
     v1::PlanResponse* response = call.response;
-    FillPlanResponse(*result, call.core_request, *grid, call.max_expansions, response);
+    FillPlanResponse(*result, call.core_request, *source.grid, call.max_expansions,
+                     response);
     response->set_robot_radius_cells(call.robot_radius_cells);
-    response->set_map_version(call.snapshot->version);
+    response->set_map_version(source.map_version);
     response->set_planner(std::string(call.planner_name));
+    response->set_cache_hit(source.cache_hit);
+    response->set_repaired_cells(source.repaired_cells);
     FinishCall(call, absl::OkStatus(), outcome);
   }
 
-  // Inflates (cached), plans and simplifies. `grid` is set to the grid the
-  // path was planned on, for the response's world points.
+  // Inflates (cached), plans and simplifies. `source` starts as the request's
+  // snapshot and is set to what the plan actually used.
   absl::StatusOr<PlanResult> PlanOn(const PlanCall& call, SearchScratch& scratch,
-                                    const StopCondition& stop,
-                                    std::shared_ptr<const Grid>& grid) {
+                                    const StopCondition& stop, PlanSource& source) {
     if (call.robot_radius_cells > 0.0) {
-      PATHD_ASSIGN_OR_RETURN(grid, inflation_.Get(grid, call.robot_radius_cells));
-      for (const auto& [cell, what] : {std::pair{call.core_request.start, "start"},
-                                       std::pair{call.core_request.goal, "goal"}}) {
-        if (grid->InBounds(cell) && grid->cost(cell) == kInscribedCost &&
-            call.snapshot->grid->cost(cell) != kInscribedCost) {
-          return absl::InvalidArgumentError(absl::StrFormat(
-              "%s %s is within the robot radius (%g cells) of an obstacle", what,
-              CellToString(cell), call.robot_radius_cells));
+      PATHD_ASSIGN_OR_RETURN(source.grid,
+                             inflation_.Get(source.grid, call.robot_radius_cells));
+      PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(
+          *call.snapshot->grid, *source.grid, call.robot_radius_cells,
+          {{call.core_request.start, "start"}, {call.core_request.goal, "goal"}}));
+    }
+    PlanResult result;
+    if (call.cached.has_value()) {
+      PATHD_ASSIGN_OR_RETURN(result, PlanCached(call, stop, source));
+    } else {
+      PATHD_ASSIGN_OR_RETURN(
+          result, call.planner->Plan(*source.grid, call.core_request, stop, scratch));
+    }
+    if (call.simplify && result.found()) {
+      SimplifyPath(*source.grid, call.core_request.cost, &result);
+    }
+    return result;
+  }
+
+  // D* Lite or shortest path map from the cache. The map version may be newer
+  // than the request's snapshot when a queued repair got there first.
+  absl::StatusOr<PlanResult> PlanCached(const PlanCall& call, const StopCondition& stop,
+                                        PlanSource& source) {
+    const absl::Time started = absl::Now();
+    const PlanRequest& request = call.core_request;
+    const IncrementalCache::Key key = CacheKey(call.request->map(), request.goal,
+                                               request.cost, call.robot_radius_cells);
+    PlanResult result;
+    if (*call.cached == IncrementalCache::Kind::kDStarLite) {
+      PATHD_ASSIGN_OR_RETURN(IncrementalCache::DStarAnswer answer,
+                             cache_.PlanDStarLite(key, call.snapshot, request.start, stop));
+      result = std::move(answer.result);
+      source = PlanSource{answer.grid, answer.map_version, answer.cache_hit,
+                          answer.repaired_cells};
+    } else {
+      PATHD_ASSIGN_OR_RETURN(const IncrementalCache::SpmAnswer answer,
+                             cache_.GetSpm(key, call.snapshot, stop));
+      if (answer.outcome != PlanOutcome::kFound) {
+        // The field's build was stopped: the request ends as a search would.
+        result.outcome = answer.outcome;
+        result.expansions = stop.max_expansions();
+      } else {
+        PATHD_ASSIGN_OR_RETURN(result, answer.field->PathFrom(request.start));
+        result.expansions += answer.expansions;
+        if (request.want_cost_to_go) {
+          const absl::Span<const float> field = answer.field->field();
+          result.cost_to_go.assign(field.begin(), field.end());
         }
+        source = PlanSource{answer.grid, answer.map_version, answer.cache_hit,
+                            answer.repaired_cells};
       }
     }
-    PATHD_ASSIGN_OR_RETURN(PlanResult result,
-                           call.planner->Plan(*grid, call.core_request, stop, scratch));
-    if (call.simplify && result.found()) {
-      SimplifyPath(*grid, call.core_request.cost, &result);
-    }
+    result.planning_time = absl::Now() - started;
     return result;
   }
 
@@ -204,18 +306,199 @@ class PlanJob final : public Job {
  private:
   std::shared_ptr<PlanCall> call_;
   InflationCache& inflation_;
+  IncrementalCache& cache_;
 };
+
+// Everything one CostToGo call needs; shared like PlanCall.
+struct CostToGoCall {
+  std::atomic<bool> cancelled{false};
+  grpc::ServerUnaryReactor* reactor = nullptr;
+  const v1::CostToGoRequest* request = nullptr;
+  v1::CostToGoResponse* response = nullptr;
+  absl::Time received;
+  absl::Time deadline = absl::InfiniteFuture();
+
+  // Filled by PrepareCostToGo().
+  std::shared_ptr<const MapSnapshot> snapshot;
+  IncrementalCache::Key key;
+  // The window's corner and size, inside the map.
+  int32_t x = 0;
+  int32_t y = 0;
+  int32_t width = 0;
+  int32_t height = 0;
+  int64_t max_expansions = 0;
+};
+
+void FinishCostToGo(CostToGoCall& call, const absl::Status& status,
+                    std::string_view outcome) {
+  LogRequest("CostToGo", call.request->map(), absl::StrFormat("outcome=%s", outcome),
+             status, call.received);
+  call.reactor->Finish(ToGrpcStatus(status));
+}
+
+absl::Status PrepareCostToGo(const MapStore& store, int64_t server_max_expansions,
+                             CostToGoCall& call) {
+  const v1::CostToGoRequest& request = *call.request;
+  PATHD_ASSIGN_OR_RETURN(call.snapshot, store.Get(request.map()));
+  const Grid& grid = *call.snapshot->grid;
+  PATHD_ASSIGN_OR_RETURN(const Cell goal, CellFromPosition(request.goal(), grid, "goal"));
+  PATHD_ASSIGN_OR_RETURN(const CostParams cost, CostParamsFromOptions(request.options()));
+  PATHD_ASSIGN_OR_RETURN(const double radius, RobotRadiusCells(request.options(), grid));
+  PATHD_ASSIGN_OR_RETURN(call.max_expansions,
+                         EffectiveMaxExpansions(request.options(), server_max_expansions));
+  if (!grid.InBounds(goal)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "goal %s is outside the %d x %d map", CellToString(goal), grid.width(),
+        grid.height()));
+  }
+  if (!Traversable(grid.cost(goal), cost.unknown_is_free)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "goal %s is on a blocked cell (cost %d)", CellToString(goal), grid.cost(goal)));
+  }
+  call.key = CacheKey(request.map(), goal, cost, radius);
+
+  call.x = 0;
+  call.y = 0;
+  call.width = grid.width();
+  call.height = grid.height();
+  if (request.has_window()) {
+    const v1::CellWindow& w = request.window();
+    // int64: x + width must not overflow on hostile values.
+    const auto check = [](int64_t lo, int64_t size, int64_t limit, const char* lo_name,
+                          const char* size_name) -> absl::Status {
+      if (size <= 0) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("window.%s %d must be > 0", size_name, size));
+      }
+      if (lo < 0 || lo + size > limit) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "window.%s %d + window.%s %d reaches outside the map's 0..%d", lo_name, lo,
+            size_name, size, limit));
+      }
+      return absl::OkStatus();
+    };
+    PATHD_RETURN_IF_ERROR(check(w.x(), w.width(), grid.width(), "x", "width"));
+    PATHD_RETURN_IF_ERROR(check(w.y(), w.height(), grid.height(), "y", "height"));
+    call.x = w.x();
+    call.y = w.y();
+    call.width = w.width();
+    call.height = w.height();
+  }
+  const int64_t cells = int64_t{call.width} * call.height;
+  if (cells > kMaxCostToGoCells) {
+    return absl::ResourceExhaustedError(absl::StrFormat(
+        "%s has %d cells; cost-to-go is returned for up to %d cells (16 MiB) per "
+        "call: ask for windows",
+        request.has_window() ? "the window" : "the map", cells, kMaxCostToGoCells));
+  }
+  return absl::OkStatus();
+}
+
+class CostToGoJob final : public Job {
+ public:
+  CostToGoJob(std::shared_ptr<CostToGoCall> call, InflationCache& inflation,
+              IncrementalCache& cache)
+      : call_(std::move(call)), inflation_(inflation), cache_(cache) {}
+
+  void Run(SearchScratch&) override {
+    CostToGoCall& call = *call_;
+    if (absl::Status s = StillWanted(call.cancelled, call.deadline); !s.ok()) {
+      FinishCostToGo(call, s, absl::IsCancelled(s) ? "CANCELLED" : "TIMEOUT");
+      return;
+    }
+    absl::Status status;
+    try {
+      status = Answer(call);
+    } catch (const std::bad_alloc&) {
+      status = absl::ResourceExhaustedError("out of memory while building the field");
+    } catch (const std::exception& e) {
+      status = absl::InternalError(absl::StrFormat("field build failed: %s", e.what()));
+    }
+    FinishCostToGo(call, status, status.ok() ? "OK" : "ERROR");
+  }
+
+  void Drop() override {
+    FinishCostToGo(*call_, absl::UnavailableError("server is shutting down"),
+                   "DROPPED");
+  }
+
+ private:
+  absl::Status Answer(CostToGoCall& call) {
+    const IncrementalCache::Key& key = call.key;
+    if (key.robot_radius_cells > 0.0) {
+      PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> inflated,
+                             inflation_.Get(call.snapshot->grid, key.robot_radius_cells));
+      PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(*call.snapshot->grid, *inflated,
+                                                 key.robot_radius_cells,
+                                                 {{key.goal, "goal"}}));
+    }
+    const StopCondition stop(call.deadline, &call.cancelled, call.max_expansions);
+    PATHD_ASSIGN_OR_RETURN(const IncrementalCache::SpmAnswer answer,
+                           cache_.GetSpm(key, call.snapshot, stop));
+    switch (answer.outcome) {
+      case PlanOutcome::kFound:
+        break;
+      case PlanOutcome::kCancelled:
+        return absl::CancelledError("cancelled while building the field");
+      case PlanOutcome::kExpansionLimit:
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "expansion limit of %d reached while building the field",
+            call.max_expansions));
+      default:
+        return absl::DeadlineExceededError("deadline passed while building the field");
+    }
+    v1::CostToGoResponse& response = *call.response;
+    response.set_map_version(answer.map_version);
+    *response.mutable_goal() = ToProto(key.goal);
+    v1::CellWindow* window = response.mutable_window();
+    window->set_x(call.x);
+    window->set_y(call.y);
+    window->set_width(call.width);
+    window->set_height(call.height);
+    response.set_cache_hit(answer.cache_hit);
+    response.set_expansions(answer.expansions);
+    // Same map id, so the field has the request's dimensions.
+    const absl::Span<const float> field = answer.field->field();
+    const size_t stride = static_cast<size_t>(answer.grid->width());
+    auto* cost = response.mutable_cost();
+    cost->Reserve(call.width * call.height);
+    for (int32_t row = call.y; row < call.y + call.height; ++row) {
+      const size_t begin = static_cast<size_t>(row) * stride + static_cast<size_t>(call.x);
+      cost->Add(field.begin() + begin, field.begin() + begin + call.width);
+    }
+    return absl::OkStatus();
+  }
+
+  std::shared_ptr<CostToGoCall> call_;
+  InflationCache& inflation_;
+  IncrementalCache& cache_;
+};
+
+void FillCacheStats(IncrementalCache::Kind kind, const IncrementalCache::Stats& s,
+                    v1::CacheStats* out) {
+  out->set_name(std::string(IncrementalCache::KindName(kind)));
+  out->set_entries(s.entries);
+  out->set_bytes(s.bytes);
+  out->set_budget_bytes(s.budget_bytes);
+  out->set_hits(s.hits);
+  out->set_misses(s.misses);
+  out->set_evictions(s.evictions);
+  out->set_repairs(s.repairs);
+  out->set_rebuilds(s.rebuilds);
+}
 
 }  // namespace
 
 PlannerServiceImpl::PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
                                        InflationCache& inflation,
+                                       IncrementalCache& cache,
                                        NavigationSessions& sessions, Options options)
     : store_(store),
       pool_(pool),
       inflation_(inflation),
+      cache_(cache),
       sessions_(sessions),
-      options_(options) {}
+      options_(std::move(options)) {}
 
 grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>*
 PlannerServiceImpl::Navigate(grpc::CallbackServerContext* context) {
@@ -230,7 +513,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
   call->request = request;
   call->response = response;
   call->deadline = DeadlineOf(*context);
-  auto* reactor = new PlanReactor(call);
+  auto* reactor = new CancellableReactor<PlanCall>(call);
   call->reactor = reactor;
 
   if (absl::Status s = Prepare(store_, options_.max_expansions, *call); !s.ok()) {
@@ -239,9 +522,51 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
   }
   // Once submitted, the job owns the answer and may already have finished the
   // call on a worker, so nothing below may touch `call` on success.
-  if (absl::Status s = pool_.Submit(std::make_unique<PlanJob>(call, inflation_)); !s.ok()) {
+  if (absl::Status s = pool_.Submit(std::make_unique<PlanJob>(call, inflation_, cache_));
+      !s.ok()) {
     FinishCall(*call, s, "REJECTED");
   }
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::CostToGo(
+    grpc::CallbackServerContext* context, const v1::CostToGoRequest* request,
+    v1::CostToGoResponse* response) {
+  auto call = std::make_shared<CostToGoCall>();
+  call->received = absl::Now();
+  call->request = request;
+  call->response = response;
+  call->deadline = DeadlineOf(*context);
+  auto* reactor = new CancellableReactor<CostToGoCall>(call);
+  call->reactor = reactor;
+
+  if (absl::Status s = PrepareCostToGo(store_, options_.max_expansions, *call);
+      !s.ok()) {
+    FinishCostToGo(*call, s, "REJECTED");
+    return reactor;
+  }
+  // As in Plan: after a successful submit the job owns the call.
+  if (absl::Status s =
+          pool_.Submit(std::make_unique<CostToGoJob>(call, inflation_, cache_));
+      !s.ok()) {
+    FinishCostToGo(*call, s, "REJECTED");
+  }
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::GetCacheStats(
+    grpc::CallbackServerContext* context, const v1::GetCacheStatsRequest* /*request*/,
+    v1::GetCacheStatsResponse* response) {
+  const absl::Time received = absl::Now();
+  for (const IncrementalCache::Kind kind :
+       {IncrementalCache::Kind::kSpm, IncrementalCache::Kind::kDStarLite}) {
+    FillCacheStats(kind, cache_.stats(kind), response->add_caches());
+  }
+  response->set_sessions(sessions_.count());
+  response->set_session_bytes(sessions_.bytes());
+  LogRequest("GetCacheStats", "-", "", absl::OkStatus(), received);
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  reactor->Finish(grpc::Status::OK);
   return reactor;
 }
 

@@ -41,7 +41,8 @@ std::string ReplacePort(const std::string& address, int port) {
 PathdServer::PathdServer(ServerOptions options)
     : options_(std::move(options)),
       store_(options_.max_map_cells),
-      inflation_(&InflateObstacles, options_.inflation_cache_entries) {}
+      inflation_(&InflateObstacles, options_.inflation_cache_entries),
+      cache_(inflation_, options_.cache_bytes) {}
 
 PathdServer::~PathdServer() { Shutdown(); }
 
@@ -82,14 +83,17 @@ absl::Status PathdServer::Start() {
 
   pool_ = std::make_unique<WorkerPool>(
       WorkerPool::Options{options_.threads, options_.queue_depth});
+  // Before any service exists, as MapStore::AddListener requires.
+  cache_.Follow(store_, *pool_);
   map_service_ = std::make_unique<MapServiceImpl>(store_, options_.map_dir);
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
                                   options_.max_expansions});
+  PlannerServiceImpl::Options planner_options;
+  planner_options.max_expansions = options_.max_expansions;
   planner_service_ = std::make_unique<PlannerServiceImpl>(
-      store_, *pool_, inflation_, *sessions_,
-      PlannerServiceImpl::Options{options_.max_expansions});
+      store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 
   // Both are process-wide switches read when the builder is created.
   grpc::EnableDefaultHealthCheckService(true);

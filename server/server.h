@@ -15,6 +15,7 @@
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "server/incremental_cache.h"
 #include "server/map_service.h"
 #include "server/map_store.h"
 #include "server/navigation.h"
@@ -41,6 +42,9 @@ struct ServerOptions {
   absl::Duration shutdown_grace = absl::Seconds(5);
   // Inflated map versions kept for robot_radius requests.
   size_t inflation_cache_entries = 16;
+  // Byte budget of the incremental-state caches (shortest path maps and D*
+  // Lite searches, half each).
+  size_t cache_bytes = size_t{1} << 30;
   // Navigate sessions: idle expiry and the most open at once.
   absl::Duration session_idle_timeout = absl::Minutes(10);
   size_t max_sessions = 1024;
@@ -72,6 +76,7 @@ class PathdServer {
 
   MapStore& store() { return store_; }
   const InflationCache& inflation_cache() const { return inflation_; }
+  const IncrementalCache& incremental_cache() const { return cache_; }
   const ServerOptions& options() const { return options_; }
 
  private:
@@ -81,6 +86,7 @@ class PathdServer {
   const ServerOptions options_;
   MapStore store_;
   InflationCache inflation_;
+  IncrementalCache cache_;
   std::unique_ptr<WorkerPool> pool_;
   // Registers a store listener: lives while the store can change.
   std::unique_ptr<NavigationSessions> sessions_;

@@ -157,6 +157,25 @@ TEST(MapStoreTest, DeleteReturnsLastVersionAndKeepsHeldSnapshots) {
   EXPECT_EQ((*again)->version, 1u);
 }
 
+// Caches tell a re-created map from the one they were built on by map_id, not
+// by version (a re-created map starts again at version 1).
+TEST(MapStoreTest, MapIdIsKeptByUpdatesAndRenewedByEveryCreate) {
+  MapStore store(1 << 20);
+  const auto v1 = *store.Create("m", FreeGrid(3, 3), false);
+  const auto other = *store.Create("other", FreeGrid(3, 3), false);
+  EXPECT_NE(v1->map_id, 0u);
+  EXPECT_NE(other->map_id, v1->map_id);
+  const auto v2 = store.Update("m", {MapChange::ForCell(0, 0, 1)}, std::nullopt)->snapshot;
+  EXPECT_EQ(v2->map_id, v1->map_id);
+  const auto replaced = *store.Create("m", FreeGrid(3, 3), true);
+  EXPECT_NE(replaced->map_id, v1->map_id);
+  ASSERT_TRUE(store.Delete("m").ok());
+  const auto recreated = *store.Create("m", FreeGrid(3, 3), false);
+  EXPECT_EQ(recreated->version, 1u);
+  EXPECT_NE(recreated->map_id, v1->map_id);
+  EXPECT_NE(recreated->map_id, replaced->map_id);
+}
+
 TEST(MapStoreTest, ListIsSortedByName) {
   MapStore store(1 << 20);
   for (const char* name : {"zeta", "Alpha", "beta", "alpha-2"}) {

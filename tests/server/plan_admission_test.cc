@@ -21,6 +21,7 @@
 #include "gtest/gtest.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "core/inflation.h"
+#include "server/incremental_cache.h"
 #include "server/map_store.h"
 #include "server/planner_service.h"
 #include "server/server.h"
@@ -40,7 +41,8 @@ class PlanAdmissionTest : public ::testing::Test {
     pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{1, 1});
     sessions_ = std::make_unique<NavigationSessions>(store_, *pool_, inflation_,
                                                      NavigationSessions::Options{});
-    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_, *sessions_,
+    service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_, cache_,
+                                                    *sessions_,
                                                     PlannerServiceImpl::Options{});
     grpc::ServerBuilder builder;
     int port = 0;
@@ -110,6 +112,7 @@ class PlanAdmissionTest : public ::testing::Test {
 
   MapStore store_{1 << 20};
   InflationCache inflation_{&InflateObstacles, 4};
+  IncrementalCache cache_{inflation_, size_t{1} << 20};
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<NavigationSessions> sessions_;
   std::unique_ptr<PlannerServiceImpl> service_;
