@@ -30,6 +30,10 @@
 
 namespace pathd {
 
+namespace internal {
+class IncrementalAccess;
+}  // namespace internal
+
 // Cells whose cost differs between two grids of the same size, in row-major
 // order. INVALID_ARGUMENT when the sizes differ.
 absl::StatusOr<std::vector<Cell>> ChangedCells(const Grid& before,
@@ -50,6 +54,8 @@ struct RepairStats {
 // from the start with the octile/Manhattan heuristic towards the goal.
 class LpaStar {
  public:
+  ~LpaStar();
+
   // INVALID_ARGUMENT (as ValidateEndpoints) when start or goal is off the map
   // or blocked, or the cost parameters are invalid. No search runs yet.
   static absl::StatusOr<std::unique_ptr<LpaStar>> Create(
@@ -76,6 +82,12 @@ class LpaStar {
   // For tests: g and rhs of a cell (+infinity when unset).
   double g(Cell c) const;
   double rhs(Cell c) const;
+
+ private:
+  friend class internal::IncrementalAccess;
+  struct State;
+  explicit LpaStar(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
 };
 
 // D* Lite: the goal is fixed, the start (the robot) moves and the map
@@ -83,6 +95,8 @@ class LpaStar {
 // the start does not reorder the open list.
 class DStarLite {
  public:
+  ~DStarLite();
+
   // INVALID_ARGUMENT when the goal is off the map or blocked, or the cost
   // parameters are invalid.
   static absl::StatusOr<std::unique_ptr<DStarLite>> Create(
@@ -112,6 +126,12 @@ class DStarLite {
   double g(Cell c) const;
   double rhs(Cell c) const;
   double km() const;
+
+ private:
+  friend class internal::IncrementalAccess;
+  struct State;
+  explicit DStarLite(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
 };
 
 // The shortest path map of a goal: the exact cost-to-go of every cell, kept
@@ -121,6 +141,8 @@ class DStarLite {
 // is rebuilt when the change is large enough that a rebuild is cheaper.
 class ShortestPathMap {
  public:
+  ~ShortestPathMap();
+
   // Builds the full field. INVALID_ARGUMENT as DStarLite::Create. A stop
   // returns its outcome as an error status (DEADLINE_EXCEEDED, CANCELLED,
   // RESOURCE_EXHAUSTED for the budget).
@@ -151,6 +173,12 @@ class ShortestPathMap {
   const RepairStats& last_stats() const;
   const Grid& grid() const;
   size_t MemoryBytes() const;
+
+ private:
+  friend class internal::IncrementalAccess;
+  struct State;
+  explicit ShortestPathMap(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
 };
 
 }  // namespace pathd

@@ -24,6 +24,9 @@ std::unique_ptr<Planner> MakeLrtaStarPlanner();
 std::unique_ptr<Planner> MakeThetaStarPlanner();
 std::unique_ptr<Planner> MakeLazyThetaStarPlanner();
 std::unique_ptr<Planner> MakeJpsPlanner();
+std::unique_ptr<Planner> MakeLpaStarPlanner();
+std::unique_ptr<Planner> MakeDStarLitePlanner();
+std::unique_ptr<Planner> MakeShortestPathMapPlanner();
 
 }  // namespace pathd
 

@@ -30,6 +30,9 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeThetaStarPlanner),
              PlannerRegistry::Factory(&MakeLazyThetaStarPlanner),
              PlannerRegistry::Factory(&MakeJpsPlanner),
+             PlannerRegistry::Factory(&MakeLpaStarPlanner),
+             PlannerRegistry::Factory(&MakeDStarLitePlanner),
+             PlannerRegistry::Factory(&MakeShortestPathMapPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

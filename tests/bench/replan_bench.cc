@@ -1,16 +1,19 @@
-// replan_bench: what incremental state buys over planning from scratch.
-//
-// For each map, robot runs between far-apart reachable cells: D* Lite plans
-// once, the robot drives `--drive` cells along its path, then k cells near it
-// change (the path cell `--ahead` moves ahead is blocked plus k - 1 cells
-// around it, blocked or re-weighted), and D* Lite repairs. The repair
-// (SetStart + UpdateMap + Plan) is timed against A* from scratch on the same
-// new map from the same cell, in the same run; costs must agree. Then the
-// shortest path map of the goal answers random starts against A* on the same
-// queries. Prints a table of means and the ratios; figures, not assertions.
+// replan_bench: what incremental replanning buys, measured in one run.
+//  - D* Lite: after the robot has moved along its path, k cells just ahead of
+//    it become blocked (k = 1, 10, 100); the repair (UpdateMap + Plan) against
+//    A* from scratch on the same new map, per trial, as a ratio of medians.
+//    Blockages that leave no way to the goal are counted, not timed.
+//  - Shortest path map: a query (PathFrom) on a cached field against A* on
+//    the same query.
+//  - Memory per cell of D* Lite's state and of a field.
+//  - With --threshold: repairing a field after k changed cells (scattered or
+//    in one square cluster) against rebuilding it, which is how the repair
+//    or rebuild rule in core/incremental.cc was chosen, and what
+//    ShortestPathMap::UpdateMap with that rule then takes.
+// Maps: a 1024 x 1024 grid with random obstacles (fixed seed) and the shared
+// Moving AI maps (start and goal of each map's longest scenario). Figures,
+// not assertions.
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -21,239 +24,339 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
-#include "absl/strings/str_split.h"
-#include "core/grid.h"
+#include "absl/time/clock.h"
 #include "core/incremental.h"
+#include "core/incremental_engine.h"
 #include "core/map_io.h"
 #include "core/planner.h"
-#include "core/search_scratch.h"
 #include "tests/bench/movingai_maps.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
-          "folder holding <set>/<map>.map files");
-ABSL_FLAG(std::string, maps,
-          "dao/brc202d.map,random/random512-25-0.map,street/Berlin_0_512.map,"
-          "bg512/AR0011SR.map,maze/maze512-4-0.map",
-          "comma-separated Moving AI maps relative to --movingai_dir (empty: all)");
-ABSL_FLAG(int, random_size, 1024, "side of the random map (0: skip it)");
-ABSL_FLAG(double, random_density, 0.2, "share of blocked cells on the random map");
-ABSL_FLAG(int, runs, 20, "robot runs per map and k");
-ABSL_FLAG(std::string, ks, "1,10,100", "changed cells per repair");
-ABSL_FLAG(int, drive, 10, "cells the robot drives before the change");
-ABSL_FLAG(int, ahead, 8, "how far ahead of the robot, along its path, the change is");
-ABSL_FLAG(int, spm_queries, 200, "shortest-path-map queries per map");
-ABSL_FLAG(uint32_t, seed, 1, "random seed");
+          "folder holding <set>/<map>.map and <map>.map.scen files");
+ABSL_FLAG(std::string, maps, "",
+          "comma-separated map paths relative to --movingai_dir; empty = every map");
+ABSL_FLAG(int, size, 1024, "side of the random map");
+ABSL_FLAG(double, obstacles, 0.2, "obstacle fraction of the random map");
+ABSL_FLAG(int, trials, 20, "replanning trials per map and k");
+ABSL_FLAG(int, queries, 100, "shortest path map queries per map");
+ABSL_FLAG(bool, threshold, false,
+          "also measure field repair against rebuild for growing k");
 
 namespace fs = std::filesystem;
+using pathd::Cell;
+using pathd::Grid;
 
-namespace pathd {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+constexpr uint32_t kSeed = 20240605;
 
-double Micros(Clock::duration d) {
-  return std::chrono::duration<double, std::micro>(d).count();
+double Micros(absl::Duration d) { return absl::ToDoubleMicroseconds(d); }
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
 }
 
-Grid RandomGrid(int side, double density, std::mt19937& rng) {
-  Grid grid = *Grid::Create(side, side);
-  std::bernoulli_distribution blocked(density);
-  for (int y = 0; y < side; ++y) {
-    for (int x = 0; x < side; ++x) {
-      if (blocked(rng)) grid.set_cost(x, y, kLethalCost);
-    }
-  }
-  return grid;
-}
-
-Cell RandomFree(const Grid& grid, std::mt19937& rng) {
-  for (;;) {
-    const Cell c{static_cast<int32_t>(rng() % static_cast<uint32_t>(grid.width())),
-                 static_cast<int32_t>(rng() % static_cast<uint32_t>(grid.height()))};
-    if (grid.cost(c) == kFreeCost) return c;
-  }
-}
-
-struct Sums {
-  double repair_us = 0;
-  double astar_us = 0;
-  double repair_expansions = 0;
-  double astar_expansions = 0;
-  int runs = 0;
-  int mismatches = 0;
+struct Scene {
+  std::string name;
+  std::shared_ptr<const Grid> grid;
+  Cell start;
+  Cell goal;
 };
 
-// k cells around `center`: the centre itself blocked, then cells of a
-// growing square around it, each blocked or given a random cost. Never the
-// robot's cell or the goal.
-std::vector<Cell> ChangeAround(Grid& grid, Cell center, int k, Cell robot, Cell goal,
-                               std::mt19937& rng) {
-  std::vector<Cell> changed;
-  for (int r = 0; static_cast<int>(changed.size()) < k && r < grid.width(); ++r) {
-    std::vector<Cell> ring;
-    for (int dy = -r; dy <= r; ++dy) {
-      for (int dx = -r; dx <= r; ++dx) {
-        if (std::max(std::abs(dx), std::abs(dy)) != r) continue;
-        const Cell c{center.x + dx, center.y + dy};
-        if (!grid.InBounds(c) || c == robot || c == goal) continue;
-        ring.push_back(c);
-      }
-    }
-    std::shuffle(ring.begin(), ring.end(), rng);
-    for (const Cell& c : ring) {
-      if (static_cast<int>(changed.size()) == k) break;
-      const uint8_t before = grid.cost(c);
-      const uint8_t after = changed.empty() || rng() % 2 == 0
-                                ? kLethalCost
-                                : static_cast<uint8_t>(1 + rng() % 200);
-      if (after == before) continue;
-      grid.set_cost(c, after);
-      changed.push_back(c);
-    }
-  }
-  return changed;
+bool Free(const Grid& grid, Cell c) {
+  return grid.InBounds(c) && pathd::Traversable(grid.cost(c), false);
 }
 
-void BenchMap(const std::string& name, const Grid& base, const std::vector<int>& ks,
-              std::mt19937& rng) {
-  const Planner& astar = *PlannerRegistry::Default().Get("astar");
-  SearchScratch scratch;
-  const int runs = absl::GetFlag(FLAGS_runs);
-  const int drive = absl::GetFlag(FLAGS_drive);
-  const int ahead = absl::GetFlag(FLAGS_ahead);
-  const double cells = static_cast<double>(base.size());
-  size_t dstar_bytes = 0;
+Scene RandomScene(int size, double obstacles) {
+  std::mt19937 rng(kSeed);
+  Grid grid = Grid::Create(size, size).value();
+  std::bernoulli_distribution blocked(obstacles);
+  for (uint8_t& v : grid.mutable_cells()) v = blocked(rng) ? pathd::kLethalCost : 0;
+  const Cell start{size / 64, size / 64};
+  const Cell goal{size - 1 - size / 64, size - 1 - size / 64};
+  grid.set_cost(start, pathd::kFreeCost);
+  grid.set_cost(goal, pathd::kFreeCost);
+  return Scene{"random " + std::to_string(size) + "x" + std::to_string(size),
+               std::make_shared<const Grid>(std::move(grid)), start, goal};
+}
 
-  for (int k : ks) {
-    Sums sums;
-    int attempts = 0;
-    while (sums.runs < runs && attempts++ < runs * 20) {
-      auto grid = std::make_shared<const Grid>(base);
-      const Cell start = RandomFree(*grid, rng);
-      const Cell goal = RandomFree(*grid, rng);
-      if (std::abs(start.x - goal.x) + std::abs(start.y - goal.y) < grid->width() / 2) {
-        continue;
-      }
-      auto dstar = DStarLite::Create(grid, goal, CostParams{});
-      if (!dstar.ok() || !(*dstar)->SetStart(start).ok()) continue;
-      absl::StatusOr<PlanResult> first = (*dstar)->Plan(StopCondition::None());
-      if (!first.ok() || !first->found() ||
-          static_cast<int>(first->path.size()) <= drive + ahead + 1) {
-        continue;
-      }
-      const Cell robot = first->path[static_cast<size_t>(drive)];
-      const Cell center = first->path[static_cast<size_t>(drive + ahead)];
-      Grid next = *grid;
-      const std::vector<Cell> changed = ChangeAround(next, center, k, robot, goal, rng);
-      auto next_grid = std::make_shared<const Grid>(std::move(next));
+// The map with the start and goal of its longest scenario.
+std::optional<Scene> MovingAiScene(const fs::path& root, const std::string& name) {
+  auto grid = pathd::ReadMovingAiMapFile((root / name).string());
+  auto file = pathd::ReadMovingAiScenarioFileWithVersion((root / name).string() + ".scen");
+  if (!grid.ok() || !file.ok() || file->scenarios.empty()) return std::nullopt;
+  const pathd::Scenario* longest = &file->scenarios.front();
+  for (const pathd::Scenario& s : file->scenarios) {
+    if (s.optimal_length > longest->optimal_length) longest = &s;
+  }
+  return Scene{name, std::make_shared<const Grid>(*std::move(grid)), longest->start,
+               longest->goal};
+}
 
-      const Clock::time_point t0 = Clock::now();
-      absl::Status moved = (*dstar)->SetStart(robot);
-      absl::Status updated = (*dstar)->UpdateMap(next_grid, changed);
-      absl::StatusOr<PlanResult> repaired = (*dstar)->Plan(StopCondition::None());
-      const Clock::time_point t1 = Clock::now();
-      absl::StatusOr<PlanResult> fresh =
-          astar.Plan(*next_grid, PlanRequest::Between(robot, goal), StopCondition::None(),
-                     scratch);
-      const Clock::time_point t2 = Clock::now();
-      if (!moved.ok() || !updated.ok() || !repaired.ok() || !fresh.ok()) {
-        std::fprintf(stderr, "%s: run failed\n", name.c_str());
-        continue;
+// The k free cells nearest (ring by ring) to `center`, sparing `keep`s.
+std::vector<Cell> Blob(const Grid& grid, Cell center, int k,
+                       std::initializer_list<Cell> keep) {
+  std::vector<Cell> cells;
+  for (int r = 0; static_cast<int>(cells.size()) < k && r < grid.width(); ++r) {
+    for (int dy = -r; dy <= r && static_cast<int>(cells.size()) < k; ++dy) {
+      for (int dx = -r; dx <= r && static_cast<int>(cells.size()) < k; ++dx) {
+        if (std::max(std::abs(dx), std::abs(dy)) != r) continue;
+        const Cell c{center.x + dx, center.y + dy};
+        if (!Free(grid, c)) continue;
+        if (std::find(keep.begin(), keep.end(), c) != keep.end()) continue;
+        cells.push_back(c);
       }
-      if (repaired->found() != fresh->found() ||
-          (fresh->found() && std::abs(repaired->cost - fresh->cost) >
-                                 1e-9 * (1.0 + fresh->cost))) {
-        ++sums.mismatches;
-      }
-      sums.repair_us += Micros(t1 - t0);
-      sums.astar_us += Micros(t2 - t1);
-      sums.repair_expansions += static_cast<double>(repaired->expansions);
-      sums.astar_expansions += static_cast<double>(fresh->expansions);
-      dstar_bytes = std::max(dstar_bytes, (*dstar)->MemoryBytes());
-      ++sums.runs;
     }
-    if (sums.runs == 0) {
-      std::printf("%-24s k=%-4d no runs (no long enough paths)\n", name.c_str(), k);
+  }
+  return cells;
+}
+
+struct ReplanFigures {
+  double dstar_us = 0;
+  double astar_us = 0;
+  double expansions = 0;
+  int trials = 0;
+  // Trials skipped because the blocked cells cut the robot off from the goal
+  // (no detour exists): D* Lite must then raise every cell of the cut-off
+  // part, while A* only floods the robot's pocket.
+  int cut_off = 0;
+};
+
+// D* Lite follows its path; each trial moves the robot 5 cells on, blocks k
+// cells around the path cell 6 ahead, and times the repair and A*. Changes
+// that leave no path to the goal are counted and skipped.
+ReplanFigures ReplanTrials(const Scene& scene, int k, int trials) {
+  const pathd::Planner& astar = *pathd::PlannerRegistry::Default().Get("astar");
+  pathd::SearchScratch scratch;
+  auto dstar = pathd::DStarLite::Create(scene.grid, scene.goal, {}).value();
+  std::shared_ptr<const Grid> grid = scene.grid;
+  Cell robot = scene.start;
+  (void)dstar->SetStart(robot);
+  auto plan = dstar->Plan(pathd::StopCondition::None());
+  std::vector<double> dstar_us, astar_us, expansions;
+  int cut_off = 0;
+  for (int t = 0; t < trials && plan.ok() && plan->found(); ++t) {
+    if (plan->path.size() < 12) break;
+    robot = plan->path[5];
+    (void)dstar->SetStart(robot);
+    plan = dstar->Plan(pathd::StopCondition::None());
+    if (!plan.ok() || !plan->found()) break;
+    Grid next = *grid;
+    const std::vector<Cell> changed = Blob(next, plan->path[6], k, {robot, scene.goal});
+    for (const Cell c : changed) next.set_cost(c, pathd::kLethalCost);
+    auto check = astar.Plan(next, pathd::PlanRequest::Between(robot, scene.goal),
+                            pathd::StopCondition::None(), scratch);
+    if (!check.ok() || !check->found()) {
+      ++cut_off;
       continue;
     }
-    const double n = sums.runs;
-    std::printf("%-24s k=%-4d runs=%-3d dstar_repair_us=%9.1f astar_us=%9.1f "
-                "astar/repair=%6.1fx  expansions %8.0f vs %8.0f%s\n",
-                name.c_str(), k, sums.runs, sums.repair_us / n, sums.astar_us / n,
-                sums.astar_us / sums.repair_us, sums.repair_expansions / n,
-                sums.astar_expansions / n,
-                sums.mismatches > 0 ? "  COST MISMATCH" : "");
-  }
+    grid = std::make_shared<const Grid>(std::move(next));
 
-  // Shortest path map: one field per goal, many starts.
-  auto grid = std::make_shared<const Grid>(base);
-  const Cell goal = RandomFree(*grid, rng);
-  const Clock::time_point b0 = Clock::now();
-  auto spm = ShortestPathMap::Build(grid, goal, CostParams{}, StopCondition::None());
-  const Clock::time_point b1 = Clock::now();
-  if (!spm.ok()) {
-    std::fprintf(stderr, "%s: %s\n", name.c_str(), std::string(spm.status().message()).c_str());
-    return;
-  }
-  double spm_us = 0, astar_us = 0;
-  int queries = 0, mismatches = 0;
-  for (int q = 0; q < absl::GetFlag(FLAGS_spm_queries); ++q) {
-    const Cell start = RandomFree(*grid, rng);
-    const Clock::time_point t0 = Clock::now();
-    absl::StatusOr<PlanResult> fast = (*spm)->PathFrom(start);
-    const Clock::time_point t1 = Clock::now();
-    absl::StatusOr<PlanResult> fresh = astar.Plan(
-        *grid, PlanRequest::Between(start, goal), StopCondition::None(), scratch);
-    const Clock::time_point t2 = Clock::now();
-    if (!fast.ok() || !fresh.ok()) continue;
-    if (fast->found() != fresh->found() ||
-        (fresh->found() && std::abs(fast->cost - fresh->cost) > 1e-5 * (1.0 + fresh->cost))) {
-      ++mismatches;
+    const absl::Time t0 = absl::Now();
+    (void)dstar->UpdateMap(grid, changed);
+    plan = dstar->Plan(pathd::StopCondition::None());
+    const absl::Time t1 = absl::Now();
+    auto a = astar.Plan(*grid, pathd::PlanRequest::Between(robot, scene.goal),
+                        pathd::StopCondition::None(), scratch);
+    const absl::Time t2 = absl::Now();
+    if (!plan.ok() || !a.ok() || !plan->found() ||
+        std::abs(plan->cost - a->cost) > 1e-9 * (1 + a->cost)) {
+      std::fprintf(stderr, "%s: D* Lite and A* disagree\n", scene.name.c_str());
+      break;
     }
-    spm_us += Micros(t1 - t0);
-    astar_us += Micros(t2 - t1);
-    ++queries;
+    dstar_us.push_back(Micros(t1 - t0));
+    astar_us.push_back(Micros(t2 - t1));
+    expansions.push_back(static_cast<double>(dstar->last_stats().expansions));
   }
-  std::printf("%-24s spm build_ms=%7.1f query_us=%8.2f astar_us=%9.1f "
-              "astar/spm=%7.1fx (%d queries)%s\n",
-              name.c_str(), Micros(b1 - b0) / 1000.0, spm_us / queries,
-              astar_us / queries, astar_us / spm_us, queries,
-              mismatches > 0 ? "  COST MISMATCH" : "");
-  std::printf("%-24s memory bytes/cell: dstar_lite %.2f, spm field %.2f\n", name.c_str(),
-              static_cast<double>(dstar_bytes) / cells,
-              static_cast<double>((*spm)->MemoryBytes()) / cells);
+  return {Median(dstar_us), Median(astar_us), Median(expansions),
+          static_cast<int>(dstar_us.size()), cut_off};
+}
+
+struct QueryFigures {
+  double spm_us = 0;
+  double astar_us = 0;
+  double build_ms = 0;
+  double dstar_bytes_per_cell = 0;
+  double spm_bytes_per_cell = 0;
+};
+
+QueryFigures QueryTrials(const Scene& scene, int queries) {
+  const pathd::Planner& astar = *pathd::PlannerRegistry::Default().Get("astar");
+  pathd::SearchScratch scratch;
+  QueryFigures f;
+  const double cells = static_cast<double>(scene.grid->size());
+  auto dstar = pathd::DStarLite::Create(scene.grid, scene.goal, {}).value();
+  (void)dstar->SetStart(scene.start);
+  (void)dstar->Plan(pathd::StopCondition::None());
+  f.dstar_bytes_per_cell = static_cast<double>(dstar->MemoryBytes()) / cells;
+
+  const absl::Time b0 = absl::Now();
+  auto spm = pathd::ShortestPathMap::Build(scene.grid, scene.goal, {},
+                                           pathd::StopCondition::None())
+                 .value();
+  f.build_ms = Micros(absl::Now() - b0) / 1000.0;
+  f.spm_bytes_per_cell = static_cast<double>(spm->MemoryBytes()) / cells;
+
+  std::mt19937 rng(kSeed);
+  std::vector<double> spm_us, astar_us;
+  for (int q = 0; q < queries * 20 && static_cast<int>(spm_us.size()) < queries; ++q) {
+    const Cell s{static_cast<int32_t>(rng() % scene.grid->width()),
+                 static_cast<int32_t>(rng() % scene.grid->height())};
+    if (!Free(*scene.grid, s) || std::isinf(spm->CostToGo(s))) continue;
+    const absl::Time t0 = absl::Now();
+    auto r = spm->PathFrom(s);
+    const absl::Time t1 = absl::Now();
+    auto a = astar.Plan(*scene.grid, pathd::PlanRequest::Between(s, scene.goal),
+                        pathd::StopCondition::None(), scratch);
+    const absl::Time t2 = absl::Now();
+    if (!r.ok() || !a.ok() || !r->found() ||
+        std::abs(r->cost - a->cost) > 1e-9 * (1 + a->cost)) {
+      std::fprintf(stderr, "%s: SPM and A* disagree from (%d, %d)\n",
+                   scene.name.c_str(), s.x, s.y);
+      continue;
+    }
+    spm_us.push_back(Micros(t1 - t0));
+    astar_us.push_back(Micros(t2 - t1));
+  }
+  f.spm_us = Median(spm_us);
+  f.astar_us = Median(astar_us);
+  return f;
+}
+
+// Repair against rebuild of the field of a goal in the middle of the map.
+void ThresholdTrials(const Scene& scene) {
+  using Field = pathd::internal::IncrementalSearch<pathd::internal::FieldConfig>;
+  const Grid& grid = *scene.grid;
+  Cell goal{grid.width() / 2, grid.height() / 2};
+  while (!Free(grid, goal)) goal.x = (goal.x + 1) % grid.width();
+  Field base(scene.grid, {}, pathd::internal::MoveRules(), goal);
+  std::vector<double> build_us;
+  for (int i = 0; i < 3; ++i) {
+    const absl::Time t0 = absl::Now();
+    base.Reset();
+    base.Compute(pathd::StopCondition::None());
+    base.store().Settle();
+    build_us.push_back(Micros(absl::Now() - t0));
+  }
+  const double rebuild = Median(build_us);
+  std::printf("\n%s: rebuild %.0f us (goal (%d, %d), %zu cells)\n", scene.name.c_str(),
+              rebuild, goal.x, goal.y, grid.size());
+  auto base_map =
+      pathd::ShortestPathMap::Build(scene.grid, goal, {}, pathd::StopCondition::None())
+          .value();
+  std::printf("  %-9s %8s %9s %12s %12s %8s %14s %8s %8s\n", "pattern", "k", "fraction",
+              "repair us", "expansions", "/rebuild", "UpdateMap us", "/rebuild",
+              "rebuilt");
+  std::mt19937 rng(kSeed);
+  for (const bool clustered : {false, true}) {
+    for (int k = 1; k <= static_cast<int>(grid.size()) / 4; k *= 4) {
+      std::vector<double> repair_us, expansions, update_us;
+      int rebuilt = 0;
+      for (int t = 0; t < 5; ++t) {
+        Grid next = grid;
+        std::vector<Cell> changed;
+        if (clustered) {
+          const int side = std::max(1, static_cast<int>(std::sqrt(k)));
+          const Cell corner{static_cast<int32_t>(rng() % (grid.width() - side + 1)),
+                            static_cast<int32_t>(rng() % (grid.height() - side + 1))};
+          for (int dy = 0; dy < side; ++dy) {
+            for (int dx = 0; dx < side; ++dx) changed.push_back({corner.x + dx, corner.y + dy});
+          }
+        } else {
+          for (int i = 0; i < k; ++i) {
+            changed.push_back({static_cast<int32_t>(rng() % grid.width()),
+                               static_cast<int32_t>(rng() % grid.height())});
+          }
+        }
+        // Toggle: free cells become blocked, blocked ones free.
+        for (const Cell c : changed) {
+          if (c == goal) continue;
+          next.set_cost(c, Free(next, c) ? pathd::kLethalCost : pathd::kFreeCost);
+        }
+        Field field = base;
+        auto shared = std::make_shared<const Grid>(std::move(next));
+        std::unique_ptr<pathd::ShortestPathMap> map = base_map->Clone();
+        const absl::Time u0 = absl::Now();
+        (void)map->UpdateMap(shared, changed);
+        update_us.push_back(Micros(absl::Now() - u0));
+        rebuilt += map->last_stats().rebuilt ? 1 : 0;
+        const absl::Time t0 = absl::Now();
+        field.SwitchGrid(shared, changed);
+        const auto end = field.Compute(pathd::StopCondition::None());
+        field.store().Settle();
+        repair_us.push_back(Micros(absl::Now() - t0));
+        expansions.push_back(static_cast<double>(end.expansions));
+      }
+      const double repair = Median(repair_us);
+      std::printf("  %-9s %8d %9.5f %12.0f %12.0f %8.3f %14.0f %8.3f %6d/5\n",
+                  clustered ? "cluster" : "scattered", k,
+                  static_cast<double>(k) / static_cast<double>(grid.size()), repair,
+                  Median(expansions), repair / rebuild, Median(update_us),
+                  Median(update_us) / rebuild, rebuilt);
+    }
+  }
 }
 
 }  // namespace
-}  // namespace pathd
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
-      "replan_bench [--maps a.map,...] [--random_size 1024] [--runs 20] [--ks 1,10,100]\n"
-      "D* Lite repair vs A* from scratch after k changed cells near the robot, and\n"
-      "shortest-path-map queries vs A*, with memory per cell.");
+      "replan_bench [--movingai_dir DIR] [--maps a.map,...] [--trials N] "
+      "[--threshold]");
   absl::ParseCommandLine(argc, argv);
-  std::vector<int> ks;
-  for (absl::string_view k : absl::StrSplit(absl::GetFlag(FLAGS_ks), ',', absl::SkipEmpty())) {
-    ks.push_back(std::max(1, std::atoi(std::string(k).c_str())));
-  }
-  std::mt19937 rng(absl::GetFlag(FLAGS_seed));
-  if (const int side = absl::GetFlag(FLAGS_random_size); side > 0) {
-    const pathd::Grid grid = pathd::RandomGrid(side, absl::GetFlag(FLAGS_random_density), rng);
-    pathd::BenchMap("random" + std::to_string(side), grid, ks, rng);
-  }
+  std::vector<Scene> scenes{RandomScene(absl::GetFlag(FLAGS_size),
+                                        absl::GetFlag(FLAGS_obstacles))};
   const fs::path root = absl::GetFlag(FLAGS_movingai_dir);
-  if (!fs::exists(root)) {
-    std::printf("Moving AI maps not found at %s: skipping them\n", root.string().c_str());
-    return 0;
+  const std::vector<std::string> maps =
+      pathd::bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps));
+  if (maps.empty()) {
+    std::printf("Moving AI maps not found under %s: random map only\n", root.c_str());
   }
-  for (const std::string& name : pathd::bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps))) {
-    absl::StatusOr<pathd::Grid> grid = pathd::ReadMovingAiMapFile((root / name).string());
-    if (!grid.ok()) {
-      std::fprintf(stderr, "%s\n", std::string(grid.status().message()).c_str());
-      return 1;
+  for (const std::string& name : maps) {
+    std::optional<Scene> scene = MovingAiScene(root, name);
+    if (scene.has_value()) {
+      scenes.push_back(*std::move(scene));
+    } else {
+      std::printf("skipping %s: unreadable map or scenarios\n", name.c_str());
     }
-    pathd::BenchMap(name, *grid, ks, rng);
+  }
+
+  const int trials = absl::GetFlag(FLAGS_trials);
+  std::printf("D* Lite repair after k cells blocked just ahead of the robot vs A* "
+              "from scratch (medians of %d trials)\n",
+              trials);
+  std::printf("%-26s %5s %12s %10s %8s %11s %7s %8s\n", "map", "k", "D* Lite us",
+              "A* us", "A*/D*", "expansions", "trials", "cut off");
+  for (const Scene& scene : scenes) {
+    for (const int k : {1, 10, 100}) {
+      const ReplanFigures f = ReplanTrials(scene, k, trials);
+      std::printf("%-26s %5d %12.1f %10.1f %8.1f %11.0f %7d %8d\n", scene.name.c_str(),
+                  k, f.dstar_us, f.astar_us,
+                  f.dstar_us > 0 ? f.astar_us / f.dstar_us : 0.0, f.expansions, f.trials,
+                  f.cut_off);
+      std::fflush(stdout);
+    }
+  }
+
+  std::printf("\nShortest path map query (PathFrom) vs A* on the same query "
+              "(medians of %d queries); memory per cell\n",
+              absl::GetFlag(FLAGS_queries));
+  std::printf("%-26s %9s %10s %9s %10s %12s %12s\n", "map", "SPM us", "A* us", "A*/SPM",
+              "build ms", "D* B/cell", "SPM B/cell");
+  for (const Scene& scene : scenes) {
+    const QueryFigures f = QueryTrials(scene, absl::GetFlag(FLAGS_queries));
+    std::printf("%-26s %9.1f %10.1f %9.1f %10.1f %12.2f %12.2f\n", scene.name.c_str(),
+                f.spm_us, f.astar_us, f.spm_us > 0 ? f.astar_us / f.spm_us : 0.0,
+                f.build_ms, f.dstar_bytes_per_cell, f.spm_bytes_per_cell);
+    std::fflush(stdout);
+  }
+
+  if (absl::GetFlag(FLAGS_threshold)) {
+    std::printf("\nShortest path map: repair after k toggled cells vs rebuild "
+                "(medians of 5)\n");
+    for (const Scene& scene : scenes) ThresholdTrials(scene);
   }
   return 0;
 }

@@ -1,0 +1,131 @@
+// LPA*, D* Lite and the shortest path map as stateless registry planners:
+// each query builds the incremental object for that one query, so the typed
+// planner suite and the Moving AI conformance check the incremental search
+// against Dijkstra like any other planner. Sessions that keep the state
+// between queries use core/incremental.h directly.
+#include <memory>
+
+#include "absl/status/status.h"
+#include "absl/time/clock.h"
+#include "core/incremental.h"
+#include "core/incremental_engine.h"
+#include "core/planners/planners.h"
+#include "core/status_macros.h"
+
+namespace pathd {
+namespace {
+
+// The grid outlives the query, so the objects may borrow it: a shared_ptr
+// that owns nothing (the aliasing constructor with an empty owner).
+std::shared_ptr<const Grid> Borrow(const Grid& grid) {
+  return std::shared_ptr<const Grid>(std::shared_ptr<const Grid>(), &grid);
+}
+
+class LpaStarPlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "lpa_star"; }
+  const PlannerTraits& traits() const override {
+    static const PlannerTraits kTraits{
+        .optimal = true,
+        .incremental = true,
+        .description = "Lifelong Planning A* (Koenig, Likhachev & Furcy 2004); "
+                       "optimal; repairs after map changes in sessions"};
+    return kTraits;
+  }
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch&) const override {
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+    PATHD_ASSIGN_OR_RETURN(
+        std::unique_ptr<LpaStar> lpa,
+        LpaStar::Create(Borrow(grid), request.start, request.goal, request.cost));
+    return lpa->Plan(stop);
+  }
+};
+
+class DStarLitePlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "dstar_lite"; }
+  const PlannerTraits& traits() const override {
+    static const PlannerTraits kTraits{
+        .optimal = true,
+        .incremental = true,
+        .description = "D* Lite (Koenig & Likhachev 2002), backward from the goal; "
+                       "optimal; repairs as the robot moves and the map changes"};
+    return kTraits;
+  }
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch&) const override {
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+    PATHD_ASSIGN_OR_RETURN(std::unique_ptr<DStarLite> dstar,
+                           DStarLite::Create(Borrow(grid), request.goal, request.cost));
+    PATHD_RETURN_IF_ERROR(dstar->SetStart(request.start));
+    return dstar->Plan(stop);
+  }
+};
+
+class ShortestPathMapPlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "spm"; }
+  const PlannerTraits& traits() const override {
+    static const PlannerTraits kTraits{
+        .optimal = true,
+        .incremental = true,
+        .cost_to_go = true,
+        .description = "shortest path map: the goal's full cost-to-go field (4-byte "
+                       "floats), descended from the start; optimal"};
+    return kTraits;
+  }
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch&) const override {
+    const absl::Time started = absl::Now();
+    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+    absl::StatusOr<std::unique_ptr<ShortestPathMap>> map =
+        ShortestPathMap::Build(Borrow(grid), request.goal, request.cost, stop);
+    if (!map.ok()) {
+      // Build reports a stop as a status; a planner reports it as an outcome.
+      PlanResult stopped;
+      switch (map.status().code()) {
+        case absl::StatusCode::kDeadlineExceeded:
+          stopped.outcome = PlanOutcome::kTimeout;
+          break;
+        case absl::StatusCode::kCancelled:
+          stopped.outcome = PlanOutcome::kCancelled;
+          break;
+        case absl::StatusCode::kResourceExhausted:
+          // The build stops exactly at the budget.
+          stopped.outcome = PlanOutcome::kExpansionLimit;
+          stopped.expansions = stop.max_expansions();
+          break;
+        default:
+          return map.status();
+      }
+      stopped.planning_time = absl::Now() - started;
+      return stopped;
+    }
+    PATHD_ASSIGN_OR_RETURN(PlanResult result, (*map)->PathFrom(request.start));
+    result.expansions += (*map)->last_stats().expansions;
+    if (request.want_cost_to_go) {
+      // What the descent's path from each cell costs, in double: the field
+      // itself holds floats.
+      PATHD_ASSIGN_OR_RETURN(result.cost_to_go,
+                             internal::IncrementalAccess::PathCosts(**map));
+    }
+    result.planning_time = absl::Now() - started;
+    return result;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Planner> MakeLpaStarPlanner() { return std::make_unique<LpaStarPlanner>(); }
+std::unique_ptr<Planner> MakeDStarLitePlanner() {
+  return std::make_unique<DStarLitePlanner>();
+}
+std::unique_ptr<Planner> MakeShortestPathMapPlanner() {
+  return std::make_unique<ShortestPathMapPlanner>();
+}
+
+}  // namespace pathd
