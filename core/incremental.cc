@@ -49,14 +49,19 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 //    pattern measured is dearer to repair there, or nearly as dear).
 constexpr double kRebuildFraction = 0.05;
 // 2. Otherwise repair, but give up and rebuild once the repair has expanded
-//    kRepairBudget times as many cells as the last build did: a repair
-//    expansion costs 3-8 times a build expansion in the runs above, so this is
-//    roughly where the repair has spent what a rebuild costs (ski rental: at
-//    worst about twice the better choice, and small repairs never notice).
-//    Deterministic, unlike a time limit.
-constexpr double kRepairBudget = 0.2;
-// With both rules, in the same runs, UpdateMap took the repair's time up to
-// the crossover and 0.5-3 times a rebuild beyond it (instead of up to 22).
+//    kRepairBudget times as many cells as the last build did. A repair
+//    expansion costs several times a build expansion (3-8x on the random map,
+//    far more on dao/brc202d), so the budget is where a repair has roughly
+//    spent what a rebuild costs (ski rental: at worst about twice the better
+//    choice, and small repairs never notice). Deterministic, unlike a time
+//    limit. 0.2 was tried first: UpdateMap then cost up to 5.7x a rebuild
+//    (brc202d, 4096 scattered cells). With 0.05, in the same runs
+//    (`replan_bench --threshold --maps dao/brc202d.map,street/Berlin_0_512.map`),
+//    UpdateMap took the repair's time below the crossover and at most 1.4x a
+//    rebuild beyond it (random map: scattered 1024 1.37x, cluster 16384
+//    1.14x; brc202d at most 1.09x; Berlin at most 1.09x), where plain repairs
+//    cost up to 18x.
+constexpr double kRepairBudget = 0.05;
 // Small maps rebuild in microseconds; let their repairs run.
 constexpr int64_t kMinRepairBudget = 256;
 
