@@ -23,6 +23,11 @@
 namespace pathd::pathctl {
 namespace {
 
+// "1 cell", "2 cells".
+std::string Count(int64_t n, absl::string_view noun) {
+  return absl::StrCat(n, " ", noun, n == 1 ? "" : "s");
+}
+
 using Stream =
     grpc::ClientReaderWriterInterface<v1::NavigateRequest, v1::NavigateResponse>;
 
@@ -56,7 +61,7 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
   absl::StrAppendFormat(&text, ", %d expansions", plan.expansions());
   if (plan.cache_hit()) absl::StrAppend(&text, ", cache hit");
   if (plan.repaired_cells() > 0) {
-    absl::StrAppend(&text, ", ", plan.repaired_cells(), " cells repaired");
+    absl::StrAppend(&text, ", ", Count(plan.repaired_cells(), "cell"), " repaired");
   }
   if (response.applied_version() > 0) {
     absl::StrAppend(&text, ", observation applied as map version ",
@@ -105,8 +110,8 @@ class Session {
     std::string summary;
     {
       absl::MutexLock lock(&mu_);
-      summary = absl::StrFormat("closed: %d answers, %d unasked paths\n",
-                                answers_, pushes_total_);
+      summary = absl::StrCat("closed: ", Count(answers_, "answer"), ", ",
+                             Count(pushes_total_, "unasked path"), "\n");
     }
     Log(summary);
     return absl::OkStatus();

@@ -160,7 +160,7 @@ TEST_F(NavigateSessionTest, WithoutScriptPrintsTheFirstPathAndCloses) {
             "[OPENED] seq 1, session 7, map version 1: found, cost 3.000000, 4 "
             "cells, 0 expansions\n"
             "  path (4 cells): (3,0) (2,0) (1,0) (0,0)\n"
-            "closed: 1 answers, 0 unasked paths\n");
+            "closed: 1 answer, 0 unasked paths\n");
 }
 
 TEST_F(NavigateSessionTest, FollowDrivesAlongThePathAndStopsAtTheGoal) {
