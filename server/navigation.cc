@@ -49,7 +49,6 @@ class NavigationSession final : public NavigateReactor {
       FinishLocked(admitted);
       return;
     }
-    reading_ = true;
     StartRead(&request_);
   }
 
@@ -93,7 +92,6 @@ class NavigationSession final : public NavigateReactor {
 
   void OnReadDone(bool ok) override {
     absl::MutexLock lock(&mu_);
-    reading_ = false;
     // A message that raced with the end of the session is not answered.
     if (finish_requested_) return;
     if (!ok) {
@@ -234,7 +232,6 @@ class NavigationSession final : public NavigateReactor {
         if (pending_end_.has_value()) {
           FinishLocked(*pending_end_);
         } else if (!finish_requested_) {
-          reading_ = true;
           StartRead(&request_);
         }
       }
@@ -488,7 +485,6 @@ class NavigationSession final : public NavigateReactor {
   absl::Time last_activity_ ABSL_GUARDED_BY(mu_);
   // Owned by gRPC between StartRead and OnReadDone.
   v1::NavigateRequest request_;
-  bool reading_ ABSL_GUARDED_BY(mu_) = false;
   // A message job is queued or running; the next read starts when it ends.
   bool handling_ ABSL_GUARDED_BY(mu_) = false;
   bool push_pending_ ABSL_GUARDED_BY(mu_) = false;
