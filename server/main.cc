@@ -1,25 +1,37 @@
-// pathd: the path-planning daemon. Parses flags, sets up logging, starts a
-// PathdServer and waits for SIGINT/SIGTERM to shut it down gracefully.
+// pathd: the path-planning daemon. Reads the optional config file and the
+// flags, sets up logging, starts a PathdServer and waits for SIGINT/SIGTERM to
+// shut it down gracefully.
 #include <pthread.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <thread>
+#include <vector>
 
+#include "absl/flags/commandlineflag.h"
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
+#include "absl/flags/reflection.h"
 #include "absl/flags/usage.h"
 #include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/time/time.h"
+#include "absl/types/span.h"
+#include "server/config_file.h"
 #include "server/server.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
 
+ABSL_FLAG(std::string, config, "",
+          "YAML file of 'flag_name: value' lines setting any other pathd flag; "
+          "flags given on the command line override it; empty = none");
 ABSL_FLAG(std::string, address, "127.0.0.1:50051",
           "host:port to listen on; port 0 picks a free port (the 'pathd "
           "listening on' line on stdout names it)");
@@ -71,14 +83,69 @@ void SetUpFlagsUsage() {
   absl::SetFlagsUsageConfig(config);
   absl::SetProgramUsageMessage(
       "gRPC path-planning daemon over named 2D grid maps.\n"
-      "Usage: pathd [--address=HOST:PORT] [--map_dir=DIR] [flags...]\n"
+      "Usage: pathd [--config=FILE] [--address=HOST:PORT] [--map_dir=DIR] "
+      "[flags...]\n"
+      "Every flag but --config can also be set in the --config YAML file "
+      "('threads: 2', 'shutdown_grace: 5s'); a flag given on the command line "
+      "overrides the file, the file overrides the default.\n"
       "Prints 'pathd listening on HOST:PORT' on stdout once it serves; "
       "SIGINT/SIGTERM shut it down gracefully (exit 0).");
+}
+
+// pathd's own flags (not absl's --flagfile, --help...), sorted by name.
+std::vector<const absl::CommandLineFlag*> PathdFlags() {
+  std::vector<const absl::CommandLineFlag*> flags;
+  for (const auto& [name, flag] : absl::GetAllFlags()) {
+    if (IsPathdFlagFile(flag->Filename())) flags.push_back(flag);
+  }
+  std::sort(flags.begin(), flags.end(),
+            [](const absl::CommandLineFlag* a, const absl::CommandLineFlag* b) {
+              return a->Name() < b->Name();
+            });
+  return flags;
+}
+
+// The flags a config file may set: all of pathd's but the one naming it.
+std::vector<std::string> ConfigFileSettableFlags() {
+  std::vector<std::string> names;
+  for (const absl::CommandLineFlag* flag : PathdFlags()) {
+    if (flag->Name() != "config") names.emplace_back(flag->Name());
+  }
+  return names;
+}
+
+// "name=value ..." for every pathd flag, strings quoted so an empty one shows.
+std::string EffectiveConfiguration() {
+  std::vector<std::string> parts;
+  for (const absl::CommandLineFlag* flag : PathdFlags()) {
+    parts.push_back(flag->IsOfType<std::string>()
+                        ? absl::StrCat(flag->Name(), "='", flag->CurrentValue(), "'")
+                        : absl::StrCat(flag->Name(), "=", flag->CurrentValue()));
+  }
+  return absl::StrJoin(parts, " ");
+}
+
+// Where the --config file set which flag, so a value rejected below names its
+// line in the file rather than a flag the user never typed. Leaked on purpose:
+// no destructor runs at exit (Google style for non-trivial globals).
+pathd::server::ConfigOrigins& ConfigFileOrigins() {
+  static auto* const origins = new pathd::server::ConfigOrigins();
+  return *origins;
 }
 
 // Reports a bad flag value the way absl reports a bad flag: on stderr, exit 2.
 [[noreturn]] void UsageError(const std::string& message) {
   std::fprintf(stderr, "pathd: %s (see --help)\n", message.c_str());
+  std::exit(2);
+}
+
+// UsageError for flag `name` whose value has `problem`, naming the config file
+// line when the value came from there.
+[[noreturn]] void FlagError(const std::string& name, const std::string& problem) {
+  const std::string origin = ConfigFileOrigins().Of(name);
+  if (origin.empty()) UsageError(absl::StrCat("--", name, " ", problem));
+  std::fprintf(stderr, "pathd: %s: key '%s': %s\n", origin.c_str(), name.c_str(),
+               problem.c_str());
   std::exit(2);
 }
 
@@ -88,8 +155,8 @@ spdlog::level::level_enum ParseLogLevel(const std::string& text) {
   if (text == "info") return spdlog::level::info;
   if (text == "warn") return spdlog::level::warn;
   if (text == "error") return spdlog::level::err;
-  UsageError(absl::StrFormat("--log_level '%s' is not one of "
-                             "trace|debug|info|warn|error", text));
+  FlagError("log_level", absl::StrFormat("'%s' is not one of "
+                                         "trace|debug|info|warn|error", text));
 }
 
 pathd::server::ServerOptions OptionsFromFlags() {
@@ -102,24 +169,24 @@ pathd::server::ServerOptions OptionsFromFlags() {
   options.map_dir = absl::GetFlag(FLAGS_map_dir);
   options.shutdown_grace = absl::GetFlag(FLAGS_shutdown_grace);
   if (absl::GetFlag(FLAGS_inflation_cache_entries) < 1) {
-    UsageError("--inflation_cache_entries must be >= 1");
+    FlagError("inflation_cache_entries", "must be >= 1");
   }
   options.inflation_cache_entries =
       static_cast<size_t>(absl::GetFlag(FLAGS_inflation_cache_entries));
-  if (absl::GetFlag(FLAGS_cache_bytes) < 0) UsageError("--cache_bytes must be >= 0");
+  if (absl::GetFlag(FLAGS_cache_bytes) < 0) FlagError("cache_bytes", "must be >= 0");
   options.cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_cache_bytes));
-  if (threads < 0) UsageError("--threads must be >= 0");
-  if (queue_depth < 1) UsageError("--queue_depth must be >= 1");
-  if (options.max_map_cells < 1) UsageError("--max_map_cells must be >= 1");
-  if (options.max_expansions < 0) UsageError("--max_expansions must be >= 0");
+  if (threads < 0) FlagError("threads", "must be >= 0");
+  if (queue_depth < 1) FlagError("queue_depth", "must be >= 1");
+  if (options.max_map_cells < 1) FlagError("max_map_cells", "must be >= 1");
+  if (options.max_expansions < 0) FlagError("max_expansions", "must be >= 0");
   if (options.shutdown_grace < absl::ZeroDuration()) {
-    UsageError("--shutdown_grace must not be negative");
+    FlagError("shutdown_grace", "must not be negative");
   }
   options.session_idle_timeout = absl::GetFlag(FLAGS_session_idle_timeout);
   if (options.session_idle_timeout <= absl::ZeroDuration()) {
-    UsageError("--session_idle_timeout must be positive");
+    FlagError("session_idle_timeout", "must be positive");
   }
-  if (absl::GetFlag(FLAGS_max_sessions) < 1) UsageError("--max_sessions must be >= 1");
+  if (absl::GetFlag(FLAGS_max_sessions) < 1) FlagError("max_sessions", "must be >= 1");
   options.max_sessions = static_cast<size_t>(absl::GetFlag(FLAGS_max_sessions));
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
@@ -130,7 +197,23 @@ pathd::server::ServerOptions OptionsFromFlags() {
 
 int main(int argc, char** argv) {
   SetUpFlagsUsage();
+  // The file is applied first so that absl::ParseCommandLine, run after it,
+  // gives every flag on the command line the last word.
+  const std::string config_path =
+      pathd::server::FlagValueInArgv(absl::MakeConstSpan(argv, argc), "config");
+  if (!config_path.empty()) {
+    const absl::Status loaded = pathd::server::LoadConfigFile(
+        config_path, ConfigFileSettableFlags(), &ConfigFileOrigins());
+    if (!loaded.ok()) {
+      std::fprintf(stderr, "pathd: %s\n", std::string(loaded.message()).c_str());
+      return 2;
+    }
+  }
   absl::ParseCommandLine(argc, argv);
+  if (absl::GetFlag(FLAGS_config) != config_path) {
+    UsageError("--config must be given on the command line itself, not in a "
+               "--flagfile or the environment");
+  }
 
   const spdlog::level::level_enum level = ParseLogLevel(absl::GetFlag(FLAGS_log_level));
   // stderr: stdout carries only the "listening" line that scripts parse.
@@ -147,14 +230,7 @@ int main(int argc, char** argv) {
   sigaddset(&shutdown_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &shutdown_signals, nullptr);
 
-  spdlog::info(
-      "pathd starting: address={} threads={} queue_depth={} max_map_cells={} "
-      "max_expansions={} map_dir='{}' log_level={} shutdown_grace={} cache_bytes={} "
-      "session_idle_timeout={} max_sessions={}",
-      options.address, options.threads, options.queue_depth, options.max_map_cells,
-      options.max_expansions, options.map_dir, absl::GetFlag(FLAGS_log_level),
-      absl::FormatDuration(options.shutdown_grace), options.cache_bytes,
-      absl::FormatDuration(options.session_idle_timeout), options.max_sessions);
+  spdlog::info("pathd starting: {}", EffectiveConfiguration());
 
   pathd::server::PathdServer server(options);
   if (absl::Status status = server.Start(); !status.ok()) {

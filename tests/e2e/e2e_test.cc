@@ -141,17 +141,18 @@ int WaitForExit(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-// A pathctl process whose stdout and stderr are collected as they arrive, so
-// a test can act while it runs (a navigate session waiting for a push) and
-// wait for what it prints.
+// A pathctl process (or another `binary`, e.g. pathd) whose stdout and stderr
+// are collected as they arrive, so a test can act while it runs (a navigate
+// session waiting for a push) and wait for what it prints.
 class PathctlProcess {
  public:
   explicit PathctlProcess(const std::vector<std::string>& args,
-                          const std::vector<std::string>& extra_env = {}) {
+                          const std::vector<std::string>& extra_env = {},
+                          const std::string& binary = PATHCTL_BIN) {
     int out_pipe[2], err_pipe[2];
     MakePipe(out_pipe);
     MakePipe(err_pipe);
-    std::vector<std::string> argv = {PATHCTL_BIN};
+    std::vector<std::string> argv = {binary};
     argv.insert(argv.end(), args.begin(), args.end());
     pid_ = Spawn(argv, extra_env, out_pipe[1], err_pipe[1], true);
     close(out_pipe[1]);
@@ -210,6 +211,11 @@ class PathctlProcess {
   }
 
   const std::string& out() const { return result_.out; }
+
+  // Sends `signal_number` to the process (while it runs).
+  void Signal(int signal_number) {
+    if (pid_ > 0) kill(pid_, signal_number);
+  }
 
  private:
   // Both pipes are read together so neither can fill up and block pathctl.
@@ -292,13 +298,15 @@ class E2eTest : public ::testing::Test {
     fs::remove_all(temp_dir_, ignored);
   }
 
-  void StartDaemon() {
+  // Starts pathd on a free port with this test's map_dir and `extra_flags`.
+  void StartDaemon(const std::vector<std::string>& extra_flags = {}) {
     int out_pipe[2];
     MakePipe(out_pipe);
+    std::vector<std::string> argv = {PATHD_BIN, "--address=127.0.0.1:0",
+                                     absl::StrCat("--map_dir=", map_dir_.string())};
+    argv.insert(argv.end(), extra_flags.begin(), extra_flags.end());
     // stderr is inherited so the daemon's log shows up in the test output.
-    daemon_pid_ = Spawn({PATHD_BIN, "--address=127.0.0.1:0",
-                         absl::StrCat("--map_dir=", map_dir_.string())},
-                        {}, out_pipe[1], -1, true);
+    daemon_pid_ = Spawn(argv, {}, out_pipe[1], -1, true);
     close(out_pipe[1]);
     ASSERT_GT(daemon_pid_, 0) << "fork failed: " << strerror(errno);
     daemon_stdout_ = out_pipe[0];
@@ -1177,6 +1185,158 @@ TEST_F(E2eTest, SigtermExitsCleanly) {
       {absl::StrCat("--server=", address), "--timeout=5s", "maps", "list"});
   EXPECT_EQ(r.exit_code, 1) << r;
   EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE: ")) << r;
+}
+
+// Runs pathd with `args` to its exit (a usage error, or --help).
+ProcessResult RunPathd(const std::vector<std::string>& args) {
+  return PathctlProcess(args, {}, PATHD_BIN).Finish();
+}
+
+// The flags `pathd --help` documents, from its "    --name (meaning)" lines.
+std::vector<std::string> HelpFlagNames(const std::string& help) {
+  std::vector<std::string> names;
+  for (absl::string_view line : absl::StrSplit(help, '\n')) {
+    if (!absl::ConsumePrefix(&line, "    --")) continue;
+    names.emplace_back(line.substr(0, line.find(' ')));
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// The keys a config file sets, from its "name: value" lines.
+std::vector<std::string> ConfigKeys(const std::string& yaml) {
+  std::vector<std::string> keys;
+  for (absl::string_view line : absl::StrSplit(yaml, '\n')) {
+    if (line.empty() || line[0] == '#') continue;
+    keys.emplace_back(line.substr(0, line.find(':')));
+  }
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
+// The shipped examples/pathd.yaml sets every flag --help documents (but
+// --config) to its default, and pathd starts with it.
+TEST_F(E2eTest, HelpDocumentsEveryFlagAndTheExampleConfigSetsEach) {
+  const ProcessResult help = RunPathd({"--help"});
+  const std::vector<std::string> flags = HelpFlagNames(help.out);
+  for (const char* flag : {"config", "address", "cache_bytes", "max_sessions",
+                           "session_idle_timeout", "shutdown_grace"}) {
+    EXPECT_NE(std::find(flags.begin(), flags.end(), flag), flags.end())
+        << "--help misses --" << flag << "\n" << help;
+  }
+  // Each flag's entry ends with its default.
+  std::vector<absl::string_view> defaults = absl::StrSplit(help.out, "default: ");
+  EXPECT_EQ(defaults.size() - 1, flags.size()) << help;
+  EXPECT_TRUE(absl::StrContains(help.out, "a flag given on the command line "
+                                          "overrides the file"))
+      << help;
+
+  const std::string example =
+      absl::StrCat(PATHD_SOURCE_DIR, "/examples/pathd.yaml");
+  std::vector<std::string> settable = flags;
+  settable.erase(std::find(settable.begin(), settable.end(), "config"));
+  EXPECT_EQ(ConfigKeys(ReadFile(example)), settable);
+
+  EXPECT_EQ(StopDaemon(), 0);
+  ASSERT_NO_FATAL_FAILURE(StartDaemon({absl::StrCat("--config=", example)}));
+  EXPECT_EQ(Ctl({"health"}).out, "SERVING\n");
+}
+
+TEST_F(E2eTest, ConfigFileSetsFlagsAndTheCommandLineOverridesIt) {
+  // 192.0.2.1 is a documentation address no host has: pathd only starts
+  // because StartDaemon's --address=127.0.0.1:0 overrides the file's.
+  const std::string config = MapFile(
+      "pathd.yaml",
+      "address: 192.0.2.1:50051\nmax_expansions: 10\nshutdown_grace: 2s\n");
+  EXPECT_EQ(StopDaemon(), 0);
+  ASSERT_NO_FATAL_FAILURE(StartDaemon({absl::StrCat("--config=", config)}));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse limited =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=dijkstra"}, 3);
+  EXPECT_EQ(limited.outcome(), v1::PLAN_OUTCOME_EXPANSION_LIMIT);
+  EXPECT_TRUE(absl::StrContains(limited.reason(), "expansion limit of 10"))
+      << limited.reason();
+
+  EXPECT_EQ(StopDaemon(), 0);
+  ASSERT_NO_FATAL_FAILURE(StartDaemon(
+      {absl::StrCat("--config=", config), "--max_expansions=0"}));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse found =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=dijkstra"});
+  EXPECT_TRUE(found.found());
+  EXPECT_EQ(PathCells(found).size(), 10u);
+}
+
+TEST_F(E2eTest, StartupLineShowsTheEffectiveConfiguration) {
+  const std::string config =
+      MapFile("pathd.yaml", "max_sessions: 7\nshutdown_grace: 2s\n");
+  PathctlProcess pathd({"--address=127.0.0.1:0",
+                        absl::StrCat("--config=", config), "--shutdown_grace=1s"},
+                       {}, PATHD_BIN);
+  ASSERT_TRUE(pathd.WaitForLine(kListeningPrefix)) << pathd.out();
+  pathd.Signal(SIGTERM);
+  const ProcessResult r = pathd.Finish();
+  EXPECT_EQ(r.exit_code, 0) << r;
+  const size_t at = r.err.find("pathd starting: ");
+  ASSERT_NE(at, std::string::npos) << r;
+  const std::string line = r.err.substr(at, r.err.find('\n', at) - at);
+  for (const std::string& expected :
+       {std::string("max_sessions=7"), std::string("shutdown_grace=1s"),
+        std::string("address='127.0.0.1:0'"),
+        absl::StrCat("config='", config, "'"), std::string("threads=0"),
+        std::string("map_dir=''")}) {
+    EXPECT_TRUE(absl::StrContains(line, expected))
+        << "missing " << expected << " in\n" << line;
+  }
+  for (const std::string& flag : HelpFlagNames(RunPathd({"--help"}).out)) {
+    EXPECT_TRUE(absl::StrContains(line, absl::StrCat(" ", flag, "=")))
+        << "missing --" << flag << " in\n" << line;
+  }
+}
+
+TEST_F(E2eTest, BadConfigFileExitsTwoNamingFileLineAndKey) {
+  struct Case {
+    std::string yaml;
+    std::string says;  // after "pathd: FILE:"
+  };
+  const std::vector<Case> cases = {
+      {"max_expansions: 10\nthreads: many\n",
+       "2: key 'threads': Illegal value 'many' specified for flag 'threads'"},
+      {"threads: 2\nworkers: 4\n",
+       "2: key 'workers': not a pathd setting; valid keys: address, "},
+      {"config: other.yaml\n",
+       "1: key 'config': only the command line can name the config file"},
+      {"threads: 2\nthreads: 3\n", "2: key 'threads': set twice in this file"},
+      {"map_dir: [a, b]\n", "1: key 'map_dir': must be a single value"},
+      // Range checks name the file's line too.
+      {"threads: 1\nqueue_depth: 0\n", "2: key 'queue_depth': must be >= 1"},
+      {"log_level: loud\n", "1: key 'log_level': 'loud' is not one of"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.yaml);
+    const std::string config = MapFile("bad.yaml", c.yaml);
+    const ProcessResult r =
+        RunPathd({"--address=127.0.0.1:0", absl::StrCat("--config=", config)});
+    EXPECT_EQ(r.exit_code, 2) << r;
+    EXPECT_TRUE(absl::StartsWith(r.err, absl::StrCat("pathd: ", config, ":",
+                                                     c.says)))
+        << r;
+    EXPECT_EQ(r.out, "") << r;
+  }
+  // A value the command line overrides is not the file's problem.
+  const std::string config = MapFile("bad.yaml", "queue_depth: 0\n");
+  const ProcessResult overridden =
+      RunPathd({"--address=127.0.0.1:0", absl::StrCat("--config=", config),
+                "--queue_depth=-1"});
+  EXPECT_EQ(overridden.exit_code, 2) << overridden;
+  EXPECT_TRUE(absl::StartsWith(overridden.err, "pathd: --queue_depth must be >= 1"))
+      << overridden;
+
+  const ProcessResult missing = RunPathd(
+      {"--address=127.0.0.1:0", absl::StrCat("--config=", temp_dir_.string(),
+                                             "/absent.yaml")});
+  EXPECT_EQ(missing.exit_code, 2) << missing;
+  EXPECT_TRUE(absl::StrContains(missing.err, "cannot read config file ")) << missing;
 }
 
 }  // namespace
