@@ -209,7 +209,12 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  absl::ParseCommandLine(argc, argv);
+  const std::vector<char*> positional = absl::ParseCommandLine(argc, argv);
+  // positional[0] is the program; pathd takes no arguments, only flags.
+  if (positional.size() > 1) {
+    UsageError(absl::StrCat("unexpected argument '", positional[1],
+                            "': pathd takes only flags (--name=value)"));
+  }
   if (absl::GetFlag(FLAGS_config) != config_path) {
     UsageError("--config must be given on the command line itself, not in a "
                "--flagfile or the environment");

@@ -1337,6 +1337,11 @@ TEST_F(E2eTest, BadConfigFileExitsTwoNamingFileLineAndKey) {
                                              "/absent.yaml")});
   EXPECT_EQ(missing.exit_code, 2) << missing;
   EXPECT_TRUE(absl::StrContains(missing.err, "cannot read config file ")) << missing;
+
+  // A stray word (a forgotten "--") is refused rather than ignored.
+  const ProcessResult stray = RunPathd({"--address=127.0.0.1:0", "threads=2"});
+  EXPECT_EQ(stray.exit_code, 2) << stray;
+  EXPECT_TRUE(absl::StrContains(stray.err, "unexpected argument 'threads=2'")) << stray;
 }
 
 }  // namespace
