@@ -131,6 +131,12 @@ PathdClient::Navigate(grpc::ClientContext* context) const {
   return planner_->Navigate(context);
 }
 
+std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>>
+PathdClient::WatchMap(grpc::ClientContext* context,
+                      const v1::WatchMapRequest& request) const {
+  return maps_->WatchMap(context, request);
+}
+
 absl::StatusOr<grpc::health::v1::HealthCheckResponse> PathdClient::CheckHealth(
     const std::string& service) const {
   grpc::health::v1::HealthCheckRequest request;

@@ -74,6 +74,12 @@ class PathdClient {
                                                     v1::NavigateResponse>>
   Navigate(grpc::ClientContext* context) const;
 
+  // Opens a WatchMap stream on `context` (caller-owned, alive until the
+  // reader's Finish() returned). No deadline is set: a watch lasts until the
+  // map is deleted or the caller cancels through `context`.
+  std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>> WatchMap(
+      grpc::ClientContext* context, const v1::WatchMapRequest& request) const;
+
   // grpc.health.v1.Health/Check; `service` empty asks about the whole server.
   absl::StatusOr<grpc::health::v1::HealthCheckResponse> CheckHealth(
       const std::string& service = "") const;

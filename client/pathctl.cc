@@ -43,6 +43,7 @@ constexpr char kSynopsis[] =
   pathctl [flags] maps delete NAME
   pathctl [flags] maps set NAME X Y COST [--expected_version V]
   pathctl [flags] maps rect NAME X0 Y0 X1 Y1 COST [--expected_version V]
+  pathctl [flags] maps watch NAME [--from_version V] [--count N]
   pathctl [flags] plan NAME SX SY GX GY [--planner P] [--connectivity 4|8]
                        [--cost_weight W] [--unknown_is_free]
                        [--max_expansions N] [--world] [--simplify]
@@ -326,10 +327,101 @@ int MapsRect(Env& env, Args args) {
   return SendUpdate(env, request);
 }
 
+// Rectangles of an UPDATED event printed in full; more are only counted.
+constexpr int kMaxPrintedRects = 16;
+
+std::string FormatRect(const v1::CellRect& r) {
+  if (r.x_min() == r.x_max() && r.y_min() == r.y_max()) {
+    return absl::StrFormat("(%d,%d)", r.x_min(), r.y_min());
+  }
+  return absl::StrFormat("(%d,%d)-(%d,%d)", r.x_min(), r.y_min(), r.x_max(),
+                         r.y_max());
+}
+
+// One line per event, e.g. "version 7 updated: 2 cells in 1 rect: (3,4)-(4,4)".
+std::string FormatMapEvent(const v1::MapEvent& event) {
+  switch (event.kind()) {
+    case v1::MAP_EVENT_KIND_UPDATED: {
+      int64_t cells = 0;
+      std::vector<std::string> rects;
+      for (const v1::ChangedRect& change : event.changes()) {
+        cells += static_cast<int64_t>(change.costs().size());
+        if (static_cast<int>(rects.size()) < kMaxPrintedRects) {
+          rects.push_back(FormatRect(change.rect()));
+        }
+      }
+      if (event.changes_size() > kMaxPrintedRects) {
+        rects.push_back(absl::StrFormat(
+            "+%d more", event.changes_size() - kMaxPrintedRects));
+      }
+      return absl::StrFormat(
+          "version %d updated: %d %s in %d %s%s%s", event.version(), cells,
+          cells == 1 ? "cell" : "cells", event.changes_size(),
+          event.changes_size() == 1 ? "rect" : "rects",
+          rects.empty() ? "" : ": ", absl::StrJoin(rects, " "));
+    }
+    case v1::MAP_EVENT_KIND_RESYNC:
+    case v1::MAP_EVENT_KIND_REPLACED:
+      return absl::StrFormat(
+          "version %d %s: whole map %dx%d", event.version(),
+          event.kind() == v1::MAP_EVENT_KIND_RESYNC ? "resync" : "replaced",
+          event.info().width(), event.info().height());
+    case v1::MAP_EVENT_KIND_DELETED:
+      return absl::StrFormat("version %d deleted", event.version());
+    default:
+      return absl::StrFormat("version %d: unknown event kind %d",
+                             event.version(), static_cast<int>(event.kind()));
+  }
+}
+
+// Streams until --count events, the map's deletion, or an error. No deadline:
+// watching is open-ended, so --timeout does not apply.
+int MapsWatch(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 1) return env.Usage("maps watch takes one NAME");
+  if (options.count < 0) return env.Usage("--count must be >= 0");
+  v1::WatchMapRequest request;
+  request.set_name(args[0]);
+  request.set_from_version(options.from_version);
+  grpc::ClientContext context;
+  std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>> reader =
+      env.client().WatchMap(&context, request);
+  google::protobuf::util::JsonPrintOptions json_options;
+  json_options.always_print_primitive_fields = true;
+  int64_t printed = 0;
+  bool stopped = false;
+  v1::MapEvent event;
+  while (reader->Read(&event)) {
+    if (options.json) {
+      std::string line;
+      if (!google::protobuf::util::MessageToJsonString(event, &line,
+                                                       json_options)
+               .ok()) {
+        context.TryCancel();
+        reader->Finish();
+        return env.Fail(absl::InternalError("cannot print an event as JSON"));
+      }
+      env.out() << line << "\n";
+    } else {
+      env.out() << FormatMapEvent(event) << "\n";
+    }
+    // Flushed per event: the reader of a pipe wants each line as it happens.
+    env.out() << std::flush;
+    if (options.count > 0 && ++printed == options.count) {
+      stopped = true;
+      context.TryCancel();
+      break;
+    }
+  }
+  const grpc::Status status = reader->Finish();
+  if (stopped || status.ok()) return kExitOk;
+  return env.Fail(client::FromGrpcStatus(status));
+}
+
 int Maps(Env& env, Args args) {
   if (args.empty()) {
     return env.Usage(
-        "maps needs a subcommand: create, list, get, delete, set, rect");
+        "maps needs a subcommand: create, list, get, delete, set, rect, watch");
   }
   const std::string& sub = args[0];
   Args rest = args.subspan(1);
@@ -339,9 +431,10 @@ int Maps(Env& env, Args args) {
   if (sub == "delete") return MapsDelete(env, rest);
   if (sub == "set") return MapsSet(env, rest);
   if (sub == "rect") return MapsRect(env, rest);
+  if (sub == "watch") return MapsWatch(env, rest);
   return env.Usage(
       absl::StrCat("unknown maps subcommand '", sub,
-                   "'; expected create, list, get, delete, set, rect"));
+                   "'; expected create, list, get, delete, set, rect, watch"));
 }
 
 // --- plan --------------------------------------------------------------------
@@ -834,6 +927,9 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --resolution R       maps create: metres per cell for .map files (default 1)
   --cells              maps get: also print the cells (maps up to 1024 columns)
   --expected_version V maps set/rect: apply only if the map is at version V
+  --from_version V     maps watch: the version you hold; other than the current
+                       one (0: none) starts with the whole map (resync)
+  --count N            maps watch: stop after N events (default: until deleted)
   --planner P          plan: )",
       PlannerNames(), R"( (default: the server's, A*)
   --max_expansions N   plan: stop after N expansions (0: the server's limit)
@@ -859,6 +955,11 @@ cost options (plan, navigate, cost-to-go):
   --unknown_is_free    treat unknown cells (255) as free
   --robot_radius M     inflate lethal cells by the robot radius in metres
   --robot_radius_cells C  the same in cells
+
+maps watch prints one line per map version: "version V updated: N cells in
+R rects: (x0,y0)-(x1,y1) ...", "version V resync: whole map WxH", "version V
+replaced: whole map WxH" or "version V deleted" (then it exits 0). It has no
+deadline (--timeout does not apply); with --json each line is a MapEvent.
 
 With --json, navigate prints each NavigateResponse as one line of JSON. Its
 --timeout bounds each wait for an answer and for the server's close, not the

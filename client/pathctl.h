@@ -73,6 +73,10 @@ struct Options {
   bool cells = false;
   // maps set / rect
   std::optional<uint64_t> expected_version;
+  // maps watch: the version already held (0: none, start with the whole
+  // map) and how many events to print before stopping (0: until deleted).
+  uint64_t from_version = 0;
+  int64_t count = 0;
   // plan
   std::string planner;   // empty: the server's default
   int connectivity = 0;  // 0: the server's default (8)

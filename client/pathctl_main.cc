@@ -25,6 +25,9 @@ ABSL_FLAG(double, resolution, 0.0, "maps create: metres per cell (.map files)");
 ABSL_FLAG(bool, cells, false, "maps get: print the cells as ASCII");
 ABSL_FLAG(std::optional<uint64_t>, expected_version, std::nullopt,
           "maps set/rect: apply only at this map version");
+ABSL_FLAG(uint64_t, from_version, 0,
+          "maps watch: the version already held (0: start with the whole map)");
+ABSL_FLAG(int64_t, count, 0, "maps watch: stop after N events (0: no limit)");
 ABSL_FLAG(std::string, planner, "", "plan: planner name (default: server's)");
 ABSL_FLAG(int, connectivity, 0, "plan, navigate, cost-to-go: 4 or 8 (default 8)");
 ABSL_FLAG(std::optional<double>, cost_weight, std::nullopt,
@@ -91,6 +94,8 @@ int main(int argc, char** argv) {
   options.resolution = absl::GetFlag(FLAGS_resolution);
   options.cells = absl::GetFlag(FLAGS_cells);
   options.expected_version = absl::GetFlag(FLAGS_expected_version);
+  options.from_version = absl::GetFlag(FLAGS_from_version);
+  options.count = absl::GetFlag(FLAGS_count);
   options.planner = absl::GetFlag(FLAGS_planner);
   options.connectivity = absl::GetFlag(FLAGS_connectivity);
   options.cost_weight = absl::GetFlag(FLAGS_cost_weight);

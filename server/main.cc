@@ -59,6 +59,9 @@ ABSL_FLAG(absl::Duration, session_idle_timeout, absl::Minutes(10),
           "with DEADLINE_EXCEEDED");
 ABSL_FLAG(int, max_sessions, 1024,
           "Navigate sessions open at once; more get RESOURCE_EXHAUSTED");
+ABSL_FLAG(int, watch_queue_events, 64,
+          "WatchMap events queued for a slow reader before its backlog is "
+          "replaced by one whole-map RESYNC event");
 
 namespace {
 
@@ -188,6 +191,11 @@ pathd::server::ServerOptions OptionsFromFlags() {
   }
   if (absl::GetFlag(FLAGS_max_sessions) < 1) FlagError("max_sessions", "must be >= 1");
   options.max_sessions = static_cast<size_t>(absl::GetFlag(FLAGS_max_sessions));
+  if (absl::GetFlag(FLAGS_watch_queue_events) < 1) {
+    UsageError("--watch_queue_events must be >= 1");
+  }
+  options.watch_queue_events =
+      static_cast<size_t>(absl::GetFlag(FLAGS_watch_queue_events));
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
   return options;

@@ -36,8 +36,11 @@ absl::Status ApplyRequestPose(const v1::CreateMapRequest& request, Grid& grid) {
 
 }  // namespace
 
-MapServiceImpl::MapServiceImpl(MapStore& store, std::string map_dir)
-    : store_(store), map_dir_(std::move(map_dir)) {}
+MapServiceImpl::MapServiceImpl(MapStore& store, std::string map_dir,
+                               MapWatchers::Options watch_options)
+    : store_(store),
+      map_dir_(std::move(map_dir)),
+      watchers_(store, watch_options) {}
 
 absl::StatusOr<Grid> MapServiceImpl::BuildGrid(
     const v1::CreateMapRequest& request) const {
@@ -167,6 +170,11 @@ grpc::ServerUnaryReactor* MapServiceImpl::UpdateMap(
                              response->version()),
              status, received);
   return Answer(context, status);
+}
+
+grpc::ServerWriteReactor<v1::MapEvent>* MapServiceImpl::WatchMap(
+    grpc::CallbackServerContext* context, const v1::WatchMapRequest* request) {
+  return watchers_.Start(context, *request);
 }
 
 }  // namespace pathd::server

@@ -10,14 +10,18 @@
 #include "absl/status/statusor.h"
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "server/map_store.h"
+#include "server/map_watch.h"
 
 namespace pathd::server {
 
-// Thread-safe (all state lives in the MapStore). `store` must outlive it.
+// Thread-safe (maps live in the MapStore, WatchMap streams in MapWatchers).
+// `store` must outlive it.
 class MapServiceImpl final : public v1::MapService::CallbackService {
  public:
   // map_dir: the --map_dir used for CreateMap.map_dir_file; empty = none.
-  MapServiceImpl(MapStore& store, std::string map_dir);
+  // Registers WatchMap's store listener, so construct before serving.
+  MapServiceImpl(MapStore& store, std::string map_dir,
+                 MapWatchers::Options watch_options = {});
 
   grpc::ServerUnaryReactor* CreateMap(grpc::CallbackServerContext* context,
                                       const v1::CreateMapRequest* request,
@@ -34,6 +38,13 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
   grpc::ServerUnaryReactor* UpdateMap(grpc::CallbackServerContext* context,
                                       const v1::UpdateMapRequest* request,
                                       v1::UpdateMapResponse* response) override;
+  grpc::ServerWriteReactor<v1::MapEvent>* WatchMap(
+      grpc::CallbackServerContext* context,
+      const v1::WatchMapRequest* request) override;
+
+  // Ends every WatchMap stream with UNAVAILABLE and refuses new ones.
+  void ShutdownWatchers() { watchers_.Shutdown(); }
+  const MapWatchers& watchers() const { return watchers_; }
 
  private:
   // The grid a CreateMap request describes, with resolution and origin set.
@@ -47,6 +58,7 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
 
   MapStore& store_;
   const std::string map_dir_;
+  MapWatchers watchers_;
 };
 
 }  // namespace pathd::server

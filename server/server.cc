@@ -85,7 +85,8 @@ absl::Status PathdServer::Start() {
       WorkerPool::Options{options_.threads, options_.queue_depth});
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
-  map_service_ = std::make_unique<MapServiceImpl>(store_, options_.map_dir);
+  map_service_ = std::make_unique<MapServiceImpl>(
+      store_, options_.map_dir, MapWatchers::Options{options_.watch_queue_events});
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
@@ -137,6 +138,8 @@ void PathdServer::Shutdown() {
     }
     // Open sessions would otherwise hold the shutdown for the whole grace.
     sessions_->Shutdown();
+    // Likewise for WatchMap streams, which never end on their own.
+    map_service_->ShutdownWatchers();
     // The pool keeps running during the grace period so accepted plans can
     // answer; after it gRPC cancels what is left, which reaches running
     // planners through their cancel flag.

@@ -48,6 +48,9 @@ struct ServerOptions {
   // Navigate sessions: idle expiry and the most open at once.
   absl::Duration session_idle_timeout = absl::Minutes(10);
   size_t max_sessions = 1024;
+  // WatchMap events queued per stream before a slow reader's backlog is
+  // replaced by one whole-map RESYNC event.
+  size_t watch_queue_events = 64;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -78,6 +81,8 @@ class PathdServer {
   const InflationCache& inflation_cache() const { return inflation_; }
   const IncrementalCache& incremental_cache() const { return cache_; }
   const ServerOptions& options() const { return options_; }
+  // WatchMap streams; valid after Start.
+  const MapWatchers& map_watchers() const { return map_service_->watchers(); }
 
  private:
   // Loads map_dir's maps into the store; returns how many loaded.

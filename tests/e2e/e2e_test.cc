@@ -1000,6 +1000,41 @@ TEST_F(E2eTest, NavigateSessionReceivesAPushWhenAnotherClientBlocksItsPath) {
   EXPECT_TRUE(absl::EndsWith(paths[1], " (9,9)")) << paths[1];
 }
 
+TEST_F(E2eTest, MapsWatchSeesAnotherClientsUpdateAndTheDelete) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  std::unique_ptr<PathctlProcess> watch = StartCtl({"maps", "watch", "room"});
+  std::unique_ptr<PathctlProcess> json =
+      StartCtl({"maps", "watch", "room", "--json", "--count", "2"});
+  // Without --from_version the whole map comes first, which also shows the
+  // stream is open before the update is made.
+  ASSERT_TRUE(watch->WaitForLine("version 1 resync: whole map 10x10")) << watch->Finish();
+  ASSERT_TRUE(json->WaitForLine("MAP_EVENT_KIND_RESYNC")) << json->Finish();
+  const ProcessResult rect = Ctl({"maps", "rect", "room", "2", "3", "4", "5", "lethal"});
+  ASSERT_EQ(rect.exit_code, 0) << rect;
+
+  const ProcessResult json_result = json->Finish();
+  ASSERT_EQ(json_result.exit_code, 0) << json_result;
+  const std::vector<std::string> lines =
+      absl::StrSplit(json_result.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(lines.size(), 2u) << json_result;
+  const auto updated = ParseJson<v1::MapEvent>(lines[1]);
+  EXPECT_EQ(updated.kind(), v1::MAP_EVENT_KIND_UPDATED);
+  EXPECT_EQ(updated.version(), 2u);
+  ASSERT_EQ(updated.changes_size(), 1);
+  EXPECT_EQ(updated.changes(0).rect().x_min(), 2);
+  EXPECT_EQ(updated.changes(0).rect().y_max(), 5);
+  EXPECT_EQ(updated.changes(0).costs(), std::string(9, '\xfe'));
+
+  const ProcessResult deleted = Ctl({"maps", "delete", "room"});
+  ASSERT_EQ(deleted.exit_code, 0) << deleted;
+  const ProcessResult r = watch->Finish();
+  EXPECT_EQ(r.exit_code, 0) << r;
+  EXPECT_EQ(r.out,
+            "version 1 resync: whole map 10x10\n"
+            "version 2 updated: 9 cells in 1 rect: (2,3)-(4,5)\n"
+            "version 2 deleted\n");
+}
+
 TEST_F(E2eTest, NavigateScriptErrorsAndFailedExpectations) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
   // A bad line is reported with its place before anything is sent.
