@@ -116,6 +116,15 @@ absl::StatusOr<v1::CostToGoResponse> PathdClient::CostToGo(
       });
 }
 
+absl::StatusOr<v1::IsPathValidResponse> PathdClient::IsPathValid(
+    const v1::IsPathValidRequest& request) const {
+  return Invoke<v1::IsPathValidResponse>(
+      timeout_,
+      [&](grpc::ClientContext* context, v1::IsPathValidResponse* response) {
+        return planner_->IsPathValid(context, request, response);
+      });
+}
+
 absl::StatusOr<v1::GetCacheStatsResponse> PathdClient::GetCacheStats() const {
   return Invoke<v1::GetCacheStatsResponse>(
       timeout_,

@@ -65,6 +65,9 @@ class PathdClient {
   absl::StatusOr<v1::CostToGoResponse> CostToGo(
       const v1::CostToGoRequest& request) const;
   absl::StatusOr<v1::GetCacheStatsResponse> GetCacheStats() const;
+  // An invalid path is an OK response with valid = false.
+  absl::StatusOr<v1::IsPathValidResponse> IsPathValid(
+      const v1::IsPathValidRequest& request) const;
 
   // Opens a Navigate stream on `context`, which the caller owns and must keep
   // alive until the stream's Finish() returned. Unlike the unary calls no

@@ -23,6 +23,7 @@
 #include "client/map_source.h"
 #include "client/navigate_script.h"
 #include "client/navigate_session.h"
+#include "core/status_macros.h"
 #include "google/protobuf/util/json_util.h"
 
 namespace pathd::pathctl {
@@ -50,9 +51,12 @@ constexpr char kSynopsis[] =
                        [--robot_radius M | --robot_radius_cells C]
                        [--heuristic_weight W] [--lookahead N]
                        [--cost_to_go_file F] [--pf_* ...]
+                       [--goal_tolerance C | --goal_tolerance_m M]
   pathctl [flags] navigate NAME SX SY GX GY [--script FILE] [cost options]
   pathctl [flags] cost-to-go NAME GX GY [--window X,Y,W,H]
                        [--cost_to_go_file F] [--world] [cost options]
+  pathctl [flags] check NAME X1 Y1 [X2 Y2 ...] [--world] [cost options]
+  pathctl [flags] check NAME --path_file F [--world] [cost options]
   pathctl [flags] cache-stats
   pathctl [flags] health [SERVICE]
   pathctl --help
@@ -511,6 +515,17 @@ int Plan(Env& env, Args args) {
   if (options.heuristic_weight.has_value()) {
     plan_options->set_heuristic_weight(*options.heuristic_weight);
   }
+  if (options.goal_tolerance_cells.has_value() &&
+      options.goal_tolerance_m.has_value()) {
+    return env.Usage(
+        "give --goal_tolerance (cells) or --goal_tolerance_m, not both");
+  }
+  if (options.goal_tolerance_cells.has_value()) {
+    plan_options->set_goal_tolerance_cells(*options.goal_tolerance_cells);
+  }
+  if (options.goal_tolerance_m.has_value()) {
+    plan_options->set_goal_tolerance_m(*options.goal_tolerance_m);
+  }
   plan_options->set_simplify(options.simplify);
   plan_options->set_lookahead(options.lookahead);
   plan_options->set_return_cost_to_go(!options.cost_to_go_file.empty());
@@ -560,9 +575,14 @@ int Plan(Env& env, Args args) {
       "planner:     %s\n"
       "map version: %d\n"
       "start:       %s\n"
-      "goal:        %s\n",
+      "goal:        %s",
       response->planner(), response->map_version(),
       FormatCell(response->start()), FormatCell(response->goal()));
+  if (response->goal_substituted()) {
+    out << " (substituted for blocked "
+        << FormatCell(response->requested_goal()) << ")";
+  }
+  out << "\n";
   if (response->robot_radius_cells() > 0) {
     out << absl::StrFormat("robot radius: %g cells\n", response->robot_radius_cells());
   }
@@ -656,6 +676,99 @@ int Navigate(Env& env, Args args) {
     return env.Fail(s);
   }
   return kExitOk;
+}
+
+// --- check -------------------------------------------------------------------
+
+// Poses from positional "X Y" pairs, cells or (with --world) metres.
+absl::StatusOr<std::vector<v1::Position>> PosesFromArgs(Args args, bool world) {
+  if (args.empty() || args.size() % 2 != 0) {
+    return absl::InvalidArgumentError(
+        "check takes NAME and X Y pairs (or NAME --path_file F)");
+  }
+  std::vector<v1::Position> poses;
+  for (size_t i = 0; i < args.size(); i += 2) {
+    const std::string x_name = absl::StrCat("X", i / 2 + 1);
+    const std::string y_name = absl::StrCat("Y", i / 2 + 1);
+    const char* const names[] = {x_name.c_str(), y_name.c_str()};
+    v1::Position& pose = poses.emplace_back();
+    if (world) {
+      PATHD_ASSIGN_OR_RETURN(const std::vector<double> p,
+                             ParseDoubles(args.subspan(i, 2), names));
+      pose.mutable_world()->set_x(p[0]);
+      pose.mutable_world()->set_y(p[1]);
+    } else {
+      PATHD_ASSIGN_OR_RETURN(const std::vector<int32_t> p,
+                             ParseInts(args.subspan(i, 2), names));
+      pose.mutable_cell()->set_x(p[0]);
+      pose.mutable_cell()->set_y(p[1]);
+    }
+  }
+  return poses;
+}
+
+// Up to 32 indices, then how many more (--json has them all); "none" for
+// an empty list.
+std::string FormatIndices(
+    const google::protobuf::RepeatedField<int32_t>& indices) {
+  constexpr int kShown = 32;
+  if (indices.empty()) return "none";
+  if (indices.size() <= kShown) return absl::StrJoin(indices, " ");
+  return absl::StrCat(
+      absl::StrJoin(indices.begin(), indices.begin() + kShown, " "), " ... (",
+      indices.size(), " in all)");
+}
+
+int Check(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.empty()) return env.Usage("check takes NAME X1 Y1 [X2 Y2 ...]");
+  v1::IsPathValidRequest request;
+  request.set_map(args[0]);
+  absl::StatusOr<std::vector<v1::Position>> poses;
+  if (!options.path_file.empty()) {
+    if (args.size() != 1) {
+      return env.Usage(
+          "check takes the poses from --path_file or the command line, "
+          "not both");
+    }
+    absl::StatusOr<std::string> text = ReadTextFile(options.path_file);
+    if (!text.ok()) return env.Fail(text.status());
+    poses = ParsePathFile(*text, options.path_file, options.world);
+  } else {
+    poses = PosesFromArgs(args.subspan(1), options.world);
+  }
+  if (!poses.ok()) return env.Usage(poses.status().message());
+  for (v1::Position& pose : *poses) *request.add_path() = std::move(pose);
+  if (absl::Status s = SetCostOptions(options, request.mutable_options());
+      !s.ok()) {
+    return env.Usage(s.message());
+  }
+
+  absl::StatusOr<v1::IsPathValidResponse> response =
+      env.client().IsPathValid(request);
+  if (!response.ok()) return env.Fail(response.status());
+  const int code = response->valid() ? kExitOk : kExitInvalidPath;
+  if (options.json) {
+    const int print_code = env.PrintJson(*response);
+    return print_code == kExitOk ? code : print_code;
+  }
+  std::ostream& out = env.out();
+  out << "valid:         " << (response->valid() ? "yes" : "no") << "\n"
+      << absl::StrFormat("map version:   %d\nposes:         %d\n",
+                         response->map_version(), request.path_size());
+  if (response->robot_radius_cells() > 0) {
+    out << absl::StrFormat("robot radius:  %g cells\n",
+                           response->robot_radius_cells());
+  }
+  if (response->valid()) {
+    out << absl::StrFormat("cost:          %.6f\nlength:        %.6f\n",
+                           response->cost(), response->length());
+    return code;
+  }
+  out << "invalid poses: " << FormatIndices(response->invalid_indices()) << "\n"
+      << "invalid steps: " << FormatIndices(response->invalid_steps()) << "\n"
+      << "reason:        " << response->reason() << "\n";
+  return code;
 }
 
 // --- cost-to-go --------------------------------------------------------------
@@ -842,6 +955,45 @@ absl::StatusOr<uint32_t> ParseCost(absl::string_view text) {
   return cost;
 }
 
+absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
+    absl::string_view text, absl::string_view file_name, bool world) {
+  std::vector<v1::Position> poses;
+  int line_number = 0;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    ++line_number;
+    line = absl::StripAsciiWhitespace(line);
+    if (line.empty() || absl::StartsWith(line, "#")) continue;
+    const std::vector<absl::string_view> fields =
+        absl::StrSplit(line, absl::ByAnyChar(" \t,"), absl::SkipEmpty());
+    v1::Position pose;
+    bool ok = fields.size() == 2;
+    if (ok && world) {
+      double x = 0.0;
+      double y = 0.0;
+      ok = absl::SimpleAtod(fields[0], &x) && absl::SimpleAtod(fields[1], &y) &&
+           std::isfinite(x) && std::isfinite(y);
+      pose.mutable_world()->set_x(x);
+      pose.mutable_world()->set_y(y);
+    } else if (ok) {
+      int32_t x = 0;
+      int32_t y = 0;
+      ok = absl::SimpleAtoi(fields[0], &x) && absl::SimpleAtoi(fields[1], &y);
+      pose.mutable_cell()->set_x(x);
+      pose.mutable_cell()->set_y(y);
+    }
+    if (!ok) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s:%d: '%s' is not \"X Y\" (%s)", file_name, line_number, line,
+          world ? "two finite numbers, metres" : "two integers, cells"));
+    }
+    poses.push_back(std::move(pose));
+  }
+  if (poses.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(file_name, ": no poses"));
+  }
+  return poses;
+}
+
 std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells) {
   std::vector<std::string> parts;
   parts.reserve(cells.size());
@@ -933,7 +1085,7 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --planner P          plan: )",
       PlannerNames(), R"( (default: the server's, A*)
   --max_expansions N   plan: stop after N expansions (0: the server's limit)
-  --world              plan, cost-to-go: coordinates are world metres, not cells
+  --world              plan, cost-to-go, check: coordinates are world metres, not cells
   --simplify           plan: keep only the turning points (ray-shooting line of
                        sight); the path becomes any-angle, never longer
   --heuristic_weight W plan: weighted_astar's w >= 1 (default 1.5)
@@ -942,6 +1094,11 @@ flags (anywhere on the line, as --flag=value or --flag value):
                        cost-to-go field as CSV (one row per line, inf =
                        unreachable); cost-to-go prints a table otherwise
   --window X,Y,W,H     cost-to-go: only columns X..X+W-1, rows Y..Y+H-1
+  --goal_tolerance C   plan: when the goal cell is blocked, plan to the nearest
+                       free cell within C cells and say so (up to 1024 cells)
+  --goal_tolerance_m M plan: the same in metres
+  --path_file F        check: read the path from F, one "X Y" per line ('#'
+                       starts a comment line)
   --script FILE        navigate: replay this robot run (format below); without
                        it navigate prints the first path and closes
   --pf_attractive S    plan: potential_field: quadratic (default) or conic
@@ -949,7 +1106,7 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --pf_influence Q, --pf_step S, --pf_max_steps N
                        plan: potential_field parameters (cells; 0 = default)
 
-cost options (plan, navigate, cost-to-go):
+cost options (plan, navigate, cost-to-go, check):
   --connectivity N     4 or 8 (default 8)
   --cost_weight W      w in step = length * (1 + w * cost / 252) (default 1)
   --unknown_is_free    treat unknown cells (255) as free
@@ -986,6 +1143,7 @@ exit codes:
      navigate: a script's expect-push or follow failed
   2  usage error, also a bad navigate script line (FILE:LINE: problem)
   3  plan ran but found no path (the outcome says why)
+  4  check ran and the path is not valid on the map's current version
 
 )",
       kNavigateScriptHelp);
@@ -1091,6 +1249,7 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (command == "plan") return Plan(env, rest);
   if (command == "navigate") return Navigate(env, rest);
   if (command == "cost-to-go") return CostToGo(env, rest);
+  if (command == "check") return Check(env, rest);
   if (command == "cache-stats") return CacheStats(env, rest);
   if (command == "health") return Health(env, rest);
   if (command == "help") {

@@ -25,6 +25,7 @@ enum ExitCode : int {
   kExitError = 1,   // the RPC or server failed, or a local file was unreadable
   kExitUsage = 2,   // bad command line
   kExitNoPath = 3,  // plan ran but found no path
+  kExitInvalidPath = 4,  // check ran and the path is not valid on the map
 };
 
 // Environment variable naming the server when --server is not given.
@@ -87,6 +88,12 @@ struct Options {
   std::optional<double> heuristic_weight;
   std::optional<double> robot_radius_m;
   std::optional<double> robot_radius_cells;
+  // plan: goal tolerance in cells or metres (at most one).
+  std::optional<double> goal_tolerance_cells;
+  std::optional<double> goal_tolerance_m;
+  // check: read the poses from this file ("X Y" per line) instead of the
+  // command line.
+  std::string path_file;
   bool simplify = false;
   int lookahead = 0;
   // Non-empty: request the cost-to-go field and write it here as CSV.
@@ -116,6 +123,13 @@ absl::Status WriteCostToGoCsv(const std::string& path, int32_t width,
 // A cost byte as a number 0..255 or the Nav2 name of a special value (free,
 // inscribed, lethal, unknown); INVALID_ARGUMENT "COST: ..." otherwise.
 absl::StatusOr<uint32_t> ParseCost(absl::string_view text);
+
+// The poses of a path file: one "X Y" pair per line, separated by spaces,
+// tabs or a comma (cells, or metres when `world`), blank lines and lines
+// starting with '#' skipped. INVALID_ARGUMENT "FILE:LINE: ..." for a malformed
+// line.
+absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
+    absl::string_view text, absl::string_view file_name, bool world);
 
 // Cells as "(x,y) (x,y) ...".
 std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells);

@@ -41,6 +41,12 @@ ABSL_FLAG(std::optional<double>, robot_radius, std::nullopt,
           "plan, navigate, cost-to-go: robot radius in metres");
 ABSL_FLAG(std::optional<double>, robot_radius_cells, std::nullopt,
           "plan, navigate, cost-to-go: robot radius in cells");
+ABSL_FLAG(std::optional<double>, goal_tolerance, std::nullopt,
+          "plan: substitute the nearest free cell within this many cells for a "
+          "blocked goal");
+ABSL_FLAG(std::optional<double>, goal_tolerance_m, std::nullopt,
+          "plan: the goal tolerance in metres");
+ABSL_FLAG(std::string, path_file, "", "check: the path, one \"X Y\" per line");
 ABSL_FLAG(bool, simplify, false, "plan: simplify the path by ray-shooting");
 ABSL_FLAG(int, lookahead, 0, "plan: rtaa_star/lrta_star look-ahead (0: 64)");
 ABSL_FLAG(std::string, cost_to_go_file, "",
@@ -105,6 +111,9 @@ int main(int argc, char** argv) {
   options.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
   options.robot_radius_m = absl::GetFlag(FLAGS_robot_radius);
   options.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
+  options.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance);
+  options.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance_m);
+  options.path_file = absl::GetFlag(FLAGS_path_file);
   options.simplify = absl::GetFlag(FLAGS_simplify);
   options.lookahead = absl::GetFlag(FLAGS_lookahead);
   options.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);

@@ -2,6 +2,7 @@
 // planner.
 #include "core/planner.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -172,6 +173,86 @@ PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
                           : MeasurePath(grid, result.path, cost);
 }
 
+std::string_view MoveFaultName(MoveFault fault) {
+  switch (fault) {
+    case MoveFault::kNone:
+      return "legal";
+    case MoveFault::kNotAdjacent:
+      return "not adjacent";
+    case MoveFault::kDiagonalOnFourConnected:
+      return "diagonal on a 4-connected grid";
+    case MoveFault::kCornerCut:
+      return "cuts a corner";
+  }
+  return "unknown";
+}
+
+MoveFault CheckMove(const Grid& grid, Cell a, Cell b, const CostParams& cost) {
+  // int64: cells given by clients may be anywhere in int32.
+  const int64_t dx = int64_t{b.x} - a.x;
+  const int64_t dy = int64_t{b.y} - a.y;
+  if (std::abs(dx) > 1 || std::abs(dy) > 1 || (dx == 0 && dy == 0)) {
+    return MoveFault::kNotAdjacent;
+  }
+  if (dx == 0 || dy == 0) return MoveFault::kNone;
+  if (cost.connectivity != Connectivity::kEight) {
+    return MoveFault::kDiagonalOnFourConnected;
+  }
+  auto open = [&](int32_t x, int32_t y) {
+    return grid.InBounds(x, y) &&
+           Traversable(grid.cost(x, y), cost.unknown_is_free);
+  };
+  if (!open(b.x, a.y) || !open(a.x, b.y)) return MoveFault::kCornerCut;
+  return MoveFault::kNone;
+}
+
+std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
+                                           double max_distance,
+                                           const CostParams& cost) {
+  if (!(max_distance >= 0.0)) return std::nullopt;
+  const double max_d2 = max_distance * max_distance;
+  // Rings beyond the grid's extent hold no cell, whatever max_distance says.
+  const int64_t extent = std::max<int64_t>(grid.width(), grid.height());
+  const int64_t max_ring =
+      std::min<int64_t>(static_cast<int64_t>(std::floor(max_distance)), extent);
+  std::optional<Cell> best;
+  int64_t best_d2 = 0;
+  auto consider = [&](int64_t x, int64_t y) {
+    if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height()) return;
+    const int64_t dx = x - target.x;
+    const int64_t dy = y - target.y;
+    const int64_t d2 = dx * dx + dy * dy;
+    if (static_cast<double>(d2) > max_d2) return;
+    const Cell c{static_cast<int32_t>(x), static_cast<int32_t>(y)};
+    if (!Traversable(grid.cost(c), cost.unknown_is_free)) return;
+    if (!best.has_value() || d2 < best_d2 ||
+        (d2 == best_d2 &&
+         (c.y < best->y || (c.y == best->y && c.x < best->x)))) {
+      best = c;
+      best_d2 = d2;
+    }
+  };
+  for (int64_t r = 0; r <= max_ring; ++r) {
+    // Every cell of ring r is at least r from the target.
+    if (best.has_value() && best_d2 < r * r) break;
+    if (r == 0) {
+      consider(target.x, target.y);
+      continue;
+    }
+    // Top and bottom rows of the ring, then its side columns between them.
+    for (int64_t x = int64_t{target.x} - r; x <= int64_t{target.x} + r; ++x) {
+      consider(x, int64_t{target.y} - r);
+      consider(x, int64_t{target.y} + r);
+    }
+    for (int64_t y = int64_t{target.y} - r + 1; y <= int64_t{target.y} + r - 1;
+         ++y) {
+      consider(int64_t{target.x} - r, y);
+      consider(int64_t{target.x} + r, y);
+    }
+  }
+  return best;
+}
+
 PathMeasure MeasurePath(const Grid& grid, const std::vector<Cell>& path,
                         const CostParams& cost) {
   PathMeasure m;
@@ -186,20 +267,11 @@ PathMeasure MeasurePath(const Grid& grid, const std::vector<Cell>& path,
   for (size_t i = 1; i < path.size(); ++i) {
     const Cell a = path[i - 1];
     const Cell b = path[i];
-    const int dx = b.x - a.x;
-    const int dy = b.y - a.y;
-    const bool diagonal = dx != 0 && dy != 0;
-    const bool adjacent = std::abs(dx) <= 1 && std::abs(dy) <= 1 && (dx || dy);
-    bool legal = adjacent && ok_cell(b);
-    if (legal && diagonal) {
-      legal = cost.connectivity == Connectivity::kEight &&
-              ok_cell(Cell{a.x + dx, a.y}) && ok_cell(Cell{a.x, a.y + dy});
-    }
-    if (!legal) {
+    if (!ok_cell(b) || CheckMove(grid, a, b, cost) != MoveFault::kNone) {
       m.first_invalid = i;
       return m;
     }
-    const double len = diagonal ? kSqrt2 : 1.0;
+    const double len = (a.x != b.x && a.y != b.y) ? kSqrt2 : 1.0;
     m.length += len;
     m.cost += len * CellFactor(grid.cost(b), cost.cost_weight);
   }

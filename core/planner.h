@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -221,6 +222,37 @@ absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request);
 // calls this first.
 absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
                              std::string_view planner, const PlannerTraits& traits);
+
+// Why two consecutive cells of a path are not one legal move apart.
+// Traversability of the cells themselves is not part of it.
+enum class MoveFault {
+  kNone,
+  // The same cell twice, or cells more than one apart in x or y.
+  kNotAdjacent,
+  // A diagonal move on a 4-connected grid.
+  kDiagonalOnFourConnected,
+  // A diagonal move with a side cell off the grid or not traversable.
+  kCornerCut,
+};
+
+// "not adjacent", "diagonal on a 4-connected grid", "cuts a corner" ("legal"
+// for kNone), for messages.
+std::string_view MoveFaultName(MoveFault fault);
+
+// The move rule every planner's neighbour generation follows, for checking
+// given paths: the fault of the move a -> b, kNone when it is legal.
+MoveFault CheckMove(const Grid& grid, Cell a, Cell b, const CostParams& cost);
+
+// The nearest cell to `target` the robot centre may occupy under `cost`
+// (on the grid and Traversable), by the Euclidean distance between cell
+// centres, at most `max_distance` cells (inclusive); ties go to the smaller
+// y, then the smaller x. `target` itself when it qualifies; nullopt when no
+// cell does. Visits rings of growing Chebyshev radius and stops once no
+// further ring can be nearer, so the cost is O(d^2) for the answer's distance
+// d, O(max_distance^2) when there is none.
+std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
+                                           double max_distance,
+                                           const CostParams& cost);
 
 // Measures a cell path: every consecutive pair must be a legal move (adjacent
 // under the connectivity, traversable, no corner cutting).

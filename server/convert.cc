@@ -164,6 +164,38 @@ absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
   return radius;
 }
 
+absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
+                                          const Grid& grid) {
+  double tolerance = 0.0;
+  std::string_view field;
+  switch (options.goal_tolerance_case()) {
+    case v1::PlanOptions::kGoalToleranceM:
+      field = "goal_tolerance_m";
+      tolerance = options.goal_tolerance_m();
+      break;
+    case v1::PlanOptions::kGoalToleranceCells:
+      field = "goal_tolerance_cells";
+      tolerance = options.goal_tolerance_cells();
+      break;
+    case v1::PlanOptions::GOAL_TOLERANCE_NOT_SET:
+      return 0.0;
+  }
+  if (!std::isfinite(tolerance) || tolerance < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.%s %s must be finite and >= 0", field, Num(tolerance)));
+  }
+  const double cells =
+      options.goal_tolerance_case() == v1::PlanOptions::kGoalToleranceM
+          ? tolerance / grid.resolution()
+          : tolerance;
+  if (cells > kMaxGoalToleranceCells) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.%s %s is %s cells; the limit is %s cells", field,
+        Num(tolerance), Num(cells), Num(kMaxGoalToleranceCells)));
+  }
+  return cells;
+}
+
 absl::Status PlanOptionsToRequest(const v1::PlanOptions& options,
                                   PlanRequest* request) {
   PATHD_ASSIGN_OR_RETURN(request->cost, CostParamsFromOptions(options));

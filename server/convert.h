@@ -56,6 +56,16 @@ absl::Status PlanOptionsToRequest(const v1::PlanOptions& options, PlanRequest* r
 absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
                                         const Grid& grid);
 
+// Largest goal tolerance a request may ask for: the search for a substitute
+// goal runs on the gRPC thread and visits up to (2 * 1024 + 1)^2 cells.
+inline constexpr double kMaxGoalToleranceCells = 1024.0;
+
+// The goal tolerance in cells (0 when unset): goal_tolerance_cells as given,
+// or goal_tolerance_m / resolution. INVALID_ARGUMENT naming the field when
+// negative, not finite, or over kMaxGoalToleranceCells.
+absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
+                                          const Grid& grid);
+
 // Registry name of a wire planner value (UNSPECIFIED means A*).
 // INVALID_ARGUMENT "unknown planner 17" for a value the enum does not define.
 absl::StatusOr<std::string_view> PlannerName(int planner);

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <initializer_list>
 #include <memory>
@@ -12,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
@@ -49,6 +51,11 @@ struct PlanCall {
   const Planner* planner = nullptr;
   std::optional<IncrementalCache::Kind> cached;
   PlanRequest core_request;
+  // The goal as the client gave it; core_request.goal differs when the goal
+  // tolerance substituted a free cell for it.
+  Cell requested_goal;
+  // 0: a blocked goal is an error.
+  double goal_tolerance_cells = 0.0;
   int64_t max_expansions = 0;
   // 0: plan on the map as stored.
   double robot_radius_cells = 0.0;
@@ -98,6 +105,32 @@ absl::Status CheckRadiusEndpoints(
     }
   }
   return absl::OkStatus();
+}
+
+// The goal to plan to: `requested` when the tolerance is 0, the cell is off
+// the grid (ValidateEndpoints reports it) or the robot centre may occupy it;
+// otherwise the nearest cell within the tolerance that it may occupy
+// (NearestTraversableCell), or INVALID_ARGUMENT naming the tolerance when
+// there is none. `grid` is inflated when radius_cells > 0.
+absl::StatusOr<Cell> GoalWithinTolerance(const Grid& grid, Cell requested,
+                                         double tolerance_cells,
+                                         const CostParams& cost,
+                                         double radius_cells) {
+  if (tolerance_cells <= 0.0 || !grid.InBounds(requested) ||
+      Traversable(grid.cost(requested), cost.unknown_is_free)) {
+    return requested;
+  }
+  if (std::optional<Cell> nearest =
+          NearestTraversableCell(grid, requested, tolerance_cells, cost)) {
+    return *nearest;
+  }
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "goal %s is on a blocked cell (cost %d) and no cell within the goal "
+      "tolerance of %g cells is free%s",
+      CellToString(requested), grid.cost(requested), tolerance_cells,
+      radius_cells > 0.0
+          ? absl::StrFormat(" for the robot radius (%g cells)", radius_cells)
+          : std::string()));
 }
 
 // A cache key from validated request parts.
@@ -159,6 +192,17 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
   PATHD_ASSIGN_OR_RETURN(call.max_expansions,
                          EffectiveMaxExpansions(request.options(),
                                                 server_max_expansions));
+  // Substituted here, before anything keys on the goal, so every planner
+  // (and the SPM / D* Lite cache entries) sees the cell actually planned to.
+  // With a robot radius the worker substitutes again on the inflated map; the
+  // stored map's answer still rejects early when nothing near is free at all.
+  call.requested_goal = call.core_request.goal;
+  PATHD_ASSIGN_OR_RETURN(call.goal_tolerance_cells,
+                         GoalToleranceCells(request.options(), grid));
+  PATHD_ASSIGN_OR_RETURN(
+      call.core_request.goal,
+      GoalWithinTolerance(grid, call.requested_goal, call.goal_tolerance_cells,
+                          call.core_request.cost, 0.0));
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(grid, call.core_request));
   if (request.planner() == v1::PLANNER_SPM) {
     call.cached = IncrementalCache::Kind::kSpm;
@@ -234,16 +278,27 @@ class PlanJob final : public Job {
     response->set_planner(std::string(call.planner_name));
     response->set_cache_hit(source.cache_hit);
     response->set_repaired_cells(source.repaired_cells);
+    *response->mutable_requested_goal() = ToProto(call.requested_goal);
+    response->set_goal_substituted(
+        !(call.core_request.goal == call.requested_goal));
     FinishCall(call, absl::OkStatus(), outcome);
   }
 
   // Inflates (cached), plans and simplifies. `source` starts as the request's
-  // snapshot and is set to what the plan actually used.
-  absl::StatusOr<PlanResult> PlanOn(const PlanCall& call, SearchScratch& scratch,
-                                    const StopCondition& stop, PlanSource& source) {
+  // snapshot and is set to what the plan actually used. With a robot radius
+  // and a goal tolerance, call.core_request.goal is re-chosen on the inflated
+  // map, where an inscribed goal is blocked too.
+  absl::StatusOr<PlanResult> PlanOn(PlanCall& call, SearchScratch& scratch,
+                                    const StopCondition& stop,
+                                    PlanSource& source) {
     if (call.robot_radius_cells > 0.0) {
       PATHD_ASSIGN_OR_RETURN(source.grid,
                              inflation_.Get(source.grid, call.robot_radius_cells));
+      PATHD_ASSIGN_OR_RETURN(
+          call.core_request.goal,
+          GoalWithinTolerance(*source.grid, call.requested_goal,
+                              call.goal_tolerance_cells, call.core_request.cost,
+                              call.robot_radius_cells));
       PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(
           *call.snapshot->grid, *source.grid, call.robot_radius_cells,
           {{call.core_request.start, "start"}, {call.core_request.goal, "goal"}}));
@@ -474,6 +529,138 @@ class CostToGoJob final : public Job {
   IncrementalCache& cache_;
 };
 
+// Longest path IsPathValid checks: about 6-10 MiB of request, checked in
+// 60-90 ms on the gRPC thread (README), which is where this bound should stay.
+constexpr int kMaxCheckedPoses = 1 << 20;
+
+// Everything one IsPathValid call needs; shared like PlanCall when it runs on
+// the pool.
+struct PathCheckCall {
+  std::atomic<bool> cancelled{false};
+  grpc::ServerUnaryReactor* reactor = nullptr;
+  const v1::IsPathValidRequest* request = nullptr;
+  v1::IsPathValidResponse* response = nullptr;
+  absl::Time received;
+  absl::Time deadline = absl::InfiniteFuture();
+
+  // Filled by PreparePathCheck().
+  std::shared_ptr<const MapSnapshot> snapshot;
+  // One per pose; nullopt for a world point outside the map.
+  std::vector<std::optional<Cell>> cells;
+  CostParams cost;
+  // 0: check on the map as stored.
+  double robot_radius_cells = 0.0;
+};
+
+void FinishPathCheck(PathCheckCall& call, const absl::Status& status,
+                     std::string_view outcome) {
+  LogRequest("IsPathValid", call.request->map(),
+             absl::StrFormat("poses=%d outcome=%s", call.request->path_size(),
+                             outcome),
+             status, call.received);
+  call.reactor->Finish(ToGrpcStatus(status));
+}
+
+absl::Status PreparePathCheck(const MapStore& store, PathCheckCall& call) {
+  const v1::IsPathValidRequest& request = *call.request;
+  PATHD_ASSIGN_OR_RETURN(call.snapshot, store.Get(request.map()));
+  const Grid& grid = *call.snapshot->grid;
+  PATHD_ASSIGN_OR_RETURN(call.cost, CostParamsFromOptions(request.options()));
+  PATHD_ASSIGN_OR_RETURN(call.robot_radius_cells,
+                         RobotRadiusCells(request.options(), grid));
+  if (request.path().empty()) {
+    return absl::InvalidArgumentError("path is empty (give at least one pose)");
+  }
+  if (request.path_size() > kMaxCheckedPoses) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "path has %d poses; IsPathValid checks up to %d (1 Mi) per call",
+        request.path_size(), kMaxCheckedPoses));
+  }
+  call.cells.reserve(request.path_size());
+  for (int i = 0; i < request.path_size(); ++i) {
+    const v1::Position& pose = request.path(i);
+    const std::string what = absl::StrFormat("path[%d]", i);
+    if (pose.kind_case() == v1::Position::kWorld) {
+      // Off the map is a verdict on the path, not a bad request.
+      const WorldPoint p{pose.world().x(), pose.world().y()};
+      if (std::isfinite(p.x) && std::isfinite(p.y)) {
+        absl::StatusOr<Cell> cell = grid.WorldToCell(p);
+        call.cells.push_back(cell.ok() ? std::optional<Cell>(*cell)
+                                       : std::nullopt);
+        continue;
+      }
+    }
+    PATHD_ASSIGN_OR_RETURN(const Cell cell, CellFromPosition(pose, grid, what));
+    call.cells.push_back(cell);
+  }
+  return absl::OkStatus();
+}
+
+// Checks call.cells on `grid` (the snapshot, inflated when a robot radius was
+// given) and fills the verdict into call.response.
+void CheckPathOn(const Grid& grid, const PathCheckCall& call) {
+  const Grid& stored = *call.snapshot->grid;
+  v1::IsPathValidResponse& response = *call.response;
+  response.set_map_version(call.snapshot->version);
+  response.set_robot_radius_cells(call.robot_radius_cells);
+  std::string reason;
+  const auto note = [&reason](std::string text) {
+    if (reason.empty()) reason = std::move(text);
+  };
+  for (size_t i = 0; i < call.cells.size(); ++i) {
+    const std::optional<Cell>& cell = call.cells[i];
+    const int index = static_cast<int>(i);
+    if (!cell.has_value()) {
+      response.add_invalid_indices(index);
+      note(absl::StrFormat("pose %d: the world point is outside the map",
+                           index));
+    } else if (!grid.InBounds(*cell)) {
+      response.add_invalid_indices(index);
+      note(absl::StrFormat("pose %d %s is outside the %d x %d map", index,
+                           CellToString(*cell), grid.width(), grid.height()));
+    } else if (const uint8_t c = grid.cost(*cell);
+               !Traversable(c, call.cost.unknown_is_free)) {
+      response.add_invalid_indices(index);
+      note(c == kInscribedCost && stored.cost(*cell) != kInscribedCost
+               ? absl::StrFormat("pose %d %s is within the robot radius (%g "
+                                 "cells) of an obstacle",
+                                 index, CellToString(*cell),
+                                 call.robot_radius_cells)
+               : absl::StrFormat("pose %d %s is on a blocked cell (cost %d)",
+                                 index, CellToString(*cell), c));
+    }
+    if (i == 0 || !cell.has_value() || !call.cells[i - 1].has_value()) continue;
+    const Cell from = *call.cells[i - 1];
+    if (const MoveFault fault = CheckMove(grid, from, *cell, call.cost);
+        fault != MoveFault::kNone) {
+      response.add_invalid_steps(index);
+      note(absl::StrFormat("step %d -> %d from %s to %s: %s", index - 1, index,
+                           CellToString(from), CellToString(*cell),
+                           MoveFaultName(fault)));
+    }
+  }
+  response.set_valid(reason.empty());
+  response.set_reason(reason);
+  if (!response.valid()) return;
+  std::vector<Cell> path;
+  path.reserve(call.cells.size());
+  for (const std::optional<Cell>& cell : call.cells) path.push_back(*cell);
+  // The same rule as the checks above, so the path measures as valid.
+  const PathMeasure measure = MeasurePath(grid, path, call.cost);
+  response.set_cost(measure.cost);
+  response.set_length(measure.length);
+}
+
+// Inflates (cached) and checks, on a worker: inflating a map version for the
+// first time is O(map), too much for a gRPC thread.
+absl::Status CheckPathInflated(InflationCache& inflation, PathCheckCall& call) {
+  PATHD_ASSIGN_OR_RETURN(
+      const std::shared_ptr<const Grid> inflated,
+      inflation.Get(call.snapshot->grid, call.robot_radius_cells));
+  CheckPathOn(*inflated, call);
+  return absl::OkStatus();
+}
+
 void FillCacheStats(IncrementalCache::Kind kind, const IncrementalCache::Stats& s,
                     v1::CacheStats* out) {
   out->set_name(std::string(IncrementalCache::KindName(kind)));
@@ -550,6 +737,58 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::CostToGo(
           pool_.Submit(std::make_unique<CostToGoJob>(call, inflation_, cache_));
       !s.ok()) {
     FinishCostToGo(*call, s, "REJECTED");
+  }
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::IsPathValid(
+    grpc::CallbackServerContext* context, const v1::IsPathValidRequest* request,
+    v1::IsPathValidResponse* response) {
+  auto call = std::make_shared<PathCheckCall>();
+  call->received = absl::Now();
+  call->request = request;
+  call->response = response;
+  call->deadline = DeadlineOf(*context);
+  auto* reactor = new CancellableReactor<PathCheckCall>(call);
+  call->reactor = reactor;
+
+  if (absl::Status s = PreparePathCheck(store_, *call); !s.ok()) {
+    FinishPathCheck(*call, s, "REJECTED");
+    return reactor;
+  }
+  if (call->robot_radius_cells <= 0.0) {
+    // O(path): answered here rather than queued behind plans.
+    CheckPathOn(*call->snapshot->grid, *call);
+    FinishPathCheck(*call, absl::OkStatus(),
+                    response->valid() ? "VALID" : "INVALID");
+    return reactor;
+  }
+  InflationCache& inflation = inflation_;
+  auto run = [call, &inflation](SearchScratch&) {
+    if (absl::Status s = StillWanted(call->cancelled, call->deadline);
+        !s.ok()) {
+      FinishPathCheck(*call, s, absl::IsCancelled(s) ? "CANCELLED" : "TIMEOUT");
+      return;
+    }
+    absl::Status status;
+    try {
+      status = CheckPathInflated(inflation, *call);
+    } catch (const std::bad_alloc&) {
+      status =
+          absl::ResourceExhaustedError("out of memory while inflating the map");
+    }
+    const char* outcome = "ERROR";
+    if (status.ok()) outcome = call->response->valid() ? "VALID" : "INVALID";
+    FinishPathCheck(*call, status, outcome);
+  };
+  auto drop = [call] {
+    FinishPathCheck(*call, absl::UnavailableError("server is shutting down"),
+                    "DROPPED");
+  };
+  // As in Plan: after a successful submit the job owns the call.
+  if (absl::Status s = pool_.Submit(MakeJob(std::move(run), std::move(drop)));
+      !s.ok()) {
+    FinishPathCheck(*call, s, "REJECTED");
   }
   return reactor;
 }

@@ -43,6 +43,13 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
                                      const v1::CostToGoRequest* request,
                                      v1::CostToGoResponse* response) override;
 
+  // Answers on the gRPC thread (O(path)), or with a robot radius on a worker,
+  // which may have to inflate the map first.
+  grpc::ServerUnaryReactor* IsPathValid(
+      grpc::CallbackServerContext* context,
+      const v1::IsPathValidRequest* request,
+      v1::IsPathValidResponse* response) override;
+
   // Answers on the gRPC thread: it only copies counters.
   grpc::ServerUnaryReactor* GetCacheStats(grpc::CallbackServerContext* context,
                                           const v1::GetCacheStatsRequest* request,

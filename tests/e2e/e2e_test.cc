@@ -1379,5 +1379,75 @@ TEST_F(E2eTest, BadConfigFileExitsTwoNamingFileLineAndKey) {
   EXPECT_TRUE(absl::StrContains(stray.err, "unexpected argument 'threads=2'")) << stray;
 }
 
+TEST_F(E2eTest, CheckTellsValidFromInvalidPathsAndExitsFour) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse plan = PlanJson({"room", "0", "0", "9", "9"});
+  ASSERT_TRUE(plan.found());
+  std::vector<std::string> check = {"check", "room"};
+  for (const v1::Cell& c : plan.path()) {
+    check.push_back(absl::StrCat(c.x()));
+    check.push_back(absl::StrCat(c.y()));
+  }
+  const ProcessResult valid = Ctl(check);
+  ASSERT_EQ(valid.exit_code, 0) << valid;
+  EXPECT_TRUE(absl::StrContains(valid.out, "valid:         yes")) << valid;
+  EXPECT_TRUE(absl::StrContains(valid.out, "map version:   1")) << valid;
+  EXPECT_TRUE(absl::StrContains(valid.out, "poses:         10")) << valid;
+
+  // Block the fourth pose: the same path is now invalid at version 2.
+  const v1::Cell blocked = plan.path(3);
+  ASSERT_EQ(Ctl({"maps", "set", "room", absl::StrCat(blocked.x()),
+                 absl::StrCat(blocked.y()), "lethal"})
+                .exit_code,
+            0);
+  const ProcessResult invalid = Ctl(check);
+  EXPECT_EQ(invalid.exit_code, 4) << invalid;
+  EXPECT_TRUE(absl::StrContains(invalid.out, "valid:         no")) << invalid;
+  EXPECT_TRUE(absl::StrContains(invalid.out, "map version:   2")) << invalid;
+  EXPECT_TRUE(absl::StrContains(invalid.out, "invalid poses: 3\n")) << invalid;
+  EXPECT_TRUE(absl::StrContains(invalid.out, "reason:        pose 3 (3, 3) is on a "
+                                             "blocked cell (cost 254)"))
+      << invalid;
+
+  // The same from a file, as JSON; plus a corner cut around the new
+  // obstacle and a jump.
+  const std::string file = MapFile("path.txt",
+                                   "# x y\n"
+                                   "2 2\n3 2\n4 3\n\n4 5\n");
+  const ProcessResult json = Ctl({"check", "room", "--path_file", file, "--json"});
+  EXPECT_EQ(json.exit_code, 4) << json;
+  const auto response = ParseJson<v1::IsPathValidResponse>(json.out);
+  EXPECT_FALSE(response.valid());
+  EXPECT_EQ(response.invalid_indices_size(), 0);
+  ASSERT_EQ(response.invalid_steps_size(), 2);
+  EXPECT_EQ(response.invalid_steps(0), 2);
+  EXPECT_EQ(response.invalid_steps(1), 3);
+  EXPECT_EQ(response.map_version(), 2u);
+
+  // An odd number of coordinates is a usage error.
+  EXPECT_EQ(Ctl({"check", "room", "1", "2", "3"}).exit_code, 2);
+}
+
+TEST_F(E2eTest, GoalToleranceSubstitutesTheNearestFreeCell) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_EQ(Ctl({"maps", "set", "room", "9", "9", "lethal"}).exit_code, 0);
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9"}, "INVALID_ARGUMENT",
+                 {"goal (9, 9) is on a blocked cell"});
+  // (9,8) and (8,9) are both 1 away; the smaller row wins.
+  const ProcessResult text =
+      Ctl({"plan", "room", "0", "0", "9", "9", "--goal_tolerance", "1.5"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(
+      text.out, "goal:        (9,8) (substituted for blocked (9,9))\n"))
+      << text;
+  const v1::PlanResponse plan = PlanJson(
+      {"room", "0", "0", "9", "9", "--goal_tolerance=1.5", "--planner=spm"});
+  EXPECT_TRUE(plan.goal_substituted());
+  EXPECT_EQ(plan.goal().y(), 8);
+  EXPECT_EQ(plan.requested_goal().y(), 9);
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--goal_tolerance", "0.5"},
+                 "INVALID_ARGUMENT", {"goal tolerance of 0.5 cells"});
+}
+
 }  // namespace
 }  // namespace pathd
