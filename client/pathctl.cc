@@ -10,6 +10,8 @@
 #include <sstream>
 #include <utility>
 
+#include <curl/curl.h>
+
 #include "absl/flags/commandlineflag.h"
 #include "absl/flags/reflection.h"
 #include "absl/status/status.h"
@@ -59,6 +61,7 @@ constexpr char kSynopsis[] =
   pathctl [flags] check NAME --path_file F [--world] [cost options]
   pathctl [flags] cache-stats
   pathctl [flags] health [SERVICE]
+  pathctl [flags] metrics [PREFIX ...] [--metrics_address HOST:PORT]
   pathctl --help
 )";
 
@@ -940,7 +943,80 @@ int Health(Env& env, Args args) {
                                                             : kExitError;
 }
 
+// --- metrics -----------------------------------------------------------------
+
+// Appends what libcurl receives to a std::string.
+size_t AppendToString(char* data, size_t size, size_t count, void* out) {
+  static_cast<std::string*>(out)->append(data, size * count);
+  return size * count;
+}
+
+// GET http://`address`/metrics; UNAVAILABLE when it cannot be fetched or the
+// answer is not 200.
+absl::StatusOr<std::string> FetchMetrics(const std::string& address,
+                                         absl::Duration timeout) {
+  const std::string url = absl::StrCat("http://", address, "/metrics");
+  std::unique_ptr<CURL, decltype(&curl_easy_cleanup)> curl(curl_easy_init(),
+                                                           &curl_easy_cleanup);
+  if (curl == nullptr) return absl::InternalError("cannot initialise libcurl");
+  std::string body;
+  char curl_error[CURL_ERROR_SIZE] = {};
+  curl_easy_setopt(curl.get(), CURLOPT_URL, url.c_str());
+  curl_easy_setopt(curl.get(), CURLOPT_WRITEFUNCTION, &AppendToString);
+  curl_easy_setopt(curl.get(), CURLOPT_WRITEDATA, &body);
+  curl_easy_setopt(curl.get(), CURLOPT_ERRORBUFFER, curl_error);
+  curl_easy_setopt(curl.get(), CURLOPT_TIMEOUT_MS,
+                   static_cast<long>(absl::ToInt64Milliseconds(timeout)));
+  // The endpoint may gzip the text when asked; "" accepts what libcurl can
+  // decode.
+  curl_easy_setopt(curl.get(), CURLOPT_ACCEPT_ENCODING, "");
+  curl_easy_setopt(curl.get(), CURLOPT_NOSIGNAL, 1L);
+  if (const CURLcode code = curl_easy_perform(curl.get()); code != CURLE_OK) {
+    return absl::UnavailableError(absl::StrCat(
+        "cannot fetch ", url, ": ",
+        curl_error[0] != '\0' ? curl_error : curl_easy_strerror(code),
+        " (is pathd running with --metrics_address=", address, "?)"));
+  }
+  long http_status = 0;
+  curl_easy_getinfo(curl.get(), CURLINFO_RESPONSE_CODE, &http_status);
+  if (http_status != 200) {
+    return absl::UnavailableError(
+        absl::StrCat("GET ", url, " answered HTTP ", http_status));
+  }
+  return body;
+}
+
+int Metrics(Env& env, Args args) {
+  absl::StatusOr<std::string> text =
+      FetchMetrics(env.options().metrics_address, env.options().timeout);
+  if (!text.ok()) return env.Fail(text.status());
+  env.out() << FilterMetricsText(*text, std::vector<std::string>(args.begin(), args.end()));
+  return kExitOk;
+}
+
 }  // namespace
+
+std::string FilterMetricsText(absl::string_view text,
+                              const std::vector<std::string>& prefixes) {
+  if (prefixes.empty()) return std::string(text);
+  std::string filtered;
+  for (absl::string_view line : absl::StrSplit(text, '\n', absl::SkipEmpty())) {
+    // "# HELP name ...", "# TYPE name ..." or "name{labels} value".
+    absl::string_view name = line;
+    if (absl::ConsumePrefix(&name, "# HELP ") || absl::ConsumePrefix(&name, "# TYPE ")) {
+      name = name.substr(0, name.find(' '));
+    } else {
+      name = name.substr(0, name.find_first_of("{ "));
+    }
+    for (const std::string& prefix : prefixes) {
+      if (absl::StartsWith(name, prefix)) {
+        absl::StrAppend(&filtered, line, "\n");
+        break;
+      }
+    }
+  }
+  return filtered;
+}
 
 absl::StatusOr<uint32_t> ParseCost(absl::string_view text) {
   static constexpr std::pair<absl::string_view, uint32_t> kNamed[] = {
@@ -1101,6 +1177,8 @@ flags (anywhere on the line, as --flag=value or --flag value):
                        starts a comment line)
   --script FILE        navigate: replay this robot run (format below); without
                        it navigate prints the first path and closes
+  --metrics_address A  metrics: pathd's --metrics_address (default
+                       127.0.0.1:9464)
   --pf_attractive S    plan: potential_field: quadratic (default) or conic
   --pf_attractive_gain K, --pf_switch_distance D, --pf_repulsive_gain ETA,
   --pf_influence Q, --pf_step S, --pf_max_steps N
@@ -1117,6 +1195,10 @@ maps watch prints one line per map version: "version V updated: N cells in
 R rects: (x0,y0)-(x1,y1) ...", "version V resync: whole map WxH", "version V
 replaced: whole map WxH" or "version V deleted" (then it exits 0). It has no
 deadline (--timeout does not apply); with --json each line is a MapEvent.
+
+metrics prints pathd's Prometheus text (GET http://HOST:PORT/metrics, the
+daemon's --metrics_address); with PREFIX arguments only the metrics whose name
+starts with one of them, e.g. 'pathctl metrics pathd_requests pathd_maps'.
 
 With --json, navigate prints each NavigateResponse as one line of JSON. Its
 --timeout bounds each wait for an answer and for the server's close, not the
@@ -1252,13 +1334,14 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (command == "check") return Check(env, rest);
   if (command == "cache-stats") return CacheStats(env, rest);
   if (command == "health") return Health(env, rest);
+  if (command == "metrics") return Metrics(env, rest);
   if (command == "help") {
     out << UsageText();
     return kExitOk;
   }
   return env.Usage(absl::StrCat("unknown command '", command,
                                 "'; expected maps, plan, navigate, cost-to-go, "
-                                "cache-stats or health"));
+                                "cache-stats, health or metrics"));
 }
 
 }  // namespace pathd::pathctl

@@ -31,6 +31,10 @@ enum ExitCode : int {
 // Environment variable naming the server when --server is not given.
 inline constexpr char kServerEnvVar[] = "PATHD_SERVER";
 
+// Where `pathctl metrics` looks when --metrics_address is not given: the
+// address the README runs `pathd --metrics_address` with.
+inline constexpr char kDefaultMetricsAddress[] = "127.0.0.1:9464";
+
 // CLI planner names and their wire values. Adding a planner is one line here;
 // parsing, validation messages and the help text all read this table.
 struct PlannerName {
@@ -110,6 +114,8 @@ struct Options {
   std::string script;
   // cost-to-go: "X,Y,W,H"; empty: the whole map.
   std::string window;
+  // metrics: pathd's --metrics_address (HOST:PORT).
+  std::string metrics_address = std::string(kDefaultMetricsAddress);
 };
 
 // Writes a row-major cost-to-go field as CSV, one map row per line, "inf"
@@ -130,6 +136,12 @@ absl::StatusOr<uint32_t> ParseCost(absl::string_view text);
 // line.
 absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
     absl::string_view text, absl::string_view file_name, bool world);
+
+// The lines of Prometheus text `text` that belong to a metric whose name
+// starts with one of `prefixes` (its samples and its # HELP / # TYPE lines);
+// all of `text` when `prefixes` is empty.
+std::string FilterMetricsText(absl::string_view text,
+                              const std::vector<std::string>& prefixes);
 
 // Cells as "(x,y) (x,y) ...".
 std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells);

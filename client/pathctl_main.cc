@@ -63,6 +63,8 @@ ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
 ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
 ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
+ABSL_FLAG(std::string, metrics_address, pathd::pathctl::kDefaultMetricsAddress,
+          "metrics: pathd's --metrics_address (HOST:PORT)");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
@@ -126,6 +128,7 @@ int main(int argc, char** argv) {
   options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
   options.script = absl::GetFlag(FLAGS_script);
   options.window = absl::GetFlag(FLAGS_window);
+  options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
 
   return pathctl::Run(
       options,

@@ -63,6 +63,15 @@ ABSL_FLAG(int, watch_queue_events, 64,
           "WatchMap events queued for a slow reader before its backlog is "
           "replaced by one whole-map RESYNC event");
 
+ABSL_FLAG(std::string, metrics_address, "",
+          "IP:PORT serving Prometheus text metrics at /metrics over plain HTTP "
+          "(e.g. 127.0.0.1:9464; port 0 picks a free port); empty = no "
+          "metrics endpoint");
+ABSL_FLAG(absl::Duration, slow_request_threshold, absl::Seconds(1),
+          "requests (not Navigate/WatchMap streams) taking at least this long "
+          "are logged at warn level and counted in pathd_slow_requests_total; "
+          "0 = off");
+
 namespace {
 
 // absl 20220623's --help lists only flags from a file named after the binary
@@ -198,6 +207,11 @@ pathd::server::ServerOptions OptionsFromFlags() {
       static_cast<size_t>(absl::GetFlag(FLAGS_watch_queue_events));
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
+  options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  options.slow_request_threshold = absl::GetFlag(FLAGS_slow_request_threshold);
+  if (options.slow_request_threshold < absl::ZeroDuration()) {
+    FlagError("slow_request_threshold", "must not be negative");
+  }
   return options;
 }
 

@@ -282,7 +282,7 @@ class MapWatcher final : public grpc::ServerWriteReactor<v1::MapEvent> {
     LogRequest(
         "WatchMap", name_,
         absl::StrFormat("events=%d backlog_drops=%d", events_, backlog_drops_),
-        final_status_, opened_at_);
+        final_status_, opened_at_, RequestLabels{.planner = {}, .stream = true});
     Finish(ToGrpcStatus(final_status_));
   }
 

@@ -175,7 +175,7 @@ class NavigationSession final : public NavigateReactor {
     LogRequest("Navigate", map_name_,
                absl::StrFormat("session=%d messages=%d pushes=%d", id_, messages_,
                                pushes_),
-               final_status_, opened_at_);
+               final_status_, opened_at_, RequestLabels{.planner = {}, .stream = true});
     Finish(ToGrpcStatus(final_status_));
   }
 

@@ -148,7 +148,10 @@ IncrementalCache::Key CacheKey(const std::string& map, Cell goal, const CostPara
 void FinishCall(PlanCall& call, const absl::Status& status, std::string_view outcome) {
   LogRequest("Plan", call.request->map(),
              absl::StrFormat("planner=%s outcome=%s", call.planner_name, outcome),
-             status, call.received);
+             status, call.received,
+             // "-": rejected before the planner was known.
+             RequestLabels{.planner = call.planner_name == "-" ? std::string_view()
+                                                               : call.planner_name});
   call.reactor->Finish(ToGrpcStatus(status));
 }
 

@@ -1,25 +1,85 @@
-// Request log line.
+// Request log line, slow-request warnings and the metrics hook.
 #include "server/request_log.h"
 
 #include <string>
+#include <utility>
 
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/clock.h"
 #include "spdlog/spdlog.h"
 
 namespace pathd::server {
+namespace {
+
+// Both are read on every request and written at server start and stop, so a
+// reader lock keeps the hot path uncontended.
+struct RequestLogSettings {
+  absl::Mutex mu;
+  absl::Duration slow_threshold ABSL_GUARDED_BY(mu) = absl::ZeroDuration();
+  std::shared_ptr<RequestObserver> observer ABSL_GUARDED_BY(mu);
+};
+
+// Leaked on purpose: requests may still log while static destructors run.
+RequestLogSettings& Settings() {
+  static auto* const settings = new RequestLogSettings();
+  return *settings;
+}
+
+}  // namespace
+
+void LogRequest(std::string_view rpc, std::string_view map, std::string_view detail,
+                const absl::Status& status, absl::Time received,
+                const RequestLabels& labels) {
+  const absl::Duration elapsed = absl::Now() - received;
+  absl::Duration slow_threshold;
+  std::shared_ptr<RequestObserver> observer;
+  {
+    RequestLogSettings& settings = Settings();
+    absl::ReaderMutexLock lock(&settings.mu);
+    slow_threshold = settings.slow_threshold;
+    observer = settings.observer;
+  }
+  const bool slow = !labels.stream && slow_threshold > absl::ZeroDuration() &&
+                    elapsed >= slow_threshold;
+  if (observer != nullptr) {
+    observer->Observe(RequestRecord{rpc, map, labels.planner, status.code(), elapsed,
+                                    labels.stream, slow});
+  }
+
+  const spdlog::level::level_enum level = slow ? spdlog::level::warn : spdlog::level::debug;
+  if (!spdlog::should_log(level)) return;
+  const int64_t us = absl::ToInt64Microseconds(elapsed);
+  const std::string code = absl::StatusCodeToString(status.code());
+  const std::string error =
+      status.ok() ? std::string() : "error=\"" + std::string(status.message()) + "\"";
+  spdlog::log(level, "{}rpc={} map={} {}{}status={} us={}{}{}",
+              slow ? "slow request: " : "", rpc, map, detail, detail.empty() ? "" : " ",
+              code, us, error.empty() ? "" : " ", error);
+}
 
 void LogRequest(std::string_view rpc, std::string_view map, std::string_view detail,
                 const absl::Status& status, absl::Time received) {
-  if (!spdlog::should_log(spdlog::level::debug)) return;
-  const int64_t us = absl::ToInt64Microseconds(absl::Now() - received);
-  const std::string code = absl::StatusCodeToString(status.code());
-  if (status.ok()) {
-    spdlog::debug("rpc={} map={} {}{}status={} us={}", rpc, map, detail,
-                  detail.empty() ? "" : " ", code, us);
-  } else {
-    spdlog::debug("rpc={} map={} {}{}status={} us={} error=\"{}\"", rpc, map,
-                  detail, detail.empty() ? "" : " ", code, us,
-                  std::string(status.message()));
-  }
+  LogRequest(rpc, map, detail, status, received, RequestLabels{});
+}
+
+void SetSlowRequestThreshold(absl::Duration threshold) {
+  RequestLogSettings& settings = Settings();
+  absl::MutexLock lock(&settings.mu);
+  settings.slow_threshold = threshold;
+}
+
+void SetRequestObserver(std::shared_ptr<RequestObserver> observer) {
+  RequestLogSettings& settings = Settings();
+  absl::MutexLock lock(&settings.mu);
+  settings.observer = std::move(observer);
+}
+
+void ClearRequestObserver(const RequestObserver* observer) {
+  std::shared_ptr<RequestObserver> dropped;  // released outside the lock
+  RequestLogSettings& settings = Settings();
+  absl::MutexLock lock(&settings.mu);
+  if (settings.observer.get() == observer) dropped = std::move(settings.observer);
 }
 
 }  // namespace pathd::server

@@ -17,6 +17,7 @@
 #include "core/inflation.h"
 #include "core/status_macros.h"
 #include "server/map_dir.h"
+#include "server/request_log.h"
 #include "spdlog/spdlog.h"
 
 namespace pathd::server {
@@ -96,6 +97,24 @@ absl::Status PathdServer::Start() {
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 
+  SetSlowRequestThreshold(options_.slow_request_threshold);
+  if (!options_.metrics_address.empty()) {
+    // Before the gRPC port opens, so a bad metrics address fails start-up
+    // without a window in which the daemon serves unobserved.
+    metrics_ = std::make_shared<ServerMetrics>(
+        MetricsSources{&store_, pool_.get(), &inflation_, &cache_, sessions_.get(),
+                       &map_service_->watchers()});
+    if (absl::Status listening = metrics_->Listen(options_.metrics_address);
+        !listening.ok()) {
+      metrics_.reset();
+      pool_->Shutdown(WorkerPool::ShutdownMode::kDrop);
+      return listening;
+    }
+    SetRequestObserver(metrics_);
+    spdlog::info("serving Prometheus metrics on http://{}/metrics",
+                 ReplacePort(options_.metrics_address, metrics_->port()));
+  }
+
   // Both are process-wide switches read when the builder is created.
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -113,6 +132,10 @@ absl::Status PathdServer::Start() {
   if (server_ == nullptr || port_ == 0) {
     server_.reset();
     pool_->Shutdown(WorkerPool::ShutdownMode::kDrop);
+    if (metrics_ != nullptr) {
+      ClearRequestObserver(metrics_.get());
+      metrics_.reset();
+    }
     return absl::UnavailableError(
         absl::StrFormat("cannot listen on %s", options_.address));
   }
@@ -154,6 +177,12 @@ void PathdServer::Shutdown() {
     server_->Wait();
     server_.reset();
     spdlog::info("shut down");
+  }
+  if (metrics_ != nullptr) {
+    // Scrapes stay answered through the grace period, so the drain is
+    // visible; no request of this server logs any more.
+    ClearRequestObserver(metrics_.get());
+    metrics_.reset();
   }
 }
 

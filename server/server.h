@@ -18,6 +18,7 @@
 #include "server/incremental_cache.h"
 #include "server/map_service.h"
 #include "server/map_store.h"
+#include "server/metrics.h"
 #include "server/navigation.h"
 #include "server/planner_service.h"
 #include "server/worker_pool.h"
@@ -51,6 +52,12 @@ struct ServerOptions {
   // WatchMap events queued per stream before a slow reader's backlog is
   // replaced by one whole-map RESYNC event.
   size_t watch_queue_events = 64;
+  // "IP:PORT" serving Prometheus text metrics at /metrics; port 0 picks a
+  // free port (see PathdServer::metrics_port); empty = no metrics.
+  std::string metrics_address;
+  // Non-stream requests taking at least this long are logged at warn level;
+  // zero = never. Process-wide (server/request_log.h).
+  absl::Duration slow_request_threshold = absl::Seconds(1);
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -76,6 +83,8 @@ class PathdServer {
   int port() const { return port_; }
   // "host:port" with the bound port, for the "listening" line and clients.
   std::string listen_address() const;
+  // The bound metrics port; 0 without --metrics_address or before Start.
+  int metrics_port() const { return metrics_ == nullptr ? 0 : metrics_->port(); }
 
   MapStore& store() { return store_; }
   const InflationCache& inflation_cache() const { return inflation_; }
@@ -102,6 +111,9 @@ class PathdServer {
 
   absl::Mutex shutdown_mu_;
   bool shut_down_ ABSL_GUARDED_BY(shutdown_mu_) = false;
+  // Reads the parts above on every scrape: declared last so it is destroyed
+  // first; Shutdown releases it after the workers are joined.
+  std::shared_ptr<ServerMetrics> metrics_;
 };
 
 // Splits "host:port" ("[v6]:port" too) at the last colon; returns the host

@@ -2,6 +2,7 @@
 #include "server/worker_pool.h"
 
 #include <algorithm>
+#include <chrono>
 #include <exception>
 #include <utility>
 
@@ -95,6 +96,8 @@ void WorkerPool::WorkerLoop() {
       job = std::move(queue_.front());
       queue_.pop_front();
     }
+    busy_.fetch_add(1, std::memory_order_relaxed);
+    const auto started = std::chrono::steady_clock::now();
     try {
       job->Run(scratch);
     } catch (const std::exception& e) {
@@ -104,6 +107,11 @@ void WorkerPool::WorkerLoop() {
     } catch (...) {
       spdlog::error("worker job threw a non-standard exception");
     }
+    busy_ns_.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                           std::chrono::steady_clock::now() - started)
+                           .count(),
+                       std::memory_order_relaxed);
+    busy_.fetch_sub(1, std::memory_order_relaxed);
   }
 }
 

@@ -4,7 +4,9 @@
 #ifndef PATHD_SERVER_WORKER_POOL_H_
 #define PATHD_SERVER_WORKER_POOL_H_
 
+#include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -14,6 +16,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
 #include "core/search_scratch.h"
 
 namespace pathd::server {
@@ -71,6 +74,15 @@ class WorkerPool {
   size_t queue_depth() const { return queue_depth_; }
   // Jobs waiting for a worker right now (for logs and metrics).
   size_t queued() const;
+  // Workers running a job right now (for metrics: busy / threads is the
+  // instantaneous utilisation).
+  int busy() const { return busy_.load(std::memory_order_relaxed); }
+  // Time all workers spent running jobs, summed over jobs that returned (a
+  // running job counts when it ends). Its rate over threads() is the
+  // utilisation between two scrapes.
+  absl::Duration busy_time() const {
+    return absl::Nanoseconds(busy_ns_.load(std::memory_order_relaxed));
+  }
 
   // True on a thread of any WorkerPool (lets tests and asserts check that
   // work is where it should be).
@@ -93,6 +105,9 @@ class WorkerPool {
   std::vector<std::thread> threads_;
   absl::Mutex join_mu_;
   bool joined_ ABSL_GUARDED_BY(join_mu_) = false;
+  // Metrics only: relaxed atomics, so no job waits on them.
+  std::atomic<int> busy_{0};
+  std::atomic<int64_t> busy_ns_{0};
 };
 
 }  // namespace pathd::server

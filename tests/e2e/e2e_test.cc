@@ -211,6 +211,21 @@ class PathctlProcess {
   }
 
   const std::string& out() const { return result_.out; }
+  const std::string& err() const { return result_.err; }
+
+  // WaitForLine for stderr (where pathd logs).
+  bool WaitForStderrLine(const std::string& text) {
+    const Clock::time_point bound = Clock::now() + kCommandBound;
+    while (true) {
+      const size_t at = result_.err.find(text);
+      if (at != std::string::npos &&
+          result_.err.find('\n', at) != std::string::npos) {
+        return true;
+      }
+      if (open_count_ == 0 || Clock::now() > bound) return false;
+      Pump();
+    }
+  }
 
   // Sends `signal_number` to the process (while it runs).
   void Signal(int signal_number) {
@@ -1447,6 +1462,71 @@ TEST_F(E2eTest, GoalToleranceSubstitutesTheNearestFreeCell) {
   EXPECT_EQ(plan.requested_goal().y(), 9);
   ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--goal_tolerance", "0.5"},
                  "INVALID_ARGUMENT", {"goal tolerance of 0.5 cells"});
+}
+
+TEST_F(E2eTest, MetricsCountRequestsAndPathctlPrintsThem) {
+  // A daemon of its own, to read its metrics port from its log.
+  PathctlProcess pathd({"--address=127.0.0.1:0", "--metrics_address=127.0.0.1:0",
+                        "--threads=2", "--log_level=debug"},
+                       {}, PATHD_BIN);
+  ASSERT_TRUE(pathd.WaitForLine(kListeningPrefix)) << pathd.out();
+  constexpr char kMetricsLine[] = "serving Prometheus metrics on http://";
+  ASSERT_TRUE(pathd.WaitForStderrLine(kMetricsLine)) << pathd.err();
+  const size_t at = pathd.err().find(kMetricsLine) + strlen(kMetricsLine);
+  const std::string metrics_address =
+      pathd.err().substr(at, pathd.err().find("/metrics", at) - at);
+  const std::string server =
+      absl::StrCat("--server=", pathd.out().substr(strlen(kListeningPrefix),
+                                                   pathd.out().find('\n') -
+                                                       strlen(kListeningPrefix)));
+  const std::string metrics_flag = absl::StrCat("--metrics_address=", metrics_address);
+
+  ASSERT_EQ(RunPathctl({server, "maps", "create", "room", "--from",
+                        MapFile("room.map", OpenRoomMap())})
+                .exit_code,
+            0);
+  ASSERT_EQ(RunPathctl({server, "plan", "room", "0", "0", "9", "9"}).exit_code, 0);
+  ASSERT_EQ(RunPathctl({server, "plan", "room", "0", "0", "9", "9", "--planner=jps"})
+                .exit_code,
+            0);
+  EXPECT_EQ(RunPathctl({server, "plan", "nowhere", "0", "0", "9", "9"}).exit_code, 1);
+
+  const ProcessResult filtered = RunPathctl(
+      {"metrics", metrics_flag, "pathd_requests_total", "pathd_maps"});
+  ASSERT_EQ(filtered.exit_code, 0) << filtered;
+  for (const char* line : {R"(pathd_requests_total{code="OK",rpc="CreateMap"} 1)",
+                           R"(pathd_requests_total{code="OK",rpc="Plan"} 2)",
+                           R"(pathd_requests_total{code="NOT_FOUND",rpc="Plan"} 1)",
+                           "# TYPE pathd_maps gauge", "pathd_maps 1"}) {
+    EXPECT_TRUE(absl::StrContains(filtered.out, absl::StrCat(line, "\n")))
+        << "missing " << line << "\n" << filtered;
+  }
+  // Only the asked-for names.
+  EXPECT_FALSE(absl::StrContains(filtered.out, "pathd_cache")) << filtered;
+
+  const ProcessResult all = RunPathctl({"metrics", metrics_flag});
+  ASSERT_EQ(all.exit_code, 0) << all;
+  for (const char* line :
+       {"# TYPE pathd_plan_duration_seconds histogram",
+        R"(pathd_plan_duration_seconds_count{planner="jps"} 1)",
+        R"(pathd_request_duration_seconds_count{rpc="Plan"} 3)",
+        R"(pathd_map_version{map="room"} 1)", "pathd_worker_threads 2"}) {
+    EXPECT_TRUE(absl::StrContains(all.out, absl::StrCat(line, "\n")))
+        << "missing " << line << "\n" << all;
+  }
+
+  pathd.Signal(SIGTERM);
+  const ProcessResult daemon = pathd.Finish();
+  EXPECT_EQ(daemon.exit_code, 0) << daemon;
+  // The debug request log has one line per request, with its planner.
+  EXPECT_TRUE(absl::StrContains(
+      daemon.err, "rpc=Plan map=room planner=jps outcome=FOUND status=OK us="))
+      << daemon;
+
+  // Nobody serves the endpoint any more.
+  const ProcessResult gone = RunPathctl({"metrics", metrics_flag, "--timeout=5s"});
+  EXPECT_EQ(gone.exit_code, 1) << gone;
+  EXPECT_TRUE(absl::StartsWith(gone.err, "error: UNAVAILABLE: cannot fetch")) << gone;
 }
 
 }  // namespace

@@ -176,5 +176,21 @@ TEST(WorkerPoolTest, AThrowingJobDoesNotKillTheWorker) {
   second_ran.WaitForNotification();
 }
 
+TEST(WorkerPoolTest, CountsBusyWorkersAndTheirTime) {
+  WorkerPool pool({3, 4});
+  EXPECT_EQ(pool.busy(), 0);
+  EXPECT_EQ(pool.busy_time(), absl::ZeroDuration());
+  {
+    Blockers blockers(pool, 2);
+    EXPECT_EQ(pool.busy(), 2);
+    blockers.Release();
+    pool.Shutdown(WorkerPool::ShutdownMode::kDrain);
+    EXPECT_EQ(blockers.ran(), 2);
+  }
+  EXPECT_EQ(pool.busy(), 0);
+  // Both jobs ran for some time before they were released.
+  EXPECT_GT(pool.busy_time(), absl::ZeroDuration());
+}
+
 }  // namespace
 }  // namespace pathd::server

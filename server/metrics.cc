@@ -1,0 +1,298 @@
+// ServerMetrics: request counters and histograms, scrape-time state, exposer.
+#include "server/metrics.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+#include "absl/time/time.h"
+#include "prometheus/client_metric.h"
+#include "prometheus/collectable.h"
+#include "prometheus/metric_family.h"
+#include "prometheus/metric_type.h"
+
+namespace pathd::server {
+namespace {
+
+// Seconds, as Prometheus names durations. From 50 µs (a cached SPM lookup or
+// A* on a small map) to a minute (a D* Lite build on a 4096^2 map under
+// load); roughly 1-2.5-5 per decade so a quantile is never off by more than
+// that step.
+const prometheus::Histogram::BucketBoundaries& LatencyBuckets() {
+  static const auto* const buckets = new prometheus::Histogram::BucketBoundaries{
+      0.00005, 0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
+      0.1,     0.25,   0.5,     1.0,    2.5,   5.0,    10.0,  30.0,  60.0};
+  return *buckets;
+}
+
+prometheus::ClientMetric Value(prometheus::MetricType type, double value,
+                               std::vector<prometheus::ClientMetric::Label> labels = {}) {
+  prometheus::ClientMetric metric;
+  metric.label = std::move(labels);
+  if (type == prometheus::MetricType::Counter) {
+    metric.counter.value = value;
+  } else {
+    metric.gauge.value = value;
+  }
+  return metric;
+}
+
+prometheus::MetricFamily Family(std::string name, std::string help,
+                                prometheus::MetricType type,
+                                std::vector<prometheus::ClientMetric> metrics) {
+  prometheus::MetricFamily family;
+  family.name = std::move(name);
+  family.help = std::move(help);
+  family.type = type;
+  family.metric = std::move(metrics);
+  return family;
+}
+
+prometheus::MetricFamily Single(std::string name, std::string help,
+                                prometheus::MetricType type, double value) {
+  return Family(std::move(name), std::move(help), type, {Value(type, value)});
+}
+
+}  // namespace
+
+// Reads the server's current state on every scrape, so gauges are never
+// stale and nothing is updated on the request path for them.
+class ServerMetrics::StateCollectable final : public prometheus::Collectable {
+ public:
+  explicit StateCollectable(MetricsSources sources) : s_(sources) {}
+
+  std::vector<prometheus::MetricFamily> Collect() const override {
+    using prometheus::MetricType;
+    constexpr MetricType kGauge = MetricType::Gauge;
+    constexpr MetricType kCounter = MetricType::Counter;
+    std::vector<prometheus::MetricFamily> families;
+
+    families.push_back(Single("pathd_worker_threads", "Planning worker threads.",
+                              kGauge, s_.pool->threads()));
+    families.push_back(Single("pathd_workers_busy",
+                              "Workers running a job at scrape time.", kGauge,
+                              s_.pool->busy()));
+    families.push_back(Single(
+        "pathd_worker_busy_seconds_total",
+        "Time workers spent running jobs (counted when a job ends); "
+        "rate() / pathd_worker_threads is the utilisation.",
+        kCounter, absl::ToDoubleSeconds(s_.pool->busy_time())));
+    families.push_back(Single("pathd_queued_jobs",
+                              "Jobs waiting for a worker at scrape time.", kGauge,
+                              static_cast<double>(s_.pool->queued())));
+    families.push_back(Single("pathd_queue_capacity",
+                              "Jobs that may wait before RESOURCE_EXHAUSTED.", kGauge,
+                              static_cast<double>(s_.pool->queue_depth())));
+
+    AddCaches(families);
+
+    const std::vector<std::shared_ptr<const MapSnapshot>> maps = s_.store->List();
+    families.push_back(Single("pathd_maps", "Maps in the store.", kGauge,
+                              static_cast<double>(maps.size())));
+    std::vector<prometheus::ClientMetric> versions;
+    for (size_t i = 0; i < maps.size() && i < kMaxMapSeries; ++i) {
+      versions.push_back(Value(kGauge, static_cast<double>(maps[i]->version),
+                               {{"map", maps[i]->name}}));
+    }
+    families.push_back(Family(
+        "pathd_map_version",
+        absl::StrFormat("Current version of each map (the first %d by name).",
+                        kMaxMapSeries),
+        kGauge, std::move(versions)));
+
+    families.push_back(Single("pathd_navigate_sessions", "Open Navigate sessions.",
+                              kGauge, static_cast<double>(s_.sessions->count())));
+    families.push_back(Single("pathd_navigate_session_bytes",
+                              "Bytes of the open sessions' D* Lite state.", kGauge,
+                              static_cast<double>(s_.sessions->bytes())));
+    families.push_back(Single("pathd_map_watchers", "Open WatchMap streams.", kGauge,
+                              static_cast<double>(s_.watchers->count())));
+    families.push_back(Single(
+        "pathd_map_watch_backlog_drops_total",
+        "WatchMap backlogs replaced by a RESYNC because a reader was too slow.",
+        kCounter, static_cast<double>(s_.watchers->backlog_drops())));
+    return families;
+  }
+
+ private:
+  // One series per cache: the two incremental caches and the inflation cache
+  // (which has no byte budget and evicts by entry count, so it has neither
+  // budget nor evictions).
+  void AddCaches(std::vector<prometheus::MetricFamily>& families) const {
+    using prometheus::MetricType;
+    struct Row {
+      std::string name;
+      IncrementalCache::Stats stats;
+      bool incremental;
+    };
+    std::vector<Row> rows;
+    for (const IncrementalCache::Kind kind :
+         {IncrementalCache::Kind::kSpm, IncrementalCache::Kind::kDStarLite}) {
+      rows.push_back({std::string(IncrementalCache::KindName(kind)),
+                      s_.cache->stats(kind), true});
+    }
+    const InflationCache::Stats inflation = s_.inflation->stats();
+    IncrementalCache::Stats as_incremental;
+    as_incremental.entries = static_cast<int64_t>(inflation.entries);
+    as_incremental.bytes = static_cast<int64_t>(inflation.bytes);
+    as_incremental.hits = inflation.hits;
+    as_incremental.misses = inflation.misses;
+    rows.push_back({"inflation", as_incremental, false});
+
+    struct Column {
+      const char* name;
+      const char* help;
+      MetricType type;
+      int64_t IncrementalCache::Stats::*field;
+      bool incremental_only;
+    };
+    static constexpr Column kColumns[] = {
+        {"pathd_cache_entries", "Entries in the cache.", MetricType::Gauge,
+         &IncrementalCache::Stats::entries, false},
+        {"pathd_cache_bytes", "Bytes held by the cache.", MetricType::Gauge,
+         &IncrementalCache::Stats::bytes, false},
+        {"pathd_cache_budget_bytes", "Byte budget of the cache (--cache_bytes / 2).",
+         MetricType::Gauge, &IncrementalCache::Stats::budget_bytes, true},
+        {"pathd_cache_hits_total", "Requests answered from an existing entry.",
+         MetricType::Counter, &IncrementalCache::Stats::hits, false},
+        {"pathd_cache_misses_total", "Requests that had to build an entry.",
+         MetricType::Counter, &IncrementalCache::Stats::misses, false},
+        {"pathd_cache_evictions_total", "Entries evicted beyond the budget.",
+         MetricType::Counter, &IncrementalCache::Stats::evictions, true},
+        {"pathd_cache_repairs_total", "Entries repaired for a new map version.",
+         MetricType::Counter, &IncrementalCache::Stats::repairs, true},
+        {"pathd_cache_rebuilds_total",
+         "Entries rebuilt because a map changed too much to repair.",
+         MetricType::Counter, &IncrementalCache::Stats::rebuilds, true},
+    };
+    for (const Column& column : kColumns) {
+      std::vector<prometheus::ClientMetric> metrics;
+      for (const Row& row : rows) {
+        if (column.incremental_only && !row.incremental) continue;
+        metrics.push_back(Value(column.type, static_cast<double>(row.stats.*column.field),
+                                {{"cache", row.name}}));
+      }
+      families.push_back(Family(column.name, column.help, column.type, std::move(metrics)));
+    }
+  }
+
+  const MetricsSources s_;
+};
+
+ServerMetrics::ServerMetrics(MetricsSources sources)
+    : registry_(std::make_shared<prometheus::Registry>()),
+      requests_(prometheus::BuildCounter()
+                    .Name("pathd_requests_total")
+                    .Help("Answered RPCs by method and gRPC status code.")
+                    .Register(*registry_)),
+      request_seconds_(prometheus::BuildHistogram()
+                           .Name("pathd_request_duration_seconds")
+                           .Help("Time from receiving an RPC to answering it (a "
+                                 "stream: to its end), by method.")
+                           .Register(*registry_)),
+      plan_seconds_(prometheus::BuildHistogram()
+                        .Name("pathd_plan_duration_seconds")
+                        .Help("Time from receiving a plan request to answering "
+                              "it (queue wait included), by planner.")
+                        .Register(*registry_)),
+      slow_requests_(prometheus::BuildCounter()
+                         .Name("pathd_slow_requests_total")
+                         .Help("Requests at or over --slow_request_threshold, by "
+                               "method.")
+                         .Register(*registry_)),
+      state_(std::make_shared<StateCollectable>(sources)) {}
+
+ServerMetrics::~ServerMetrics() {
+  if (exposer_ == nullptr) return;
+  // civetweb's listener polls with a 2 s timeout and sees the stop request
+  // only when the poll returns, which would add up to 2 s to every shutdown;
+  // connecting once the stop has been requested wakes it at once. The wakes
+  // repeat because the first may land before the stop flag is set.
+  std::atomic<bool> stopped{false};
+  std::thread waker([this, &stopped] {
+    while (!stopped.load()) {
+      PokeListener();
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  exposer_.reset();
+  stopped.store(true);
+  waker.join();
+}
+
+void ServerMetrics::PokeListener() const {
+  sockaddr_storage address{};
+  socklen_t length = 0;
+  if (host_.find(':') != std::string::npos) {
+    auto* in6 = reinterpret_cast<sockaddr_in6*>(&address);
+    in6->sin6_family = AF_INET6;
+    in6->sin6_port = htons(static_cast<uint16_t>(port_));
+    // "::" (every interface) is reachable as the loopback address.
+    if (host_ == "::" || inet_pton(AF_INET6, host_.c_str(), &in6->sin6_addr) != 1) {
+      in6->sin6_addr = in6addr_loopback;
+    }
+    length = sizeof(sockaddr_in6);
+  } else {
+    auto* in4 = reinterpret_cast<sockaddr_in*>(&address);
+    in4->sin_family = AF_INET;
+    in4->sin_port = htons(static_cast<uint16_t>(port_));
+    if (host_ == "0.0.0.0" || inet_pton(AF_INET, host_.c_str(), &in4->sin_addr) != 1) {
+      in4->sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    }
+    length = sizeof(sockaddr_in);
+  }
+  const int fd = socket(address.ss_family, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+  if (fd < 0) return;
+  // Non-blocking: the SYN is all it takes; the answer does not matter.
+  connect(fd, reinterpret_cast<const sockaddr*>(&address), length);
+  close(fd);
+}
+
+absl::Status ServerMetrics::Listen(const std::string& address) {
+  try {
+    exposer_ = std::make_unique<prometheus::Exposer>(address, /*num_threads=*/2);
+  } catch (const std::exception& e) {
+    // civetweb reports a bad address or a port in use by throwing.
+    return absl::UnavailableError(
+        absl::StrFormat("cannot serve metrics on %s: %s", address, e.what()));
+  }
+  const std::vector<int> ports = exposer_->GetListeningPorts();
+  if (ports.empty() || ports[0] == 0) {
+    exposer_.reset();
+    return absl::UnavailableError(
+        absl::StrFormat("cannot serve metrics on %s: no port bound", address));
+  }
+  port_ = ports[0];
+  // The IP part of "IP:PORT" or "[IPv6]:PORT", for PokeListener.
+  host_ = address.substr(0, address.rfind(':'));
+  if (host_.size() >= 2 && host_.front() == '[' && host_.back() == ']') {
+    host_ = host_.substr(1, host_.size() - 2);
+  }
+  exposer_->RegisterCollectable(registry_);
+  exposer_->RegisterCollectable(state_);
+  return absl::OkStatus();
+}
+
+void ServerMetrics::Observe(const RequestRecord& record) {
+  const std::string rpc(record.rpc);
+  requests_.Add({{"rpc", rpc}, {"code", absl::StatusCodeToString(record.code)}})
+      .Increment();
+  const double seconds = absl::ToDoubleSeconds(record.elapsed);
+  request_seconds_.Add({{"rpc", rpc}}, LatencyBuckets()).Observe(seconds);
+  if (!record.planner.empty()) {
+    plan_seconds_.Add({{"planner", std::string(record.planner)}}, LatencyBuckets())
+        .Observe(seconds);
+  }
+  if (record.slow) slow_requests_.Add({{"rpc", rpc}}).Increment();
+}
+
+}  // namespace pathd::server
