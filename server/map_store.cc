@@ -2,6 +2,8 @@
 #include "server/map_store.h"
 
 #include <algorithm>
+#include <deque>
+#include <iterator>
 #include <utility>
 
 #include "absl/strings/escaping.h"
@@ -20,7 +22,191 @@ absl::Status NotFound(std::string_view name) {
   return absl::NotFoundError(absl::StrFormat("map '%s' not found", name));
 }
 
+// Cells [x_min, x_max] of row y.
+struct RowSpan {
+  int32_t y = 0;
+  int32_t x_min = 0;
+  int32_t x_max = 0;
+};
+
+// The cells a batch writes, as row spans in row-major order with overlapping
+// or touching spans merged, so each cell appears once. Bucketed by row, then
+// sorted within each row: O(r + rows of the batch + sorting within rows) for
+// r spans (rows summed over the changes). This is what lets an update find
+// its changed cells without scanning the batch's bounding box (two far-apart
+// cells span the map).
+std::vector<RowSpan> CoveredSpans(absl::Span<const MapChange> changes) {
+  int32_t y_lo = changes.front().y_min, y_hi = changes.front().y_max;
+  for (const MapChange& c : changes) {
+    y_lo = std::min(y_lo, c.y_min);
+    y_hi = std::max(y_hi, c.y_max);
+  }
+  // first[y - y_lo] .. first[y - y_lo + 1]: the spans of row y.
+  std::vector<size_t> first(static_cast<size_t>(y_hi - y_lo) + 2, 0);
+  for (const MapChange& c : changes) {
+    for (int32_t y = c.y_min; y <= c.y_max; ++y) ++first[static_cast<size_t>(y - y_lo) + 1];
+  }
+  for (size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
+  std::vector<RowSpan> spans(first.back());
+  std::vector<size_t> next(first.begin(), first.end() - 1);
+  for (const MapChange& c : changes) {
+    for (int32_t y = c.y_min; y <= c.y_max; ++y) {
+      spans[next[static_cast<size_t>(y - y_lo)]++] = RowSpan{y, c.x_min, c.x_max};
+    }
+  }
+  size_t kept = 0;
+  for (size_t row = 0; row + 1 < first.size(); ++row) {
+    const auto begin = spans.begin() + static_cast<std::ptrdiff_t>(first[row]);
+    const auto end = spans.begin() + static_cast<std::ptrdiff_t>(first[row + 1]);
+    if (end - begin > 1) {
+      std::sort(begin, end,
+                [](const RowSpan& a, const RowSpan& b) { return a.x_min < b.x_min; });
+    }
+    const size_t row_start = kept;
+    for (auto it = begin; it != end; ++it) {
+      if (kept > row_start && it->x_min <= spans[kept - 1].x_max + 1) {
+        spans[kept - 1].x_max = std::max(spans[kept - 1].x_max, it->x_max);
+      } else {
+        spans[kept++] = *it;
+      }
+    }
+  }
+  spans.resize(kept);
+  return spans;
+}
+
 }  // namespace
+
+// Spare grid buffers of one map id, and the cells its recent versions
+// changed. Owned by the map's store entry alone; a published grid's deleter
+// holds it weakly and hands the buffer back when the last snapshot drops it.
+class MapStore::GridPool {
+ public:
+  explicit GridPool(size_t grid_cells)
+      : log_budget_(grid_cells / kLogCellsDivisor + kLogMinCells) {}
+
+  // The shared_ptr deleter of a published grid.
+  struct Release {
+    std::weak_ptr<GridPool> pool;
+    uint64_t version = 0;
+    void operator()(Grid* grid) const {
+      std::unique_ptr<Grid> owned(grid);
+      // A pool that is gone (map deleted or replaced, store destroyed) lets
+      // the buffer be freed here.
+      if (std::shared_ptr<GridPool> live = pool.lock()) {
+        live->Return(std::move(owned), version);
+      }
+    }
+  };
+
+  // Publishes `grid` as the buffer of `version`. Every call makes a new
+  // control block, so weak references to an earlier version held in the same
+  // buffer (the inflation cache's keys) can never match this one.
+  static std::shared_ptr<const Grid> Publish(const std::shared_ptr<GridPool>& pool,
+                                             std::unique_ptr<Grid> grid,
+                                             uint64_t version) {
+    {
+      absl::MutexLock lock(&pool->mu_);
+      ++pool->published_;
+    }
+    return std::shared_ptr<const Grid>(grid.release(), Release{pool, version});
+  }
+
+  // The newest spare (null when there is none) and, when the log reaches back
+  // to it, the changed cells of every version after it up to `to`, oldest
+  // first (`replayable`). Otherwise the caller copies the whole grid.
+  struct Taken {
+    std::unique_ptr<Grid> grid;
+    bool replayable = false;
+    std::vector<std::shared_ptr<const std::vector<Cell>>> replay;
+  };
+  Taken Take(uint64_t to) {
+    absl::MutexLock lock(&mu_);
+    if (published_ >= peak_published_ || ++peak_age_ > kSpareWindow) {
+      peak_published_ = published_;
+      peak_age_ = 0;
+    }
+    Taken taken;
+    if (spares_.empty()) return taken;
+    auto newest = std::max_element(
+        spares_.begin(), spares_.end(),
+        [](const Spare& a, const Spare& b) { return a.version < b.version; });
+    const uint64_t from = newest->version;
+    taken.grid = std::move(newest->grid);
+    spares_.erase(newest);
+    if (from == to) {
+      taken.replayable = true;
+    } else if (!log_.empty() && log_.back().version == to &&
+               log_.front().version <= from + 1) {
+      taken.replayable = true;
+      for (const LogEntry& entry : log_) {
+        if (entry.version > from) taken.replay.push_back(entry.cells);
+      }
+    }
+    return taken;
+  }
+
+  // Logs what version `snapshot` changed. A version whose changes are unknown
+  // or larger than the log's budget drops the log: no spare can be replayed
+  // across it.
+  void Record(const MapSnapshot& snapshot) {
+    absl::MutexLock lock(&mu_);
+    if (!snapshot.changes_known || snapshot.changed_cells.size() > log_budget_) {
+      log_.clear();
+      log_cells_ = 0;
+      return;
+    }
+    log_.push_back(LogEntry{snapshot.version, std::make_shared<const std::vector<Cell>>(
+                                                  snapshot.changed_cells)});
+    log_cells_ += snapshot.changed_cells.size();
+    while (log_cells_ > log_budget_ || log_.size() > kMaxLogVersions) {
+      log_cells_ -= log_.front().cells->size();
+      log_.pop_front();
+    }
+  }
+
+ private:
+  struct Spare {
+    std::unique_ptr<Grid> grid;
+    uint64_t version = 0;
+  };
+  // Cells that differ between version - 1 and version.
+  struct LogEntry {
+    uint64_t version = 0;
+    std::shared_ptr<const std::vector<Cell>> cells;
+  };
+
+  // Keeps a released buffer while the pool holds fewer than the recent peak
+  // of published buffers plus one (see kSpareWindow), dropping the oldest
+  // spares beyond that: the newest needs the shortest replay.
+  void Return(std::unique_ptr<Grid> grid, uint64_t version) {
+    // Declared before the lock so buffers dropped here are freed after
+    // unlocking.
+    std::vector<Spare> dropped;
+    absl::MutexLock lock(&mu_);
+    --published_;
+    spares_.push_back(Spare{std::move(grid), version});
+    const size_t keep = peak_published_ + 1 > published_ ? peak_published_ + 1 - published_ : 0;
+    if (spares_.size() <= keep) return;
+    std::sort(spares_.begin(), spares_.end(),
+              [](const Spare& a, const Spare& b) { return a.version > b.version; });
+    std::move(spares_.begin() + static_cast<std::ptrdiff_t>(keep), spares_.end(),
+              std::back_inserter(dropped));
+    spares_.resize(keep);
+  }
+
+  const size_t log_budget_;
+  absl::Mutex mu_;
+  std::vector<Spare> spares_ ABSL_GUARDED_BY(mu_);
+  // Consecutive versions, oldest first, ending at the newest update.
+  std::deque<LogEntry> log_ ABSL_GUARDED_BY(mu_);
+  size_t log_cells_ ABSL_GUARDED_BY(mu_) = 0;
+  // Buffers published and not yet returned, and their most at an update
+  // within the last kSpareWindow updates (peak_age_ updates ago).
+  size_t published_ ABSL_GUARDED_BY(mu_) = 0;
+  size_t peak_published_ ABSL_GUARDED_BY(mu_) = 0;
+  int peak_age_ ABSL_GUARDED_BY(mu_) = 0;
+};
 
 // Every check runs before the copy is made, which is what makes a batch
 // all-or-nothing.
@@ -102,8 +288,13 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
   }
   if (absl::Status s = CheckSize(grid.width(), grid.height()); !s.ok()) return s;
 
-  auto shared_grid = std::make_shared<const Grid>(std::move(grid));
+  auto buffer = std::make_unique<Grid>(std::move(grid));
+  auto pool = std::make_shared<GridPool>(buffer->size());
   bool replaced = false;
+  // A replaced version and its pool are released after unlocking: freeing
+  // large grids should not stall other callers.
+  std::shared_ptr<const MapSnapshot> old_current;
+  std::shared_ptr<GridPool> old_pool;
   absl::ReleasableMutexLock lock(&mu_);
   auto it = maps_.find(name);
   if (it != maps_.end() && !replace) {
@@ -114,17 +305,19 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->name = std::string(name);
   snapshot->map_id = ++last_map_id_;
-  snapshot->grid = std::move(shared_grid);
+  // Continuing the count on replace keeps "version" monotonic per name, so a
+  // client holding expected_version from the old map cannot update the new
+  // one by accident.
+  snapshot->version = it == maps_.end() ? 1 : it->second.current->version + 1;
+  snapshot->grid = GridPool::Publish(pool, std::move(buffer), snapshot->version);
   if (it == maps_.end()) {
-    snapshot->version = 1;
     maps_.emplace(std::string(name),
-                  Entry{snapshot, std::make_shared<absl::Mutex>()});
+                  Entry{snapshot, std::make_shared<absl::Mutex>(), std::move(pool)});
   } else {
-    // Continuing the count keeps "version" monotonic per name, so a client
-    // holding expected_version from the old map cannot update the new one by
-    // accident.
-    snapshot->version = it->second.current->version + 1;
-    it->second.current = snapshot;
+    old_current = std::exchange(it->second.current, snapshot);
+    // The new map gets its own pool: the old one's buffers have the old
+    // size, and an update still working on the old map must not feed it.
+    old_pool = std::exchange(it->second.pool, std::move(pool));
     replaced = true;
   }
   lock.Release();
@@ -153,11 +346,13 @@ absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
   // Releasing the snapshot happens outside the lock: freeing a large grid
   // (when nobody else holds it) should not stall other callers.
   std::shared_ptr<const MapSnapshot> removed;
+  std::shared_ptr<GridPool> pool;
   {
     absl::MutexLock lock(&mu_);
     auto it = maps_.find(name);
     if (it == maps_.end()) return NotFound(name);
     removed = std::move(it->second.current);
+    pool = std::move(it->second.pool);
     maps_.erase(it);
   }
   Notify(name, nullptr);
@@ -180,12 +375,14 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     absl::MutexLock update_lock(update_mu.get());
 
     std::shared_ptr<const MapSnapshot> base;
+    std::shared_ptr<GridPool> pool;
     {
       absl::ReaderMutexLock lock(&mu_);
       auto it = maps_.find(name);
       if (it == maps_.end()) return NotFound(name);
       if (it->second.update_mu != update_mu) continue;
       base = it->second.current;
+      pool = it->second.pool;
     }
 
     if (expected_version.has_value() && *expected_version != base->version) {
@@ -198,53 +395,53 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
           absl::StrFormat("update of map '%s' has no changes", name));
     }
     const Grid& old_grid = *base->grid;
-    int32_t x_lo = old_grid.width(), y_lo = old_grid.height(), x_hi = -1, y_hi = -1;
     for (size_t i = 0; i < changes.size(); ++i) {
       if (absl::Status s = ValidateChange(changes[i], i, old_grid); !s.ok()) {
         return s;
       }
-      x_lo = std::min(x_lo, changes[i].x_min);
-      y_lo = std::min(y_lo, changes[i].y_min);
-      x_hi = std::max(x_hi, changes[i].x_max);
-      y_hi = std::max(y_hi, changes[i].y_max);
     }
 
-    // O(map) copy per update. Acceptable for now; DESIGN.md asks for
-    // O(changed area) via tile-level copy-on-write, which a later issue brings.
-    auto grid = std::make_shared<Grid>(old_grid);
+    std::unique_ptr<Grid> grid = AcquireGrid(*pool, *base);
+    uint8_t* after = grid->mutable_cells().data();
     for (const MapChange& change : changes) {
       const auto cost = static_cast<uint8_t>(change.cost);
+      const auto width = static_cast<size_t>(change.x_max - change.x_min) + 1;
       for (int32_t y = change.y_min; y <= change.y_max; ++y) {
-        for (int32_t x = change.x_min; x <= change.x_max; ++x) {
-          grid->set_cost(x, y, cost);
-        }
+        std::fill_n(after + grid->Index(change.x_min, y), width, cost);
       }
     }
     // Counting against the old version (not per change) makes a batch that
     // sets a cell and later restores it count zero, as the contract says
-    // "actually changed". Only the batch's bounding box can differ.
+    // "actually changed". Only cells the batch wrote can differ.
+    const uint8_t* before = old_grid.cells().data();
     auto snapshot = std::make_shared<MapSnapshot>();
     const size_t track_limit = std::min(kMaxTrackedChanges, old_grid.size() / 8 + 1);
     snapshot->changes_known = true;
     int64_t cells_changed = 0;
-    for (int32_t y = y_lo; y <= y_hi; ++y) {
-      for (int32_t x = x_lo; x <= x_hi; ++x) {
-        if (grid->cost(x, y) == old_grid.cost(x, y)) continue;
-        ++cells_changed;
-        if (!snapshot->changes_known) continue;
-        if (snapshot->changed_cells.size() == track_limit) {
-          snapshot->changes_known = false;
-          snapshot->changed_cells = {};
-          continue;
-        }
-        snapshot->changed_cells.push_back(Cell{x, y});
+    for (const RowSpan& span : CoveredSpans(changes)) {
+      const size_t row = old_grid.Index(0, span.y);
+      // Counted first in a loop the compiler vectorises: a large batch then
+      // costs a pass over its cells, and cells are listed only while tracked.
+      int64_t in_span = 0;
+      for (int32_t x = span.x_min; x <= span.x_max; ++x) {
+        in_span += after[row + x] != before[row + x] ? 1 : 0;
+      }
+      cells_changed += in_span;
+      if (in_span == 0 || !snapshot->changes_known) continue;
+      if (static_cast<size_t>(cells_changed) > track_limit) {
+        snapshot->changes_known = false;
+        snapshot->changed_cells = {};
+        continue;
+      }
+      for (int32_t x = span.x_min; x <= span.x_max; ++x) {
+        if (after[row + x] != before[row + x]) snapshot->changed_cells.push_back(Cell{x, span.y});
       }
     }
 
     snapshot->name = base->name;
     snapshot->map_id = base->map_id;
     snapshot->version = base->version + 1;
-    snapshot->grid = std::move(grid);
+    snapshot->grid = GridPool::Publish(pool, std::move(grid), snapshot->version);
     {
       absl::MutexLock lock(&mu_);
       auto it = maps_.find(name);
@@ -253,10 +450,44 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
       if (it->second.current != base) continue;  // replaced meanwhile
       it->second.current = snapshot;
     }
+    // Under update_mu, so the next update of this map sees this version
+    // logged.
+    pool->Record(*snapshot);
     // Still under update_mu: listeners see this map's versions in order.
     Notify(name, snapshot);
     return MapUpdateResult{std::move(snapshot), cells_changed};
   }
+}
+
+std::unique_ptr<Grid> MapStore::AcquireGrid(GridPool& pool, const MapSnapshot& base) {
+  const Grid& current = *base.grid;
+  GridPool::Taken taken = pool.Take(base.version);
+  if (taken.grid == nullptr) {
+    grids_allocated_.fetch_add(1, std::memory_order_relaxed);
+    return std::make_unique<Grid>(current);
+  }
+  if (!taken.replayable) {
+    grids_copied_.fetch_add(1, std::memory_order_relaxed);
+    // Same size: the assignment reuses the buffer's memory.
+    *taken.grid = current;
+    return std::move(taken.grid);
+  }
+  // Every cell that differs between the spare's version and the current one
+  // was changed by one of the versions in between, so copying those cells
+  // from the current grid makes the two equal.
+  grids_replayed_.fetch_add(1, std::memory_order_relaxed);
+  for (const auto& cells : taken.replay) {
+    for (const Cell c : *cells) taken.grid->set_cost(c, current.cost(c));
+  }
+  return std::move(taken.grid);
+}
+
+MapStore::BufferStats MapStore::buffer_stats() const {
+  BufferStats stats;
+  stats.replayed = grids_replayed_.load(std::memory_order_relaxed);
+  stats.copied = grids_copied_.load(std::memory_order_relaxed);
+  stats.allocated = grids_allocated_.load(std::memory_order_relaxed);
+  return stats;
 }
 
 void MapStore::AddListener(Listener listener) {

@@ -4,6 +4,7 @@
 #ifndef PATHD_SERVER_MAP_STORE_H_
 #define PATHD_SERVER_MAP_STORE_H_
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -73,12 +74,46 @@ struct MapUpdateResult {
 };
 
 // Thread-safe. Readers (Get/List) hold the store lock only to copy a pointer;
-// the O(map) work of an update happens outside it, serialised per map name, so
-// planning and reads of other maps never wait for a copy.
+// an update's work happens outside it, serialised per map name, so planning
+// and reads of other maps never wait for it.
+//
+// An update costs O(changed area), not O(map): each map keeps a few grid
+// buffers that no snapshot references any more (a snapshot's grid returns to
+// its map's pool when the last reference goes) and a bounded log of the cells
+// recent versions changed. An update takes the newest spare buffer, replays
+// the logged cells of the versions it missed (copying them from the current
+// grid), applies the batch and publishes the buffer. It copies the whole grid
+// only when no spare exists (a new buffer), or the spare is older than the
+// log reaches (docs/decisions.md, "Map updates recycle grid buffers").
 class MapStore {
  public:
   static constexpr size_t kMaxNameLength = 128;
   static constexpr size_t kMaxTrackedChanges = 1 << 20;
+  // A map keeps unreferenced grid buffers for later updates up to a total
+  // (buffers in snapshots plus spares) of one more than the most buffers its
+  // snapshots held at once over its last kSpareWindow updates: enough that
+  // an update finds a spare as long as the load stays as it was, never more
+  // than the copy-per-update scheme needed at that peak plus one, and
+  // shrinking again when the load drops.
+  static constexpr int kSpareWindow = 64;
+  // The change log of a map keeps at most this many versions, and at most
+  // width * height / kLogCellsDivisor + kLogMinCells changed cells: replaying
+  // more scattered cells than that costs about what copying the grid does.
+  static constexpr size_t kMaxLogVersions = 256;
+  static constexpr size_t kLogCellsDivisor = 32;
+  static constexpr size_t kLogMinCells = 64;
+
+  // How updates got their grid buffer, since the store was created.
+  struct BufferStats {
+    // A spare buffer brought up to date by replaying logged changes.
+    int64_t replayed = 0;
+    // A spare buffer overwritten with the whole current grid (its version
+    // was older than the log reaches, or the log was dropped by a large
+    // update).
+    int64_t copied = 0;
+    // No spare buffer: a new grid allocated as a copy of the current one.
+    int64_t allocated = 0;
+  };
 
   // Called after a map got a new version (snapshot set) or was deleted
   // (snapshot null). Calls for one name arrive in version order for updates;
@@ -123,8 +158,9 @@ class MapStore {
   // Snapshots already handed out stay valid.
   absl::StatusOr<uint64_t> Delete(std::string_view name);
 
-  // Applies `changes` in order to a copy of the current version and installs
-  // it as version + 1; all or nothing. Errors: NOT_FOUND for an unknown map;
+  // Applies `changes` in order to a copy of the current version (a recycled
+  // buffer, see the class comment) and installs it as version + 1; all or
+  // nothing. Errors: NOT_FOUND for an unknown map;
   // ABORTED when expected_version is set and differs from the current version;
   // INVALID_ARGUMENT for an empty batch, a cost > 255, a rectangle with
   // min > max, or a change reaching off the map (naming the change index).
@@ -134,13 +170,22 @@ class MapStore {
 
   size_t size() const;
 
+  BufferStats buffer_stats() const;
+
   // Registers a listener for every later Create (replacing), Update and
   // Delete. Not thread-safe with respect to writers: register at start-up.
   void AddListener(Listener listener);
 
  private:
+  // Spare grid buffers and the change log of one map id (map_store.cc).
+  class GridPool;
+
   void Notify(std::string_view name,
               const std::shared_ptr<const MapSnapshot>& snapshot) const;
+
+  // A buffer equal to `base`'s grid that no snapshot references: a recycled
+  // spare from `pool` or a new copy. Counts which in grids_*_.
+  std::unique_ptr<Grid> AcquireGrid(GridPool& pool, const MapSnapshot& base);
 
   struct Entry {
     std::shared_ptr<const MapSnapshot> current;
@@ -148,6 +193,9 @@ class MapStore {
     // map only for one to lose; shared so an updater can hold it without the
     // store lock while a concurrent Delete drops the entry.
     std::shared_ptr<absl::Mutex> update_mu;
+    // The only owning reference: released grids hold it weakly, so deleting
+    // or replacing the map (or destroying the store) frees them instead.
+    std::shared_ptr<GridPool> pool;
   };
 
   const int64_t max_cells_;
@@ -155,6 +203,9 @@ class MapStore {
   // std::map keeps List() sorted without a sort per call.
   std::map<std::string, Entry, std::less<>> maps_ ABSL_GUARDED_BY(mu_);
   uint64_t last_map_id_ ABSL_GUARDED_BY(mu_) = 0;
+  std::atomic<int64_t> grids_replayed_{0};
+  std::atomic<int64_t> grids_copied_{0};
+  std::atomic<int64_t> grids_allocated_{0};
   std::vector<Listener> listeners_;
 };
 
