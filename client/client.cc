@@ -3,6 +3,8 @@
 
 #include <utility>
 
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
 
@@ -39,8 +41,18 @@ std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout) {
 absl::Status FromGrpcStatus(const grpc::Status& status) {
   // grpc::StatusCode and absl::StatusCode use the same numbers (both follow
   // google.rpc.Code), so the cast keeps the code exactly.
-  return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
-                      status.error_message());
+  const auto code = static_cast<absl::StatusCode>(status.error_code());
+  // gRPC's own size refusal names no setting. MakeChannel's receive limit is
+  // off and its send limit is gRPC's default (none), so on pathctl's channel
+  // it is the server's limit.
+  if (code == absl::StatusCode::kResourceExhausted &&
+      absl::StrContains(status.error_message(), "message larger than max")) {
+    return absl::Status(
+        code, absl::StrCat(status.error_message(),
+                           "; pathd's message size limit is set by "
+                           "--max_message_bytes"));
+  }
+  return absl::Status(code, status.error_message());
 }
 
 PathdClient::PathdClient(std::shared_ptr<grpc::ChannelInterface> channel,

@@ -40,11 +40,13 @@ std::string_view GuaranteeName(const PlannerTraits& traits) {
 }
 
 PlanOutcome StopCondition::CheckNow() const {
-  if (cancelled_ != nullptr && cancelled_->load(std::memory_order_relaxed)) {
-    return PlanOutcome::kCancelled;
-  }
+  // The deadline first: gRPC cancels a call whose deadline passed too, and the
+  // outcome should say it timed out rather than that someone cancelled it.
   if (deadline_ != absl::InfiniteFuture() && absl::Now() >= deadline_) {
     return PlanOutcome::kTimeout;
+  }
+  if (cancelled_ != nullptr && cancelled_->load(std::memory_order_relaxed)) {
+    return PlanOutcome::kCancelled;
   }
   return PlanOutcome::kFound;
 }

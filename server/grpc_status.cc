@@ -1,7 +1,12 @@
-// absl::Status -> grpc::Status.
+// absl::Status -> grpc::Status, and the retry hint's payload and trailer.
 #include "server/grpc_status.h"
 
 #include <string>
+
+#include "absl/strings/cord.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/types/optional.h"
 
 namespace pathd::server {
 
@@ -51,6 +56,36 @@ grpc::StatusCode ToGrpcCode(absl::StatusCode code) {
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(ToGrpcCode(status.code()), std::string(status.message()));
+}
+
+namespace {
+
+// A type URL, as absl payloads want; never leaves the process.
+constexpr char kRetryAfterPayload[] = "type.googleapis.com/pathd.RetryAfterMs";
+
+}  // namespace
+
+absl::Status WithRetryAfter(absl::Status status, absl::Duration after) {
+  const int64_t ms = absl::ToInt64Milliseconds(absl::Ceil(after, absl::Milliseconds(1)));
+  status.SetPayload(kRetryAfterPayload, absl::Cord(absl::StrCat(ms)));
+  return status;
+}
+
+std::optional<int64_t> RetryAfterMs(const absl::Status& status) {
+  // Debian's Abseil has its own optional, not std::optional.
+  const absl::optional<absl::Cord> payload = status.GetPayload(kRetryAfterPayload);
+  int64_t ms = 0;
+  if (!payload.has_value() || !absl::SimpleAtoi(std::string(*payload), &ms)) {
+    return std::nullopt;
+  }
+  return ms;
+}
+
+void AddRetryAfterTrailer(const absl::Status& status,
+                          grpc::ServerContextBase& context) {
+  if (const std::optional<int64_t> ms = RetryAfterMs(status)) {
+    context.AddTrailingMetadata(kRetryAfterMsKey, absl::StrCat(*ms));
+  }
 }
 
 }  // namespace pathd::server

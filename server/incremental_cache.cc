@@ -329,13 +329,13 @@ absl::StatusOr<IncrementalCache::DStarAnswer> IncrementalCache::PlanDStarLite(
 
 void IncrementalCache::OnMapChanged(std::string_view name,
                                     const std::shared_ptr<const MapSnapshot>& snapshot) {
-  // Repairs may fill at most half of the queue, so they never take the slots
-  // requests need; a skipped entry is repaired by its next request. (Read
+  // Repairs may fill at most half of the interactive queue (a batch backlog
+  // does not hold them back), so they never take the slots requests need; a skipped entry is repaired by its next request. (Read
   // before mu_: the pool has its own lock.)
   size_t room = 0;
   if (pool_ != nullptr && snapshot != nullptr) {
     const size_t half = (pool_->queue_depth() + 1) / 2;
-    const size_t queued = pool_->queued();
+    const size_t queued = pool_->queued(WorkerPool::Priority::kInteractive);
     room = queued < half ? half - queued : 0;
   }
   std::vector<std::shared_ptr<Slot>> to_repair;

@@ -37,11 +37,28 @@ ABSL_FLAG(std::string, address, "127.0.0.1:50051",
           "listening on' line on stdout names it)");
 ABSL_FLAG(int32_t, threads, 0, "planning worker threads; 0 = hardware threads");
 ABSL_FLAG(int32_t, queue_depth, 256,
-          "plan requests that may wait for a worker before RESOURCE_EXHAUSTED");
+          "interactive requests (Plan, CostToGo, Navigate messages) that may "
+          "wait for a worker before RESOURCE_EXHAUSTED with a retry-after-ms "
+          "hint");
 ABSL_FLAG(int64_t, max_map_cells, int64_t{64} << 20,
           "largest map accepted, in cells (width * height)");
 ABSL_FLAG(int64_t, max_expansions, 0,
           "cap on search expansions per plan request; 0 = unlimited");
+ABSL_FLAG(int32_t, batch_queue_depth, 1024,
+          "PlanBatch requests that may wait for a worker (always behind the "
+          "interactive ones) before RESOURCE_EXHAUSTED with a retry-after-ms "
+          "hint");
+ABSL_FLAG(int64_t, max_path_points, int64_t{1} << 20,
+          "most points a plan may return (RESOURCE_EXHAUSTED beyond) and most "
+          "poses an IsPathValid request may hold (INVALID_ARGUMENT beyond)");
+ABSL_FLAG(int64_t, max_cost_to_go_cells, int64_t{1} << 22,
+          "most cells of a cost-to-go field returned in one message (Plan "
+          "return_cost_to_go: INVALID_ARGUMENT beyond; CostToGo windows: "
+          "RESOURCE_EXHAUSTED beyond)");
+ABSL_FLAG(int64_t, max_message_bytes, 0,
+          "largest gRPC message received or sent (gRPC answers "
+          "RESOURCE_EXHAUSTED beyond); 0 = max_map_cells + 1 MiB, so a "
+          "CreateMap of the largest map fits");
 ABSL_FLAG(std::string, map_dir, "",
           "directory whose .map/.yaml files are loaded at start-up (named after "
           "the file stem) and readable via CreateMap map_dir_file; empty = none");
@@ -191,6 +208,21 @@ pathd::server::ServerOptions OptionsFromFlags() {
   if (queue_depth < 1) FlagError("queue_depth", "must be >= 1");
   if (options.max_map_cells < 1) FlagError("max_map_cells", "must be >= 1");
   if (options.max_expansions < 0) FlagError("max_expansions", "must be >= 0");
+  if (absl::GetFlag(FLAGS_batch_queue_depth) < 1) {
+    FlagError("batch_queue_depth", "must be >= 1");
+  }
+  options.batch_queue_depth =
+      static_cast<size_t>(absl::GetFlag(FLAGS_batch_queue_depth));
+  options.max_path_points = absl::GetFlag(FLAGS_max_path_points);
+  if (options.max_path_points < 1) FlagError("max_path_points", "must be >= 1");
+  options.max_cost_to_go_cells = absl::GetFlag(FLAGS_max_cost_to_go_cells);
+  if (options.max_cost_to_go_cells < 1) {
+    FlagError("max_cost_to_go_cells", "must be >= 1");
+  }
+  options.max_message_bytes = absl::GetFlag(FLAGS_max_message_bytes);
+  if (options.max_message_bytes < 0 || options.max_message_bytes > INT32_MAX) {
+    FlagError("max_message_bytes", "must be in 0..2147483647 (gRPC's limit)");
+  }
   if (options.shutdown_grace < absl::ZeroDuration()) {
     FlagError("shutdown_grace", "must not be negative");
   }

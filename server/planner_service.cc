@@ -3,6 +3,7 @@
 // answer, and the cache counters.
 #include "server/planner_service.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "core/cost_model.h"
@@ -57,13 +59,23 @@ struct PlanCall {
   // 0: a blocked goal is an error.
   double goal_tolerance_cells = 0.0;
   int64_t max_expansions = 0;
+  // Which setting max_expansions came from, for the outcome's reason.
+  const char* expansion_limit_source = "";
+  // --max_path_points, --max_message_bytes.
+  int64_t max_path_points = 0;
+  int64_t max_message_bytes = 0;
   // 0: plan on the map as stored.
   double robot_radius_cells = 0.0;
   bool simplify = false;
 };
 
+// How close to its deadline a cancelled call counts as timed out (see
+// CancellableReactor::OnCancel).
+constexpr absl::Duration kDeadlineSlack = absl::Milliseconds(10);
+
 // The reactor of a unary call that runs on the pool: forwards cancellation to
-// the call's flag. `Call` has `std::atomic<bool> cancelled`.
+// the call's flag. `Call` has `std::atomic<bool> cancelled` and `absl::Time
+// deadline`.
 template <typename Call>
 class CancellableReactor final : public grpc::ServerUnaryReactor {
  public:
@@ -71,24 +83,69 @@ class CancellableReactor final : public grpc::ServerUnaryReactor {
 
   // The planner polls the flag every StopCondition::kPollInterval expansions;
   // a queued job sees it before it starts.
-  void OnCancel() override { call_->cancelled.store(true, std::memory_order_relaxed); }
+  void OnCancel() override {
+    // A client whose own deadline fires cancels the call a moment before the
+    // server's copy of that deadline (it travels as a relative timeout), so a
+    // cancel this close to the deadline is the deadline: the planner's own
+    // check stops it within kDeadlineSlack and it is reported as a TIMEOUT.
+    if (absl::Now() + kDeadlineSlack >= call_->deadline) return;
+    call_->cancelled.store(true, std::memory_order_relaxed);
+  }
   void OnDone() override { delete this; }
 
  private:
   std::shared_ptr<Call> call_;
 };
 
-// Why a job that waited in the queue should not start: CANCELLED or
-// DEADLINE_EXCEEDED, OK when it should.
+// Why a job that waited in the queue should not start: DEADLINE_EXCEEDED or
+// CANCELLED, OK when it should. The deadline is checked first because gRPC
+// also cancels a call whose deadline passed, and the log should say why.
 absl::Status StillWanted(const std::atomic<bool>& cancelled, absl::Time deadline) {
-  if (cancelled.load(std::memory_order_relaxed)) {
-    return absl::CancelledError("cancelled before planning started");
-  }
   if (absl::Now() >= deadline) {
     return absl::DeadlineExceededError(
         "deadline passed while the request waited for a worker");
   }
+  if (cancelled.load(std::memory_order_relaxed)) {
+    return absl::CancelledError("cancelled before planning started");
+  }
   return absl::OkStatus();
+}
+
+// RESOURCE_EXHAUSTED when the plan's path (or a potential field's
+// trajectory) has more points than --max_path_points allows, checked before
+// the response is filled.
+absl::Status CheckPathPoints(const PlanResult& result, int64_t max_points) {
+  const size_t points = std::max(result.path.size(), result.trajectory.size());
+  if (max_points <= 0 || points <= static_cast<size_t>(max_points)) {
+    return absl::OkStatus();
+  }
+  return absl::ResourceExhaustedError(absl::StrFormat(
+      "the path has %d points, more than the limit of %d (--max_path_points)",
+      points, max_points));
+}
+
+// RESOURCE_EXHAUSTED when `response` would not fit in one gRPC message
+// (max_bytes 0: unchecked). Checked here because gRPC's own refusal, "Sent
+// message larger than max", names neither the response nor the flag.
+absl::Status CheckResponseSize(const google::protobuf::Message& response,
+                               std::string_view what, int64_t max_bytes) {
+  const size_t bytes = response.ByteSizeLong();
+  if (max_bytes <= 0 || bytes <= static_cast<size_t>(max_bytes)) {
+    return absl::OkStatus();
+  }
+  return absl::ResourceExhaustedError(absl::StrFormat(
+      "the %s would be %d bytes, more than the limit of %d bytes "
+      "(--max_message_bytes)",
+      what, bytes, max_bytes));
+}
+
+// Names where an expansion cap came from, for the messages that report it.
+const char* ExpansionLimitSource(const v1::PlanOptions& options,
+                                 int64_t server_limit) {
+  const bool server_binds =
+      server_limit > 0 &&
+      (options.max_expansions() == 0 || options.max_expansions() >= server_limit);
+  return server_binds ? "--max_expansions" : "options.max_expansions";
 }
 
 // INVALID_ARGUMENT when one of `endpoints` became inscribed by the robot
@@ -165,14 +222,10 @@ absl::Time DeadlineOf(const grpc::CallbackServerContext& context) {
   return absl::FromChrono(deadline);
 }
 
-// A whole field is 8 bytes per cell in one Plan message and 4 in a CostToGo
-// message; beyond this either would take tens of megabytes.
-constexpr int64_t kMaxCostToGoCells = int64_t{1} << 22;
-
 // Resolves everything that can fail before planning, on the gRPC thread, so
 // a bad request never takes a queue slot.
-absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
-                     PlanCall& call) {
+absl::Status Prepare(const MapStore& store,
+                     const PlannerServiceImpl::Options& limits, PlanCall& call) {
   const v1::PlanRequest& request = *call.request;
   PATHD_ASSIGN_OR_RETURN(call.planner_name, PlannerName(request.planner()));
   PATHD_ASSIGN_OR_RETURN(call.snapshot, store.Get(request.map()));
@@ -185,16 +238,21 @@ absl::Status Prepare(const MapStore& store, int64_t server_max_expansions,
   PATHD_ASSIGN_OR_RETURN(call.robot_radius_cells,
                          RobotRadiusCells(request.options(), grid));
   call.simplify = request.options().simplify();
+  // A whole field is 8 bytes per cell in a Plan message.
   if (call.core_request.want_cost_to_go &&
-      grid.size() > static_cast<size_t>(kMaxCostToGoCells)) {
+      grid.size() > static_cast<size_t>(limits.max_cost_to_go_cells)) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "options.return_cost_to_go: the map has %d cells; whole cost-to-go "
-        "fields are returned for maps of up to %d cells (32 MiB)",
-        grid.size(), kMaxCostToGoCells));
+        "fields are returned for maps of up to %d cells (--max_cost_to_go_cells)",
+        grid.size(), limits.max_cost_to_go_cells));
   }
   PATHD_ASSIGN_OR_RETURN(call.max_expansions,
                          EffectiveMaxExpansions(request.options(),
-                                                server_max_expansions));
+                                                limits.max_expansions));
+  call.expansion_limit_source =
+      ExpansionLimitSource(request.options(), limits.max_expansions);
+  call.max_path_points = limits.max_path_points;
+  call.max_message_bytes = limits.max_message_bytes;
   // Substituted here, before anything keys on the goal, so every planner
   // (and the SPM / D* Lite cache entries) sees the cell actually planned to.
   // With a robot radius the worker substitutes again on the inflated map; the
@@ -273,9 +331,17 @@ class PlanJob final : public Job {
                  outcome);
       return;
     }
+    if (absl::Status s = CheckPathPoints(*result, call.max_path_points); !s.ok()) {
+      FinishCall(call, s, outcome);
+      return;
+    }
     v1::PlanResponse* response = call.response;
     FillPlanResponse(*result, call.core_request, *source.grid, call.max_expansions,
                      response);
+    if (result->outcome == PlanOutcome::kExpansionLimit) {
+      response->set_reason(absl::StrCat(response->reason(), " (",
+                                        call.expansion_limit_source, ")"));
+    }
     response->set_robot_radius_cells(call.robot_radius_cells);
     response->set_map_version(source.map_version);
     response->set_planner(std::string(call.planner_name));
@@ -284,6 +350,13 @@ class PlanJob final : public Job {
     *response->mutable_requested_goal() = ToProto(call.requested_goal);
     response->set_goal_substituted(
         !(call.core_request.goal == call.requested_goal));
+    if (absl::Status s =
+            CheckResponseSize(*response, "plan response", call.max_message_bytes);
+        !s.ok()) {
+      response->Clear();
+      FinishCall(call, s, outcome);
+      return;
+    }
     FinishCall(call, absl::OkStatus(), outcome);
   }
 
@@ -385,6 +458,10 @@ struct CostToGoCall {
   int32_t width = 0;
   int32_t height = 0;
   int64_t max_expansions = 0;
+  // Which setting max_expansions came from, for the error.
+  const char* expansion_limit_source = "";
+  // --max_message_bytes.
+  int64_t max_message_bytes = 0;
 };
 
 void FinishCostToGo(CostToGoCall& call, const absl::Status& status,
@@ -394,7 +471,8 @@ void FinishCostToGo(CostToGoCall& call, const absl::Status& status,
   call.reactor->Finish(ToGrpcStatus(status));
 }
 
-absl::Status PrepareCostToGo(const MapStore& store, int64_t server_max_expansions,
+absl::Status PrepareCostToGo(const MapStore& store,
+                             const PlannerServiceImpl::Options& limits,
                              CostToGoCall& call) {
   const v1::CostToGoRequest& request = *call.request;
   PATHD_ASSIGN_OR_RETURN(call.snapshot, store.Get(request.map()));
@@ -403,7 +481,10 @@ absl::Status PrepareCostToGo(const MapStore& store, int64_t server_max_expansion
   PATHD_ASSIGN_OR_RETURN(const CostParams cost, CostParamsFromOptions(request.options()));
   PATHD_ASSIGN_OR_RETURN(const double radius, RobotRadiusCells(request.options(), grid));
   PATHD_ASSIGN_OR_RETURN(call.max_expansions,
-                         EffectiveMaxExpansions(request.options(), server_max_expansions));
+                         EffectiveMaxExpansions(request.options(), limits.max_expansions));
+  call.expansion_limit_source =
+      ExpansionLimitSource(request.options(), limits.max_expansions);
+  call.max_message_bytes = limits.max_message_bytes;
   if (!grid.InBounds(goal)) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "goal %s is outside the %d x %d map", CellToString(goal), grid.width(),
@@ -442,12 +523,14 @@ absl::Status PrepareCostToGo(const MapStore& store, int64_t server_max_expansion
     call.width = w.width();
     call.height = w.height();
   }
+  // 4 bytes per cell in a CostToGo message.
   const int64_t cells = int64_t{call.width} * call.height;
-  if (cells > kMaxCostToGoCells) {
+  if (cells > limits.max_cost_to_go_cells) {
     return absl::ResourceExhaustedError(absl::StrFormat(
-        "%s has %d cells; cost-to-go is returned for up to %d cells (16 MiB) per "
-        "call: ask for windows",
-        request.has_window() ? "the window" : "the map", cells, kMaxCostToGoCells));
+        "%s has %d cells; cost-to-go is returned for up to %d cells per call "
+        "(--max_cost_to_go_cells): ask for windows",
+        request.has_window() ? "the window" : "the map", cells,
+        limits.max_cost_to_go_cells));
   }
   return absl::OkStatus();
 }
@@ -500,8 +583,8 @@ class CostToGoJob final : public Job {
         return absl::CancelledError("cancelled while building the field");
       case PlanOutcome::kExpansionLimit:
         return absl::ResourceExhaustedError(absl::StrFormat(
-            "expansion limit of %d reached while building the field",
-            call.max_expansions));
+            "expansion limit of %d (%s) reached while building the field",
+            call.max_expansions, call.expansion_limit_source));
       default:
         return absl::DeadlineExceededError("deadline passed while building the field");
     }
@@ -524,6 +607,12 @@ class CostToGoJob final : public Job {
       const size_t begin = static_cast<size_t>(row) * stride + static_cast<size_t>(call.x);
       cost->Add(field.begin() + begin, field.begin() + begin + call.width);
     }
+    if (absl::Status s = CheckResponseSize(response, "cost-to-go response",
+                                           call.max_message_bytes);
+        !s.ok()) {
+      response.Clear();
+      return s;
+    }
     return absl::OkStatus();
   }
 
@@ -531,10 +620,6 @@ class CostToGoJob final : public Job {
   InflationCache& inflation_;
   IncrementalCache& cache_;
 };
-
-// Longest path IsPathValid checks: about 6-10 MiB of request, checked in
-// 60-90 ms on the gRPC thread (README), which is where this bound should stay.
-constexpr int kMaxCheckedPoses = 1 << 20;
 
 // Everything one IsPathValid call needs; shared like PlanCall when it runs on
 // the pool.
@@ -564,7 +649,10 @@ void FinishPathCheck(PathCheckCall& call, const absl::Status& status,
   call.reactor->Finish(ToGrpcStatus(status));
 }
 
-absl::Status PreparePathCheck(const MapStore& store, PathCheckCall& call) {
+// A path of the default --max_path_points (1 Mi poses) is about 6-10 MiB of
+// request and is checked in 60-90 ms on the gRPC thread (README).
+absl::Status PreparePathCheck(const MapStore& store, int64_t max_path_points,
+                              PathCheckCall& call) {
   const v1::IsPathValidRequest& request = *call.request;
   PATHD_ASSIGN_OR_RETURN(call.snapshot, store.Get(request.map()));
   const Grid& grid = *call.snapshot->grid;
@@ -574,10 +662,10 @@ absl::Status PreparePathCheck(const MapStore& store, PathCheckCall& call) {
   if (request.path().empty()) {
     return absl::InvalidArgumentError("path is empty (give at least one pose)");
   }
-  if (request.path_size() > kMaxCheckedPoses) {
+  if (request.path_size() > max_path_points) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "path has %d poses; IsPathValid checks up to %d (1 Mi) per call",
-        request.path_size(), kMaxCheckedPoses));
+        "path has %d poses, more than the limit of %d (--max_path_points)",
+        request.path_size(), max_path_points));
   }
   call.cells.reserve(request.path_size());
   for (int i = 0; i < request.path_size(); ++i) {
@@ -706,7 +794,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
   auto* reactor = new CancellableReactor<PlanCall>(call);
   call->reactor = reactor;
 
-  if (absl::Status s = Prepare(store_, options_.max_expansions, *call); !s.ok()) {
+  if (absl::Status s = Prepare(store_, options_, *call); !s.ok()) {
     FinishCall(*call, s, "REJECTED");
     return reactor;
   }
@@ -714,6 +802,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
   // call on a worker, so nothing below may touch `call` on success.
   if (absl::Status s = pool_.Submit(std::make_unique<PlanJob>(call, inflation_, cache_));
       !s.ok()) {
+    AddRetryAfterTrailer(s, *context);
     FinishCall(*call, s, "REJECTED");
   }
   return reactor;
@@ -730,7 +819,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::CostToGo(
   auto* reactor = new CancellableReactor<CostToGoCall>(call);
   call->reactor = reactor;
 
-  if (absl::Status s = PrepareCostToGo(store_, options_.max_expansions, *call);
+  if (absl::Status s = PrepareCostToGo(store_, options_, *call);
       !s.ok()) {
     FinishCostToGo(*call, s, "REJECTED");
     return reactor;
@@ -739,6 +828,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::CostToGo(
   if (absl::Status s =
           pool_.Submit(std::make_unique<CostToGoJob>(call, inflation_, cache_));
       !s.ok()) {
+    AddRetryAfterTrailer(s, *context);
     FinishCostToGo(*call, s, "REJECTED");
   }
   return reactor;
@@ -755,7 +845,8 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::IsPathValid(
   auto* reactor = new CancellableReactor<PathCheckCall>(call);
   call->reactor = reactor;
 
-  if (absl::Status s = PreparePathCheck(store_, *call); !s.ok()) {
+  if (absl::Status s = PreparePathCheck(store_, options_.max_path_points, *call);
+      !s.ok()) {
     FinishPathCheck(*call, s, "REJECTED");
     return reactor;
   }
@@ -791,6 +882,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::IsPathValid(
   // As in Plan: after a successful submit the job owns the call.
   if (absl::Status s = pool_.Submit(MakeJob(std::move(run), std::move(drop)));
       !s.ok()) {
+    AddRetryAfterTrailer(s, *context);
     FinishPathCheck(*call, s, "REJECTED");
   }
   return reactor;

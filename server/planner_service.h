@@ -24,6 +24,17 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   struct Options {
     // Cap on expansions per request (--max_expansions); 0 = unlimited.
     int64_t max_expansions = 0;
+    // Most points a Plan may return (RESOURCE_EXHAUSTED beyond) and most
+    // poses an IsPathValid request may hold (INVALID_ARGUMENT beyond)
+    // (--max_path_points).
+    int64_t max_path_points = int64_t{1} << 20;
+    // Most cells of a cost-to-go field returned in one message: a Plan's
+    // return_cost_to_go map, a CostToGo window (--max_cost_to_go_cells).
+    int64_t max_cost_to_go_cells = int64_t{1} << 22;
+    // gRPC's send limit (--max_message_bytes); a Plan or CostToGo response
+    // above it answers RESOURCE_EXHAUSTED naming the flag instead of gRPC's
+    // bare "Sent message larger than max". 0 = not checked.
+    int64_t max_message_bytes = 0;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,

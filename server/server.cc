@@ -82,8 +82,8 @@ absl::Status PathdServer::Start() {
     spdlog::info("loaded {} map(s) from --map_dir {}", loaded, options_.map_dir);
   }
 
-  pool_ = std::make_unique<WorkerPool>(
-      WorkerPool::Options{options_.threads, options_.queue_depth});
+  pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{
+      options_.threads, options_.queue_depth, options_.batch_queue_depth});
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
   map_service_ = std::make_unique<MapServiceImpl>(
@@ -94,6 +94,9 @@ absl::Status PathdServer::Start() {
                                   options_.max_expansions});
   PlannerServiceImpl::Options planner_options;
   planner_options.max_expansions = options_.max_expansions;
+  planner_options.max_path_points = options_.max_path_points;
+  planner_options.max_cost_to_go_cells = options_.max_cost_to_go_cells;
+  planner_options.max_message_bytes = max_message_bytes();
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 
@@ -124,10 +127,10 @@ absl::Status PathdServer::Start() {
                            &port_);
   builder.RegisterService(map_service_.get());
   builder.RegisterService(planner_service_.get());
-  // A raw CreateMap of the largest allowed map must fit in one message; gRPC's
-  // default receive limit (4 MiB) would refuse maps over ~2000 x 2000.
-  builder.SetMaxReceiveMessageSize(static_cast<int>(
-      std::min<int64_t>(INT_MAX, options_.max_map_cells + kMessageOverheadBytes)));
+  // gRPC refuses a larger request with RESOURCE_EXHAUSTED before reading it
+  // into memory, and fails a larger response the same way.
+  builder.SetMaxReceiveMessageSize(max_message_bytes());
+  builder.SetMaxSendMessageSize(max_message_bytes());
   server_ = builder.BuildAndStart();
   if (server_ == nullptr || port_ == 0) {
     server_.reset();
@@ -142,8 +145,11 @@ absl::Status PathdServer::Start() {
   if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
     health->SetServingStatus(true);
   }
-  spdlog::info("serving on {} with {} worker thread(s), queue depth {}",
-               listen_address(), pool_->threads(), pool_->queue_depth());
+  spdlog::info(
+      "serving on {} with {} worker thread(s), queue depth {} interactive / {} "
+      "batch, messages up to {} bytes",
+      listen_address(), pool_->threads(), pool_->queue_depth(),
+      pool_->queue_depth(WorkerPool::Priority::kBatch), max_message_bytes());
   return absl::OkStatus();
 }
 
@@ -184,6 +190,15 @@ void PathdServer::Shutdown() {
     ClearRequestObserver(metrics_.get());
     metrics_.reset();
   }
+}
+
+int PathdServer::max_message_bytes() const {
+  // By default a raw CreateMap of the largest allowed map must fit in one
+  // message; gRPC's own default (4 MiB) would refuse maps over ~2000 x 2000.
+  const int64_t bytes = options_.max_message_bytes > 0
+                            ? options_.max_message_bytes
+                            : options_.max_map_cells + kMessageOverheadBytes;
+  return static_cast<int>(std::min<int64_t>(INT_MAX, bytes));
 }
 
 std::string PathdServer::listen_address() const {

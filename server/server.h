@@ -30,12 +30,22 @@ struct ServerOptions {
   std::string address = "127.0.0.1:50051";
   // Worker threads; 0 = hardware threads.
   int threads = 0;
-  // Plan jobs that may wait for a worker before RESOURCE_EXHAUSTED.
+  // Interactive jobs (Plan, CostToGo, Navigate...) that may wait for a worker
+  // before RESOURCE_EXHAUSTED.
   size_t queue_depth = 256;
+  // PlanBatch jobs that may wait for a worker before RESOURCE_EXHAUSTED.
+  size_t batch_queue_depth = 1024;
   // Largest map accepted, in cells.
   int64_t max_map_cells = int64_t{64} << 20;
   // Per-request expansion cap; 0 = unlimited.
   int64_t max_expansions = 0;
+  // Most points in a returned path / poses in a checked one.
+  int64_t max_path_points = int64_t{1} << 20;
+  // Most cells of a cost-to-go field returned in one message.
+  int64_t max_cost_to_go_cells = int64_t{1} << 22;
+  // Largest gRPC message received or sent; 0 = max_map_cells + 1 MiB, so a
+  // raw CreateMap of the largest map fits.
+  int64_t max_message_bytes = 0;
   // Directory of maps loaded at start-up and readable via map_dir_file;
   // empty = none.
   std::string map_dir;
@@ -78,6 +88,9 @@ class PathdServer {
   // period, cancel the rest, drop queued plan jobs (UNAVAILABLE) and join the
   // workers. Idempotent.
   void Shutdown();
+
+  // max_message_bytes with 0 resolved; at most INT_MAX (gRPC's int).
+  int max_message_bytes() const;
 
   // The bound port (the chosen one when the address said 0); 0 before Start.
   int port() const { return port_; }

@@ -1,4 +1,5 @@
-// WorkerPool: fixed threads, bounded FIFO queue, per-worker scratch.
+// WorkerPool: fixed threads, a bounded FIFO queue per priority, per-worker
+// scratch, and the retry hint for refused jobs.
 #include "server/worker_pool.h"
 
 #include <algorithm>
@@ -7,6 +8,8 @@
 #include <utility>
 
 #include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "server/grpc_status.h"
 #include "spdlog/spdlog.h"
 
 namespace pathd::server {
@@ -41,7 +44,8 @@ std::unique_ptr<Job> MakeJob(std::function<void(SearchScratch&)> run,
 }
 
 WorkerPool::WorkerPool(const Options& options)
-    : queue_depth_(std::max<size_t>(1, options.queue_depth)) {
+    : queue_depth_(std::max<size_t>(1, options.queue_depth)),
+      batch_queue_depth_(std::max<size_t>(1, options.batch_queue_depth)) {
   const int n = ThreadCount(options.threads);
   threads_.reserve(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) threads_.emplace_back([this] { WorkerLoop(); });
@@ -49,15 +53,41 @@ WorkerPool::WorkerPool(const Options& options)
 
 WorkerPool::~WorkerPool() { Shutdown(ShutdownMode::kDrop); }
 
-absl::Status WorkerPool::Submit(std::unique_ptr<Job> job) {
+absl::Status WorkerPool::Submit(std::unique_ptr<Job> job, Priority priority) {
   absl::MutexLock lock(&mu_);
   if (stopping_) return absl::UnavailableError("server is shutting down");
-  if (queue_.size() >= queue_depth_) {
-    return absl::ResourceExhaustedError(
-        absl::StrFormat("work queue full (depth %d)", queue_depth_));
+  const bool interactive = priority == Priority::kInteractive;
+  std::deque<std::unique_ptr<Job>>& queue = interactive ? queue_ : batch_queue_;
+  if (queue.size() >= queue_depth(priority)) {
+    const absl::Duration after = EstimateRetryAfterLocked(priority);
+    return WithRetryAfter(
+        absl::ResourceExhaustedError(absl::StrFormat(
+            "%s work queue full (%d jobs waiting, the limit set by %s); retry "
+            "in about %d ms (trailing metadata %s)",
+            interactive ? "interactive" : "batch", queue.size(),
+            interactive ? "--queue_depth" : "--batch_queue_depth",
+            absl::ToInt64Milliseconds(after), kRetryAfterMsKey)),
+        after);
   }
-  queue_.push_back(std::move(job));
+  queue.push_back(std::move(job));
   return absl::OkStatus();
+}
+
+absl::Duration WorkerPool::EstimateRetryAfter(Priority priority) const {
+  absl::MutexLock lock(&mu_);
+  return EstimateRetryAfterLocked(priority);
+}
+
+absl::Duration WorkerPool::EstimateRetryAfterLocked(Priority priority) const {
+  size_t ahead = queue_.size();
+  if (priority == Priority::kBatch) ahead += batch_queue_.size();
+  const absl::Duration per_job =
+      mean_job_time_ > absl::ZeroDuration() ? mean_job_time_ : kDefaultJobTime;
+  const absl::Duration wait =
+      per_job * static_cast<double>(ahead) / static_cast<double>(threads_.size());
+  // Whole milliseconds, rounded up: the hint travels as an integer.
+  return std::clamp(absl::Ceil(wait, absl::Milliseconds(1)), kMinRetryAfter,
+                    kMaxRetryAfter);
 }
 
 void WorkerPool::Shutdown(ShutdownMode mode) {
@@ -67,7 +97,11 @@ void WorkerPool::Shutdown(ShutdownMode mode) {
   {
     absl::MutexLock lock(&mu_);
     stopping_ = true;
-    if (mode == ShutdownMode::kDrop) dropped.swap(queue_);
+    if (mode == ShutdownMode::kDrop) {
+      dropped.swap(queue_);
+      for (auto& job : batch_queue_) dropped.push_back(std::move(job));
+      batch_queue_.clear();
+    }
   }
   // Outside mu_: a Drop() answers an RPC, which must not hold the pool lock.
   for (auto& job : dropped) job->Drop();
@@ -77,7 +111,12 @@ void WorkerPool::Shutdown(ShutdownMode mode) {
 
 size_t WorkerPool::queued() const {
   absl::MutexLock lock(&mu_);
-  return queue_.size();
+  return queue_.size() + batch_queue_.size();
+}
+
+size_t WorkerPool::queued(Priority priority) const {
+  absl::MutexLock lock(&mu_);
+  return priority == Priority::kInteractive ? queue_.size() : batch_queue_.size();
 }
 
 bool WorkerPool::OnWorkerThread() { return on_worker_thread; }
@@ -92,9 +131,11 @@ void WorkerPool::WorkerLoop() {
     {
       absl::MutexLock lock(&mu_,
                            absl::Condition(this, &WorkerPool::HasWorkOrStopping));
-      if (queue_.empty()) return;  // stopping, nothing left to drain
-      job = std::move(queue_.front());
-      queue_.pop_front();
+      std::deque<std::unique_ptr<Job>>& queue =
+          queue_.empty() ? batch_queue_ : queue_;
+      if (queue.empty()) return;  // stopping, nothing left to drain
+      job = std::move(queue.front());
+      queue.pop_front();
     }
     busy_.fetch_add(1, std::memory_order_relaxed);
     const auto started = std::chrono::steady_clock::now();
@@ -107,11 +148,16 @@ void WorkerPool::WorkerLoop() {
     } catch (...) {
       spdlog::error("worker job threw a non-standard exception");
     }
-    busy_ns_.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                           std::chrono::steady_clock::now() - started)
-                           .count(),
-                       std::memory_order_relaxed);
+    const auto ran_for_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                std::chrono::steady_clock::now() - started)
+                                .count();
+    busy_ns_.fetch_add(ran_for_ns, std::memory_order_relaxed);
     busy_.fetch_sub(1, std::memory_order_relaxed);
+    const absl::Duration ran_for = absl::Nanoseconds(ran_for_ns);
+    absl::MutexLock lock(&mu_);
+    mean_job_time_ = mean_job_time_ == absl::ZeroDuration()
+                         ? ran_for
+                         : mean_job_time_ + (ran_for - mean_job_time_) / 8;
   }
 }
 

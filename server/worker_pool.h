@@ -1,6 +1,7 @@
-// The fixed pool of planning threads behind a bounded queue. Planning never
-// runs on gRPC's threads; each worker owns the SearchScratch its jobs reuse,
-// and a full queue fails fast instead of piling up latency.
+// The fixed pool of planning threads behind one bounded queue per priority.
+// Planning never runs on gRPC's threads; each worker owns the SearchScratch its
+// jobs reuse, interactive jobs always start before batch ones, and a full
+// queue fails fast (with a retry hint) instead of piling up latency.
 #ifndef PATHD_SERVER_WORKER_POOL_H_
 #define PATHD_SERVER_WORKER_POOL_H_
 
@@ -43,8 +44,20 @@ class WorkerPool {
   struct Options {
     // Worker threads; 0 means std::thread::hardware_concurrency() (at least 1).
     int threads = 0;
-    // Jobs that may wait for a worker; at least 1.
+    // Interactive jobs that may wait for a worker; at least 1.
     size_t queue_depth = 256;
+    // Batch jobs that may wait for a worker; at least 1.
+    size_t batch_queue_depth = 1024;
+  };
+  // Which queue a job waits in. A free worker always takes the oldest
+  // interactive job first and a batch job only when none waits, so a batch
+  // backlog never delays a robot's Plan; batch work can starve while
+  // interactive work keeps every worker busy (by design).
+  enum class Priority {
+    // Plan, CostToGo, IsPathValid, Navigate messages, cache repairs.
+    kInteractive,
+    // PlanBatch requests.
+    kBatch,
   };
   enum class ShutdownMode {
     // Run every queued job, then stop.
@@ -60,10 +73,13 @@ class WorkerPool {
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
 
-  // Queues `job`. Never blocks: RESOURCE_EXHAUSTED "work queue full (depth
-  // N)" when the queue is full, UNAVAILABLE after Shutdown. On error the job
-  // is destroyed without Run or Drop; the caller answers with the status.
-  absl::Status Submit(std::unique_ptr<Job> job);
+  // Queues `job` behind the jobs of its priority. Never blocks: when that
+  // priority's queue is full, RESOURCE_EXHAUSTED naming the queue and its flag
+  // with a retry hint (RetryAfter() in server/grpc_status.h; see
+  // EstimateRetryAfter); UNAVAILABLE after Shutdown. On error the job is
+  // destroyed without Run or Drop; the caller answers with the status.
+  absl::Status Submit(std::unique_ptr<Job> job,
+                      Priority priority = Priority::kInteractive);
 
   // Stops accepting jobs, handles queued ones per `mode`, and joins the
   // threads (so every running job has returned). Idempotent; must not be
@@ -71,8 +87,11 @@ class WorkerPool {
   void Shutdown(ShutdownMode mode);
 
   int threads() const { return static_cast<int>(threads_.size()); }
-  size_t queue_depth() const { return queue_depth_; }
-  // Jobs waiting for a worker right now (for logs and metrics).
+  size_t queue_depth(Priority priority = Priority::kInteractive) const {
+    return priority == Priority::kInteractive ? queue_depth_ : batch_queue_depth_;
+  }
+  // Jobs of both priorities waiting for a worker right now (for logs and
+  // metrics).
   size_t queued() const;
   // Workers running a job right now (for metrics: busy / threads is the
   // instantaneous utilisation).
@@ -83,6 +102,20 @@ class WorkerPool {
   absl::Duration busy_time() const {
     return absl::Nanoseconds(busy_ns_.load(std::memory_order_relaxed));
   }
+  // Jobs of `priority` waiting for a worker right now.
+  size_t queued(Priority priority) const;
+
+  // How long a job of `priority` refused now should wait before it is sent
+  // again: the time the workers need to start every job queued ahead of it
+  // (the queued interactive jobs, plus the batch ones for kBatch) at the
+  // recent mean run time of a job (kDefaultJobTime before any job ran),
+  // clamped to [kMinRetryAfter, kMaxRetryAfter]. A client that waits this
+  // long finds room unless more work arrived meanwhile, and clients refused
+  // together do not all come back at once when the backlog is long.
+  absl::Duration EstimateRetryAfter(Priority priority) const;
+  static constexpr absl::Duration kDefaultJobTime = absl::Milliseconds(50);
+  static constexpr absl::Duration kMinRetryAfter = absl::Milliseconds(10);
+  static constexpr absl::Duration kMaxRetryAfter = absl::Seconds(30);
 
   // True on a thread of any WorkerPool (lets tests and asserts check that
   // work is where it should be).
@@ -91,14 +124,21 @@ class WorkerPool {
  private:
   void WorkerLoop();
   bool HasWorkOrStopping() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-    return stopping_ || !queue_.empty();
+    return stopping_ || !queue_.empty() || !batch_queue_.empty();
   }
+  absl::Duration EstimateRetryAfterLocked(Priority priority) const
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const size_t queue_depth_;
+  const size_t batch_queue_depth_;
   mutable absl::Mutex mu_;
   std::deque<std::unique_ptr<Job>> queue_ ABSL_GUARDED_BY(mu_);
-  // Workers leave once this is set and the queue is empty; kDrop empties the
-  // queue itself, so both modes share one exit rule.
+  std::deque<std::unique_ptr<Job>> batch_queue_ ABSL_GUARDED_BY(mu_);
+  // Exponentially weighted mean of recent jobs' run times (weight 1/8 for
+  // the newest), for EstimateRetryAfter; zero until a job has run.
+  absl::Duration mean_job_time_ ABSL_GUARDED_BY(mu_);
+  // Workers leave once this is set and both queues are empty; kDrop empties
+  // the queues itself, so both modes share one exit rule.
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
   // Sized in the constructor and never resized; only joined (once, under
   // join_mu_), so threads() needs no lock.

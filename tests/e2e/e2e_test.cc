@@ -37,8 +37,7 @@
 #include "client/pathctl.h"
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
-
-extern char** environ;
+#include "tests/e2e/process.h"
 
 namespace pathd {
 namespace {
@@ -88,58 +87,9 @@ std::ostream& operator<<(std::ostream& os, const ProcessResult& r) {
             << r.err;
 }
 
-// Starts argv[0] with the test's environment minus PATHD_SERVER plus
-// `extra_env` ("NAME=value"), stdout/stderr redirected to the given fds (or
-// inherited when -1). With `die_with_parent` the kernel kills the child if the
-// test process dies, so even a crashed test leaves no daemon running.
-pid_t Spawn(const std::vector<std::string>& argv,
-            const std::vector<std::string>& extra_env, int stdout_fd,
-            int stderr_fd, bool die_with_parent) {
-  // Everything the child needs is built before fork: after it only
-  // async-signal-safe calls are allowed.
-  std::vector<std::string> env_strings;
-  for (char** e = environ; *e != nullptr; ++e) {
-    if (!absl::StartsWith(*e, "PATHD_SERVER=")) env_strings.emplace_back(*e);
-  }
-  env_strings.insert(env_strings.end(), extra_env.begin(), extra_env.end());
-  std::vector<char*> envp;
-  for (std::string& s : env_strings) envp.push_back(s.data());
-  envp.push_back(nullptr);
-  std::vector<std::string> argv_copy = argv;
-  std::vector<char*> args;
-  for (std::string& s : argv_copy) args.push_back(s.data());
-  args.push_back(nullptr);
-  const pid_t parent = getpid();
-  sigset_t empty_mask;
-  sigemptyset(&empty_mask);
-
-  const pid_t pid = fork();
-  if (pid != 0) return pid;
-  // Child.
-  if (die_with_parent) {
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (getppid() != parent) _exit(127);
-  }
-  sigprocmask(SIG_SETMASK, &empty_mask, nullptr);
-  signal(SIGTERM, SIG_DFL);
-  signal(SIGPIPE, SIG_DFL);
-  if (stdout_fd >= 0) dup2(stdout_fd, STDOUT_FILENO);
-  if (stderr_fd >= 0) dup2(stderr_fd, STDERR_FILENO);
-  execve(args[0], args.data(), envp.data());
-  _exit(127);
-}
-
-void MakePipe(int fds[2]) {
-  ASSERT_EQ(pipe2(fds, O_CLOEXEC), 0) << strerror(errno);
-}
-
-// Blocks until `pid` exits; returns its exit code, or -1 for a signal.
-int WaitForExit(pid_t pid) {
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using e2e::MakePipe;
+using e2e::Spawn;
+using e2e::WaitForExit;
 
 // A pathctl process (or another `binary`, e.g. pathd) whose stdout and stderr
 // are collected as they arrive, so a test can act while it runs (a navigate

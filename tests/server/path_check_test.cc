@@ -341,7 +341,8 @@ TEST_F(PathCheckTest, PathOverTheLimitNamesTheLimit) {
   v1::IsPathValidResponse check;
   const grpc::Status s = planner_->IsPathValid(Context().get(), request, &check);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_THAT(s.error_message(), HasSubstr("up to 1048576 (1 Mi)"));
+  EXPECT_THAT(s.error_message(),
+              HasSubstr("the limit of 1048576 (--max_path_points)"));
 
   // Exactly at the limit it is checked: back and forth along row 0.
   request.mutable_path()->RemoveLast();

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <future>
 #include <memory>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -141,7 +142,16 @@ TEST_F(PlanAdmissionTest, FullQueueIsResourceExhausted) {
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
   const grpc::Status full = stub_->Plan(&context, Request(), &response);
   EXPECT_EQ(full.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-  EXPECT_EQ(full.error_message(), "work queue full (depth 1)");
+  EXPECT_EQ(full.error_message(),
+            "interactive work queue full (1 jobs waiting, the limit set by "
+            "--queue_depth); retry in about 50 ms (trailing metadata "
+            "retry-after-ms)");
+  // No job has finished, so the hint is the default job time for the one
+  // queued job on the one worker.
+  const auto& trailers = context.GetServerTrailingMetadata();
+  const auto hint = trailers.find("retry-after-ms");
+  ASSERT_NE(hint, trailers.end());
+  EXPECT_EQ(std::string(hint->second.data(), hint->second.size()), "50");
 
   Release();
   EXPECT_TRUE(queued->done.get_future().get().ok());
@@ -198,6 +208,39 @@ TEST_F(PlanAdmissionTest, DeadlinePassedWhileQueuedIsDeadlineExceeded) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
   EXPECT_TRUE(stub_->Plan(&context, Request(), &response).ok());
+}
+
+TEST_F(PlanAdmissionTest, PathLongerThanTheLimitIsResourceExhausted) {
+  PlannerServiceImpl::Options options;
+  options.max_path_points = 31;  // the diagonal of the 32 x 32 map has 32
+  PlannerServiceImpl limited(store_, *pool_, inflation_, cache_, *sessions_, options);
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(&limited);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  ASSERT_NE(server, nullptr);
+  auto stub = v1::PlannerService::NewStub(grpc::CreateChannel(
+      "127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials()));
+
+  v1::PlanResponse response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  const grpc::Status status = stub->Plan(&context, Request(), &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(status.error_message(),
+            "the path has 32 points, more than the limit of 31 (--max_path_points)");
+  EXPECT_EQ(response.path_size(), 0);
+
+  // One cell shorter fits.
+  v1::PlanRequest shorter = Request();
+  shorter.mutable_goal()->mutable_cell()->set_x(30);
+  shorter.mutable_goal()->mutable_cell()->set_y(30);
+  grpc::ClientContext again;
+  again.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  ASSERT_TRUE(stub->Plan(&again, shorter, &response).ok());
+  EXPECT_EQ(response.path_size(), 31);
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(10));
 }
 
 }  // namespace
