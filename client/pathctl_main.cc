@@ -1,6 +1,8 @@
 // pathctl: the command-line client of pathd. Defines the flags and hands the
 // parsed command to pathd::pathctl::Run (client/pathctl.h), where the commands
 // live.
+#include <unistd.h>
+
 #include <cstdlib>
 #include <iostream>
 #include <optional>
@@ -63,6 +65,8 @@ ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
 ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
 ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
+ABSL_FLAG(bool, progress, false,
+          "plan: stream the search's progress to stderr (PlanStream)");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
@@ -126,6 +130,8 @@ int main(int argc, char** argv) {
   options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
   options.script = absl::GetFlag(FLAGS_script);
   options.window = absl::GetFlag(FLAGS_window);
+  options.progress = absl::GetFlag(FLAGS_progress);
+  options.stderr_is_terminal = isatty(STDERR_FILENO) != 0;
 
   return pathctl::Run(
       options,

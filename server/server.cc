@@ -93,6 +93,8 @@ absl::Status PathdServer::Start() {
                                   options_.max_expansions});
   PlannerServiceImpl::Options planner_options;
   planner_options.max_expansions = options_.max_expansions;
+  planner_options.progress_interval = options_.progress_interval;
+  planner_options.batch_max_inflight = options_.batch_max_inflight;
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 

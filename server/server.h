@@ -51,6 +51,10 @@ struct ServerOptions {
   // WatchMap events queued per stream before a slow reader's backlog is
   // replaced by one whole-map RESYNC event.
   size_t watch_queue_events = 64;
+  // PlanStream: least time between two progress events.
+  absl::Duration progress_interval = absl::Milliseconds(100);
+  // PlanBatch: items in flight per stream; 0 = twice the worker threads.
+  int batch_max_inflight = 0;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
