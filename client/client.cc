@@ -152,6 +152,18 @@ PathdClient::Navigate(grpc::ClientContext* context) const {
   return planner_->Navigate(context);
 }
 
+std::unique_ptr<grpc::ClientReaderInterface<v1::PlanStreamEvent>>
+PathdClient::PlanStream(grpc::ClientContext* context,
+                        const v1::PlanRequest& request) const {
+  return planner_->PlanStream(context, request);
+}
+
+std::unique_ptr<grpc::ClientReaderWriterInterface<v1::PlanBatchRequest,
+                                                  v1::PlanBatchResponse>>
+PathdClient::PlanBatch(grpc::ClientContext* context) const {
+  return planner_->PlanBatch(context);
+}
+
 std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>>
 PathdClient::WatchMap(grpc::ClientContext* context,
                       const v1::WatchMapRequest& request) const {

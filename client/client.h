@@ -83,6 +83,20 @@ class PathdClient {
   std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>> WatchMap(
       grpc::ClientContext* context, const v1::WatchMapRequest& request) const;
 
+  // Opens a PlanStream call on `context` (caller-owned, alive until the
+  // reader's Finish() returned; the caller sets its deadline): progress
+  // events, then one final event.
+  std::unique_ptr<grpc::ClientReaderInterface<v1::PlanStreamEvent>> PlanStream(
+      grpc::ClientContext* context, const v1::PlanRequest& request) const;
+
+  // Opens a PlanBatch stream on `context` (caller-owned, alive until the
+  // stream's Finish() returned; the caller sets its deadline). Writes may
+  // block while the server holds the stream at its in-flight bound, so write
+  // from one thread and read the answers from another.
+  std::unique_ptr<grpc::ClientReaderWriterInterface<v1::PlanBatchRequest,
+                                                    v1::PlanBatchResponse>>
+  PlanBatch(grpc::ClientContext* context) const;
+
   // grpc.health.v1.Health/Check; `service` empty asks about the whole server.
   absl::StatusOr<grpc::health::v1::HealthCheckResponse> CheckHealth(
       const std::string& service = "") const;

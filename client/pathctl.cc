@@ -7,7 +7,10 @@
 #include <fstream>
 #include <memory>
 #include <span>
+#include <iostream>
+#include <optional>
 #include <sstream>
+#include <thread>
 #include <utility>
 
 #include <curl/curl.h>
@@ -54,6 +57,10 @@ constexpr char kSynopsis[] =
                        [--heuristic_weight W] [--lookahead N]
                        [--cost_to_go_file F] [--pf_* ...]
                        [--goal_tolerance C | --goal_tolerance_m M]
+                       [--progress]
+  pathctl [flags] batch FILE|- [--planner P] [--world] [--max_expansions N]
+                       [--heuristic_weight W] [--simplify] [--lookahead N]
+                       [cost options]
   pathctl [flags] navigate NAME SX SY GX GY [--script FILE] [cost options]
   pathctl [flags] cost-to-go NAME GX GY [--window X,Y,W,H]
                        [--cost_to_go_file F] [--world] [cost options]
@@ -480,6 +487,76 @@ absl::Status SetCostOptions(const Options& options, v1::PlanOptions* plan_option
   return absl::OkStatus();
 }
 
+// The progress line of `plan --progress`: "expansions N  best f F  T s".
+std::string FormatProgress(const v1::PlanProgress& progress) {
+  return absl::StrFormat(
+      "progress: %d expansions, best f %s, %.3f s", progress.expansions(),
+      progress.has_best_f() ? absl::StrFormat("%.3f", progress.best_f()) : "-",
+      progress.elapsed_us() / 1e6);
+}
+
+// "GOAL_OCCUPIED" for PLAN_OUTCOME_GOAL_OCCUPIED.
+std::string OutcomeName(v1::PlanOutcome outcome) {
+  absl::string_view name = v1::PlanOutcome_Name(outcome);
+  absl::ConsumePrefix(&name, "PLAN_OUTCOME_");
+  return std::string(name);
+}
+
+// A PlanError as the status it stands for, its typed outcome appended to the
+// message.
+absl::Status FromPlanError(const v1::PlanError& error) {
+  std::string message = error.message();
+  if (error.outcome() != v1::PLAN_OUTCOME_UNSPECIFIED) {
+    absl::StrAppend(&message, " (outcome ", OutcomeName(error.outcome()), ")");
+  }
+  return absl::Status(static_cast<absl::StatusCode>(error.code()), message);
+}
+
+// Plan through PlanStream, showing its progress on stderr: one line rewritten
+// in place on a terminal, one line per event otherwise (logs, pipes).
+absl::StatusOr<v1::PlanResponse> PlanWithProgress(Env& env,
+                                                  const v1::PlanRequest& request) {
+  const bool terminal = env.options().stderr_is_terminal;
+  std::unique_ptr<grpc::ClientContext> context =
+      client::MakeContext(env.options().timeout);
+  std::unique_ptr<grpc::ClientReaderInterface<v1::PlanStreamEvent>> reader =
+      env.client().PlanStream(context.get(), request);
+  std::optional<v1::PlanResponse> result;
+  std::optional<v1::PlanError> error;
+  bool line_open = false;
+  v1::PlanStreamEvent event;
+  while (reader->Read(&event)) {
+    switch (event.kind_case()) {
+      case v1::PlanStreamEvent::kProgress:
+        if (terminal) {
+          // \r and erase-to-end-of-line: the line shrinks as well as grows.
+          env.err() << "\r" << FormatProgress(event.progress()) << "\033[K"
+                    << std::flush;
+          line_open = true;
+        } else {
+          env.err() << FormatProgress(event.progress()) << "\n" << std::flush;
+        }
+        break;
+      case v1::PlanStreamEvent::kResult:
+        result = std::move(*event.mutable_result());
+        break;
+      case v1::PlanStreamEvent::kError:
+        error = std::move(*event.mutable_error());
+        break;
+      case v1::PlanStreamEvent::KIND_NOT_SET:
+        break;
+    }
+  }
+  if (line_open) env.err() << "\n";
+  const grpc::Status status = reader->Finish();
+  if (error.has_value()) return FromPlanError(*error);
+  if (!status.ok()) return client::FromGrpcStatus(status);
+  if (!result.has_value()) {
+    return absl::InternalError("PlanStream ended without a final event");
+  }
+  return *std::move(result);
+}
+
 int Plan(Env& env, Args args) {
   const Options& options = env.options();
   if (args.size() != 5) return env.Usage("plan takes NAME SX SY GX GY");
@@ -548,7 +625,8 @@ int Plan(Env& env, Args args) {
   pf->set_step_size(options.pf_step);
   pf->set_max_steps(options.pf_max_steps);
 
-  absl::StatusOr<v1::PlanResponse> response = env.client().Plan(request);
+  absl::StatusOr<v1::PlanResponse> response =
+      options.progress ? PlanWithProgress(env, request) : env.client().Plan(request);
   if (!response.ok()) return env.Fail(response.status());
   const int code = response->found() ? kExitOk : kExitNoPath;
   if (!options.cost_to_go_file.empty()) {
@@ -639,6 +717,127 @@ absl::StatusOr<std::string> ReadTextFile(const std::string& path) {
   text << file.rdbuf();
   if (file.bad()) return absl::DataLossError(absl::StrCat("error reading ", path));
   return text.str();
+}
+
+// --- batch -------------------------------------------------------------------
+
+// One answer of `pathctl batch` as a line: "ID found cost C length L
+// expansions N time T us", "ID no-path OUTCOME: reason" or "ID error CODE
+// OUTCOME: message".
+std::string FormatBatchAnswer(const v1::PlanBatchResponse& answer) {
+  const std::string& id = answer.request_id();
+  if (answer.has_error()) {
+    const v1::PlanError& e = answer.error();
+    return absl::StrFormat(
+        "%s error %s %s: %s", id,
+        absl::StatusCodeToString(static_cast<absl::StatusCode>(e.code())),
+        OutcomeName(e.outcome()), e.message());
+  }
+  const v1::PlanResponse& r = answer.result();
+  if (r.found()) {
+    return absl::StrFormat("%s found cost %.6f length %.6f expansions %d time %d us",
+                           id, r.cost(), r.length(), r.expansions(),
+                           r.planning_time_us());
+  }
+  return absl::StrFormat("%s no-path %s: %s", id, OutcomeName(r.outcome()),
+                         r.reason());
+}
+
+// Sends every item of a batch file through one PlanBatch stream (a writer
+// thread, because writes block while the server is at its in-flight bound)
+// and prints each answer as it arrives, then a summary. --timeout bounds the
+// whole batch.
+int Batch(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 1) return env.Usage("batch takes FILE (or - for stdin)");
+  const std::string& file = args[0];
+  std::string text;
+  if (file == "-") {
+    std::stringstream in;
+    in << std::cin.rdbuf();
+    text = in.str();
+  } else {
+    absl::StatusOr<std::string> read = ReadTextFile(file);
+    if (!read.ok()) return env.Fail(read.status());
+    text = *std::move(read);
+  }
+  absl::StatusOr<std::vector<BatchItem>> items =
+      ParseBatchFile(text, file == "-" ? "stdin" : file, options.world);
+  if (!items.ok()) return env.Usage(items.status().message());
+  v1::PlanOptions shared;
+  if (absl::Status s = SetCostOptions(options, &shared); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  shared.set_max_expansions(options.max_expansions);
+  if (options.heuristic_weight.has_value()) {
+    shared.set_heuristic_weight(*options.heuristic_weight);
+  }
+  shared.set_simplify(options.simplify);
+  shared.set_lookahead(options.lookahead);
+  std::optional<v1::Planner> default_planner;
+  if (!options.planner.empty()) {
+    absl::StatusOr<v1::Planner> planner = PlannerFromName(options.planner);
+    if (!planner.ok()) return env.Usage(planner.status().message());
+    default_planner = *planner;
+  }
+  for (BatchItem& item : *items) {
+    *item.request.mutable_options() = shared;
+    if (item.request.planner() == v1::PLANNER_UNSPECIFIED && default_planner) {
+      item.request.set_planner(*default_planner);
+    }
+  }
+
+  const absl::Time started = absl::Now();
+  std::unique_ptr<grpc::ClientContext> context = client::MakeContext(options.timeout);
+  auto stream = env.client().PlanBatch(context.get());
+  std::thread writer([&stream, &items] {
+    v1::PlanBatchRequest message;
+    for (BatchItem& item : *items) {
+      message.set_request_id(item.id);
+      *message.mutable_request() = std::move(item.request);
+      // A failed write means the stream ended; Finish says why.
+      if (!stream->Write(message)) break;
+    }
+    stream->WritesDone();
+  });
+  google::protobuf::util::JsonPrintOptions json_options;
+  json_options.always_print_primitive_fields = true;
+  int64_t found = 0;
+  int64_t no_path = 0;
+  int64_t errors = 0;
+  v1::PlanBatchResponse answer;
+  while (stream->Read(&answer)) {
+    if (answer.has_error()) {
+      ++errors;
+    } else if (answer.result().found()) {
+      ++found;
+    } else {
+      ++no_path;
+    }
+    if (options.json) {
+      std::string line;
+      if (!google::protobuf::util::MessageToJsonString(answer, &line, json_options)
+               .ok()) {
+        line = absl::StrCat("{\"requestId\": \"", answer.request_id(), "\"}");
+      }
+      env.out() << line << "\n";
+    } else {
+      env.out() << FormatBatchAnswer(answer) << "\n";
+    }
+    env.out() << std::flush;
+  }
+  writer.join();
+  const grpc::Status status = stream->Finish();
+  const double seconds = absl::ToDoubleSeconds(absl::Now() - started);
+  const int64_t answered = found + no_path + errors;
+  // With --json stdout holds only answers, one JSON object per line.
+  (options.json ? env.err() : env.out()) << absl::StrFormat(
+      "summary: %d of %d answered: %d found, %d no path, %d errors in %.3f s "
+      "(%.1f plans/s)\n",
+      answered, items->size(), found, no_path, errors, seconds,
+      seconds > 0 ? answered / seconds : 0.0);
+  if (!status.ok()) return env.Fail(client::FromGrpcStatus(status));
+  return errors > 0 ? kExitError : kExitOk;
 }
 
 int Navigate(Env& env, Args args) {
@@ -1070,6 +1269,65 @@ absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
   return poses;
 }
 
+absl::StatusOr<std::vector<BatchItem>> ParseBatchFile(absl::string_view text,
+                                                      absl::string_view file_name,
+                                                      bool world) {
+  std::vector<BatchItem> items;
+  int line_number = 0;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    ++line_number;
+    line = absl::StripAsciiWhitespace(line);
+    if (line.empty() || absl::StartsWith(line, "#")) continue;
+    const std::vector<absl::string_view> fields =
+        absl::StrSplit(line, absl::ByAnyChar(" \t"), absl::SkipEmpty());
+    const auto bad = [&](absl::string_view problem) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s:%d: %s (expected \"ID MAP SX SY GX GY [PLANNER]\")", file_name,
+          line_number, problem));
+    };
+    if (fields.size() != 6 && fields.size() != 7) {
+      return bad(absl::StrFormat("%d fields", fields.size()));
+    }
+    BatchItem item;
+    item.id = std::string(fields[0]);
+    item.request.set_map(std::string(fields[1]));
+    v1::Position* positions[] = {item.request.mutable_start(),
+                                 item.request.mutable_goal()};
+    for (int i = 0; i < 2; ++i) {
+      const absl::string_view x = fields[2 + 2 * i];
+      const absl::string_view y = fields[3 + 2 * i];
+      if (world) {
+        double wx = 0.0;
+        double wy = 0.0;
+        if (!absl::SimpleAtod(x, &wx) || !absl::SimpleAtod(y, &wy) ||
+            !std::isfinite(wx) || !std::isfinite(wy)) {
+          return bad(absl::StrCat("'", x, " ", y, "' is not two finite numbers"));
+        }
+        positions[i]->mutable_world()->set_x(wx);
+        positions[i]->mutable_world()->set_y(wy);
+      } else {
+        int32_t cx = 0;
+        int32_t cy = 0;
+        if (!absl::SimpleAtoi(x, &cx) || !absl::SimpleAtoi(y, &cy)) {
+          return bad(absl::StrCat("'", x, " ", y, "' is not two integers"));
+        }
+        positions[i]->mutable_cell()->set_x(cx);
+        positions[i]->mutable_cell()->set_y(cy);
+      }
+    }
+    if (fields.size() == 7) {
+      absl::StatusOr<v1::Planner> planner = PlannerFromName(fields[6]);
+      if (!planner.ok()) return bad(planner.status().message());
+      item.request.set_planner(*planner);
+    }
+    items.push_back(std::move(item));
+  }
+  if (items.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(file_name, ": no requests"));
+  }
+  return items;
+}
+
 std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells) {
   std::vector<std::string> parts;
   parts.reserve(cells.size());
@@ -1179,6 +1437,9 @@ flags (anywhere on the line, as --flag=value or --flag value):
                        it navigate prints the first path and closes
   --metrics_address A  metrics: pathd's --metrics_address (default
                        127.0.0.1:9464)
+  --progress           plan: use PlanStream and show the search's progress
+                       on stderr (one line updated in place on a terminal,
+                       one line per event otherwise)
   --pf_attractive S    plan: potential_field: quadratic (default) or conic
   --pf_attractive_gain K, --pf_switch_distance D, --pf_repulsive_gain ETA,
   --pf_influence Q, --pf_step S, --pf_max_steps N
@@ -1199,6 +1460,18 @@ deadline (--timeout does not apply); with --json each line is a MapEvent.
 metrics prints pathd's Prometheus text (GET http://HOST:PORT/metrics, the
 daemon's --metrics_address); with PREFIX arguments only the metrics whose name
 starts with one of them, e.g. 'pathctl metrics pathd_requests pathd_maps'.
+batch FILE (or - for stdin) sends every request of FILE through one PlanBatch
+stream: one request per line, "ID MAP SX SY GX GY [PLANNER]" (cells, or
+metres with --world; '#' starts a comment line). --planner is the default
+for lines without one; --max_expansions, --heuristic_weight, --simplify,
+--lookahead and the cost options apply to every line. It prints one line per
+answer as it arrives (in finishing order), "ID found cost C length L
+expansions N time T us", "ID no-path OUTCOME: reason" or "ID error CODE
+OUTCOME: message", then "summary: A of N answered: F found, P no path, E
+errors in S s" with the rate in plans/s. With --json each answer is a
+PlanBatchResponse line and the summary goes to stderr. --timeout bounds the
+whole batch. Exit code 0 when no item errored (no path is not an error), 1
+when any item errored or the stream failed.
 
 With --json, navigate prints each NavigateResponse as one line of JSON. Its
 --timeout bounds each wait for an answer and for the server's close, not the
@@ -1225,6 +1498,7 @@ exit codes:
      navigate: a script's expect-push or follow failed
   2  usage error, also a bad navigate script line (FILE:LINE: problem)
   3  plan ran but found no path (the outcome says why)
+     (batch: 1 when any item errored, otherwise 0)
   4  check ran and the path is not valid on the map's current version
 
 )",
@@ -1335,13 +1609,14 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (command == "cache-stats") return CacheStats(env, rest);
   if (command == "health") return Health(env, rest);
   if (command == "metrics") return Metrics(env, rest);
+  if (command == "batch") return Batch(env, rest);
   if (command == "help") {
     out << UsageText();
     return kExitOk;
   }
   return env.Usage(absl::StrCat("unknown command '", command,
                                 "'; expected maps, plan, navigate, cost-to-go, "
-                                "cache-stats, health or metrics"));
+                                "check, cache-stats, health, metrics or batch"));
 }
 
 }  // namespace pathd::pathctl

@@ -116,7 +116,27 @@ struct Options {
   std::string window;
   // metrics: pathd's --metrics_address (HOST:PORT).
   std::string metrics_address = std::string(kDefaultMetricsAddress);
+  // plan: use PlanStream and show its progress on `err`.
+  bool progress = false;
+  // `err` is a terminal: progress rewrites one line instead of printing one
+  // line per event.
+  bool stderr_is_terminal = false;
 };
+
+// One item of a `pathctl batch` file.
+struct BatchItem {
+  std::string id;
+  v1::PlanRequest request;
+};
+
+// The items of a batch file: one "ID MAP SX SY GX GY [PLANNER]" per line
+// (cells; world metres with `world`), fields separated by spaces or tabs,
+// blank lines and lines starting with '#' skipped. INVALID_ARGUMENT
+// "FILE:LINE: ..." for a malformed line. Only the positions and the planner
+// are set; the caller adds the options shared by every item.
+absl::StatusOr<std::vector<BatchItem>> ParseBatchFile(absl::string_view text,
+                                                      absl::string_view file_name,
+                                                      bool world);
 
 // Writes a row-major cost-to-go field as CSV, one map row per line, "inf"
 // for unreachable cells. DATA_LOSS when the values do not fill whole rows.

@@ -1,6 +1,8 @@
 // pathctl: the command-line client of pathd. Defines the flags and hands the
 // parsed command to pathd::pathctl::Run (client/pathctl.h), where the commands
 // live.
+#include <unistd.h>
+
 #include <cstdlib>
 #include <iostream>
 #include <optional>
@@ -65,6 +67,8 @@ ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
 ABSL_FLAG(std::string, metrics_address, pathd::pathctl::kDefaultMetricsAddress,
           "metrics: pathd's --metrics_address (HOST:PORT)");
+ABSL_FLAG(bool, progress, false,
+          "plan: stream the search's progress to stderr (PlanStream)");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
@@ -129,6 +133,8 @@ int main(int argc, char** argv) {
   options.script = absl::GetFlag(FLAGS_script);
   options.window = absl::GetFlag(FLAGS_window);
   options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  options.progress = absl::GetFlag(FLAGS_progress);
+  options.stderr_is_terminal = isatty(STDERR_FILENO) != 0;
 
   return pathctl::Run(
       options,

@@ -149,6 +149,11 @@ struct FocusedKey {
   friend bool operator==(const FocusedKey& a, const FocusedKey& b) = default;
 };
 
+// The f-like part of an open-list key, for progress reports: k1 of a focused
+// key, the key itself for the shortest path map's float keys.
+inline double PrimaryKey(const FocusedKey& key) { return key.k1; }
+inline double PrimaryKey(float key) { return key; }
+
 // g and rhs of every cell as doubles: 16 bytes per cell.
 class DenseStore {
  public:
@@ -383,7 +388,8 @@ class IncrementalSearch {
         Push(u, key);
         continue;
       }
-      if (const PlanOutcome why = stop.Check(expansions); why != PlanOutcome::kFound) {
+      if (const PlanOutcome why = stop.Check(expansions, PrimaryKey(key));
+          why != PlanOutcome::kFound) {
         return {why, expansions};
       }
       PopTop();

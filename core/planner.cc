@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <string>
 
 #include "absl/status/status.h"
+#include "absl/strings/cord.h"
 #include "absl/strings/str_format.h"
 #include "core/line_of_sight.h"
 
@@ -39,6 +41,19 @@ std::string_view GuaranteeName(const PlannerTraits& traits) {
   return "heuristic";
 }
 
+void ProgressSink::Poll(int64_t expansions, double best_f) {
+  const absl::Time now = absl::Now();
+  if (next_ == absl::InfinitePast()) {
+    next_ = now + interval_;
+    return;
+  }
+  if (now < next_) return;
+  // From now rather than next_ += interval: a long stretch between polls
+  // must not be followed by a burst of catch-up reports.
+  next_ = now + interval_;
+  Report(expansions, best_f, now);
+}
+
 PlanOutcome StopCondition::CheckNow() const {
   // The deadline first: gRPC cancels a call whose deadline passed too, and the
   // outcome should say it timed out rather than that someone cancelled it.
@@ -53,22 +68,56 @@ PlanOutcome StopCondition::CheckNow() const {
 
 namespace {
 
+// Payload key of EndpointFault; the value is the enumerator's number.
+constexpr char kEndpointFaultUrl[] = "type.pathd.dev/pathd.EndpointFault";
+
 absl::Status ValidateEndpoint(const Grid& grid, Cell c, std::string_view what,
                               const CostParams& cost) {
   if (!grid.InBounds(c)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("%s %s is outside the %d x %d map", what,
-                        CellToString(c), grid.width(), grid.height()));
+    return WithEndpointFault(
+        absl::InvalidArgumentError(
+            absl::StrFormat("%s %s is outside the %d x %d map", what,
+                            CellToString(c), grid.width(), grid.height())),
+        *EndpointFaultFor(what, /*outside=*/true));
   }
   const uint8_t v = grid.cost(c);
   if (!Traversable(v, cost.unknown_is_free)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "%s %s is on a blocked cell (cost %d)", what, CellToString(c), v));
+    return WithEndpointFault(
+        absl::InvalidArgumentError(absl::StrFormat(
+            "%s %s is on a blocked cell (cost %d)", what, CellToString(c), v)),
+        *EndpointFaultFor(what, /*outside=*/false));
   }
   return absl::OkStatus();
 }
 
 }  // namespace
+
+absl::Status WithEndpointFault(absl::Status status, EndpointFault fault) {
+  status.SetPayload(kEndpointFaultUrl,
+                    absl::Cord(std::to_string(static_cast<int>(fault))));
+  return status;
+}
+
+std::optional<EndpointFault> EndpointFaultOf(const absl::Status& status) {
+  const auto payload = status.GetPayload(kEndpointFaultUrl);
+  if (!payload.has_value()) return std::nullopt;
+  for (const EndpointFault fault :
+       {EndpointFault::kStartOutsideMap, EndpointFault::kGoalOutsideMap,
+        EndpointFault::kStartBlocked, EndpointFault::kGoalBlocked}) {
+    if (*payload == std::to_string(static_cast<int>(fault))) return fault;
+  }
+  return std::nullopt;
+}
+
+std::optional<EndpointFault> EndpointFaultFor(std::string_view what, bool outside) {
+  if (what == "start") {
+    return outside ? EndpointFault::kStartOutsideMap : EndpointFault::kStartBlocked;
+  }
+  if (what == "goal") {
+    return outside ? EndpointFault::kGoalOutsideMap : EndpointFault::kGoalBlocked;
+  }
+  return std::nullopt;
+}
 
 absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request) {
   // Search records index cells with uint32 and reserve the largest value.

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -122,31 +123,70 @@ struct PlanResult {
   bool found() const { return outcome == PlanOutcome::kFound; }
 };
 
+// Receives a running search's progress, at most once per interval, from the
+// stop condition's polls (so every planner reports without plumbing of its
+// own). The first report comes one interval after the first poll, so a search
+// that ends sooner reports nothing. Thread-compatible: one search polls it.
+class ProgressSink {
+ public:
+  explicit ProgressSink(absl::Duration interval) : interval_(interval) {}
+  virtual ~ProgressSink() = default;
+
+  // Called at every poll; calls Report when the interval has passed since the
+  // last report (or the first poll).
+  void Poll(int64_t expansions, double best_f);
+
+ protected:
+  // `expansions` so far (descent steps for the potential field), `best_f` the
+  // smallest key on the open list (NaN when the planner has none), `now` the
+  // clock reading that passed the rate limit.
+  virtual void Report(int64_t expansions, double best_f, absl::Time now) = 0;
+
+ private:
+  const absl::Duration interval_;
+  // InfinitePast until the first poll arms it.
+  absl::Time next_ = absl::InfinitePast();
+};
+
 // Deadline, cancellation and expansion budget as one condition, polled by
 // every search loop every kPollInterval expansions (and at the budget).
 // Thread-compatible; the cancel flag may be set from any thread.
 class StopCondition {
  public:
   static constexpr int64_t kPollInterval = 1024;
+  // best_f of a search without an ordered open list.
+  static constexpr double kNoKey = std::numeric_limits<double>::quiet_NaN();
 
   StopCondition() = default;
+  // `progress`, when not null, is polled with the search's progress and must
+  // outlive the search.
   StopCondition(absl::Time deadline, const std::atomic<bool>* cancelled,
-                int64_t max_expansions)
-      : deadline_(deadline), cancelled_(cancelled), max_expansions_(max_expansions) {}
+                int64_t max_expansions, ProgressSink* progress = nullptr)
+      : deadline_(deadline),
+        cancelled_(cancelled),
+        max_expansions_(max_expansions),
+        progress_(progress) {}
 
   static StopCondition None() { return StopCondition(); }
 
   // Returns the outcome to stop with, or kFound meaning "keep going". Cheap
   // enough to call every expansion; only reads the clock every kPollInterval.
-  PlanOutcome Check(int64_t expansions) const {
+  // `best_f` is the smallest open-list key, for progress reports.
+  PlanOutcome Check(int64_t expansions, double best_f = kNoKey) const {
     if (max_expansions_ > 0 && expansions >= max_expansions_) {
       return PlanOutcome::kExpansionLimit;
     }
     if ((expansions & (kPollInterval - 1)) != 0) return PlanOutcome::kFound;
-    return CheckNow();
+    return Poll(expansions, best_f);
   }
   // Checks cancellation and the deadline now.
   PlanOutcome CheckNow() const;
+  // CheckNow plus a progress report: for loops that poll on their own
+  // schedule (row by row) rather than through Check.
+  PlanOutcome Poll(int64_t expansions, double best_f = kNoKey) const {
+    if (progress_ != nullptr) progress_->Poll(expansions, best_f);
+    return CheckNow();
+  }
 
   absl::Time deadline() const { return deadline_; }
   int64_t max_expansions() const { return max_expansions_; }
@@ -155,6 +195,7 @@ class StopCondition {
   absl::Time deadline_ = absl::InfiniteFuture();
   const std::atomic<bool>* cancelled_ = nullptr;
   int64_t max_expansions_ = 0;
+  ProgressSink* progress_ = nullptr;
 };
 
 // What a planner guarantees, so callers and tests can treat it correctly.
@@ -208,12 +249,30 @@ class Planner {
                                           SearchScratch& scratch) const = 0;
 };
 
+// Which endpoint a rejected request got wrong. Validation attaches it to its
+// INVALID_ARGUMENT status (as a payload, which survives being passed up
+// unchanged), so callers can report a typed reason without parsing messages.
+enum class EndpointFault {
+  kStartOutsideMap,
+  kGoalOutsideMap,
+  kStartBlocked,
+  kGoalBlocked,
+};
+
+// `status` with `fault` attached.
+absl::Status WithEndpointFault(absl::Status status, EndpointFault fault);
+// The fault attached to `status`, nullopt when none is.
+std::optional<EndpointFault> EndpointFaultOf(const absl::Status& status);
+// The fault of endpoint `what` ("start" or "goal"; nullopt for any other
+// name) being outside the map or blocked.
+std::optional<EndpointFault> EndpointFaultFor(std::string_view what, bool outside);
+
 // INVALID_ARGUMENT naming "start" or "goal" when one is off the grid or on a
 // cell that is not traversable under request.cost, or naming the field when
 // the cost parameters are invalid (weight negative or not finite,
 // connectivity not 4/8, heuristic_weight < 1, lookahead < 0, potential-field
 // parameters not positive and finite) or the grid is empty or too large to
-// search.
+// search. Endpoint errors carry their EndpointFault.
 absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request);
 
 // ValidateEndpoints plus the planner's own preconditions from its traits:

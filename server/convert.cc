@@ -2,6 +2,7 @@
 #include "server/convert.h"
 
 #include <cmath>
+#include <optional>
 #include <utility>
 
 #include "absl/status/status.h"
@@ -30,9 +31,13 @@ absl::StatusOr<Cell> CellFromPosition(const v1::Position& position,
       }
       absl::StatusOr<Cell> cell = grid.WorldToCell(p);
       if (!cell.ok()) {
-        return absl::InvalidArgumentError(absl::StrFormat(
+        absl::Status outside = absl::InvalidArgumentError(absl::StrFormat(
             "%s world point (%s, %s) is outside the map: %s", what, Num(p.x),
             Num(p.y), cell.status().message()));
+        if (const auto fault = EndpointFaultFor(what, /*outside=*/true)) {
+          return WithEndpointFault(std::move(outside), *fault);
+        }
+        return outside;
       }
       return *cell;
     }
@@ -260,6 +265,39 @@ v1::PlanOutcome ToProto(PlanOutcome outcome) {
       return v1::PLAN_OUTCOME_LOCAL_MINIMUM;
   }
   return v1::PLAN_OUTCOME_UNSPECIFIED;
+}
+
+v1::PlanOutcome OutcomeOfStatus(const absl::Status& status) {
+  if (const std::optional<EndpointFault> fault = EndpointFaultOf(status)) {
+    switch (*fault) {
+      case EndpointFault::kStartOutsideMap:
+        return v1::PLAN_OUTCOME_START_OUTSIDE_MAP;
+      case EndpointFault::kGoalOutsideMap:
+        return v1::PLAN_OUTCOME_GOAL_OUTSIDE_MAP;
+      case EndpointFault::kStartBlocked:
+        return v1::PLAN_OUTCOME_START_OCCUPIED;
+      case EndpointFault::kGoalBlocked:
+        return v1::PLAN_OUTCOME_GOAL_OCCUPIED;
+    }
+  }
+  switch (status.code()) {
+    case absl::StatusCode::kInvalidArgument:
+    case absl::StatusCode::kFailedPrecondition:
+      return v1::PLAN_OUTCOME_INVALID_REQUEST;
+    case absl::StatusCode::kNotFound:
+      return v1::PLAN_OUTCOME_MAP_NOT_FOUND;
+    case absl::StatusCode::kDeadlineExceeded:
+      return v1::PLAN_OUTCOME_TIMEOUT;
+    case absl::StatusCode::kCancelled:
+      return v1::PLAN_OUTCOME_CANCELLED;
+    default:
+      return v1::PLAN_OUTCOME_UNSPECIFIED;
+  }
+}
+
+bool IsRejectionOutcome(v1::PlanOutcome outcome) {
+  return outcome >= v1::PLAN_OUTCOME_START_OUTSIDE_MAP &&
+         outcome <= v1::PLAN_OUTCOME_MAP_NOT_FOUND;
 }
 
 void FillPlanResponse(const PlanResult& result, const PlanRequest& request,

@@ -30,7 +30,8 @@ inline Cell FromProto(const v1::Cell& c) { return Cell{c.x(), c.y()}; }
 // The cell a request position denotes. A cell is passed through unchecked
 // (ValidateEndpoints reports it off the map); a world point is converted with
 // Grid::WorldToCell. INVALID_ARGUMENT naming `what` ("start"/"goal") when the
-// position is unset, or the world point is not finite or off the map.
+// position is unset, or the world point is not finite or off the map (with
+// its EndpointFault when `what` is "start" or "goal").
 absl::StatusOr<Cell> CellFromPosition(const v1::Position& position,
                                       const Grid& grid, std::string_view what);
 
@@ -78,6 +79,18 @@ void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
                       v1::PlanResponse* response);
 
 v1::PlanOutcome ToProto(PlanOutcome outcome);
+
+// The typed reason of a plan request's error status: the attached
+// EndpointFault (START/GOAL_OUTSIDE_MAP, START/GOAL_OCCUPIED), else by code:
+// INVALID_ARGUMENT and FAILED_PRECONDITION -> INVALID_REQUEST, NOT_FOUND ->
+// MAP_NOT_FOUND (the map lookup is the only NOT_FOUND a plan request
+// meets), DEADLINE_EXCEEDED -> TIMEOUT, CANCELLED -> CANCELLED; UNSPECIFIED
+// for OK and every other code.
+v1::PlanOutcome OutcomeOfStatus(const absl::Status& status);
+
+// True for the outcomes that say why a request was rejected
+// (START_OUTSIDE_MAP .. MAP_NOT_FOUND).
+bool IsRejectionOutcome(v1::PlanOutcome outcome);
 
 // Metadata of one map version.
 void FillMapInfo(const MapSnapshot& snapshot, v1::MapInfo* info);

@@ -79,6 +79,12 @@ ABSL_FLAG(int, max_sessions, 1024,
 ABSL_FLAG(int, watch_queue_events, 64,
           "WatchMap events queued for a slow reader before its backlog is "
           "replaced by one whole-map RESYNC event");
+ABSL_FLAG(absl::Duration, progress_interval, absl::Milliseconds(100),
+          "PlanStream: least time between two progress events of a plan (none "
+          "for plans that end sooner)");
+ABSL_FLAG(int, batch_max_inflight, 0,
+          "PlanBatch: items per stream read but not yet answered; the server "
+          "stops reading the stream at this bound; 0 = twice the worker threads");
 
 ABSL_FLAG(std::string, metrics_address, "",
           "IP:PORT serving Prometheus text metrics at /metrics over plain HTTP "
@@ -237,6 +243,12 @@ pathd::server::ServerOptions OptionsFromFlags() {
   }
   options.watch_queue_events =
       static_cast<size_t>(absl::GetFlag(FLAGS_watch_queue_events));
+  options.progress_interval = absl::GetFlag(FLAGS_progress_interval);
+  if (options.progress_interval <= absl::ZeroDuration()) {
+    FlagError("progress_interval", "must be positive");
+  }
+  options.batch_max_inflight = absl::GetFlag(FLAGS_batch_max_inflight);
+  if (options.batch_max_inflight < 0) FlagError("batch_max_inflight", "must be >= 0");
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
   options.metrics_address = absl::GetFlag(FLAGS_metrics_address);

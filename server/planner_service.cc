@@ -7,7 +7,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <exception>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <new>
@@ -16,9 +18,11 @@
 #include <utility>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "core/cost_model.h"
 #include "core/path_simplify.h"
@@ -67,6 +71,18 @@ struct PlanCall {
   // 0: plan on the map as stored.
   double robot_radius_cells = 0.0;
   bool simplify = false;
+
+  // The RPC, for the request log ("Plan", "PlanStream", "PlanBatch").
+  std::string_view rpc = "Plan";
+  // For the trailing metadata of a rejected unary call; unset when
+  // `on_finish` answers.
+  grpc::CallbackServerContext* context = nullptr;
+  // PlanStream: receives the search's progress; must outlive the job.
+  ProgressSink* progress = nullptr;
+  // PlanStream and PlanBatch answer through this instead of `reactor`
+  // (reading `response` when the status is OK). Called exactly once, as the
+  // call's last use of request/response.
+  std::function<void(const absl::Status&)> on_finish;
 };
 
 // How close to its deadline a cancelled call counts as timed out (see
@@ -156,9 +172,13 @@ absl::Status CheckRadiusEndpoints(
   for (const auto& [cell, what] : endpoints) {
     if (inflated.InBounds(cell) && inflated.cost(cell) == kInscribedCost &&
         stored.cost(cell) != kInscribedCost) {
-      return absl::InvalidArgumentError(absl::StrFormat(
+      absl::Status inscribed = absl::InvalidArgumentError(absl::StrFormat(
           "%s %s is within the robot radius (%g cells) of an obstacle", what,
           CellToString(cell), radius_cells));
+      if (const auto fault = EndpointFaultFor(what, /*outside=*/false)) {
+        return WithEndpointFault(std::move(inscribed), *fault);
+      }
+      return inscribed;
     }
   }
   return absl::OkStatus();
@@ -181,13 +201,15 @@ absl::StatusOr<Cell> GoalWithinTolerance(const Grid& grid, Cell requested,
           NearestTraversableCell(grid, requested, tolerance_cells, cost)) {
     return *nearest;
   }
-  return absl::InvalidArgumentError(absl::StrFormat(
-      "goal %s is on a blocked cell (cost %d) and no cell within the goal "
-      "tolerance of %g cells is free%s",
-      CellToString(requested), grid.cost(requested), tolerance_cells,
-      radius_cells > 0.0
-          ? absl::StrFormat(" for the robot radius (%g cells)", radius_cells)
-          : std::string()));
+  return WithEndpointFault(
+      absl::InvalidArgumentError(absl::StrFormat(
+          "goal %s is on a blocked cell (cost %d) and no cell within the goal "
+          "tolerance of %g cells is free%s",
+          CellToString(requested), grid.cost(requested), tolerance_cells,
+          radius_cells > 0.0
+              ? absl::StrFormat(" for the robot radius (%g cells)", radius_cells)
+              : std::string())),
+      EndpointFault::kGoalBlocked);
 }
 
 // A cache key from validated request parts.
@@ -203,12 +225,21 @@ IncrementalCache::Key CacheKey(const std::string& map, Cell goal, const CostPara
 
 // Answers the call. Must be the last use of call.request/response/reactor.
 void FinishCall(PlanCall& call, const absl::Status& status, std::string_view outcome) {
-  LogRequest("Plan", call.request->map(),
+  LogRequest(call.rpc, call.request->map(),
              absl::StrFormat("planner=%s outcome=%s", call.planner_name, outcome),
              status, call.received,
              // "-": rejected before the planner was known.
              RequestLabels{.planner = call.planner_name == "-" ? std::string_view()
                                                                : call.planner_name});
+  if (call.on_finish) {
+    call.on_finish(status);
+    return;
+  }
+  if (const v1::PlanOutcome typed = OutcomeOfStatus(status);
+      call.context != nullptr && IsRejectionOutcome(typed)) {
+    call.context->AddTrailingMetadata(kPlanOutcomeMetadataKey,
+                                      v1::PlanOutcome_Name(typed));
+  }
   call.reactor->Finish(ToGrpcStatus(status));
 }
 
@@ -303,7 +334,8 @@ class PlanJob final : public Job {
       FinishCall(call, s, absl::IsCancelled(s) ? "CANCELLED" : "TIMEOUT");
       return;
     }
-    const StopCondition stop(call.deadline, &call.cancelled, call.max_expansions);
+    const StopCondition stop(call.deadline, &call.cancelled, call.max_expansions,
+                             call.progress);
     absl::StatusOr<PlanResult> result;
     PlanSource source{call.snapshot->grid, call.snapshot->version};
     try {
@@ -765,6 +797,380 @@ void FillCacheStats(IncrementalCache::Kind kind, const IncrementalCache::Stats& 
   out->set_rebuilds(s.rebuilds);
 }
 
+// ---- PlanStream and PlanBatch ----
+//
+// Both run the same PlanCall/PlanJob as Plan; they answer through
+// PlanCall::on_finish instead of a unary reactor. Their mutable state lives
+// in a shared object held by the reactor and by the pool jobs' on_finish, so
+// a job that is still returning from the call that led to Finish never uses
+// a reactor gRPC has already deleted (OnDone may run on another thread as
+// soon as Finish is called). gRPC never runs reactions inline from
+// Start*/Finish, so those are called with the state's mutex held.
+
+// What a failed plan reports on a stream.
+v1::PlanError ToPlanError(const absl::Status& status) {
+  v1::PlanError error;
+  error.set_code(static_cast<int32_t>(ToGrpcCode(status.code())));
+  error.set_message(std::string(status.message()));
+  error.set_outcome(OutcomeOfStatus(status));
+  return error;
+}
+
+// One PlanStream call's writer side: receives progress (as the stop
+// condition's ProgressSink, on the worker) and the final answer, and writes
+// them one at a time. A progress event arriving while a write is in flight
+// replaces any unsent one, so a slow reader costs one pending event, not a
+// backlog; the final event replaces an unsent progress event. Thread-safe.
+class PlanStreamState final : public ProgressSink {
+ public:
+  PlanStreamState(absl::Duration interval, grpc::CallbackServerContext* context,
+                  absl::Time received)
+      : ProgressSink(interval), context_(context), received_(received) {}
+
+  // Must be called before the plan can finish; `reactor` must stay valid
+  // until this state calls its Finish.
+  void Attach(grpc::ServerWriteReactor<v1::PlanStreamEvent>* reactor) {
+    absl::MutexLock lock(&mu_);
+    reactor_ = reactor;
+  }
+
+  // Where the plan job writes its response.
+  v1::PlanResponse* response() { return &response_; }
+
+  // The plan's answer (PlanCall::on_finish): queues the final event.
+  void OnPlanFinished(const absl::Status& status) {
+    absl::MutexLock lock(&mu_);
+    final_.emplace();
+    if (status.ok()) {
+      *final_->mutable_result() = std::move(response_);
+    } else {
+      *final_->mutable_error() = ToPlanError(status);
+      if (const v1::PlanOutcome typed = OutcomeOfStatus(status);
+          IsRejectionOutcome(typed)) {
+        context_->AddTrailingMetadata(kPlanOutcomeMetadataKey,
+                                      v1::PlanOutcome_Name(typed));
+      }
+    }
+    final_status_ = ToGrpcStatus(status);
+    progress_.reset();
+    PumpLocked();
+  }
+
+  void OnWriteDone(bool ok) {
+    absl::MutexLock lock(&mu_);
+    writing_ = false;
+    if (!ok) broken_ = true;
+    PumpLocked();
+  }
+
+ private:
+  void Report(int64_t expansions, double best_f, absl::Time now) override {
+    v1::PlanStreamEvent event;
+    v1::PlanProgress* progress = event.mutable_progress();
+    progress->set_expansions(expansions);
+    if (!std::isnan(best_f)) progress->set_best_f(best_f);
+    progress->set_elapsed_us(absl::ToInt64Microseconds(now - received_));
+    absl::MutexLock lock(&mu_);
+    progress_ = std::move(event);
+    PumpLocked();
+  }
+
+  // Starts the next write, or finishes once the final event is written (or
+  // can no longer be).
+  void PumpLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (writing_ || finished_) return;
+    if (final_.has_value() && (final_sent_ || broken_)) {
+      finished_ = true;
+      reactor_->Finish(final_status_);
+      return;
+    }
+    if (broken_) return;  // the plan is being cancelled; wait for its end
+    if (final_.has_value()) {
+      out_ = std::move(*final_);
+      final_sent_ = true;
+    } else if (progress_.has_value()) {
+      out_ = std::move(*progress_);
+      progress_.reset();
+    } else {
+      return;
+    }
+    writing_ = true;
+    reactor_->StartWrite(&out_);
+  }
+
+  grpc::CallbackServerContext* const context_;
+  const absl::Time received_;
+  // Written by the plan job before on_finish, read by on_finish.
+  v1::PlanResponse response_;
+
+  absl::Mutex mu_;
+  grpc::ServerWriteReactor<v1::PlanStreamEvent>* reactor_ ABSL_GUARDED_BY(mu_) =
+      nullptr;
+  std::optional<v1::PlanStreamEvent> progress_ ABSL_GUARDED_BY(mu_);
+  std::optional<v1::PlanStreamEvent> final_ ABSL_GUARDED_BY(mu_);
+  grpc::Status final_status_ ABSL_GUARDED_BY(mu_);
+  // Owned by gRPC between StartWrite and OnWriteDone.
+  v1::PlanStreamEvent out_ ABSL_GUARDED_BY(mu_);
+  bool writing_ ABSL_GUARDED_BY(mu_) = false;
+  bool final_sent_ ABSL_GUARDED_BY(mu_) = false;
+  // A write failed: the client is gone.
+  bool broken_ ABSL_GUARDED_BY(mu_) = false;
+  bool finished_ ABSL_GUARDED_BY(mu_) = false;
+};
+
+class PlanStreamReactor final : public grpc::ServerWriteReactor<v1::PlanStreamEvent> {
+ public:
+  PlanStreamReactor(std::shared_ptr<PlanCall> call,
+                    std::shared_ptr<PlanStreamState> state)
+      : call_(std::move(call)), state_(std::move(state)) {}
+
+  void OnCancel() override { call_->cancelled.store(true, std::memory_order_relaxed); }
+  void OnWriteDone(bool ok) override {
+    // A failed write means nobody reads the rest: stop planning.
+    if (!ok) call_->cancelled.store(true, std::memory_order_relaxed);
+    state_->OnWriteDone(ok);
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  std::shared_ptr<PlanCall> call_;
+  std::shared_ptr<PlanStreamState> state_;
+};
+
+// One PlanBatch stream. Items are read while fewer than `max_inflight` are
+// outstanding (read, answer not yet written), so a client that sends faster
+// than the workers plan, or reads its answers slowly, is held back by gRPC
+// flow control instead of growing the server's queues. Answers are written
+// in the order they finish. The stream finishes when the client has
+// half-closed and every item is answered, or, once the client cancelled or
+// stopped reading, when every running item has stopped. Thread-safe.
+class PlanBatchState final : public std::enable_shared_from_this<PlanBatchState> {
+ public:
+  struct Deps {
+    const MapStore& store;
+    WorkerPool& pool;
+    InflationCache& inflation;
+    IncrementalCache& cache;
+    const PlannerServiceImpl::Options& limits;
+    size_t max_inflight;
+  };
+
+  PlanBatchState(Deps deps, absl::Time deadline)
+      : deps_(deps), deadline_(deadline), opened_(absl::Now()) {}
+
+  // Starts reading; `reactor` must stay valid until this state calls its
+  // Finish.
+  void Start(grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>*
+                 reactor) {
+    absl::MutexLock lock(&mu_);
+    reactor_ = reactor;
+    reading_ = true;
+    reactor_->StartRead(&read_);
+  }
+
+  void OnReadDone(bool ok) {
+    v1::PlanBatchRequest message;
+    {
+      absl::MutexLock lock(&mu_);
+      reading_ = false;
+      if (broken_ || !ok) {
+        reads_done_ = true;
+        PumpLocked();
+        return;
+      }
+      ++outstanding_;
+      ++items_;
+      message = std::move(read_);
+      read_.Clear();
+    }
+    Accept(std::move(message));
+    absl::MutexLock lock(&mu_);
+    ResumeReadingLocked();
+    PumpLocked();
+  }
+
+  void OnWriteDone(bool ok) {
+    absl::MutexLock lock(&mu_);
+    writing_ = false;
+    --outstanding_;
+    if (!ok) BreakLocked(absl::CancelledError("the client stopped reading"));
+    ResumeReadingLocked();
+    PumpLocked();
+  }
+
+  void OnCancel() {
+    absl::MutexLock lock(&mu_);
+    BreakLocked(absl::CancelledError("the client cancelled the batch"));
+    PumpLocked();
+  }
+
+ private:
+  // An item's request and response; the item's PlanCall points into it.
+  struct Item {
+    v1::PlanBatchRequest request;
+    v1::PlanResponse response;
+  };
+
+  // Validates and submits one item; every path ends in exactly one answer
+  // (FinishCall -> ItemDone, or an immediate error).
+  void Accept(v1::PlanBatchRequest message) {
+    auto item = std::make_shared<Item>();
+    item->request = std::move(message);
+    const std::string& id = item->request.request_id();
+    auto call = std::make_shared<PlanCall>();
+    call->received = absl::Now();
+    call->request = &item->request.request();
+    call->response = &item->response;
+    call->deadline = deadline_;
+    call->rpc = "PlanBatch";
+    call->on_finish = [state = shared_from_this(), item](const absl::Status& s) {
+      state->ItemDone(*item, s);
+    };
+    {
+      absl::MutexLock lock(&mu_);
+      absl::Status refused;
+      if (id.empty()) {
+        refused = absl::InvalidArgumentError(
+            "request_id is empty (give each item a non-empty id)");
+      } else if (running_.contains(id)) {
+        refused = absl::InvalidArgumentError(absl::StrFormat(
+            "request_id '%s' is already in flight on this stream", id));
+      } else if (broken_) {
+        refused = absl::CancelledError("the batch was cancelled");
+      }
+      if (!refused.ok()) {
+        v1::PlanBatchResponse answer;
+        answer.set_request_id(id);
+        *answer.mutable_error() = ToPlanError(refused);
+        AnswerLocked(std::move(answer));
+        return;
+      }
+      // Registered before submitting: the job may answer at once.
+      running_.emplace(id, call);
+    }
+    if (absl::Status s = Prepare(deps_.store, deps_.limits, *call); !s.ok()) {
+      FinishCall(*call, s, "REJECTED");
+      return;
+    }
+    if (absl::Status s = deps_.pool.Submit(
+            std::make_unique<PlanJob>(call, deps_.inflation, deps_.cache),
+            WorkerPool::Priority::kBatch);
+        !s.ok()) {
+      FinishCall(*call, s, "REJECTED");
+    }
+  }
+
+  // PlanCall::on_finish of an accepted item, on a worker or gRPC thread.
+  void ItemDone(Item& item, const absl::Status& status) {
+    // Released after the lock: the caller still holds the call.
+    std::shared_ptr<PlanCall> finished;
+    absl::MutexLock lock(&mu_);
+    const std::string& id = item.request.request_id();
+    if (auto it = running_.find(id); it != running_.end()) {
+      finished = std::move(it->second);
+      running_.erase(it);
+    }
+    v1::PlanBatchResponse answer;
+    answer.set_request_id(id);
+    if (status.ok()) {
+      *answer.mutable_result() = std::move(item.response);
+    } else {
+      *answer.mutable_error() = ToPlanError(status);
+    }
+    AnswerLocked(std::move(answer));
+  }
+
+  void AnswerLocked(v1::PlanBatchResponse answer) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (broken_) {
+      --outstanding_;  // nobody will read it
+    } else {
+      pending_.push_back(std::move(answer));
+    }
+    PumpLocked();
+  }
+
+  // The client is gone: cancel what runs, drop what waits, read no more.
+  void BreakLocked(const absl::Status& why) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (broken_) return;
+    broken_ = true;
+    end_status_ = why;
+    reads_done_ = true;
+    outstanding_ -= pending_.size();
+    pending_.clear();
+    for (auto& [id, call] : running_) {
+      call->cancelled.store(true, std::memory_order_relaxed);
+    }
+  }
+
+  void ResumeReadingLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (reading_ || reads_done_ || finished_ || outstanding_ >= deps_.max_inflight) {
+      return;
+    }
+    reading_ = true;
+    reactor_->StartRead(&read_);
+  }
+
+  void PumpLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (finished_ || writing_) return;
+    if (!pending_.empty()) {
+      out_ = std::move(pending_.front());
+      pending_.pop_front();
+      writing_ = true;
+      reactor_->StartWrite(&out_);
+      return;
+    }
+    // Every running item must have answered first: their on_finish holds
+    // this state, but the reactor is deleted soon after Finish.
+    if (!reads_done_ || !running_.empty()) return;
+    finished_ = true;
+    LogRequest("PlanBatch", "-", absl::StrFormat("items=%d", items_), end_status_,
+               opened_);
+    reactor_->Finish(ToGrpcStatus(end_status_));
+  }
+
+  const Deps deps_;
+  const absl::Time deadline_;
+  const absl::Time opened_;
+
+  absl::Mutex mu_;
+  grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>* reactor_
+      ABSL_GUARDED_BY(mu_) = nullptr;
+  // Owned by gRPC between StartRead and OnReadDone.
+  v1::PlanBatchRequest read_ ABSL_GUARDED_BY(mu_);
+  // Owned by gRPC between StartWrite and OnWriteDone.
+  v1::PlanBatchResponse out_ ABSL_GUARDED_BY(mu_);
+  std::deque<v1::PlanBatchResponse> pending_ ABSL_GUARDED_BY(mu_);
+  // Items submitted or being prepared, by request id (for duplicates and
+  // cancellation); an item leaves when it is answered.
+  absl::flat_hash_map<std::string, std::shared_ptr<PlanCall>> running_
+      ABSL_GUARDED_BY(mu_);
+  // Items read whose answer is not yet written (or dropped).
+  size_t outstanding_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t items_ ABSL_GUARDED_BY(mu_) = 0;
+  bool reading_ ABSL_GUARDED_BY(mu_) = false;
+  // The client half-closed, or the stream broke.
+  bool reads_done_ ABSL_GUARDED_BY(mu_) = false;
+  bool writing_ ABSL_GUARDED_BY(mu_) = false;
+  bool broken_ ABSL_GUARDED_BY(mu_) = false;
+  bool finished_ ABSL_GUARDED_BY(mu_) = false;
+  absl::Status end_status_ ABSL_GUARDED_BY(mu_);
+};
+
+class PlanBatchReactor final
+    : public grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse> {
+ public:
+  explicit PlanBatchReactor(std::shared_ptr<PlanBatchState> state)
+      : state_(std::move(state)) {}
+
+  void OnReadDone(bool ok) override { state_->OnReadDone(ok); }
+  void OnWriteDone(bool ok) override { state_->OnWriteDone(ok); }
+  void OnCancel() override { state_->OnCancel(); }
+  void OnDone() override { delete this; }
+
+ private:
+  std::shared_ptr<PlanBatchState> state_;
+};
+
 }  // namespace
 
 PlannerServiceImpl::PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
@@ -791,6 +1197,7 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
   call->request = request;
   call->response = response;
   call->deadline = DeadlineOf(*context);
+  call->context = context;
   auto* reactor = new CancellableReactor<PlanCall>(call);
   call->reactor = reactor;
 
@@ -901,6 +1308,47 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::GetCacheStats(
   LogRequest("GetCacheStats", "-", "", absl::OkStatus(), received);
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   reactor->Finish(grpc::Status::OK);
+  return reactor;
+}
+
+grpc::ServerWriteReactor<v1::PlanStreamEvent>* PlannerServiceImpl::PlanStream(
+    grpc::CallbackServerContext* context, const v1::PlanRequest* request) {
+  auto call = std::make_shared<PlanCall>();
+  call->received = absl::Now();
+  call->request = request;
+  call->deadline = DeadlineOf(*context);
+  call->rpc = "PlanStream";
+  auto state = std::make_shared<PlanStreamState>(options_.progress_interval,
+                                                 context, call->received);
+  call->response = state->response();
+  call->progress = state.get();
+  call->on_finish = [state](const absl::Status& s) { state->OnPlanFinished(s); };
+  auto* reactor = new PlanStreamReactor(call, state);
+  state->Attach(reactor);
+
+  if (absl::Status s = Prepare(store_, options_, *call); !s.ok()) {
+    FinishCall(*call, s, "REJECTED");
+    return reactor;
+  }
+  if (absl::Status s = pool_.Submit(std::make_unique<PlanJob>(call, inflation_, cache_));
+      !s.ok()) {
+    FinishCall(*call, s, "REJECTED");
+  }
+  return reactor;
+}
+
+grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>*
+PlannerServiceImpl::PlanBatch(grpc::CallbackServerContext* context) {
+  const size_t max_inflight =
+      options_.batch_max_inflight > 0
+          ? static_cast<size_t>(options_.batch_max_inflight)
+          : static_cast<size_t>(2 * pool_.threads());
+  auto state = std::make_shared<PlanBatchState>(
+      PlanBatchState::Deps{store_, pool_, inflation_, cache_, options_,
+                           max_inflight},
+      DeadlineOf(*context));
+  auto* reactor = new PlanBatchReactor(state);
+  state->Start(reactor);
   return reactor;
 }
 

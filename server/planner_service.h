@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 
+#include "absl/time/time.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/incremental_cache.h"
 #include "server/inflation_cache.h"
@@ -15,6 +16,10 @@
 #include "server/worker_pool.h"
 
 namespace pathd::server {
+
+// Trailing metadata key of a rejected Plan or PlanStream call: the typed
+// reason, as a v1::PlanOutcome name (e.g. "PLAN_OUTCOME_START_OCCUPIED").
+inline constexpr char kPlanOutcomeMetadataKey[] = "pathd-plan-outcome";
 
 // Thread-safe. `store`, `pool`, `inflation` and `cache` must outlive the
 // service, and the pool must be shut down (so every accepted job has answered)
@@ -35,6 +40,12 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     // above it answers RESOURCE_EXHAUSTED naming the flag instead of gRPC's
     // bare "Sent message larger than max". 0 = not checked.
     int64_t max_message_bytes = 0;
+    // PlanStream: least time between two progress events
+    // (--progress_interval).
+    absl::Duration progress_interval = absl::Milliseconds(100);
+    // PlanBatch: items per stream read but not yet answered
+    // (--batch_max_inflight); 0 = twice the worker threads.
+    int batch_max_inflight = 0;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
@@ -65,6 +76,16 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   grpc::ServerUnaryReactor* GetCacheStats(grpc::CallbackServerContext* context,
                                           const v1::GetCacheStatsRequest* request,
                                           v1::GetCacheStatsResponse* response) override;
+
+  // Plan with progress events (planner_service.proto); the plan runs on the
+  // pool like Plan's, and its stop condition reports the progress.
+  grpc::ServerWriteReactor<v1::PlanStreamEvent>* PlanStream(
+      grpc::CallbackServerContext* context, const v1::PlanRequest* request) override;
+
+  // Many plans on one stream, each validated on the gRPC thread and run on
+  // the pool as Plan's; at most options.batch_max_inflight per stream.
+  grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>* PlanBatch(
+      grpc::CallbackServerContext* context) override;
 
   // A D* Lite session (server/navigation.h).
   grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>* Navigate(

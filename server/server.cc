@@ -97,6 +97,8 @@ absl::Status PathdServer::Start() {
   planner_options.max_path_points = options_.max_path_points;
   planner_options.max_cost_to_go_cells = options_.max_cost_to_go_cells;
   planner_options.max_message_bytes = max_message_bytes();
+  planner_options.progress_interval = options_.progress_interval;
+  planner_options.batch_max_inflight = options_.batch_max_inflight;
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 

@@ -68,6 +68,10 @@ struct ServerOptions {
   // Non-stream requests taking at least this long are logged at warn level;
   // zero = never. Process-wide (server/request_log.h).
   absl::Duration slow_request_threshold = absl::Seconds(1);
+  // PlanStream: least time between two progress events.
+  absl::Duration progress_interval = absl::Milliseconds(100);
+  // PlanBatch: items in flight per stream; 0 = twice the worker threads.
+  int batch_max_inflight = 0;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be

@@ -130,7 +130,8 @@ PlanResult BestFirstSearch(const Grid& grid, const PlanRequest& request,
   result.outcome = PlanOutcome::kNoPath;
   int64_t expansions = 0;
   while (!open.empty()) {
-    if (const PlanOutcome why = stop.Check(expansions); why != PlanOutcome::kFound) {
+    if (const PlanOutcome why = stop.Check(expansions, open.Top().f);
+        why != PlanOutcome::kFound) {
       result.outcome = why;
       break;
     }

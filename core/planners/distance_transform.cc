@@ -100,7 +100,7 @@ class RasterSweep {
       return PlanOutcome::kExpansionLimit;
     }
     if (expansions_ >= next_clock_poll_) {
-      if (const PlanOutcome why = stop_.CheckNow(); why != PlanOutcome::kFound) {
+      if (const PlanOutcome why = stop_.Poll(expansions_); why != PlanOutcome::kFound) {
         return why;
       }
       next_clock_poll_ = expansions_ + StopCondition::kPollInterval;
@@ -280,7 +280,7 @@ CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& co
 
   CostToGoField field;
   while (!open.empty()) {
-    if (const PlanOutcome why = stop.Check(field.expansions);
+    if (const PlanOutcome why = stop.Check(field.expansions, open.Top().f);
         why != PlanOutcome::kFound) {
       field.outcome = why;
       break;

@@ -312,7 +312,7 @@ class JpsSearch {
     scratch_.At(start_id).g = 0.0;
     open_.Push(start_id, H(start.x, start.y), 0.0);
     while (!open_.empty()) {
-      if (const PlanOutcome why = stop.Check(expansions);
+      if (const PlanOutcome why = stop.Check(expansions, open_.Top().f);
           why != PlanOutcome::kFound) {
         return why;
       }

@@ -129,7 +129,8 @@ class RealTimeSearch {
     open.Push(from, H(from), 0.0);
     for (int32_t n = 0; n < lookahead_ && !open.empty() && open.Top().index != goal_;
          ++n) {
-      if (const PlanOutcome why = stop_.Check(expansions_); why != PlanOutcome::kFound) {
+      if (const PlanOutcome why = stop_.Check(expansions_, open.Top().f);
+          why != PlanOutcome::kFound) {
         return why;
       }
       const SearchScratch::OpenEntry best = open.Pop();

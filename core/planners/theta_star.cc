@@ -107,7 +107,7 @@ class AnyAngleSearch {
     open_.Push(start_, h_(view_.CellOf(start_)), 0.0);
     int64_t expansions = 0;
     while (!open_.empty()) {
-      if (const PlanOutcome why = stop.Check(expansions);
+      if (const PlanOutcome why = stop.Check(expansions, open_.Top().f);
           why != PlanOutcome::kFound) {
         result.outcome = why;
         break;

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -136,6 +137,54 @@ TEST_P(EveryPlanner, BlockedOrOffMapEndpointsNameTheEndpoint) {
   EXPECT_NE(r.status().message().find("outside"), std::string::npos) << r.status();
   r = Plan(grid, {0, 0}, {0, 3});
   EXPECT_NE(r.status().message().find("goal"), std::string::npos) << r.status();
+}
+
+TEST_P(EveryPlanner, EndpointErrorsCarryTheirFault) {
+  Grid grid = MakeGrid({"..#", "...", "#.."});
+  EXPECT_EQ(EndpointFaultOf(Plan(grid, {2, 0}, {0, 0}).status()),
+            EndpointFault::kStartBlocked);
+  EXPECT_EQ(EndpointFaultOf(Plan(grid, {0, 0}, {0, 2}).status()),
+            EndpointFault::kGoalBlocked);
+  EXPECT_EQ(EndpointFaultOf(Plan(grid, {-1, 0}, {0, 0}).status()),
+            EndpointFault::kStartOutsideMap);
+  EXPECT_EQ(EndpointFaultOf(Plan(grid, {0, 0}, {0, 3}).status()),
+            EndpointFault::kGoalOutsideMap);
+  CostParams bad;
+  bad.cost_weight = -1.0;
+  const absl::Status other = Plan(grid, {0, 0}, {1, 1}, bad).status();
+  EXPECT_EQ(other.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(EndpointFaultOf(other), std::nullopt);
+}
+
+// Counts reports; with interval zero every poll after the first reports.
+class CountingSink final : public ProgressSink {
+ public:
+  explicit CountingSink(absl::Duration interval) : ProgressSink(interval) {}
+  int reports = 0;
+  int64_t last_expansions = 0;
+
+ protected:
+  void Report(int64_t expansions, double /*best_f*/, absl::Time /*now*/) override {
+    ++reports;
+    last_expansions = expansions;
+  }
+};
+
+TEST_P(EveryPlanner, LongSearchesReportProgressThroughTheStopCondition) {
+  // A wall with one gap at the far end: every planner works through
+  // thousands of cells (or steps), so the stop condition polls several times.
+  std::vector<std::string> rows(96, std::string(96, '.'));
+  for (int y = 0; y < 95; ++y) rows[y][48] = '#';
+  const Grid grid = MakeGrid(rows);
+  CountingSink sink(absl::ZeroDuration());
+  const StopCondition stop(absl::InfiniteFuture(), nullptr, 0, &sink);
+  auto r = Plan(grid, {0, 0}, {95, 0}, {}, stop);
+  ASSERT_TRUE(r.ok()) << r.status();
+  if (r->expansions < 4 * StopCondition::kPollInterval) {
+    GTEST_SKIP() << "only " << r->expansions << " expansions";
+  }
+  EXPECT_GE(sink.reports, 2) << r->expansions << " expansions";
+  EXPECT_LE(sink.last_expansions, r->expansions);
 }
 
 TEST_P(EveryPlanner, UnknownCellsFollowTheOption) {
@@ -400,6 +449,19 @@ TEST_P(EveryPlanner, RandomWeightedGridsAgreeWithReferences) {
 INSTANTIATE_TEST_SUITE_P(Registry, EveryPlanner,
                          ::testing::ValuesIn(PlannerRegistry::Default().Names()),
                          [](const auto& info) { return info.param; });
+
+TEST(ProgressSink, ReportsOncePerIntervalAfterTheFirstPoll) {
+  CountingSink every_poll(absl::ZeroDuration());
+  CountingSink hourly(absl::Hours(1));
+  for (int i = 0; i < 5; ++i) {
+    every_poll.Poll(i * 1024, 1.0);
+    hourly.Poll(i * 1024, 1.0);
+  }
+  // The first poll arms the interval; each later one passed a zero interval.
+  EXPECT_EQ(every_poll.reports, 4);
+  EXPECT_EQ(every_poll.last_expansions, 4 * 1024);
+  EXPECT_EQ(hourly.reports, 0);
+}
 
 TEST(PlannerRegistry, CreatesByNameAndListsNames) {
   const PlannerRegistry& registry = PlannerRegistry::Default();

@@ -409,7 +409,12 @@ TEST_F(AdmissionTest, SigtermWithALongGraceLetsTheInFlightPlanFinish) {
         call->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
   }
   if (!plan_done) {
-    EXPECT_EQ(refused.status().code(), absl::StatusCode::kUnavailable) << refused.status();
+    // UNAVAILABLE once gRPC has stopped accepting; a call that reached the
+    // server in the instant Shutdown began is cancelled by gRPC itself
+    // (CANCELLED, seen about once in five runs). Either way it is refused.
+    EXPECT_THAT(refused.status().code(),
+                testing::AnyOf(absl::StatusCode::kUnavailable, absl::StatusCode::kCancelled))
+        << refused.status();
   }
   const grpc::Status status = call->Get();
   ASSERT_TRUE(status.ok()) << status.error_message();

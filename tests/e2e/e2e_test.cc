@@ -1479,5 +1479,113 @@ TEST_F(E2eTest, MetricsCountRequestsAndPathctlPrintsThem) {
   EXPECT_TRUE(absl::StartsWith(gone.err, "error: UNAVAILABLE: cannot fetch")) << gone;
 }
 
+TEST_F(E2eTest, PlanProgressStreamsProgressLinesThenTheSamePlan) {
+  EXPECT_EQ(StopDaemon(), 0);
+  ASSERT_NO_FATAL_FAILURE(StartDaemon({"--progress_interval=1ms"}));
+  // Dijkstra on an open 512 x 512 room: about 260 000 expansions, over 250
+  // stop-condition polls, so the 1 ms interval passes many times.
+  ASSERT_NO_FATAL_FAILURE(CreateMap("big", OpenRoomMap(512, 512)));
+  const std::vector<std::string> plan = {"plan", "big", "0", "0", "511", "300",
+                                         "--planner=dijkstra"};
+  std::vector<std::string> with_progress = plan;
+  with_progress.push_back("--progress");
+  const ProcessResult streamed = Ctl(with_progress);
+  ASSERT_EQ(streamed.exit_code, 0) << streamed;
+  // stderr is a pipe here, not a terminal: one line per event.
+  const std::vector<std::string> lines =
+      absl::StrSplit(streamed.err, '\n', absl::SkipEmpty());
+  ASSERT_FALSE(lines.empty()) << streamed;
+  for (const std::string& line : lines) {
+    EXPECT_TRUE(absl::StartsWith(line, "progress: ")) << line;
+    EXPECT_TRUE(absl::StrContains(line, " expansions, best f ")) << line;
+  }
+  const ProcessResult unary = Ctl(plan);
+  ASSERT_EQ(unary.exit_code, 0) << unary;
+  EXPECT_EQ(unary.err, "");
+  // The same answer, line for line, except the planning time.
+  const auto without_time = [](const std::string& out) {
+    std::vector<std::string> kept;
+    for (absl::string_view line : absl::StrSplit(out, '\n')) {
+      if (!absl::StartsWith(line, "time:")) kept.emplace_back(line);
+    }
+    return kept;
+  };
+  EXPECT_EQ(without_time(streamed.out), without_time(unary.out));
+
+  ExpectRpcError({"plan", "big", "0", "0", "600", "0", "--progress"},
+                 "INVALID_ARGUMENT",
+                 {"goal (600, 0) is outside", "(outcome GOAL_OUTSIDE_MAP)"});
+}
+
+TEST_F(E2eTest, BatchAnswersEveryLineAndExitsOneOnItemErrors) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("hall", OpenRoomMap(30, 5)));
+  ASSERT_EQ(Ctl({"maps", "set", "room", "5", "5", "lethal"}).exit_code, 0);
+  const std::string good = MapFile("good.txt",
+                                   "# ID MAP SX SY GX GY [PLANNER]\n"
+                                   "r1 room 0 0 9 9\n"
+                                   "\n"
+                                   "h1 hall 0 0 29 4 dijkstra\n"
+                                   "r2 room 0 9 9 0 jps\n");
+  const ProcessResult ok = Ctl({"batch", good, "--cost_weight", "0"});
+  ASSERT_EQ(ok.exit_code, 0) << ok;
+  std::vector<std::string> lines = absl::StrSplit(ok.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(lines.size(), 4u) << ok;
+  std::sort(lines.begin(), lines.end() - 1);
+  // 25 straight + 4 diagonal moves; r2 cannot cut the corner at (5,5), so
+  // 8 diagonal + 2 straight.
+  EXPECT_TRUE(absl::StartsWith(lines[0], "h1 found cost 30.656854 ")) << lines[0];
+  EXPECT_TRUE(absl::StartsWith(lines[1], "r1 found cost ")) << lines[1];
+  EXPECT_TRUE(absl::StartsWith(lines[2], "r2 found cost 13.313708 ")) << lines[2];
+  EXPECT_TRUE(absl::StartsWith(lines[3], "summary: 3 of 3 answered: 3 found, 0 no path, "
+                                         "0 errors in "))
+      << lines[3];
+
+  const std::string mixed = MapFile("mixed.txt",
+                                    "a room 0 0 9 9\n"
+                                    "b room 5 5 0 0\n"
+                                    "c room 0 0 10 0\n"
+                                    "d nowhere 0 0 1 1\n"
+                                    "e hall 0 0 29 0\n");
+  const ProcessResult r = Ctl({"batch", mixed});
+  EXPECT_EQ(r.exit_code, 1) << r;
+  lines = absl::StrSplit(r.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(lines.size(), 6u) << r;
+  std::sort(lines.begin(), lines.end() - 1);
+  EXPECT_TRUE(absl::StartsWith(lines[0], "a found ")) << lines[0];
+  EXPECT_EQ(lines[1],
+            "b error INVALID_ARGUMENT START_OCCUPIED: start (5, 5) is on a blocked "
+            "cell (cost 254)");
+  EXPECT_EQ(lines[2],
+            "c error INVALID_ARGUMENT GOAL_OUTSIDE_MAP: goal (10, 0) is outside the "
+            "10 x 10 map");
+  EXPECT_TRUE(absl::StartsWith(lines[3], "d error NOT_FOUND MAP_NOT_FOUND: ")) << lines[3];
+  EXPECT_TRUE(absl::StartsWith(lines[4], "e found ")) << lines[4];
+  EXPECT_TRUE(absl::StartsWith(
+      lines[5], "summary: 5 of 5 answered: 2 found, 0 no path, 3 errors in "))
+      << lines[5];
+
+  const ProcessResult json = Ctl({"batch", mixed, "--json"});
+  EXPECT_EQ(json.exit_code, 1) << json;
+  // Only JSON on stdout; the summary goes to stderr.
+  lines = absl::StrSplit(json.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(lines.size(), 5u) << json;
+  EXPECT_TRUE(absl::StartsWith(json.err, "summary: 5 of 5 answered: ")) << json;
+  int errors = 0;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const auto answer = ParseJson<v1::PlanBatchResponse>(lines[i]);
+    if (answer.request_id() == "d") {
+      EXPECT_EQ(answer.error().outcome(), v1::PLAN_OUTCOME_MAP_NOT_FOUND);
+    }
+    errors += answer.has_error();
+  }
+  EXPECT_EQ(errors, 3);
+
+  const std::string malformed = MapFile("bad.txt", "a room 0 0 9 9\nb room 0 x 9 9\n");
+  const ProcessResult bad = Ctl({"batch", malformed});
+  EXPECT_EQ(bad.exit_code, 2) << bad;
+  EXPECT_TRUE(absl::StrContains(bad.err, "bad.txt:2: '0 x' is not two integers")) << bad;
+}
+
 }  // namespace
 }  // namespace pathd
