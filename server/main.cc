@@ -42,6 +42,10 @@ ABSL_FLAG(int64_t, max_map_cells, int64_t{64} << 20,
           "largest map accepted, in cells (width * height)");
 ABSL_FLAG(int64_t, max_expansions, 0,
           "cap on search expansions per plan request; 0 = unlimited");
+ABSL_FLAG(int64_t, max_returned_expansions, 1'000'000,
+          "most expanded cells one Plan response returns for "
+          "options.return_expansions (the response says when it was "
+          "truncated); about 10 bytes each on the wire");
 ABSL_FLAG(std::string, map_dir, "",
           "directory whose .map/.yaml files are loaded at start-up (named after "
           "the file stem) and readable via CreateMap map_dir_file; empty = none");
@@ -182,6 +186,10 @@ pathd::server::ServerOptions OptionsFromFlags() {
   if (queue_depth < 1) FlagError("queue_depth", "must be >= 1");
   if (options.max_map_cells < 1) FlagError("max_map_cells", "must be >= 1");
   if (options.max_expansions < 0) FlagError("max_expansions", "must be >= 0");
+  options.max_returned_expansions = absl::GetFlag(FLAGS_max_returned_expansions);
+  if (options.max_returned_expansions < 0) {
+    FlagError("max_returned_expansions", "must be >= 0");
+  }
   if (options.shutdown_grace < absl::ZeroDuration()) {
     FlagError("shutdown_grace", "must not be negative");
   }

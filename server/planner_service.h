@@ -24,6 +24,8 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   struct Options {
     // Cap on expansions per request (--max_expansions); 0 = unlimited.
     int64_t max_expansions = 0;
+    // Most cells PlanResponse.expanded holds (--max_returned_expansions).
+    int64_t max_returned_expansions = 1'000'000;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,

@@ -93,6 +93,7 @@ absl::Status PathdServer::Start() {
                                   options_.max_expansions});
   PlannerServiceImpl::Options planner_options;
   planner_options.max_expansions = options_.max_expansions;
+  planner_options.max_returned_expansions = options_.max_returned_expansions;
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 

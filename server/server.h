@@ -35,6 +35,8 @@ struct ServerOptions {
   int64_t max_map_cells = int64_t{64} << 20;
   // Per-request expansion cap; 0 = unlimited.
   int64_t max_expansions = 0;
+  // Most expanded cells one Plan response returns (options.return_expansions).
+  int64_t max_returned_expansions = 1'000'000;
   // Directory of maps loaded at start-up and readable via map_dir_file;
   // empty = none.
   std::string map_dir;
