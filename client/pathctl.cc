@@ -57,6 +57,7 @@ constexpr char kSynopsis[] =
                        [--heuristic_weight W] [--lookahead N]
                        [--cost_to_go_file F] [--pf_* ...]
                        [--goal_tolerance C | --goal_tolerance_m M]
+                       [--via X,Y[;X,Y...] [--allow_partial]] [--expansions]
                        [--progress]
   pathctl [flags] batch FILE|- [--planner P] [--world] [--max_expansions N]
                        [--heuristic_weight W] [--simplify] [--lookahead N]
@@ -557,6 +558,43 @@ absl::StatusOr<v1::PlanResponse> PlanWithProgress(Env& env,
   return *std::move(result);
 }
 
+// Adds --via's "X,Y;X,Y..." to request.via: cells, or world metres with
+// --world. INVALID_ARGUMENT (a usage error) naming the bad point.
+absl::Status AddViaPoints(const Options& options, v1::PlanRequest* request) {
+  if (options.via.empty()) return absl::OkStatus();
+  const std::vector<std::string> points =
+      absl::StrSplit(options.via, ';', absl::SkipWhitespace());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const std::vector<std::string> xy = absl::StrSplit(points[i], ',');
+    const std::string name = absl::StrCat("--via point ", i + 1);
+    if (xy.size() != 2) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(name, ": '", points[i], "' is not X,Y"));
+    }
+    const Args parts(xy);
+    static constexpr const char* kXY[] = {"X", "Y"};
+    v1::Position* via = request->add_via();
+    if (options.world) {
+      absl::StatusOr<std::vector<double>> p = ParseDoubles(parts, kXY);
+      if (!p.ok()) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(name, ": ", p.status().message()));
+      }
+      via->mutable_world()->set_x((*p)[0]);
+      via->mutable_world()->set_y((*p)[1]);
+    } else {
+      absl::StatusOr<std::vector<int32_t>> p = ParseInts(parts, kXY);
+      if (!p.ok()) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(name, ": ", p.status().message()));
+      }
+      via->mutable_cell()->set_x((*p)[0]);
+      via->mutable_cell()->set_y((*p)[1]);
+    }
+  }
+  return absl::OkStatus();
+}
+
 int Plan(Env& env, Args args) {
   const Options& options = env.options();
   if (args.size() != 5) return env.Usage("plan takes NAME SX SY GX GY");
@@ -606,6 +644,11 @@ int Plan(Env& env, Args args) {
   if (options.goal_tolerance_m.has_value()) {
     plan_options->set_goal_tolerance_m(*options.goal_tolerance_m);
   }
+  if (absl::Status s = AddViaPoints(options, &request); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  request.set_allow_partial(options.allow_partial);
+  plan_options->set_return_expansions(options.expansions);
   plan_options->set_simplify(options.simplify);
   plan_options->set_lookahead(options.lookahead);
   plan_options->set_return_cost_to_go(!options.cost_to_go_file.empty());
@@ -667,11 +710,34 @@ int Plan(Env& env, Args args) {
   if (response->robot_radius_cells() > 0) {
     out << absl::StrFormat("robot radius: %g cells\n", response->robot_radius_cells());
   }
-  if (response->found()) {
+  // A partial plan (--allow_partial) has a path without found.
+  const bool has_path = response->path_size() > 0;
+  if (has_path) {
     out << absl::StrFormat("cost:        %.6f\nlength:      %.6f\n",
                            response->cost(), response->length());
   }
+  if (request.via_size() > 0) {
+    const int reached = response->reached_goal_index();
+    out << absl::StrFormat(
+        "via:         %d point%s; reached %s\n", request.via_size(),
+        request.via_size() == 1 ? "" : "s",
+        reached < 0 ? std::string("none")
+        : reached == request.via_size()
+            ? std::string("the goal")
+            : absl::StrFormat("via[%d] (goal index %d)", reached, reached));
+    if (response->leg_end_indices_size() > 0) {
+      out << "legs end at: path["
+          << absl::StrJoin(response->leg_end_indices(), "], path[") << "]\n";
+    }
+  }
   out << absl::StrFormat("expansions:  %d\n", response->expansions());
+  if (options.expansions) {
+    out << absl::StrFormat("expanded:    %d cells returned%s\n",
+                           response->expanded_size(),
+                           response->expanded_truncated()
+                               ? " (truncated: the server's --max_returned_expansions)"
+                               : "");
+  }
   // Only the caching planners fill these; elsewhere "no" would mislead.
   if (request.planner() == v1::PLANNER_DSTAR_LITE ||
       request.planner() == v1::PLANNER_SPM) {
@@ -693,7 +759,7 @@ int Plan(Env& env, Args args) {
         << options.cost_to_go_file << "\n";
   }
   out << absl::StrFormat("time:        %d us\n", response->planning_time_us());
-  if (response->found()) {
+  if (has_path) {
     out << "path (" << response->path_size()
         << (response->any_angle() ? " vertices, any-angle" : " cells")
         << "): " << FormatPath(response->path()) << "\n";
@@ -1431,6 +1497,12 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --goal_tolerance C   plan: when the goal cell is blocked, plan to the nearest
                        free cell within C cells and say so (up to 1024 cells)
   --goal_tolerance_m M plan: the same in metres
+  --via X,Y[;X,Y...]   plan: visit these points in order before the goal (up to
+                       256; metres with --world); one leg per point
+  --allow_partial      plan: with --via, when a leg finds no path print the path
+                       to the last reached point (exit code 3 still)
+  --expansions         plan: ask for the cells the search expanded; prints how
+                       many came back (--json prints them, as "expanded")
   --path_file F        check: read the path from F, one "X Y" per line ('#'
                        starts a comment line)
   --script FILE        navigate: replay this robot run (format below); without

@@ -95,6 +95,13 @@ struct Options {
   // plan: goal tolerance in cells or metres (at most one).
   std::optional<double> goal_tolerance_cells;
   std::optional<double> goal_tolerance_m;
+  // plan: via points "X,Y;X,Y..." (cells, or metres with --world) visited in
+  // order before the goal; empty: none.
+  std::string via;
+  // plan: with via, return the path to the last reached goal when a leg fails.
+  bool allow_partial = false;
+  // plan: ask for the expanded cells (print their count; --json: the cells).
+  bool expansions = false;
   // check: read the poses from this file ("X Y" per line) instead of the
   // command line.
   std::string path_file;

@@ -48,6 +48,13 @@ ABSL_FLAG(std::optional<double>, goal_tolerance, std::nullopt,
           "blocked goal");
 ABSL_FLAG(std::optional<double>, goal_tolerance_m, std::nullopt,
           "plan: the goal tolerance in metres");
+ABSL_FLAG(std::string, via, "",
+          "plan: via points X,Y[;X,Y...] visited in order before the goal");
+ABSL_FLAG(bool, allow_partial, false,
+          "plan: with --via, return the path to the last reached goal when a "
+          "leg finds no path");
+ABSL_FLAG(bool, expansions, false,
+          "plan: return the expanded cells (prints the count; --json: the cells)");
 ABSL_FLAG(std::string, path_file, "", "check: the path, one \"X Y\" per line");
 ABSL_FLAG(bool, simplify, false, "plan: simplify the path by ray-shooting");
 ABSL_FLAG(int, lookahead, 0, "plan: rtaa_star/lrta_star look-ahead (0: 64)");
@@ -119,6 +126,9 @@ int main(int argc, char** argv) {
   options.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
   options.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance);
   options.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance_m);
+  options.via = absl::GetFlag(FLAGS_via);
+  options.allow_partial = absl::GetFlag(FLAGS_allow_partial);
+  options.expansions = absl::GetFlag(FLAGS_expansions);
   options.path_file = absl::GetFlag(FLAGS_path_file);
   options.simplify = absl::GetFlag(FLAGS_simplify);
   options.lookahead = absl::GetFlag(FLAGS_lookahead);

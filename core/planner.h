@@ -4,6 +4,7 @@
 #define PATHD_CORE_PLANNER_H_
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -54,6 +55,33 @@ struct PotentialFieldParams {
   int64_t max_steps = 0;
 };
 
+// Collects the cells a search expands (takes from its open list or queue to
+// close), in expansion order, up to a cap, so tools can draw what a search
+// touched. Not thread-safe: one per query. A PlanRequest points to one only
+// when the caller asked; the best-first loop checks the pointer once per
+// search, the other loops once per expansion.
+class ExpansionRecorder {
+ public:
+  explicit ExpansionRecorder(size_t max_cells) : max_cells_(max_cells) {}
+
+  // Appends `cell`, or notes the truncation once the cap is reached.
+  void Record(Cell cell) {
+    if (cells_.size() < max_cells_) {
+      cells_.push_back(cell);
+    } else {
+      truncated_ = true;
+    }
+  }
+  const std::vector<Cell>& cells() const { return cells_; }
+  // More cells were expanded than the cap let through.
+  bool truncated() const { return truncated_; }
+
+ private:
+  size_t max_cells_;
+  std::vector<Cell> cells_;
+  bool truncated_ = false;
+};
+
 // One planning query.
 struct PlanRequest {
   Cell start;
@@ -68,6 +96,11 @@ struct PlanRequest {
   // Planners with PlannerTraits::cost_to_go fill PlanResult::cost_to_go.
   bool want_cost_to_go = false;
   PotentialFieldParams potential;
+  // Not owned; null: record nothing. When set, the planners that search cell
+  // by cell record every expansion here (one cell per unit of
+  // PlanResult::expansions); the incremental planners (lpa_star, dstar_lite,
+  // spm), the raster distance_transform and potential_field record nothing.
+  ExpansionRecorder* expansion_recorder = nullptr;
 
   // A request with every option at its default.
   static PlanRequest Between(Cell start, Cell goal, CostParams cost = {}) {
@@ -186,6 +219,12 @@ class StopCondition {
   PlanOutcome Poll(int64_t expansions, double best_f = kNoKey) const {
     if (progress_ != nullptr) progress_->Poll(expansions, best_f);
     return CheckNow();
+  }
+
+  // The same deadline and cancel flag with another expansion budget (0:
+  // none), for callers that split one budget over several searches.
+  StopCondition WithMaxExpansions(int64_t max_expansions) const {
+    return StopCondition(deadline_, cancelled_, max_expansions);
   }
 
   absl::Time deadline() const { return deadline_; }

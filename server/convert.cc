@@ -348,7 +348,9 @@ void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
     response->mutable_cost_to_go()->Add(result.cost_to_go.begin(),
                                         result.cost_to_go.end());
   }
-  if (!result.found()) return;
+  // A result that did not find its goal may still carry a path: the path to
+  // the last reached via point of a partial plan (allow_partial).
+  if (!result.found() && result.path.empty()) return;
   response->set_any_angle(result.any_angle);
   response->set_cost(result.cost);
   response->set_length(result.length);

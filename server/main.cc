@@ -59,6 +59,10 @@ ABSL_FLAG(int64_t, max_message_bytes, 0,
           "largest gRPC message received or sent (gRPC answers "
           "RESOURCE_EXHAUSTED beyond); 0 = max_map_cells + 1 MiB, so a "
           "CreateMap of the largest map fits");
+ABSL_FLAG(int64_t, max_returned_expansions, 1'000'000,
+          "most expanded cells one Plan response returns for "
+          "options.return_expansions (the response says when it was "
+          "truncated); about 10 bytes each on the wire");
 ABSL_FLAG(std::string, map_dir, "",
           "directory whose .map/.yaml files are loaded at start-up (named after "
           "the file stem) and readable via CreateMap map_dir_file; empty = none");
@@ -228,6 +232,10 @@ pathd::server::ServerOptions OptionsFromFlags() {
   options.max_message_bytes = absl::GetFlag(FLAGS_max_message_bytes);
   if (options.max_message_bytes < 0 || options.max_message_bytes > INT32_MAX) {
     FlagError("max_message_bytes", "must be in 0..2147483647 (gRPC's limit)");
+  }
+  options.max_returned_expansions = absl::GetFlag(FLAGS_max_returned_expansions);
+  if (options.max_returned_expansions < 0) {
+    FlagError("max_returned_expansions", "must be >= 0");
   }
   if (options.shutdown_grace < absl::ZeroDuration()) {
     FlagError("shutdown_grace", "must not be negative");

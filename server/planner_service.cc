@@ -26,6 +26,7 @@
 #include "absl/time/clock.h"
 #include "core/cost_model.h"
 #include "core/path_simplify.h"
+#include "core/plan_through.h"
 #include "core/planner.h"
 #include "core/status_macros.h"
 #include "server/convert.h"
@@ -83,6 +84,18 @@ struct PlanCall {
   // (reading `response` when the status is OK). Called exactly once, as the
   // call's last use of request/response.
   std::function<void(const absl::Status&)> on_finish;
+  // Filled by PrepareViaAndExpansions(). PlanRequest.via as cells (empty: a
+  // plain plan) and allow_partial.
+  std::vector<Cell> via;
+  bool allow_partial = false;
+  // Set for options.return_expansions; core_request.expansion_recorder points
+  // to it (PlanCall is never moved: it lives behind a shared_ptr).
+  std::optional<ExpansionRecorder> recorder;
+
+  // Filled by PlanJob for via plans: ThroughResult's leg fields.
+  int32_t reached_goal_index = -1;
+  std::vector<int32_t> leg_end_indices;
+  int32_t failed_leg = -1;
 };
 
 // How close to its deadline a cancelled call counts as timed out (see
@@ -253,9 +266,9 @@ absl::Time DeadlineOf(const grpc::CallbackServerContext& context) {
   return absl::FromChrono(deadline);
 }
 
-// Resolves everything that can fail before planning, on the gRPC thread, so
-// a bad request never takes a queue slot.
-absl::Status Prepare(const MapStore& store,
+// The map, endpoints, options and planner of a request: the part of
+// Prepare() every plan has.
+absl::Status PrepareEndpointsAndPlanner(const MapStore& store,
                      const PlannerServiceImpl::Options& limits, PlanCall& call) {
   const v1::PlanRequest& request = *call.request;
   PATHD_ASSIGN_OR_RETURN(call.planner_name, PlannerName(request.planner()));
@@ -310,6 +323,87 @@ absl::Status Prepare(const MapStore& store,
         "planner '%s' is not available on this server", call.planner_name));
   }
   return absl::OkStatus();
+}
+
+// The via points and the expansion recorder, after Prepare() succeeded: on
+// the gRPC thread too, so a bad via point never takes a queue slot.
+absl::Status PrepareViaAndExpansions(int64_t max_returned_expansions,
+                                     PlanCall& call) {
+  const v1::PlanRequest& request = *call.request;
+  if (request.options().return_expansions()) {
+    call.recorder.emplace(static_cast<size_t>(max_returned_expansions));
+    call.core_request.expansion_recorder = &*call.recorder;
+  }
+  call.allow_partial = request.allow_partial();
+  if (request.via().empty()) return absl::OkStatus();
+  if (call.cached.has_value()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "via: planner %s keeps cached state for one goal and may answer on a "
+        "newer map version, so it cannot plan through via points; use a "
+        "planner such as astar or dijkstra",
+        call.planner_name));
+  }
+  if (call.core_request.want_cost_to_go) {
+    return absl::InvalidArgumentError(
+        "options.return_cost_to_go: a cost-to-go field belongs to one goal, "
+        "and a plan through via points has several");
+  }
+  const Grid& grid = *call.snapshot->grid;
+  call.via.reserve(request.via_size());
+  for (int i = 0; i < request.via_size(); ++i) {
+    PATHD_ASSIGN_OR_RETURN(
+        const Cell cell,
+        CellFromPosition(request.via(i), grid, absl::StrFormat("via[%d]", i)));
+    call.via.push_back(cell);
+  }
+  return ValidateVia(grid, call.via, call.core_request.cost);
+}
+
+// Resolves everything that can fail before planning, on the gRPC thread, so
+// a bad request never takes a queue slot (Plan, PlanStream and every
+// PlanBatch item).
+absl::Status Prepare(const MapStore& store,
+                     const PlannerServiceImpl::Options& limits, PlanCall& call) {
+  PATHD_RETURN_IF_ERROR(PrepareEndpointsAndPlanner(store, limits, call));
+  return PrepareViaAndExpansions(limits.max_returned_expansions, call);
+}
+
+// Fills the leg fields and the expanded cells of a response that
+// FillPlanResponse filled; for a failed via plan, says which leg failed.
+void FillLegsAndExpansions(const PlanCall& call, const PlanResult& result,
+                           v1::PlanResponse* response) {
+  if (call.via.empty()) {
+    // A plain plan is a plan with one leg.
+    response->set_reached_goal_index(result.found() ? 0 : -1);
+    if (result.found()) {
+      response->add_leg_end_indices(static_cast<int32_t>(result.path.size()) - 1);
+    }
+  } else {
+    response->set_reached_goal_index(call.reached_goal_index);
+    response->mutable_leg_end_indices()->Add(call.leg_end_indices.begin(),
+                                             call.leg_end_indices.end());
+  }
+  if (call.failed_leg >= 0) {
+    const auto n = static_cast<int32_t>(call.via.size());
+    const Cell to = call.failed_leg == n ? call.core_request.goal
+                                         : call.via[call.failed_leg];
+    const Cell from = call.failed_leg == 0 ? call.core_request.start
+                                           : call.via[call.failed_leg - 1];
+    // FillPlanResponse's "no path" names the whole plan's ends.
+    const std::string why =
+        result.outcome == PlanOutcome::kNoPath
+            ? absl::StrFormat("no path from %s to %s", CellToString(from),
+                              CellToString(to))
+            : response->reason();
+    response->set_reason(
+        absl::StrFormat("%s: %s", LegName(call.failed_leg, n), why));
+  }
+  if (call.recorder.has_value()) {
+    auto* expanded = response->mutable_expanded();
+    expanded->Reserve(static_cast<int>(call.recorder->cells().size()));
+    for (const Cell& c : call.recorder->cells()) *expanded->Add() = ToProto(c);
+    response->set_expanded_truncated(call.recorder->truncated());
+  }
 }
 
 // Where a plan came from, for the response.
@@ -382,6 +476,7 @@ class PlanJob final : public Job {
     *response->mutable_requested_goal() = ToProto(call.requested_goal);
     response->set_goal_substituted(
         !(call.core_request.goal == call.requested_goal));
+    FillLegsAndExpansions(call, *result, response);
     if (absl::Status s =
             CheckResponseSize(*response, "plan response", call.max_message_bytes);
         !s.ok()) {
@@ -410,6 +505,25 @@ class PlanJob final : public Job {
       PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(
           *call.snapshot->grid, *source.grid, call.robot_radius_cells,
           {{call.core_request.start, "start"}, {call.core_request.goal, "goal"}}));
+      for (size_t i = 0; i < call.via.size(); ++i) {
+        const std::string what = absl::StrFormat("via[%d]", i);
+        PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(
+            *call.snapshot->grid, *source.grid, call.robot_radius_cells,
+            {{call.via[i], what.c_str()}}));
+      }
+    }
+    if (!call.via.empty()) {
+      // One grid for every leg: the snapshot (or its inflation) taken once.
+      PATHD_ASSIGN_OR_RETURN(
+          ThroughResult through,
+          PlanThrough(*call.planner, *source.grid, call.core_request, call.via,
+                      stop, scratch,
+                      ThroughOptions{.allow_partial = call.allow_partial,
+                                     .simplify = call.simplify}));
+      call.reached_goal_index = through.reached_goal_index;
+      call.leg_end_indices = std::move(through.leg_end_indices);
+      call.failed_leg = through.failed_leg;
+      return std::move(through.plan);
     }
     PlanResult result;
     if (call.cached.has_value()) {

@@ -46,6 +46,8 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     // PlanBatch: items per stream read but not yet answered
     // (--batch_max_inflight); 0 = twice the worker threads.
     int batch_max_inflight = 0;
+    // Most cells PlanResponse.expanded holds (--max_returned_expansions).
+    int64_t max_returned_expansions = 1'000'000;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,

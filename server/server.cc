@@ -99,6 +99,7 @@ absl::Status PathdServer::Start() {
   planner_options.max_message_bytes = max_message_bytes();
   planner_options.progress_interval = options_.progress_interval;
   planner_options.batch_max_inflight = options_.batch_max_inflight;
+  planner_options.max_returned_expansions = options_.max_returned_expansions;
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 

@@ -46,6 +46,8 @@ struct ServerOptions {
   // Largest gRPC message received or sent; 0 = max_map_cells + 1 MiB, so a
   // raw CreateMap of the largest map fits.
   int64_t max_message_bytes = 0;
+  // Most expanded cells one Plan response returns (options.return_expansions).
+  int64_t max_returned_expansions = 1'000'000;
   // Directory of maps loaded at start-up and readable via map_dir_file;
   // empty = none.
   std::string map_dir;

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -115,6 +116,15 @@ template <typename Priority, typename Listener = NullListener>
 PlanResult BestFirstSearch(const Grid& grid, const PlanRequest& request,
                            const StopCondition& stop, SearchScratch& scratch,
                            Priority&& priority, Listener&& listener = Listener()) {
+  if constexpr (std::is_same_v<std::decay_t<Listener>, NullListener>) {
+    // Decided once per search, so the loop that records nothing tests
+    // nothing per expansion.
+    if (request.expansion_recorder != nullptr) {
+      return BestFirstSearch(grid, request, stop, scratch, priority,
+                             RecordingListener{*request.expansion_recorder,
+                                               grid.width()});
+    }
+  }
   const absl::Time started = absl::Now();
   const GridView view(grid, request.cost);
   scratch.BeginSearch(grid.size());

@@ -47,6 +47,7 @@ class BfsPlanner final : public Planner {
       }
       const uint32_t current = queue[head++];
       ++expansions;
+      internal::RecordExpansion(request, view, current);
       if (current == goal) {
         result.outcome = PlanOutcome::kFound;
         break;

@@ -56,6 +56,7 @@ class DfsPlanner final : public Planner {
       const uint32_t current = stack.back();
       stack.pop_back();
       ++expansions;
+      internal::RecordExpansion(request, view, current);
       if (current == goal) {
         result.outcome = PlanOutcome::kFound;
         break;

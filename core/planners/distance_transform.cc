@@ -255,7 +255,8 @@ class DistanceTransformExactPlanner final : public Planner {
     PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
     const absl::Time started = absl::Now();
     return FinishFromField(
-        grid, request, DijkstraCostToGo(grid, request.goal, request.cost, stop, scratch),
+        grid, request, DijkstraCostToGo(grid, request.goal, request.cost, stop, scratch,
+                                         request.expansion_recorder),
         started);
   }
 };
@@ -270,7 +271,8 @@ CostToGoField RasterDistanceTransform(const Grid& grid, Cell goal, const CostPar
 }
 
 CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& cost,
-                               const StopCondition& stop, SearchScratch& scratch) {
+                               const StopCondition& stop, SearchScratch& scratch,
+                               ExpansionRecorder* recorder) {
   const GridView view(grid, cost);
   scratch.BeginSearch(grid.size());
   internal::OpenList open(scratch);
@@ -287,6 +289,7 @@ CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& co
     }
     const SearchScratch::OpenEntry settled = open.Pop();
     ++field.expansions;
+    if (recorder != nullptr) recorder->Record(view.CellOf(settled.index));
     // Legal moves are symmetric, so the neighbours of `settled` are exactly
     // the cells with a move into it; that move costs its length times the
     // factor of `settled`, the cell entered.

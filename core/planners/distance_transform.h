@@ -48,9 +48,10 @@ CostToGoField RasterDistanceTransform(const Grid& grid, Cell goal, const CostPar
 
 // The same field by Dijkstra's algorithm from the goal over reversed moves, in
 // O(n log n) whatever the map's shape. Polls `stop` every settled cell. Same
-// precondition.
+// precondition. Settled cells go to `recorder` unless it is null.
 CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& cost,
-                               const StopCondition& stop, SearchScratch& scratch);
+                               const StopCondition& stop, SearchScratch& scratch,
+                               ExpansionRecorder* recorder = nullptr);
 
 // Follows a complete field from `start` to the cell where it is 0 (the goal),
 // each step to the neighbour v minimising move length * CellFactor(v) +

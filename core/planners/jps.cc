@@ -292,15 +292,17 @@ struct JpsScratch final : public SearchScratch::Extension {
 // in the SearchScratch are indexed by JumpPointTable ids, not cells.
 class JpsSearch {
  public:
+  // Expanded jump points go to `recorder` unless it is null.
   JpsSearch(const JpsMap& map, JumpPointTable& points, int32_t width,
-            SearchScratch& scratch, Cell goal)
+            SearchScratch& scratch, Cell goal, ExpansionRecorder* recorder)
       : map_(map),
         rows_(map.rows()),
         points_(points),
         width_(width),
         scratch_(scratch),
         open_(scratch),
-        goal_(goal) {}
+        goal_(goal),
+        recorder_(recorder) {}
 
   // Searches from `start`; returns kFound, kNoPath or the stop condition's
   // outcome. `expansions` counts the jump points taken from the open list.
@@ -318,6 +320,10 @@ class JpsSearch {
       }
       const SearchScratch::OpenEntry best = open_.Pop();
       ++expansions;
+      if (recorder_ != nullptr) {
+        const JumpPoint& p = points_.point(best.index);
+        recorder_->Record(Cell{p.x, p.y});
+      }
       if (best.index == goal_id_) return PlanOutcome::kFound;
       Expand(best.index, best.g);
     }
@@ -447,6 +453,7 @@ class JpsSearch {
   SearchScratch& scratch_;
   internal::OpenList open_;
   const Cell goal_;
+  ExpansionRecorder* const recorder_;
   uint32_t goal_id_ = 0;
 };
 
@@ -492,7 +499,7 @@ class JpsPlanner final : public Planner {
     state.points.Clear();
 
     JpsSearch search(state.map, state.points, grid.width(), scratch,
-                     request.goal);
+                     request.goal, request.expansion_recorder);
     PlanResult result;
     result.outcome = search.Run(request.start, stop, result.expansions);
     if (result.found()) {

@@ -135,6 +135,7 @@ class RealTimeSearch {
       }
       const SearchScratch::OpenEntry best = open.Pop();
       ++expansions_;
+      internal::RecordExpansion(request_, view_, best.index);
       closed.push_back(best.index);
       const Cell at = view_.CellOf(best.index);
       view_.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t nx, int32_t ny,

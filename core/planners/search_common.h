@@ -120,10 +120,30 @@ inline double PathLength(const std::vector<Cell>& path) {
   return length;
 }
 
+// Records the expansion of cell `index` when the request asks for expansions;
+// a pointer test otherwise.
+inline void RecordExpansion(const PlanRequest& request, const GridView& view,
+                            uint32_t index) {
+  if (request.expansion_recorder != nullptr) {
+    request.expansion_recorder->Record(view.CellOf(index));
+  }
+}
+
 // A listener that records nothing; search loops call it on every expansion and
 // the calls compile away.
 struct NullListener {
   void OnExpand(uint32_t /*index*/) {}
+};
+
+// A listener that records each expanded cell of a grid `width` cells wide.
+struct RecordingListener {
+  ExpansionRecorder& recorder;
+  int32_t width;
+  void OnExpand(uint32_t index) {
+    const auto w = static_cast<uint32_t>(width);
+    recorder.Record(
+        Cell{static_cast<int32_t>(index % w), static_cast<int32_t>(index / w)});
+  }
 };
 
 }  // namespace pathd::internal

@@ -91,6 +91,7 @@ class AnyAngleSearch {
   AnyAngleSearch(const Grid& grid, const PlanRequest& request,
                  SearchScratch& scratch)
       : grid_(grid),
+        recorder_(request.expansion_recorder),
         view_(grid, request.cost),
         scratch_(scratch),
         open_(scratch),
@@ -117,6 +118,7 @@ class AnyAngleSearch {
         if (!SetVertex(index)) continue;
       }
       ++expansions;
+      if (recorder_ != nullptr) recorder_->Record(view_.CellOf(index));
       if (index == goal_) {
         result.outcome = PlanOutcome::kFound;
         break;
@@ -224,6 +226,7 @@ class AnyAngleSearch {
   }
 
   const Grid& grid_;
+  ExpansionRecorder* const recorder_;
   const GridView view_;
   SearchScratch& scratch_;
   OpenList open_;

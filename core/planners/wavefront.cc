@@ -33,9 +33,10 @@ struct FloodEnd {
 // label order, so when the next cell to expand carries the start's label the
 // layer that labelled the start is complete: the notes' loop ends exactly
 // there. `start` == kNoCell floods every reachable cell. The caller has called
-// scratch.BeginSearch().
+// scratch.BeginSearch(). Expanded cells go to `recorder` unless it is null.
 FloodEnd Flood(const GridView& view, uint32_t goal, uint32_t start,
-               const StopCondition& stop, SearchScratch& scratch) {
+               const StopCondition& stop, SearchScratch& scratch,
+               ExpansionRecorder* recorder) {
   std::vector<uint32_t>& queue = scratch.fifo();
   scratch.At(goal).g = 0.0;
   queue.push_back(goal);
@@ -51,6 +52,7 @@ FloodEnd Flood(const GridView& view, uint32_t goal, uint32_t start,
     }
     ++expansions;
     const Cell at = view.CellOf(current);
+    if (recorder != nullptr) recorder->Record(at);
     view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t, int32_t, double) {
       if (scratch.Seen(next)) return;
       scratch.At(next).g = moves + 1.0;
@@ -106,7 +108,8 @@ class WavefrontPlanner final : public Planner {
     scratch.BeginSearch(grid.size());
     const uint32_t start = view.Index(request.start.x, request.start.y);
     const FloodEnd end =
-        Flood(view, view.Index(request.goal.x, request.goal.y), start, stop, scratch);
+        Flood(view, view.Index(request.goal.x, request.goal.y), start, stop, scratch,
+              request.expansion_recorder);
 
     PlanResult result;
     result.outcome = end.outcome;
@@ -128,7 +131,8 @@ WavefrontLabelling WavefrontLabels(const Grid& grid, Cell goal, const CostParams
   scratch.BeginSearch(grid.size());
   const FloodEnd end =
       Flood(view, view.Index(goal.x, goal.y),
-            start.has_value() ? view.Index(start->x, start->y) : kNoCell, stop, scratch);
+            start.has_value() ? view.Index(start->x, start->y) : kNoCell, stop, scratch,
+            /*recorder=*/nullptr);
 
   WavefrontLabelling labelling;
   labelling.outcome = end.outcome;

@@ -29,6 +29,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
@@ -1585,6 +1586,96 @@ TEST_F(E2eTest, BatchAnswersEveryLineAndExitsOneOnItemErrors) {
   const ProcessResult bad = Ctl({"batch", malformed});
   EXPECT_EQ(bad.exit_code, 2) << bad;
   EXPECT_TRUE(absl::StrContains(bad.err, "bad.txt:2: '0 x' is not two integers")) << bad;
+}
+
+// WalledRoomMap with the goal corner (17..19, 0..1) walled off by column 16
+// and row 2 there.
+std::string PocketRoomMap() {
+  std::string text = "type octile\nheight 12\nwidth 20\nmap\n";
+  for (int y = 0; y < 12; ++y) {
+    std::string row(20, '.');
+    if (y < 8 || y > 9) row[10] = '@';
+    if (y <= 2) row[16] = '@';
+    if (y == 2) row.replace(16, 4, "@@@@");
+    text += row + "\n";
+  }
+  return text;
+}
+
+TEST_F(E2eTest, PlanThroughViaPointsWithAllowPartialAndExpansions) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  // Through (12,0) and (5,11): the cost is the sum of the three legs alone.
+  const v1::PlanResponse via =
+      PlanJson({"walled", "2", "2", "17", "3", "--via", "12,0;5,11"});
+  ASSERT_TRUE(via.found());
+  EXPECT_EQ(via.reached_goal_index(), 2);
+  ASSERT_EQ(via.leg_end_indices_size(), 3);
+  EXPECT_EQ(via.path(via.leg_end_indices(0)).x(), 12);
+  EXPECT_EQ(via.path(via.leg_end_indices(0)).y(), 0);
+  EXPECT_EQ(via.path(via.leg_end_indices(1)).x(), 5);
+  EXPECT_EQ(via.path(via.leg_end_indices(1)).y(), 11);
+  double legs = 0.0;
+  for (const auto& leg : std::vector<std::vector<std::string>>{
+           {"2", "2", "12", "0"}, {"12", "0", "5", "11"}, {"5", "11", "17", "3"}}) {
+    std::vector<std::string> args = {"walled"};
+    args.insert(args.end(), leg.begin(), leg.end());
+    args.push_back("--planner=dijkstra");
+    legs += PlanJson(args).cost();
+  }
+  EXPECT_NEAR(via.cost(), legs, 1e-9);
+  const ProcessResult text =
+      Ctl({"plan", "walled", "2", "2", "17", "3", "--via=12,0;5,11"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "via:         2 points; reached the goal\n"))
+      << text;
+  EXPECT_TRUE(absl::StrContains(
+      text.out, absl::StrFormat("legs end at: path[%d], path[%d], path[%d]\n",
+                                via.leg_end_indices(0), via.leg_end_indices(1),
+                                via.leg_end_indices(2))))
+      << text;
+
+  // The goal in a walled-off corner: the last leg fails.
+  ASSERT_NO_FATAL_FAILURE(CreateMap("pocket", PocketRoomMap()));
+  const ProcessResult failed =
+      Ctl({"plan", "pocket", "2", "2", "18", "0", "--via", "12,5"});
+  EXPECT_EQ(failed.exit_code, 3) << failed;
+  EXPECT_TRUE(absl::StrContains(
+      failed.out,
+      "reason:      leg 1 (via[0] -> goal): no path from (12, 5) to (18, 0)\n"))
+      << failed;
+  EXPECT_FALSE(absl::StrContains(failed.out, "path (")) << failed;
+  const ProcessResult partial =
+      Ctl({"plan", "pocket", "2", "2", "18", "0", "--via", "12,5", "--allow_partial"});
+  EXPECT_EQ(partial.exit_code, 3) << partial;
+  EXPECT_TRUE(absl::StrContains(partial.out, "reached via[0] (goal index 0)")) << partial;
+  EXPECT_TRUE(absl::StrContains(partial.out, " (12,5)\n")) << partial;
+  const v1::PlanResponse partial_json = PlanJson(
+      {"pocket", "2", "2", "18", "0", "--via", "12,5", "--allow_partial"}, 3);
+  EXPECT_EQ(partial_json.reached_goal_index(), 0);
+  EXPECT_EQ(partial_json.outcome(), v1::PLAN_OUTCOME_NO_PATH);
+
+  ExpectRpcError({"plan", "walled", "2", "2", "17", "3", "--via", "1,1;10,0"},
+                 "INVALID_ARGUMENT", {"via[1] (10, 0) is on a blocked cell"});
+  EXPECT_EQ(Ctl({"plan", "walled", "2", "2", "17", "3", "--via", "1;2"}).exit_code, 2);
+
+  // --expansions: as many cells as expansions, until the server's cap.
+  const v1::PlanResponse expanded =
+      PlanJson({"walled", "2", "2", "17", "3", "--expansions"});
+  EXPECT_GT(expanded.expansions(), 0);
+  EXPECT_EQ(expanded.expanded_size(), expanded.expansions());
+  const ProcessResult count =
+      Ctl({"plan", "walled", "2", "2", "17", "3", "--expansions"});
+  EXPECT_TRUE(absl::StrContains(
+      count.out, absl::StrFormat("expanded:    %d cells returned\n",
+                                 expanded.expansions())))
+      << count;
+  EXPECT_EQ(StopDaemon(), 0);
+  ASSERT_NO_FATAL_FAILURE(StartDaemon({"--max_returned_expansions=5"}));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  const v1::PlanResponse capped =
+      PlanJson({"walled", "2", "2", "17", "3", "--expansions"});
+  EXPECT_EQ(capped.expanded_size(), 5);
+  EXPECT_TRUE(capped.expanded_truncated());
 }
 
 }  // namespace
