@@ -269,7 +269,8 @@ absl::Time DeadlineOf(const grpc::CallbackServerContext& context) {
 // The map, endpoints, options and planner of a request: the part of
 // Prepare() every plan has.
 absl::Status PrepareEndpointsAndPlanner(const MapStore& store,
-                     const PlannerServiceImpl::Options& limits, PlanCall& call) {
+                                        const PlannerServiceImpl::Options& limits,
+                                        PlanCall& call) {
   const v1::PlanRequest& request = *call.request;
   PATHD_ASSIGN_OR_RETURN(call.planner_name, PlannerName(request.planner()));
   PATHD_ASSIGN_OR_RETURN(call.snapshot, store.Get(request.map()));
