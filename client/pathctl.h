@@ -110,6 +110,21 @@ struct Options {
   std::string script;
   // cost-to-go: "X,Y,W,H"; empty: the whole map.
   std::string window;
+  // bench: closed-loop load of Plan calls. Workers (one request in flight
+  // each), connections they share, the measured time and / or request count
+  // (0: no count bound), the unmeasured warm-up before it, the Moving AI map
+  // to load (queries from its .scen file), and the seed of the random
+  // queries and of the shuffle.
+  int concurrency = 4;
+  int channels = 1;
+  absl::Duration duration = absl::Seconds(10);
+  absl::Duration warmup = absl::Seconds(1);
+  int64_t requests = 0;
+  std::string movingai;
+  uint64_t seed = 1;
+  // bench: rewrite a progress line on `err` about once a second (pathctl
+  // sets it when stderr is a terminal).
+  bool progress = false;
 };
 
 // Writes a row-major cost-to-go field as CSV, one map row per line, "inf"

@@ -1,6 +1,8 @@
 // pathctl: the command-line client of pathd. Defines the flags and hands the
 // parsed command to pathd::pathctl::Run (client/pathctl.h), where the commands
 // live.
+#include <unistd.h>
+
 #include <cstdlib>
 #include <iostream>
 #include <optional>
@@ -11,6 +13,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/pathctl.h"
 
@@ -63,9 +66,22 @@ ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
 ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
 ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
+ABSL_FLAG(int, concurrency, 4, "bench: requests in flight (closed-loop workers)");
+ABSL_FLAG(int, channels, 1, "bench: gRPC connections the workers share");
+ABSL_FLAG(absl::Duration, duration, absl::Seconds(10),
+          "bench: measured time (0: until --requests are done)");
+ABSL_FLAG(absl::Duration, warmup, absl::Seconds(1),
+          "bench: unmeasured load before the measured time");
+ABSL_FLAG(int64_t, requests, 0, "bench: stop after N measured requests (0: no limit)");
+ABSL_FLAG(std::string, movingai, "",
+          "bench: load this Moving AI .map and take queries from its .scen");
+ABSL_FLAG(uint64_t, seed, 1, "bench: seed of the random queries and the shuffle");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
+  // Debian's Abseil checks every absl::Mutex acquisition (gRPC's too) for
+  // deadlock cycles; that costs bench a few per cent of each call's CPU.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
   absl::SetProgramUsageMessage(pathctl::UsageText());
 
   absl::StatusOr<pathctl::CommandLine> line =
@@ -126,6 +142,14 @@ int main(int argc, char** argv) {
   options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
   options.script = absl::GetFlag(FLAGS_script);
   options.window = absl::GetFlag(FLAGS_window);
+  options.concurrency = absl::GetFlag(FLAGS_concurrency);
+  options.channels = absl::GetFlag(FLAGS_channels);
+  options.duration = absl::GetFlag(FLAGS_duration);
+  options.warmup = absl::GetFlag(FLAGS_warmup);
+  options.requests = absl::GetFlag(FLAGS_requests);
+  options.movingai = absl::GetFlag(FLAGS_movingai);
+  options.seed = absl::GetFlag(FLAGS_seed);
+  options.progress = isatty(STDERR_FILENO) == 1;
 
   return pathctl::Run(
       options,
