@@ -4,8 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
+#include <random>
 #include <span>
 #include <iostream>
 #include <optional>
@@ -25,10 +28,13 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "client/load_generator.h"
 #include "client/map_source.h"
 #include "client/navigate_script.h"
 #include "client/navigate_session.h"
+#include "core/map_io.h"
 #include "core/status_macros.h"
+#include "google/protobuf/struct.pb.h"
 #include "google/protobuf/util/json_util.h"
 
 namespace pathd::pathctl {
@@ -70,6 +76,10 @@ constexpr char kSynopsis[] =
   pathctl [flags] cache-stats
   pathctl [flags] health [SERVICE]
   pathctl [flags] metrics [PREFIX ...] [--metrics_address HOST:PORT]
+  pathctl [flags] bench NAME [--concurrency N] [--duration T] [--warmup T]
+                       [--requests N] [--channels K] [--seed S]
+                       [--planner P] [cost options]
+  pathctl [flags] bench [NAME] --movingai FILE.map [...]
   pathctl --help
 )";
 
@@ -1259,6 +1269,290 @@ int Metrics(Env& env, Args args) {
   return kExitOk;
 }
 
+// --- bench -------------------------------------------------------------------
+
+// Distinct random queries when a map has no scenario file; the load cycles
+// through them.
+constexpr int kRandomQueries = 1000;
+
+// Where the benchmark's queries come from, for the report.
+struct BenchQueries {
+  std::vector<v1::PlanRequest> requests;
+  std::string source;
+};
+
+// `count` start/goal pairs drawn uniformly (fixed seed) from the cells a
+// robot centre may occupy on `map`; pairs in different components make
+// NO_PATH answers, which the report counts.
+absl::StatusOr<std::vector<std::pair<v1::Cell, v1::Cell>>> RandomEndpoints(
+    const v1::GetMapResponse& map, bool unknown_is_free, uint64_t seed, int count) {
+  std::vector<int64_t> free_cells;
+  const std::string& cells = map.cells();
+  for (size_t i = 0; i < cells.size(); ++i) {
+    const auto cost = static_cast<uint8_t>(cells[i]);
+    if (cost < 253 || (cost == 255 && unknown_is_free)) {
+      free_cells.push_back(static_cast<int64_t>(i));
+    }
+  }
+  if (free_cells.empty()) {
+    return absl::FailedPreconditionError(
+        absl::StrCat("map ", map.info().name(), " has no free cell to plan between"));
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<size_t> pick(0, free_cells.size() - 1);
+  const int64_t width = map.info().width();
+  auto cell = [&] {
+    const int64_t i = free_cells[pick(rng)];
+    v1::Cell c;
+    c.set_x(static_cast<int32_t>(i % width));
+    c.set_y(static_cast<int32_t>(i / width));
+    return c;
+  };
+  std::vector<std::pair<v1::Cell, v1::Cell>> pairs;
+  for (int q = 0; q < count; ++q) {
+    v1::Cell start = cell();
+    pairs.emplace_back(std::move(start), cell());
+  }
+  return pairs;
+}
+
+v1::Cell ToProtoCell(const Cell& cell) {
+  v1::Cell c;
+  c.set_x(cell.x);
+  c.set_y(cell.y);
+  return c;
+}
+
+// Loads --movingai into the server as `name` (replacing it) and returns its
+// scenario file's pairs, or, when the map has none, random ones.
+absl::StatusOr<std::vector<std::pair<v1::Cell, v1::Cell>>> MovingAiEndpoints(
+    Env& env, const std::string& name, std::string* source) {
+  const Options& options = env.options();
+  v1::CreateMapRequest create;
+  create.set_name(name);
+  create.set_replace(true);
+  PATHD_RETURN_IF_ERROR(client::SetMapSourceFromFile(options.movingai, &create));
+  PATHD_RETURN_IF_ERROR(env.client().CreateMap(create).status());
+  const std::string scen = options.movingai + ".scen";
+  absl::StatusOr<std::string> text = ReadTextFile(scen);
+  if (!text.ok()) {
+    v1::GetMapRequest get;
+    get.set_name(name);
+    get.set_include_cells(true);
+    PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse map, env.client().GetMap(get));
+    *source = absl::StrCat(kRandomQueries, " random pairs of free cells (no ", scen, ")");
+    return RandomEndpoints(map, options.unknown_is_free, options.seed, kRandomQueries);
+  }
+  PATHD_ASSIGN_OR_RETURN(std::vector<Scenario> scenarios,
+                         ParseMovingAiScenarios(*text, scen));
+  if (scenarios.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(scen, " has no scenarios"));
+  }
+  std::vector<std::pair<v1::Cell, v1::Cell>> pairs;
+  for (const Scenario& s : scenarios) {
+    pairs.emplace_back(ToProtoCell(s.start), ToProtoCell(s.goal));
+  }
+  *source = absl::StrCat(scenarios.size(), " scenarios of ", scen);
+  return pairs;
+}
+
+// The request every benchmark query shares: map, planner and cost options.
+// INVALID_ARGUMENT (a usage error) for a bad planner or option.
+absl::StatusOr<v1::PlanRequest> BenchBaseRequest(const Options& options,
+                                                 const std::string& name) {
+  v1::PlanRequest base;
+  base.set_map(name);
+  if (!options.planner.empty()) {
+    PATHD_ASSIGN_OR_RETURN(v1::Planner planner, PlannerFromName(options.planner));
+    base.set_planner(planner);
+  }
+  PATHD_RETURN_IF_ERROR(SetCostOptions(options, base.mutable_options()));
+  base.mutable_options()->set_max_expansions(options.max_expansions);
+  if (options.heuristic_weight.has_value()) {
+    base.mutable_options()->set_heuristic_weight(*options.heuristic_weight);
+  }
+  return base;
+}
+
+// The plan requests of a benchmark: `base` between each pair, shuffled with
+// --seed so a time-bounded run samples the whole list (scenario files are
+// sorted by length).
+absl::StatusOr<BenchQueries> MakeBenchQueries(Env& env, const v1::PlanRequest& base) {
+  const Options& options = env.options();
+  const std::string& name = base.map();
+  BenchQueries queries;
+  std::vector<std::pair<v1::Cell, v1::Cell>> pairs;
+  if (!options.movingai.empty()) {
+    PATHD_ASSIGN_OR_RETURN(pairs, MovingAiEndpoints(env, name, &queries.source));
+  } else {
+    v1::GetMapRequest get;
+    get.set_name(name);
+    get.set_include_cells(true);
+    PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse map, env.client().GetMap(get));
+    PATHD_ASSIGN_OR_RETURN(pairs, RandomEndpoints(map, options.unknown_is_free,
+                                                  options.seed, kRandomQueries));
+    queries.source = absl::StrCat(kRandomQueries, " random pairs of free cells");
+  }
+  std::mt19937_64 rng(options.seed);
+  std::shuffle(pairs.begin(), pairs.end(), rng);
+  for (auto& [start, goal] : pairs) {
+    v1::PlanRequest& request = queries.requests.emplace_back(base);
+    *request.mutable_start()->mutable_cell() = std::move(start);
+    *request.mutable_goal()->mutable_cell() = std::move(goal);
+  }
+  return queries;
+}
+
+// The live progress line: rewritten in place ("\r") about once a second.
+class ProgressLine {
+ public:
+  explicit ProgressLine(std::ostream& err) : err_(err) {}
+
+  void Update(const client::LoadProgress& p) {
+    if (p.warming_up != warming_up_) {
+      warming_up_ = p.warming_up;
+      last_requests_ = 0;
+      last_elapsed_ = absl::ZeroDuration();
+    }
+    const double seconds = absl::ToDoubleSeconds(p.elapsed - last_elapsed_);
+    const double rate =
+        seconds > 0 ? static_cast<double>(p.requests - last_requests_) / seconds : 0;
+    last_requests_ = p.requests;
+    last_elapsed_ = p.elapsed;
+    err_ << absl::StrFormat("\r%s %5.1fs  %d requests  %.0f req/s now  %d errors\x1b[K",
+                            p.warming_up ? "warm-up" : "bench  ",
+                            absl::ToDoubleSeconds(p.elapsed), p.requests, rate,
+                            p.errors)
+         << std::flush;
+    shown_ = true;
+  }
+
+  // Ends the line so the report starts on a fresh one.
+  void Close() {
+    if (shown_) err_ << "\n" << std::flush;
+  }
+
+ private:
+  std::ostream& err_;
+  bool warming_up_ = true;
+  int64_t last_requests_ = 0;
+  absl::Duration last_elapsed_;
+  bool shown_ = false;
+};
+
+double Micros(absl::Duration d) { return absl::ToDoubleMicroseconds(d); }
+
+int PrintBenchJson(Env& env, const std::string& name, const std::string& source,
+                   const client::LoadReport& report) {
+  const Options& options = env.options();
+  google::protobuf::Struct json;
+  auto& fields = *json.mutable_fields();
+  fields["map"].set_string_value(name);
+  fields["planner"].set_string_value(options.planner.empty() ? "default"
+                                                             : options.planner);
+  fields["queries"].set_string_value(source);
+  fields["concurrency"].set_number_value(options.concurrency);
+  fields["channels"].set_number_value(options.channels);
+  fields["elapsed_s"].set_number_value(absl::ToDoubleSeconds(report.elapsed));
+  fields["requests"].set_number_value(static_cast<double>(report.requests));
+  fields["ok"].set_number_value(static_cast<double>(report.ok));
+  fields["no_path"].set_number_value(static_cast<double>(report.no_path));
+  fields["errors"].set_number_value(static_cast<double>(report.errors()));
+  auto& by_code = *fields["errors_by_code"].mutable_struct_value()->mutable_fields();
+  for (size_t c = 0; c < report.errors_by_code.size(); ++c) {
+    if (report.errors_by_code[c] == 0) continue;
+    by_code[absl::StatusCodeToString(static_cast<absl::StatusCode>(c))]
+        .set_number_value(static_cast<double>(report.errors_by_code[c]));
+  }
+  fields["requests_per_second"].set_number_value(report.requests_per_second);
+  auto& latency = *fields["latency_us"].mutable_struct_value()->mutable_fields();
+  latency["min"].set_number_value(Micros(report.latency.min));
+  latency["mean"].set_number_value(Micros(report.latency.mean));
+  latency["p50"].set_number_value(Micros(report.latency.p50));
+  latency["p95"].set_number_value(Micros(report.latency.p95));
+  latency["p99"].set_number_value(Micros(report.latency.p99));
+  latency["max"].set_number_value(Micros(report.latency.max));
+  return env.PrintJson(json);
+}
+
+void PrintBenchText(Env& env, const std::string& name, const std::string& source,
+                    const client::LoadReport& report) {
+  const Options& options = env.options();
+  std::vector<std::string> errors;
+  for (size_t c = 0; c < report.errors_by_code.size(); ++c) {
+    if (report.errors_by_code[c] == 0) continue;
+    errors.push_back(absl::StrCat(
+        absl::StatusCodeToString(static_cast<absl::StatusCode>(c)), " ",
+        report.errors_by_code[c]));
+  }
+  const client::LatencySummary& l = report.latency;
+  env.out() << absl::StrFormat(
+      "map:         %s\n"
+      "planner:     %s\n"
+      "queries:     %s\n"
+      "load:        %d concurrent requests over %d channel(s), %.2f s measured\n"
+      "requests:    %d (%d ok, %d of them without a path; %d errors)\n"
+      "throughput:  %.1f requests/s\n"
+      "latency us:  p50 %.0f  p95 %.0f  p99 %.0f  max %.0f  (min %.0f, mean %.0f; "
+      "ok answers)\n"
+      "errors:      %s\n",
+      name, options.planner.empty() ? "the server's default" : options.planner,
+      source, options.concurrency, options.channels,
+      absl::ToDoubleSeconds(report.elapsed), report.requests, report.ok,
+      report.no_path, report.errors(), report.requests_per_second, Micros(l.p50),
+      Micros(l.p95), Micros(l.p99), Micros(l.max), Micros(l.min), Micros(l.mean),
+      errors.empty() ? "none" : absl::StrJoin(errors, ", "));
+}
+
+int Bench(Env& env, Args args) {
+  const Options& options = env.options();
+  std::string name;
+  if (!options.movingai.empty()) {
+    if (args.size() > 1) return env.Usage("bench --movingai FILE takes at most one NAME");
+    if (client::DetectMapFileKind(options.movingai) != client::MapFileKind::kMovingAi) {
+      return env.Usage(absl::StrCat("--movingai ", options.movingai,
+                                    ": expected a Moving AI .map file"));
+    }
+    name = args.empty() ? std::filesystem::path(options.movingai).stem().string()
+                        : args[0];
+  } else {
+    if (args.size() != 1) return env.Usage("bench takes NAME (or --movingai FILE)");
+    name = args[0];
+  }
+  if (options.concurrency < 1) return env.Usage("--concurrency must be at least 1");
+  if (options.channels < 1) return env.Usage("--channels must be at least 1");
+  if (options.requests < 0) return env.Usage("--requests must not be negative");
+  if (options.duration < absl::ZeroDuration() || options.warmup < absl::ZeroDuration()) {
+    return env.Usage("--duration and --warmup must not be negative");
+  }
+  if (options.duration == absl::ZeroDuration() && options.requests == 0) {
+    return env.Usage("--duration 0 needs --requests N, or the load never ends");
+  }
+  absl::StatusOr<v1::PlanRequest> base = BenchBaseRequest(options, name);
+  if (!base.ok()) return env.Usage(base.status().message());
+  absl::StatusOr<BenchQueries> queries = MakeBenchQueries(env, *base);
+  if (!queries.ok()) return env.Fail(queries.status());
+
+  client::LoadOptions load;
+  load.concurrency = options.concurrency;
+  load.duration = options.duration;
+  load.max_requests = options.requests;
+  load.warmup = options.warmup;
+  ProgressLine line(env.err());
+  std::function<void(const client::LoadProgress&)> progress;
+  if (options.stderr_is_terminal) {
+    progress = [&line](const client::LoadProgress& p) { line.Update(p); };
+  }
+  absl::StatusOr<client::LoadReport> report =
+      client::RunPlanLoad(options.server, options.channels, options.timeout,
+                          queries->requests, load, progress);
+  line.Close();
+  if (!report.ok()) return env.Fail(report.status());
+  if (options.json) return PrintBenchJson(env, name, queries->source, *report);
+  PrintBenchText(env, name, queries->source, *report);
+  return kExitOk;
+}
+
 }  // namespace
 
 std::string FilterMetricsText(absl::string_view text,
@@ -1517,6 +1811,18 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --pf_influence Q, --pf_step S, --pf_max_steps N
                        plan: potential_field parameters (cells; 0 = default)
 
+  --concurrency N      bench: requests in flight; each worker sends its next
+                       request when the previous answer arrives (default 4)
+  --duration T         bench: measured time, e.g. 30s (default 10s; 0: until
+                       --requests are done)
+  --warmup T           bench: unmeasured load first (default 1s)
+  --requests N         bench: stop after N measured requests (0: no limit)
+  --channels K         bench: gRPC connections the workers share (default 1)
+  --movingai FILE      bench: load FILE (a Moving AI .map) as NAME (default:
+                       the file's stem), replacing a map of that name, and
+                       take the queries from FILE.scen
+  --seed S             bench: seed of the random queries and of the shuffle
+
 cost options (plan, navigate, cost-to-go, check):
   --connectivity N     4 or 8 (default 8)
   --cost_weight W      w in step = length * (1 + w * cost / 252) (default 1)
@@ -1544,6 +1850,14 @@ errors in S s" with the rate in plans/s. With --json each answer is a
 PlanBatchResponse line and the summary goes to stderr. --timeout bounds the
 whole batch. Exit code 0 when no item errored (no path is not an error), 1
 when any item errored or the stream failed.
+bench runs a closed-loop load of Plan calls. Its queries are the
+scenarios of --movingai's .scen file, or 1000 random pairs of free cells of
+NAME, shuffled with --seed and sent in a cycle. It prints throughput, latency
+percentiles of the OK answers (exact, from every recorded sample), and errors
+by status code; --json prints one object. When stderr is a terminal a
+progress line (elapsed, requests, current rate, errors) is rewritten there
+about once a second. The exit code is 0 when the run completed, whatever the
+answers; scripts read the error counts.
 
 With --json, navigate prints each NavigateResponse as one line of JSON. Its
 --timeout bounds each wait for an answer and for the server's close, not the
@@ -1682,13 +1996,14 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (command == "health") return Health(env, rest);
   if (command == "metrics") return Metrics(env, rest);
   if (command == "batch") return Batch(env, rest);
+  if (command == "bench") return Bench(env, rest);
   if (command == "help") {
     out << UsageText();
     return kExitOk;
   }
   return env.Usage(absl::StrCat("unknown command '", command,
                                 "'; expected maps, plan, navigate, cost-to-go, "
-                                "check, cache-stats, health, metrics or batch"));
+                                "check, cache-stats, health, metrics, batch or bench"));
 }
 
 }  // namespace pathd::pathctl

@@ -128,6 +128,18 @@ struct Options {
   // `err` is a terminal: progress rewrites one line instead of printing one
   // line per event.
   bool stderr_is_terminal = false;
+  // bench: closed-loop load of Plan calls. Workers (one request in flight
+  // each), connections they share, the measured time and / or request count
+  // (0: no count bound), the unmeasured warm-up before it, the Moving AI map
+  // to load (queries from its .scen file), and the seed of the random
+  // queries and of the shuffle.
+  int concurrency = 4;
+  int channels = 1;
+  absl::Duration duration = absl::Seconds(10);
+  absl::Duration warmup = absl::Seconds(1);
+  int64_t requests = 0;
+  std::string movingai;
+  uint64_t seed = 1;
 };
 
 // One item of a `pathctl batch` file.

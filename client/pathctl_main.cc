@@ -13,6 +13,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/pathctl.h"
 
@@ -76,9 +77,22 @@ ABSL_FLAG(std::string, metrics_address, pathd::pathctl::kDefaultMetricsAddress,
           "metrics: pathd's --metrics_address (HOST:PORT)");
 ABSL_FLAG(bool, progress, false,
           "plan: stream the search's progress to stderr (PlanStream)");
+ABSL_FLAG(int, concurrency, 4, "bench: requests in flight (closed-loop workers)");
+ABSL_FLAG(int, channels, 1, "bench: gRPC connections the workers share");
+ABSL_FLAG(absl::Duration, duration, absl::Seconds(10),
+          "bench: measured time (0: until --requests are done)");
+ABSL_FLAG(absl::Duration, warmup, absl::Seconds(1),
+          "bench: unmeasured load before the measured time");
+ABSL_FLAG(int64_t, requests, 0, "bench: stop after N measured requests (0: no limit)");
+ABSL_FLAG(std::string, movingai, "",
+          "bench: load this Moving AI .map and take queries from its .scen");
+ABSL_FLAG(uint64_t, seed, 1, "bench: seed of the random queries and the shuffle");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
+  // Debian's Abseil checks every absl::Mutex acquisition (gRPC's too) for
+  // deadlock cycles; that costs bench a few per cent of each call's CPU.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
   absl::SetProgramUsageMessage(pathctl::UsageText());
 
   absl::StatusOr<pathctl::CommandLine> line =
@@ -145,6 +159,13 @@ int main(int argc, char** argv) {
   options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
   options.progress = absl::GetFlag(FLAGS_progress);
   options.stderr_is_terminal = isatty(STDERR_FILENO) != 0;
+  options.concurrency = absl::GetFlag(FLAGS_concurrency);
+  options.channels = absl::GetFlag(FLAGS_channels);
+  options.duration = absl::GetFlag(FLAGS_duration);
+  options.warmup = absl::GetFlag(FLAGS_warmup);
+  options.requests = absl::GetFlag(FLAGS_requests);
+  options.movingai = absl::GetFlag(FLAGS_movingai);
+  options.seed = absl::GetFlag(FLAGS_seed);
 
   return pathctl::Run(
       options,

@@ -22,6 +22,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "absl/types/span.h"
 #include "server/config_file.h"
@@ -294,6 +295,11 @@ int main(int argc, char** argv) {
                "--flagfile or the environment");
   }
 
+  // Debian's Abseil is built with absl::Mutex deadlock detection on, which
+  // takes a global lock and updates a lock graph in every Mutex acquisition
+  // and destruction -- gRPC's internal locks included -- costing several
+  // per cent of a Plan call's CPU. Tests keep it; the daemon does not.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
   const spdlog::level::level_enum level = ParseLogLevel(absl::GetFlag(FLAGS_log_level));
   // stderr: stdout carries only the "listening" line that scripts parse.
   spdlog::set_default_logger(spdlog::stderr_color_mt("pathd"));

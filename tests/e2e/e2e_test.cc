@@ -33,6 +33,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "google/protobuf/struct.pb.h"
 #include "google/protobuf/util/json_util.h"
 #include "gtest/gtest.h"
 #include "client/pathctl.h"
@@ -1676,6 +1677,74 @@ TEST_F(E2eTest, PlanThroughViaPointsWithAllowPartialAndExpansions) {
       PlanJson({"walled", "2", "2", "17", "3", "--expansions"});
   EXPECT_EQ(capped.expanded_size(), 5);
   EXPECT_TRUE(capped.expanded_truncated());
+}
+
+// pathctl bench: a one-second closed loop at concurrency 4 against the real
+// daemon answers every request (the shape of the report, not its timing),
+// and --movingai loads a map and sends exactly its scenarios.
+TEST_F(E2eTest, BenchRunsAClosedLoopWithoutErrors) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap(32, 32)));
+  const ProcessResult text = Ctl({"bench", "room", "--duration", "1s", "--warmup",
+                                  "200ms", "--concurrency", "4", "--planner", "astar"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  for (const char* line :
+       {"map:         room\n", "planner:     astar\n",
+        "queries:     1000 random pairs of free cells\n",
+        "load:        4 concurrent requests over 1 channel(s)", "throughput:  ",
+        "latency us:  p50 ", "errors:      none\n"}) {
+    EXPECT_TRUE(absl::StrContains(text.out, line)) << "missing '" << line << "'\n"
+                                                   << text;
+  }
+  // stderr is a pipe here, not a terminal: no progress line.
+  EXPECT_EQ(text.err, "") << text;
+
+  const ProcessResult json = Ctl({"bench", "room", "--duration=1s", "--warmup=0s",
+                                  "--concurrency=4", "--channels=2", "--json"});
+  ASSERT_EQ(json.exit_code, 0) << json;
+  const auto report = ParseJson<google::protobuf::Struct>(json.out);
+  const auto& f = report.fields();
+  ASSERT_TRUE(f.contains("requests") && f.contains("latency_us")) << json;
+  const double requests = f.at("requests").number_value();
+  EXPECT_GT(requests, 0) << json;
+  EXPECT_EQ(f.at("ok").number_value(), requests) << json;
+  EXPECT_EQ(f.at("errors").number_value(), 0) << json;
+  EXPECT_EQ(f.at("no_path").number_value(), 0) << json;  // one open room
+  EXPECT_TRUE(f.at("errors_by_code").struct_value().fields().empty()) << json;
+  EXPECT_EQ(f.at("concurrency").number_value(), 4) << json;
+  EXPECT_EQ(f.at("channels").number_value(), 2) << json;
+  EXPECT_GT(f.at("requests_per_second").number_value(), 0) << json;
+  const auto& latency = f.at("latency_us").struct_value().fields();
+  EXPECT_LE(latency.at("min").number_value(), latency.at("p50").number_value());
+  EXPECT_LE(latency.at("p50").number_value(), latency.at("p95").number_value());
+  EXPECT_LE(latency.at("p95").number_value(), latency.at("p99").number_value());
+  EXPECT_LE(latency.at("p99").number_value(), latency.at("max").number_value());
+
+  // --movingai: the map is created under its stem, the queries are its
+  // scenarios; --duration 0 --requests 30 sends exactly 30 requests.
+  const std::string map = MapFile("open.map", OpenRoomMap());
+  WriteFile(map + ".scen",
+            "version 1\n"
+            "0\topen.map\t10\t10\t0\t0\t9\t9\t12.72792206\n"
+            "0\topen.map\t10\t10\t9\t0\t0\t9\t12.72792206\n"
+            "0\topen.map\t10\t10\t0\t5\t9\t5\t9.00000000\n");
+  const ProcessResult scen =
+      Ctl({"bench", "--movingai", map, "--duration=0", "--requests=30", "--json"});
+  ASSERT_EQ(scen.exit_code, 0) << scen;
+  const auto scen_report = ParseJson<google::protobuf::Struct>(scen.out);
+  EXPECT_EQ(scen_report.fields().at("map").string_value(), "open") << scen;
+  EXPECT_TRUE(absl::StartsWith(scen_report.fields().at("queries").string_value(),
+                               "3 scenarios of "))
+      << scen;
+  EXPECT_EQ(scen_report.fields().at("requests").number_value(), 30) << scen;
+  EXPECT_EQ(scen_report.fields().at("errors").number_value(), 0) << scen;
+  EXPECT_EQ(Ctl({"maps", "get", "open"}).exit_code, 0);
+
+  // A map that does not exist fails like any call; bad options are usage.
+  ExpectRpcError({"bench", "nope", "--duration=1s"}, "NOT_FOUND");
+  EXPECT_EQ(Ctl({"bench"}).exit_code, 2);
+  EXPECT_EQ(Ctl({"bench", "room", "--duration=0"}).exit_code, 2);
+  EXPECT_EQ(Ctl({"bench", "room", "--concurrency=0"}).exit_code, 2);
+  EXPECT_EQ(Ctl({"bench", "room", "--planner=nope"}).exit_code, 2);
 }
 
 }  // namespace

@@ -1,0 +1,374 @@
+// load_bench: what the gRPC service costs over calling the planner directly.
+// Starts the real pathd on loopback with --threads=W, then for each Moving AI
+// map (by default every 512x512 one) runs the same scenario queries in a
+// closed loop both ways, alternating for a few rounds: in this process on W
+// threads, each with its own scratch, and as gRPC Plan calls at 2W
+// concurrency through the load generator `pathctl bench` uses. Prints both
+// throughputs, their ratio and the gRPC latency percentiles, and the CPU
+// time per query of the planner alone, of the daemon and of the client, which
+// other load on the machine disturbs far less than the wall clock. Figures,
+// not assertions: the README records them with the command that produced
+// them.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/strip.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "client/client.h"
+#include "client/load_generator.h"
+#include "client/map_source.h"
+#include "client/pathctl.h"
+#include "core/map_io.h"
+#include "core/planner.h"
+#include "server/convert.h"
+#include "tests/bench/movingai_maps.h"
+
+extern char** environ;
+
+ABSL_FLAG(std::string, pathd, PATHD_BIN, "the pathd binary to start");
+ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
+          "folder holding <set>/<map>.map and <map>.map.scen files");
+ABSL_FLAG(std::string, maps, "",
+          "comma-separated map paths relative to --movingai_dir; empty = every "
+          "512x512 map found");
+ABSL_FLAG(std::string, planner, "astar", "planner name (server and in-process)");
+ABSL_FLAG(int, threads, 2, "W: pathd's worker threads and the in-process threads");
+ABSL_FLAG(int, concurrency, 0, "gRPC requests in flight; 0 = 2W");
+ABSL_FLAG(int, channels, 1, "gRPC connections the load shares");
+ABSL_FLAG(int, limit, 1000, "the first N scenarios of each map (0 = all)");
+ABSL_FLAG(int, passes, 1, "each measured run sends every query this many times");
+ABSL_FLAG(int, rounds, 3,
+          "alternating in-process / gRPC runs per map; each side's fastest is "
+          "reported");
+ABSL_FLAG(absl::Duration, warmup, absl::Milliseconds(500),
+          "unmeasured load before each measured run");
+ABSL_FLAG(absl::Duration, timeout, absl::Seconds(60), "deadline of each gRPC call");
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kListeningPrefix[] = "pathd listening on ";
+
+// The daemon under test: started with posix_spawn, stopped with SIGTERM.
+class Daemon {
+ public:
+  ~Daemon() {
+    if (pid_ <= 0) return;
+    kill(pid_, SIGTERM);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    if (stdout_ != nullptr) fclose(stdout_);
+  }
+
+  // Spawns `binary` on a free loopback port with `threads` workers and waits
+  // for its "pathd listening on" line.
+  absl::Status Start(const std::string& binary, int threads) {
+    int fds[2];
+    if (pipe(fds) != 0) return absl::InternalError("pipe failed");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+    posix_spawn_file_actions_addclose(&actions, fds[0]);
+    posix_spawn_file_actions_addclose(&actions, fds[1]);
+    std::vector<std::string> args = {binary, "--address=127.0.0.1:0",
+                                     absl::StrCat("--threads=", threads),
+                                     "--log_level=warn"};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const int error =
+        posix_spawn(&pid_, binary.c_str(), &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    close(fds[1]);
+    if (error != 0) {
+      close(fds[0]);
+      pid_ = -1;
+      return absl::NotFoundError(absl::StrCat("cannot start ", binary));
+    }
+    stdout_ = fdopen(fds[0], "r");
+    char line[256];
+    if (fgets(line, sizeof line, stdout_) == nullptr) {
+      return absl::UnavailableError(absl::StrCat(binary, " exited before listening"));
+    }
+    absl::string_view text = absl::StripAsciiWhitespace(line);
+    if (!absl::ConsumePrefix(&text, kListeningPrefix)) {
+      return absl::InternalError(absl::StrCat("unexpected first line: ", line));
+    }
+    address_ = std::string(text);
+    return absl::OkStatus();
+  }
+
+  const std::string& address() const { return address_; }
+
+  // CPU seconds (user + system) the daemon has used so far, from
+  // /proc/PID/stat (clock-tick resolution); 0 when unreadable.
+  double CpuSeconds() const {
+    std::ifstream stat(absl::StrCat("/proc/", pid_, "/stat"));
+    std::string text((std::istreambuf_iterator<char>(stat)),
+                     std::istreambuf_iterator<char>());
+    // Fields after the parenthesised command name; utime and stime are the
+    // 14th and 15th of the whole line.
+    const size_t paren = text.rfind(')');
+    if (paren == std::string::npos) return 0;
+    std::vector<std::string> fields =
+        absl::StrSplit(text.substr(paren + 2), ' ', absl::SkipEmpty());
+    double utime = 0, stime = 0;
+    if (fields.size() < 13 || !absl::SimpleAtod(fields[11], &utime) ||
+        !absl::SimpleAtod(fields[12], &stime)) {
+      return 0;
+    }
+    return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+  }
+
+ private:
+  pid_t pid_ = -1;
+  FILE* stdout_ = nullptr;
+  std::string address_;
+};
+
+// CPU seconds (user + system) this process has used so far.
+double OwnCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const auto seconds = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6;
+  };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
+struct MapFigures {
+  int queries = 0;
+  pathd::client::LoadReport in_process;
+  pathd::client::LoadReport grpc;
+  // CPU microseconds per query, the least over the rounds: in-process, and
+  // for gRPC the daemon's and the client's (this process). Other processes
+  // slow the wall clock down far more than they change these.
+  double in_process_cpu_us = 0;
+  double server_cpu_us = 0;
+  double client_cpu_us = 0;
+};
+
+// Keeps the smaller of `*best` (0: none yet) and `value`.
+void KeepLeast(double value, double* best) {
+  if (*best == 0 || value < *best) *best = value;
+}
+
+absl::StatusOr<MapFigures> MeasureMap(const Daemon& daemon, const fs::path& map_path,
+                                      const std::string& name,
+                                      const pathd::Grid& grid) {
+  const int threads = absl::GetFlag(FLAGS_threads);
+  const int limit = absl::GetFlag(FLAGS_limit);
+  auto scenarios = pathd::ReadMovingAiScenarioFile(map_path.string() + ".scen");
+  if (!scenarios.ok()) return scenarios.status();
+  if (limit > 0 && static_cast<int>(scenarios->size()) > limit) scenarios->resize(limit);
+  if (scenarios->empty()) return absl::NotFoundError("no scenarios");
+
+  // The wire requests, and the core requests the server turns them into (the
+  // same conversion), so both sides plan exactly the same queries.
+  absl::StatusOr<pathd::v1::Planner> wire_planner =
+      pathd::pathctl::PlannerFromName(absl::GetFlag(FLAGS_planner));
+  if (!wire_planner.ok()) return wire_planner.status();
+  const pathd::Planner* planner =
+      pathd::PlannerRegistry::Default().Get(absl::GetFlag(FLAGS_planner));
+  if (planner == nullptr) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("planner ", absl::GetFlag(FLAGS_planner), " is not in the registry"));
+  }
+  std::vector<pathd::v1::PlanRequest> wire;
+  std::vector<pathd::PlanRequest> core;
+  for (const pathd::Scenario& s : *scenarios) {
+    pathd::v1::PlanRequest& w = wire.emplace_back();
+    w.set_map(name);
+    w.set_planner(*wire_planner);
+    *w.mutable_start()->mutable_cell() = pathd::server::ToProto(s.start);
+    *w.mutable_goal()->mutable_cell() = pathd::server::ToProto(s.goal);
+    pathd::PlanRequest c = pathd::PlanRequest::Between(s.start, s.goal);
+    if (absl::Status st = pathd::server::PlanOptionsToRequest(w.options(), &c); !st.ok()) {
+      return st;
+    }
+    core.push_back(c);
+  }
+  MapFigures figures;
+  figures.queries = static_cast<int>(core.size());
+  const int64_t measured = int64_t{absl::GetFlag(FLAGS_passes)} * figures.queries;
+
+  pathd::client::PathdClient client(daemon.address(), absl::Seconds(60));
+  pathd::v1::CreateMapRequest create;
+  create.set_name(name);
+  create.set_replace(true);
+  if (absl::Status s = pathd::client::SetMapSourceFromFile(map_path.string(), &create);
+      !s.ok()) {
+    return s;
+  }
+  if (auto created = client.CreateMap(create); !created.ok()) return created.status();
+
+  pathd::client::LoadOptions in_process;
+  in_process.concurrency = threads;
+  in_process.duration = absl::ZeroDuration();
+  in_process.max_requests = measured;
+  in_process.warmup = absl::GetFlag(FLAGS_warmup);
+  pathd::client::LoadOptions remote = in_process;
+  const int concurrency = absl::GetFlag(FLAGS_concurrency);
+  remote.concurrency = concurrency > 0 ? concurrency : 2 * threads;
+  // One scratch per thread, as each pool worker owns one.
+  std::vector<std::unique_ptr<pathd::SearchScratch>> scratch;
+  for (int t = 0; t < threads; ++t) {
+    scratch.push_back(std::make_unique<pathd::SearchScratch>());
+  }
+  const pathd::StopCondition stop(absl::InfiniteFuture(), nullptr, 0);
+  const auto plan_locally = [&](int worker, int64_t index) {
+    absl::StatusOr<pathd::PlanResult> result =
+        planner->Plan(grid, core[static_cast<size_t>(index) % core.size()], stop,
+                      *scratch[static_cast<size_t>(worker)]);
+    pathd::client::CallResult r;
+    r.code = result.status().code();
+    r.found = result.ok() && result->found();
+    return r;
+  };
+  // Alternating rounds, keeping each side's best: other processes on this
+  // machine only ever slow a run down, so the fastest round is the closest
+  // to what the code itself costs, and alternating exposes both sides to the
+  // same conditions.
+  for (int round = 0; round < absl::GetFlag(FLAGS_rounds); ++round) {
+    double cpu = OwnCpuSeconds();
+    absl::StatusOr<pathd::client::LoadReport> local =
+        pathd::client::RunClosedLoop(in_process, plan_locally);
+    if (!local.ok()) return local.status();
+    // The warm-up's CPU is in the difference too; its requests are counted.
+    const auto per_query = [](double seconds, int64_t requests) {
+      return seconds * 1e6 / static_cast<double>(std::max<int64_t>(requests, 1));
+    };
+    KeepLeast(per_query(OwnCpuSeconds() - cpu, local->requests + local->warmup_requests),
+              &figures.in_process_cpu_us);
+    if (local->requests_per_second > figures.in_process.requests_per_second) {
+      figures.in_process = *local;
+    }
+    cpu = OwnCpuSeconds();
+    const double server_cpu = daemon.CpuSeconds();
+    absl::StatusOr<pathd::client::LoadReport> grpc = pathd::client::RunPlanLoad(
+        daemon.address(), absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_timeout),
+        wire, remote);
+    if (!grpc.ok()) return grpc.status();
+    const int64_t sent = grpc->requests + grpc->warmup_requests;
+    KeepLeast(per_query(daemon.CpuSeconds() - server_cpu, sent), &figures.server_cpu_us);
+    KeepLeast(per_query(OwnCpuSeconds() - cpu, sent), &figures.client_cpu_us);
+    if (grpc->requests_per_second > figures.grpc.requests_per_second) {
+      figures.grpc = *grpc;
+    }
+  }
+  // Keeps the daemon's memory flat across maps.
+  if (auto deleted = client.DeleteMap(name); !deleted.ok()) return deleted.status();
+  return figures;
+}
+
+double Ms(absl::Duration d) { return absl::ToDoubleMilliseconds(d); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "load_bench [--pathd BIN] [--movingai_dir DIR] [--maps a.map,...] "
+      "[--planner astar] [--threads W] [--concurrency C] [--channels K] "
+      "[--limit N] [--passes P] [--rounds R]\n"
+      "Starts pathd --threads=W and prints per map: in-process throughput on W "
+      "threads, gRPC Plan throughput at 2W concurrency on the same queries, "
+      "their ratio, and the gRPC latency p50/p99.");
+  absl::ParseCommandLine(argc, argv);
+  // As in pathd and pathctl: Debian's Abseil would check every Mutex
+  // acquisition of the gRPC client for deadlock cycles.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
+  const fs::path root = absl::GetFlag(FLAGS_movingai_dir);
+  if (absl::GetFlag(FLAGS_maps).empty() && !fs::is_directory(root)) {
+    std::printf("Moving AI benchmarks not found at %s; nothing to measure\n",
+                root.c_str());
+    return 0;
+  }
+  const int threads = absl::GetFlag(FLAGS_threads);
+  if (threads < 1 || absl::GetFlag(FLAGS_passes) < 1 || absl::GetFlag(FLAGS_rounds) < 1) {
+    std::fprintf(stderr, "--threads, --passes and --rounds must be at least 1\n");
+    return 2;
+  }
+  Daemon daemon;
+  if (absl::Status s = daemon.Start(absl::GetFlag(FLAGS_pathd), threads); !s.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(s.message()).c_str());
+    return 1;
+  }
+  const int concurrency = absl::GetFlag(FLAGS_concurrency) > 0
+                              ? absl::GetFlag(FLAGS_concurrency)
+                              : 2 * threads;
+  std::printf(
+      "load_bench: %u hardware threads; pathd --threads=%d on %s; planner %s; "
+      "in-process %d threads vs gRPC concurrency %d over %d channel(s); first %d "
+      "scenarios x %d passes, best of %d rounds\n",
+      std::thread::hardware_concurrency(), threads, daemon.address().c_str(),
+      absl::GetFlag(FLAGS_planner).c_str(), threads, concurrency,
+      absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_limit),
+      absl::GetFlag(FLAGS_passes), absl::GetFlag(FLAGS_rounds));
+  std::printf("%-28s %7s %9s %9s %8s %9s %9s %9s %9s %8s %8s %8s %8s %8s %6s\n",
+              "map", "queries", "local_q/s", "grpc_q/s", "grpc/loc", "local_p99",
+              "grpc_p50", "grpc_p95", "grpc_p99", "loc_cpu", "srv_cpu", "cli_cpu",
+              "loc/srv", "loc/all", "errors");
+  const bool all = absl::GetFlag(FLAGS_maps).empty();
+  int failures = 0;
+  for (const std::string& relative :
+       pathd::bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps))) {
+    const fs::path map_path = root / relative;
+    auto grid = pathd::ReadMovingAiMapFile(map_path.string());
+    if (!grid.ok()) {
+      std::fprintf(stderr, "%s\n", std::string(grid.status().message()).c_str());
+      return 1;
+    }
+    if (all && (grid->width() != 512 || grid->height() != 512)) continue;
+    const std::string name = map_path.stem().string();
+    absl::StatusOr<MapFigures> f = MeasureMap(daemon, map_path, name, *grid);
+    if (!f.ok()) {
+      std::fprintf(stderr, "%s: %s\n", relative.c_str(), f.status().ToString().c_str());
+      ++failures;
+      continue;
+    }
+    const double ratio = f->in_process.requests_per_second > 0
+                             ? f->grpc.requests_per_second /
+                                   f->in_process.requests_per_second
+                             : 0.0;
+    const auto fraction = [](double numerator, double denominator) {
+      return denominator > 0 ? numerator / denominator : 0.0;
+    };
+    std::printf(
+        "%-28s %7d %9.1f %9.1f %8.3f %9.2f %9.2f %9.2f %9.2f %8.0f %8.0f %8.0f %8.3f "
+        "%8.3f %6lld\n",
+        relative.c_str(), f->queries, f->in_process.requests_per_second,
+        f->grpc.requests_per_second, ratio, Ms(f->in_process.latency.p99),
+        Ms(f->grpc.latency.p50), Ms(f->grpc.latency.p95), Ms(f->grpc.latency.p99),
+        f->in_process_cpu_us, f->server_cpu_us, f->client_cpu_us,
+        fraction(f->in_process_cpu_us, f->server_cpu_us),
+        fraction(f->in_process_cpu_us, f->server_cpu_us + f->client_cpu_us),
+        static_cast<long long>(f->grpc.errors() + f->in_process.errors()));
+    std::fflush(stdout);
+  }
+  return failures == 0 ? 0 : 1;
+}
