@@ -312,6 +312,9 @@ TEST_F(AdmissionTest, DeadlinesStopRunningPlansAndDropQueuedOnes) {
   auto running = StartPlan(
       PlanRequest("big", 0, 0, kBig - 1, kBig - 1, v1::PLANNER_DIJKSTRA),
       std::chrono::milliseconds(1500));
+  // The two calls travel independently, so give the long one time to reach
+  // the single worker first (it then holds it for its whole 1.5 s deadline).
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
   auto queued = StartPlan(PlanRequest("small", 0, 0, 9, 9, v1::PLANNER_DIJKSTRA),
                           std::chrono::milliseconds(300));
   EXPECT_EQ(queued->Get().error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);

@@ -34,6 +34,7 @@
 #include <tuple>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/cost_model.h"
 #include "core/grid.h"
@@ -60,18 +61,14 @@ int EnvSeconds(const char* name, int fallback) {
 constexpr auto kCallDeadline = std::chrono::minutes(10);
 
 // What each client thread does.
-//
-// PlanBatch streams (issue 6, added after this test) join here as a fourth
-// role, kBatch: a BatchClient member that sends PlanClient's kind of requests
-// over one PlanBatch stream and records every answer with RecordPlan (the
-// verification then covers it unchanged); give it threads in Roles() (taken
-// from kPlan, keeping 32), a name in RoleName() and a case in RunClient().
-enum class Role { kPlan, kNavigate, kUpdate };
+enum class Role { kPlan, kBatch, kNavigate, kUpdate };
 
 const char* RoleName(Role role) {
   switch (role) {
     case Role::kPlan:
       return "plan";
+    case Role::kBatch:
+      return "batch";
     case Role::kNavigate:
       return "navigate";
     case Role::kUpdate:
@@ -82,7 +79,8 @@ const char* RoleName(Role role) {
 
 std::vector<Role> Roles() {
   std::vector<Role> roles;
-  roles.insert(roles.end(), 16, Role::kPlan);
+  roles.insert(roles.end(), 12, Role::kPlan);
+  roles.insert(roles.end(), 4, Role::kBatch);
   roles.insert(roles.end(), 10, Role::kNavigate);
   roles.insert(roles.end(), 6, Role::kUpdate);
   return roles;
@@ -269,8 +267,34 @@ class ConcurrencyTest : public ::testing::Test {
     return changes;
   }
 
-  void PlanClient(int thread, ClientLog& log) {
-    std::mt19937 rng(100 + thread);
+  // A random plan request between two endpoints of a random map, with what
+  // its answer must be checked against.
+  struct RandomPlan {
+    size_t map = 0;
+    const char* planner = "";
+    Cell start;
+    Cell goal;
+    CostParams cost;
+    v1::PlanRequest request;
+    std::string what;
+
+    // Records `response` into `log` if it answers this request, else a
+    // failure.
+    void Record(const v1::PlanResponse& response, ClientLog& log) const {
+      if (response.planner() != planner || CellOf(response.start()) != start ||
+          CellOf(response.goal()) != goal) {
+        log.failures.push_back(what + ": answer for " + response.planner() + " " +
+                               CellToString(CellOf(response.start())) + " -> " +
+                               CellToString(CellOf(response.goal())));
+        return;
+      }
+      Answer answer = RecordPlan(map, response, goal, cost, what);
+      if (request.planner() == v1::PLANNER_SPM) answer.tolerance = 1e-4;
+      log.answers.push_back(std::move(answer));
+    }
+  };
+
+  RandomPlan MakeRandomPlan(std::mt19937& rng) const {
     struct Choice {
       v1::Planner planner;
       const char* name;
@@ -281,14 +305,19 @@ class ConcurrencyTest : public ::testing::Test {
          {v1::PLANNER_JPS, "jps"},
          {v1::PLANNER_DSTAR_LITE, "dstar_lite"},
          {v1::PLANNER_SPM, "spm"}}};
-    while (!stop_.load()) {
+    RandomPlan plan;
+    {
       const size_t m = rng() % maps_.size();
+      plan.map = m;
       const SharedMap& map = maps_[m];
       const Choice& choice = kPlanners[rng() % kPlanners.size()];
+      plan.planner = choice.name;
       const Cell start = map.endpoints[rng() % map.endpoints.size()];
       const Cell goal = map.endpoints[rng() % map.endpoints.size()];
-      CostParams cost;
-      v1::PlanRequest request;
+      plan.start = start;
+      plan.goal = goal;
+      CostParams& cost = plan.cost;
+      v1::PlanRequest& request = plan.request;
       request.set_map(map.name);
       request.set_planner(choice.planner);
       *request.mutable_start() = CellPosition(start);
@@ -307,30 +336,86 @@ class ConcurrencyTest : public ::testing::Test {
       request.mutable_options()->set_connectivity(
           cost.connectivity == Connectivity::kFour ? v1::CONNECTIVITY_FOUR
                                                    : v1::CONNECTIVITY_EIGHT);
+      plan.what = absl::StrFormat("%s on %s %s -> %s", choice.name, map.name,
+                                  CellToString(start), CellToString(goal));
+    }
+    return plan;
+  }
+
+  void PlanClient(int thread, ClientLog& log) {
+    std::mt19937 rng(100 + thread);
+    while (!stop_.load()) {
+      RandomPlan plan = MakeRandomPlan(rng);
+      plan.what = "Plan " + plan.what;
       grpc::ClientContext context;
       context.set_deadline(std::chrono::system_clock::now() + kCallDeadline);
       v1::PlanResponse response;
       Progress(thread, "Plan");
-      const grpc::Status status = planner_->Plan(&context, request, &response);
+      const grpc::Status status = planner_->Plan(&context, plan.request, &response);
       Progress(thread, "between calls");
-      const std::string what =
-          absl::StrFormat("Plan %s on %s %s -> %s", choice.name, map.name,
-                          CellToString(start), CellToString(goal));
       if (!status.ok()) {
-        log.failures.push_back(what + ": " + status.error_message());
+        log.failures.push_back(plan.what + ": " + status.error_message());
         continue;
       }
-      if (response.planner() != choice.name ||
-          CellOf(response.start()) != start ||
-          CellOf(response.goal()) != goal) {
-        log.failures.push_back(what + ": answer for " + response.planner() +
-                               " " + CellToString(CellOf(response.start())) +
-                               " -> " + CellToString(CellOf(response.goal())));
-        continue;
+      plan.Record(response, log);
+    }
+  }
+
+  // One PlanBatch stream per round: writes a burst of random requests with
+  // distinct ids, reads every answer (in finishing order) and checks each
+  // against the request its id names; then half-closes and expects OK.
+  void BatchClient(int thread, ClientLog& log) {
+    std::mt19937 rng(300 + thread);
+    int round = 0;
+    while (!stop_.load()) {
+      grpc::ClientContext context;
+      context.set_deadline(std::chrono::system_clock::now() + kCallDeadline);
+      Progress(thread, "PlanBatch open");
+      auto stream = planner_->PlanBatch(&context);
+      std::map<std::string, RandomPlan> pending;
+      const int burst = 4 + static_cast<int>(rng() % 12);
+      for (int i = 0; i < burst; ++i) {
+        RandomPlan plan = MakeRandomPlan(rng);
+        const std::string id = absl::StrCat(round, "-", i);
+        plan.what = absl::StrCat("PlanBatch item ", id, " ", plan.what);
+        v1::PlanBatchRequest item;
+        item.set_request_id(id);
+        *item.mutable_request() = plan.request;
+        Progress(thread, "PlanBatch write");
+        if (!stream->Write(item)) break;
+        pending.emplace(id, std::move(plan));
       }
-      Answer answer = RecordPlan(m, response, goal, cost, what);
-      if (choice.planner == v1::PLANNER_SPM) answer.tolerance = 1e-4;
-      log.answers.push_back(std::move(answer));
+      Progress(thread, "PlanBatch writes done");
+      stream->WritesDone();
+      v1::PlanBatchResponse answer;
+      while (true) {
+        Progress(thread, "PlanBatch read");
+        if (!stream->Read(&answer)) break;
+        auto it = pending.find(answer.request_id());
+        if (it == pending.end()) {
+          log.failures.push_back(absl::StrCat("PlanBatch: answer for unknown or "
+                                              "repeated id '",
+                                              answer.request_id(), "'"));
+          continue;
+        }
+        if (answer.has_error()) {
+          log.failures.push_back(it->second.what + ": " + answer.error().message());
+        } else {
+          it->second.Record(answer.result(), log);
+        }
+        pending.erase(it);
+      }
+      Progress(thread, "PlanBatch finish");
+      const grpc::Status status = stream->Finish();
+      Progress(thread, "between calls");
+      if (!status.ok()) {
+        log.failures.push_back(absl::StrCat("PlanBatch round ", round, ": ",
+                                            status.error_message()));
+      }
+      for (const auto& [id, plan] : pending) {
+        log.failures.push_back(plan.what + ": never answered");
+      }
+      ++round;
     }
   }
 
@@ -474,6 +559,9 @@ class ConcurrencyTest : public ::testing::Test {
     switch (role) {
       case Role::kPlan:
         PlanClient(thread, log);
+        break;
+      case Role::kBatch:
+        BatchClient(thread, log);
         break;
       case Role::kNavigate:
         NavigateClient(thread, log);
@@ -694,16 +782,18 @@ TEST_F(ConcurrencyTest, MixedClientsGetAnswersRightForTheVersionTheyName) {
   }
   // Every kind of traffic really ran alongside the others.
   EXPECT_GT(answers_by_role[Role::kPlan], 0u);
+  EXPECT_GT(answers_by_role[Role::kBatch], 0u);
   EXPECT_GT(answers_by_role[Role::kNavigate], 0u);
   EXPECT_GT(versions, 0u);
 
   const size_t checked = Verify(logs);
   std::printf(
-      "concurrency_test: %d s, %zu Plan answers, %zu Navigate answers (%lld "
-      "pushed), "
+      "concurrency_test: %d s, %zu Plan answers, %zu PlanBatch answers, %zu "
+      "Navigate answers (%lld pushed), "
       "%zu map versions; %zu answers checked against Dijkstra on their "
       "version\n",
-      seconds, answers_by_role[Role::kPlan], answers_by_role[Role::kNavigate],
+      seconds, answers_by_role[Role::kPlan], answers_by_role[Role::kBatch],
+      answers_by_role[Role::kNavigate],
       static_cast<long long>(pushes), versions, checked);
 }
 
