@@ -86,12 +86,25 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
         "Time workers spent running jobs (counted when a job ends); "
         "rate() / pathd_worker_threads is the utilisation.",
         kCounter, absl::ToDoubleSeconds(s_.pool->busy_time())));
-    families.push_back(Single("pathd_queued_jobs",
+    // One series per priority queue (interactive: Plan, CostToGo, Navigate,
+    // cache repairs; batch: PlanBatch items).
+    std::vector<prometheus::ClientMetric> queued;
+    std::vector<prometheus::ClientMetric> capacity;
+    for (const auto& [priority, label] :
+         {std::pair{WorkerPool::Priority::kInteractive, "interactive"},
+          std::pair{WorkerPool::Priority::kBatch, "batch"}}) {
+      queued.push_back(Value(kGauge, static_cast<double>(s_.pool->queued(priority)),
+                             {{"priority", label}}));
+      capacity.push_back(Value(kGauge,
+                               static_cast<double>(s_.pool->queue_depth(priority)),
+                               {{"priority", label}}));
+    }
+    families.push_back(Family("pathd_queued_jobs",
                               "Jobs waiting for a worker at scrape time.", kGauge,
-                              static_cast<double>(s_.pool->queued())));
-    families.push_back(Single("pathd_queue_capacity",
+                              std::move(queued)));
+    families.push_back(Family("pathd_queue_capacity",
                               "Jobs that may wait before RESOURCE_EXHAUSTED.", kGauge,
-                              static_cast<double>(s_.pool->queue_depth())));
+                              std::move(capacity)));
 
     AddCaches(families);
 

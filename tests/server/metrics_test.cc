@@ -202,8 +202,11 @@ TEST_F(MetricsTest, CountsRequestsByRpcAndCodeAndReadsServerState) {
             static_cast<double>(server_->options().cache_bytes / 2));
   EXPECT_EQ(s.at(R"(pathd_cache_hits_total{cache="inflation"})"), 0);
   EXPECT_EQ(s.at("pathd_worker_threads"), 2);
-  EXPECT_EQ(s.at("pathd_queue_capacity"), 64);
-  EXPECT_EQ(s.at("pathd_queued_jobs"), 0);
+  EXPECT_EQ(s.at(R"(pathd_queue_capacity{priority="interactive"})"), 64);
+  EXPECT_EQ(s.at(R"(pathd_queue_capacity{priority="batch"})"),
+            static_cast<double>(server_->options().batch_queue_depth));
+  EXPECT_EQ(s.at(R"(pathd_queued_jobs{priority="interactive"})"), 0);
+  EXPECT_EQ(s.at(R"(pathd_queued_jobs{priority="batch"})"), 0);
   // Four plans ran on the workers.
   EXPECT_GT(s.at("pathd_worker_busy_seconds_total"), 0);
   EXPECT_EQ(s.at("pathd_map_watchers"), 1);
