@@ -568,6 +568,25 @@ absl::StatusOr<v1::PlanResponse> PlanWithProgress(Env& env,
   return *std::move(result);
 }
 
+// One position from two arguments (`names` word the errors): a cell, or
+// with `world` a point in metres.
+absl::StatusOr<v1::Position> PositionFromPair(Args xy, bool world,
+                                              std::span<const char* const> names) {
+  v1::Position position;
+  if (world) {
+    PATHD_ASSIGN_OR_RETURN(const std::vector<double> p,
+                           ParseDoubles(xy, names));
+    position.mutable_world()->set_x(p[0]);
+    position.mutable_world()->set_y(p[1]);
+  } else {
+    PATHD_ASSIGN_OR_RETURN(const std::vector<int32_t> p,
+                           ParseInts(xy, names));
+    position.mutable_cell()->set_x(p[0]);
+    position.mutable_cell()->set_y(p[1]);
+  }
+  return position;
+}
+
 // Adds --via's "X,Y;X,Y..." to request.via: cells, or world metres with
 // --world. INVALID_ARGUMENT (a usage error) naming the bad point.
 absl::Status AddViaPoints(const Options& options, v1::PlanRequest* request) {
@@ -581,26 +600,13 @@ absl::Status AddViaPoints(const Options& options, v1::PlanRequest* request) {
       return absl::InvalidArgumentError(
           absl::StrCat(name, ": '", points[i], "' is not X,Y"));
     }
-    const Args parts(xy);
     static constexpr const char* kXY[] = {"X", "Y"};
-    v1::Position* via = request->add_via();
-    if (options.world) {
-      absl::StatusOr<std::vector<double>> p = ParseDoubles(parts, kXY);
-      if (!p.ok()) {
-        return absl::InvalidArgumentError(
-            absl::StrCat(name, ": ", p.status().message()));
-      }
-      via->mutable_world()->set_x((*p)[0]);
-      via->mutable_world()->set_y((*p)[1]);
-    } else {
-      absl::StatusOr<std::vector<int32_t>> p = ParseInts(parts, kXY);
-      if (!p.ok()) {
-        return absl::InvalidArgumentError(
-            absl::StrCat(name, ": ", p.status().message()));
-      }
-      via->mutable_cell()->set_x((*p)[0]);
-      via->mutable_cell()->set_y((*p)[1]);
+    absl::StatusOr<v1::Position> via = PositionFromPair(Args(xy), options.world, kXY);
+    if (!via.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(name, ": ", via.status().message()));
     }
+    *request->add_via() = *std::move(via);
   }
   return absl::OkStatus();
 }
@@ -969,18 +975,9 @@ absl::StatusOr<std::vector<v1::Position>> PosesFromArgs(Args args, bool world) {
     const std::string x_name = absl::StrCat("X", i / 2 + 1);
     const std::string y_name = absl::StrCat("Y", i / 2 + 1);
     const char* const names[] = {x_name.c_str(), y_name.c_str()};
-    v1::Position& pose = poses.emplace_back();
-    if (world) {
-      PATHD_ASSIGN_OR_RETURN(const std::vector<double> p,
-                             ParseDoubles(args.subspan(i, 2), names));
-      pose.mutable_world()->set_x(p[0]);
-      pose.mutable_world()->set_y(p[1]);
-    } else {
-      PATHD_ASSIGN_OR_RETURN(const std::vector<int32_t> p,
-                             ParseInts(args.subspan(i, 2), names));
-      pose.mutable_cell()->set_x(p[0]);
-      pose.mutable_cell()->set_y(p[1]);
-    }
+    PATHD_ASSIGN_OR_RETURN(v1::Position pose,
+                           PositionFromPair(args.subspan(i, 2), world, names));
+    poses.push_back(std::move(pose));
   }
   return poses;
 }
