@@ -1095,6 +1095,7 @@ class PlanBatchState final : public std::enable_shared_from_this<PlanBatchState>
       }
       ++outstanding_;
       ++items_;
+      ++accepting_;
       message = std::move(read_);
       read_.Clear();
     }
@@ -1153,6 +1154,9 @@ class PlanBatchState final : public std::enable_shared_from_this<PlanBatchState>
       } else if (broken_) {
         refused = absl::CancelledError("the batch was cancelled");
       }
+      // From here the item is either answered or in running_, both of which
+      // keep the stream open.
+      --accepting_;
       if (!refused.ok()) {
         v1::PlanBatchResponse answer;
         answer.set_request_id(id);
@@ -1235,8 +1239,10 @@ class PlanBatchState final : public std::enable_shared_from_this<PlanBatchState>
       return;
     }
     // Every running item must have answered first: their on_finish holds
-    // this state, but the reactor is deleted soon after Finish.
-    if (!reads_done_ || !running_.empty()) return;
+    // this state, but the reactor is deleted soon after Finish. An item
+    // still being accepted counts too: a write completing meanwhile may
+    // already have started the read that sees the client's half-close.
+    if (!reads_done_ || !running_.empty() || accepting_ > 0) return;
     finished_ = true;
     LogRequest("PlanBatch", "-", absl::StrFormat("items=%d", items_), end_status_,
                opened_);
@@ -1261,6 +1267,9 @@ class PlanBatchState final : public std::enable_shared_from_this<PlanBatchState>
       ABSL_GUARDED_BY(mu_);
   // Items read whose answer is not yet written (or dropped).
   size_t outstanding_ ABSL_GUARDED_BY(mu_) = 0;
+  // Items read but not yet answered or registered in running_ (Accept runs
+  // outside the lock).
+  int accepting_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t items_ ABSL_GUARDED_BY(mu_) = 0;
   bool reading_ ABSL_GUARDED_BY(mu_) = false;
   // The client half-closed, or the stream broke.
