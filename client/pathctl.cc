@@ -26,6 +26,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_replace.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "client/load_generator.h"
@@ -1903,12 +1904,14 @@ absl::StatusOr<CommandLine> SplitCommandLine(int argc,
       continue;
     }
     absl::string_view body = arg.substr(arg[1] == '-' ? 2 : 1);
-    absl::string_view name = body;
     std::optional<absl::string_view> value;
     if (size_t eq = body.find('='); eq != absl::string_view::npos) {
-      name = body.substr(0, eq);
       value = body.substr(eq + 1);
+      body = body.substr(0, eq);
     }
+    // --tls-ca reads as --tls_ca: the issues and other tools spell flags
+    // with hyphens, absl with underscores.
+    const std::string name = absl::StrReplaceAll(body, {{"-", "_"}});
     if (name == "help" || name == "h") {
       line.help = true;
       continue;

@@ -11,10 +11,12 @@
 
 #include "absl/flags/commandlineflag.h"
 #include "absl/flags/reflection.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/escaping.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_replace.h"
 #include "absl/strings/strip.h"
 
 namespace pathd::server {
@@ -68,7 +70,7 @@ absl::StatusOr<std::vector<ConfigSetting>> ParseConfigYamlOrThrow(
       return absl::InvalidArgumentError(
           absl::StrCat(Where(source, line), ": keys must be flag names"));
     }
-    const std::string& name = key.Scalar();
+    const std::string name = CanonicalFlagName(key.Scalar());
     if (!seen.insert(name).second) {
       return KeyError(source, line, name, "set twice in this file");
     }
@@ -169,6 +171,27 @@ absl::Status LoadConfigFile(const std::string& path,
       ParseConfigYaml(text.str(), path);
   if (!settings.ok()) return settings.status();
   return ApplyConfigSettings(*settings, path, settable, origins);
+}
+
+std::string CanonicalFlagName(absl::string_view name) {
+  return absl::StrReplaceAll(name, {{"-", "_"}});
+}
+
+std::vector<std::string> NormalizeFlagSpelling(absl::Span<char* const> argv) {
+  std::vector<std::string> normalized(argv.begin(), argv.end());
+  for (size_t i = 1; i < normalized.size(); ++i) {
+    std::string& arg = normalized[i];
+    if (arg == "--") break;
+    // Only "-name..." / "--name...": a value such as "-3" stays as it is.
+    const size_t start = absl::StartsWith(arg, "--") ? 2 : 1;
+    if (arg.size() <= start || arg[0] != '-' ||
+        !absl::ascii_isalpha(static_cast<unsigned char>(arg[start]))) {
+      continue;
+    }
+    const size_t end = std::min(arg.find('='), arg.size());
+    std::replace(arg.begin() + start, arg.begin() + end, '-', '_');
+  }
+  return normalized;
 }
 
 std::string FlagValueInArgv(absl::Span<char* const> argv,

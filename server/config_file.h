@@ -69,6 +69,15 @@ absl::Status LoadConfigFile(const std::string& path,
                             absl::Span<const std::string> settable,
                             ConfigOrigins* origins);
 
+// Flag names spelled with hyphens (`--data-dir`, as the docs of some tools
+// write them) rewritten to pathd's underscores (`--data_dir`); values and
+// everything after a bare `--` are kept as they are. argv[0] is copied.
+std::vector<std::string> NormalizeFlagSpelling(absl::Span<char* const> argv);
+
+// The flag name a config file key or command-line flag stands for: hyphens
+// read as underscores.
+std::string CanonicalFlagName(absl::string_view name);
+
 // The value of flag `flag_name` in argv (argv[0] is the program) as
 // absl::ParseCommandLine will read it: `--name=V`, `-name=V`, `--name V` or
 // `-name V`, the last occurrence winning, none after a bare `--`; other

@@ -272,6 +272,13 @@ pathd::server::ServerOptions OptionsFromFlags() {
 
 int main(int argc, char** argv) {
   SetUpFlagsUsage();
+  // --data-dir reads as --data_dir (see NormalizeFlagSpelling).
+  std::vector<std::string> spelled =
+      pathd::server::NormalizeFlagSpelling(absl::MakeConstSpan(argv, argc));
+  std::vector<char*> args;
+  for (std::string& arg : spelled) args.push_back(arg.data());
+  argc = static_cast<int>(args.size());
+  argv = args.data();
   // The file is applied first so that absl::ParseCommandLine, run after it,
   // gives every flag on the command line the last word.
   const std::string config_path =

@@ -191,6 +191,27 @@ TEST_F(ConfigFileTest, FindsTheFlagInArgvAsAbslReadsIt) {
   EXPECT_EQ(ValueIn({"prog", "--cfgtest_config"}), "");
 }
 
+TEST_F(ConfigFileTest, HyphenatedFlagNamesReadAsUnderscores) {
+  std::vector<std::string> args = {"prog", "--data-dir=/var/lib/pathd",
+                                   "-log-level", "debug-ish", "--tls_cert",
+                                   "a-b.pem", "-3", "--", "--not-a-flag"};
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  // Values keep their hyphens, including one that looks like a short flag
+  // but is a number, and nothing after "--" is touched.
+  EXPECT_THAT(NormalizeFlagSpelling(argv),
+              ElementsAre("prog", "--data_dir=/var/lib/pathd", "-log_level",
+                          "debug-ish", "--tls_cert", "a-b.pem", "-3", "--",
+                          "--not-a-flag"));
+  const auto settings =
+      ParseConfigYaml("cfgtest-threads: 2\ncfgtest_threads: 3\n", "x.yaml");
+  ASSERT_FALSE(settings.ok());
+  EXPECT_THAT(settings.status().message(), HasSubstr("set twice"));
+  const auto hyphenated = ParseConfigYaml("cfgtest-threads: 2\n", "x.yaml");
+  ASSERT_TRUE(hyphenated.ok()) << hyphenated.status();
+  EXPECT_THAT(*hyphenated, ElementsAre(Setting("cfgtest_threads", "2", 1)));
+}
+
 // What pathd's main does: load the file named in argv, then parse the command
 // line, whose flags override the file's; flags in neither keep their default.
 TEST_F(ConfigFileTest, CommandLineOverridesFileOverridesDefault) {
