@@ -1,0 +1,421 @@
+#!/usr/bin/python3
+"""The Python client (client/python) against a real pathd, plus a fake
+server that records what the client puts on the wire.
+
+Run by ctest with PYTHONPATH set to the build's client/python directory and
+PATHD_BIN to the daemon; by hand:
+    PYTHONPATH=build/client/python PATHD_BIN=build/server/pathd \\
+        tests/client/pathd_client_test.py
+"""
+
+import ctypes
+import heapq
+import math
+import os
+import pathlib
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import unittest
+from concurrent import futures
+
+import grpc
+
+import pathd_client
+from pathd_client import (LETHAL, Cell, PathdClient, PathdError, SetCell,
+                          SetRect)
+from pathd.v1 import map_service_pb2
+from pathd.v1 import map_service_pb2_grpc
+from pathd.v1 import planner_service_pb2
+from pathd.v1 import planner_service_pb2_grpc
+
+SOURCE_DIR = pathlib.Path(__file__).resolve().parents[2]
+EXAMPLE = SOURCE_DIR / "client" / "python" / "examples" / "robot_loop.py"
+
+# 14 x 8: a wall at column 6 with openings at rows 0 and 7.
+ROWS = [
+    "..............",
+    "......@.......",
+    "......@.......",
+    "......@.......",
+    "......@.......",
+    "......@.......",
+    "......@.......",
+    "..............",
+]
+
+
+def _die_with_parent() -> None:
+    # The kernel kills pathd if this test dies, so no daemon outlives it.
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+
+
+def blocked_cells(rows: list[str]) -> set[Cell]:
+    return {Cell(x, y) for y, row in enumerate(rows) for x, c in enumerate(row) if c == "@"}
+
+
+def shortest_cost(width: int, height: int, blocked: set[Cell], start: Cell,
+                  goal: Cell) -> float:
+    """Dijkstra on a free/blocked grid under pathd's default rules:
+    8-connected, 1 per straight and sqrt(2) per diagonal move, diagonals only
+    when both side cells are free. math.inf when unreachable."""
+    def free(x, y):
+        return 0 <= x < width and 0 <= y < height and Cell(x, y) not in blocked
+
+    dist = {start: 0.0}
+    heap = [(0.0, start)]
+    while heap:
+        d, cell = heapq.heappop(heap)
+        if cell == goal:
+            return d
+        if d > dist[cell]:
+            continue
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                x, y = cell.x + dx, cell.y + dy
+                if (dx, dy) == (0, 0) or not free(x, y):
+                    continue
+                if dx and dy and not (free(cell.x + dx, cell.y) and free(cell.x, cell.y + dy)):
+                    continue
+                nd = d + (math.sqrt(2) if dx and dy else 1.0)
+                if nd < dist.get(Cell(x, y), math.inf):
+                    dist[Cell(x, y)] = nd
+                    heapq.heappush(heap, (nd, Cell(x, y)))
+    return math.inf
+
+
+class PathChecks:
+    """Assertions shared by the real-server tests."""
+
+    def assert_valid_path(self, path, start, goal, width, height, blocked):
+        self.assertEqual(path[0], start)
+        self.assertEqual(path[-1], goal)
+        for cell in path:
+            self.assertTrue(0 <= cell.x < width and 0 <= cell.y < height, cell)
+            self.assertNotIn(cell, blocked)
+        for a, b in zip(path, path[1:]):
+            dx, dy = b.x - a.x, b.y - a.y
+            self.assertEqual(max(abs(dx), abs(dy)), 1, f"{a} -> {b} is not one move")
+            if dx and dy:
+                self.assertNotIn(Cell(a.x + dx, a.y), blocked, f"{a} -> {b} cuts a corner")
+                self.assertNotIn(Cell(a.x, a.y + dy), blocked, f"{a} -> {b} cuts a corner")
+
+
+class RealServerTest(unittest.TestCase, PathChecks):
+    """pathd itself, started on a free loopback port."""
+
+    @classmethod
+    def setUpClass(cls):
+        pathd = os.environ.get("PATHD_BIN", str(SOURCE_DIR / "build" / "server" / "pathd"))
+        cls.map_dir = tempfile.TemporaryDirectory()
+        cls.daemon = subprocess.Popen(
+            [pathd, "--address=127.0.0.1:0", f"--map_dir={cls.map_dir.name}"],
+            stdout=subprocess.PIPE, text=True, preexec_fn=_die_with_parent)
+        line = cls.daemon.stdout.readline().strip()
+        prefix = "pathd listening on "
+        if not line.startswith(prefix):
+            cls.daemon.kill()
+            raise RuntimeError(f"pathd did not start: first stdout line '{line}'")
+        cls.address = line[len(prefix):]
+        cls.client = PathdClient(cls.address, timeout=10.0)
+        # Another program changing the map: its own channel.
+        cls.operator = PathdClient(cls.address, timeout=10.0)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.client.close()
+        cls.operator.close()
+        cls.daemon.terminate()
+        cls.daemon.wait(timeout=30)
+        cls.daemon.stdout.close()
+        cls.map_dir.cleanup()
+
+    def make_map(self, name: str):
+        info = self.client.create_map(name, ROWS, replace=True)
+        self.addCleanup(self._delete_quietly, name)
+        return info
+
+    def _delete_quietly(self, name):
+        try:
+            self.client.delete_map(name)
+        except pathd_client.NotFoundError:
+            pass
+
+    def test_map_calls(self):
+        info = self.make_map("maps")
+        self.assertEqual((info.name, info.width, info.height, info.version),
+                         ("maps", 14, 8, 1))
+        self.assertEqual(info.blocked_cells, 6)
+        self.assertEqual(info.free_cells, 14 * 8 - 6)
+
+        cells = self.client.get_cells("maps")
+        self.assertEqual(len(cells.cells), 14 * 8)
+        self.assertEqual(cells.cost((6, 3)), LETHAL)
+        self.assertEqual(cells.cost((5, 3)), 0)
+
+        raw = bytes([0, 0, 254, 0, 9, 0])
+        made = self.client.create_map("maps_raw", cells=raw, width=3, height=2)
+        self.addCleanup(self._delete_quietly, "maps_raw")
+        self.assertEqual((made.width, made.height, made.blocked_cells), (3, 2, 1))
+        self.assertEqual(self.client.get_cells("maps_raw").cells, raw)
+
+        names = [m.name for m in self.client.list_maps()]
+        self.assertIn("maps", names)
+        self.assertEqual(names, sorted(names))
+
+        result = self.client.update_map(
+            "maps", [SetCell(0, 0, LETHAL), SetRect(10, 2, 11, 3, 50)],
+            expected_version=1)
+        self.assertEqual((result.version, result.cells_changed), (2, 5))
+        after = self.client.get_cells("maps")
+        self.assertEqual(after.info.version, 2)
+        self.assertEqual(after.cost((0, 0)), LETHAL)
+        self.assertEqual(after.cost((11, 3)), 50)
+
+        self.assertEqual(self.client.delete_map("maps"), 2)
+        with self.assertRaises(pathd_client.NotFoundError):
+            self.client.get_map("maps")
+
+    def test_plan_is_valid_and_optimal(self):
+        self.make_map("plan")
+        start, goal = Cell(1, 3), Cell(12, 4)
+        for planner in ("astar", "dijkstra", "jps"):
+            with self.subTest(planner=planner):
+                plan = self.client.plan("plan", start, goal, planner=planner)
+                self.assertTrue(plan.found)
+                self.assertEqual(plan.outcome, "FOUND")
+                self.assertEqual(plan.map_version, 1)
+                self.assert_valid_path(plan.path, start, goal, 14, 8, blocked_cells(ROWS))
+                self.assertAlmostEqual(
+                    plan.cost, shortest_cost(14, 8, blocked_cells(ROWS), start, goal), places=6)
+
+        self.client.update_map("plan", [SetRect(6, 0, 6, 0, LETHAL), SetRect(6, 7, 6, 7, LETHAL)])
+        cut = self.client.plan("plan", start, goal)
+        self.assertFalse(cut.found)
+        self.assertEqual(cut.outcome, "NO_PATH")
+        self.assertEqual(cut.path, [])
+
+    def test_errors_carry_the_status(self):
+        self.make_map("errors")
+        with self.assertRaises(PathdError) as missing:
+            self.client.plan("no_such_map", (0, 0), (1, 1))
+        self.assertIsInstance(missing.exception, pathd_client.NotFoundError)
+        self.assertEqual(missing.exception.code, grpc.StatusCode.NOT_FOUND)
+        self.assertIn("no_such_map", missing.exception.details)
+        self.assertEqual(missing.exception.outcome, "MAP_NOT_FOUND")
+
+        with self.assertRaises(pathd_client.InvalidArgumentError) as occupied:
+            self.client.plan("errors", (0, 0), (6, 3))
+        self.assertEqual(occupied.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertEqual(occupied.exception.outcome, "GOAL_OCCUPIED")
+
+        with self.assertRaises(pathd_client.AlreadyExistsError):
+            self.client.create_map("errors", ROWS)
+        with self.assertRaises(pathd_client.AbortedError) as stale:
+            self.client.update_map("errors", [SetCell(0, 0, LETHAL)], expected_version=7)
+        self.assertEqual(stale.exception.code, grpc.StatusCode.ABORTED)
+        with self.assertRaises(pathd_client.InvalidArgumentError):
+            self.client.create_map("bad_rows", ["...", ".x."])
+        with self.assertRaises(pathd_client.NotFoundError):
+            self.client.navigate("no_such_map", (0, 0), (1, 1))
+        with self.assertRaises(pathd_client.NotFoundError):
+            self.client.delete_map("no_such_map")
+
+        # A port nobody listens on: the transport error is a PathdError too.
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        with PathdClient(f"127.0.0.1:{port}", timeout=5.0) as nobody:
+            with self.assertRaises(pathd_client.UnavailableError):
+                nobody.list_maps()
+
+    def test_navigation_follows_the_pushed_path(self):
+        self.make_map("nav")
+        start, goal = Cell(1, 3), Cell(12, 4)
+        blocked = blocked_cells(ROWS)
+        with self.client.navigate("nav", start, goal) as nav:
+            self.assertEqual(nav.opened.event, "OPENED")
+            self.assertEqual(nav.opened.seq, 1)
+            self.assertTrue(nav.opened.plan.found)
+            self.assert_valid_path(nav.path, start, goal, 14, 8, blocked)
+
+            # Two steps along the path, each answered with the path from there.
+            position = start
+            for _ in range(2):
+                position = nav.path[1]
+                answer = nav.move(position)
+                self.assertEqual(answer.event, "MOVED")
+                self.assertEqual(answer.session_id, nav.session_id)
+                self.assertEqual(answer.plan.path[0], position)
+
+            # Another client closes the opening the path goes through.
+            door = next(c for c in nav.path if c.x == 6)
+            update = self.operator.update_map("nav", [SetCell(door.x, door.y, LETHAL)])
+            blocked.add(door)
+            push = nav.wait_push(10.0)
+            self.assertIsNotNone(push, "no path pushed after the map changed")
+            self.assertEqual((push.event, push.seq, push.pushed), ("MAP_CHANGED", 0, True))
+            self.assertEqual(push.plan.map_version, update.version)
+            self.assertTrue(push.plan.found)
+            self.assertNotIn(door, push.plan.path)
+            self.assert_valid_path(push.plan.path, position, goal, 14, 8, blocked)
+            self.assertAlmostEqual(
+                push.plan.cost, shortest_cost(14, 8, blocked, position, goal), places=6)
+            self.assertEqual(nav.path, push.plan.path)
+
+            # The robot's own sensor: a shared observation on the new path.
+            # (Not in the wall's column: blocking the last opening leaves no path.)
+            seen = next(c for c in nav.path if c.x > 7 and c != goal)
+            observed = nav.observe([SetCell(seen.x, seen.y, LETHAL)])
+            blocked.add(seen)
+            self.assertEqual(observed.event, "OBSERVED")
+            self.assertEqual(observed.applied_version, update.version + 1)
+            self.assertNotIn(seen, observed.plan.path)
+            self.assert_valid_path(observed.plan.path, position, goal, 14, 8, blocked)
+
+            # Drive the rest of the way.
+            while position != goal:
+                position = nav.path[1]
+                self.assertNotIn(position, blocked)
+                self.assertEqual(nav.move(position).plan.path[0], position)
+            self.assertEqual(nav.path, [goal])
+            self.assertEqual(len(nav.pushes), 1)
+        self.assertEqual(self.client.get_map("nav").version, update.version + 1)
+
+    def test_bad_navigate_message_ends_the_session(self):
+        self.make_map("nav_bad")
+        with self.client.navigate("nav_bad", (0, 0), (13, 7)) as nav:
+            with self.assertRaises(pathd_client.InvalidArgumentError) as off_map:
+                nav.move((40, 0))
+            self.assertIn("outside", off_map.exception.details)
+            with self.assertRaises(pathd_client.InvalidArgumentError):
+                nav.move((1, 0))  # the session has ended with that error
+
+    def test_watch_map(self):
+        self.make_map("watched")
+        with self.client.watch_map("watched") as watch:
+            events = iter(watch)
+            first = next(events)
+            self.assertEqual(first.kind, "RESYNC")
+            self.assertEqual(first.version, 1)
+            self.assertEqual(len(first.cells), 14 * 8)
+            self.operator.update_map("watched", [SetRect(2, 2, 3, 2, 7)])
+            updated = next(events)
+            self.assertEqual((updated.kind, updated.version), ("UPDATED", 2))
+            self.assertEqual(updated.changes, [pathd_client.ChangedRect(2, 2, 3, 2, bytes([7, 7]))])
+            self.operator.delete_map("watched")
+            self.assertEqual(next(events).kind, "DELETED")
+            self.assertEqual(list(events), [])
+
+    def test_example_robot_loop_reaches_its_goal(self):
+        run = subprocess.run(
+            [sys.executable, str(EXAMPLE), "--server", self.address, "--map", "example"],
+            capture_output=True, text=True, timeout=120)
+        self.assertEqual(run.returncode, 0, run.stdout + run.stderr)
+        self.assertIn("pushed (unasked): path of", run.stdout)
+        self.assertIn("sensor sees an obstacle", run.stdout)
+        self.assertIn("reached the goal", run.stdout)
+        # It deletes its map afterwards.
+        self.assertNotIn("example", [m.name for m in self.client.list_maps()])
+
+
+class _Recorder(map_service_pb2_grpc.MapServiceServicer,
+                planner_service_pb2_grpc.PlannerServiceServicer):
+    """Answers every call with an empty message, noting what came with it."""
+
+    def __init__(self):
+        self.calls = []
+        self.lock = threading.Lock()
+
+    def _note(self, method, context):
+        with self.lock:
+            self.calls.append((method, dict(context.invocation_metadata()).get("x-pathd-map"),
+                               context.time_remaining()))
+
+    def CreateMap(self, request, context):
+        self._note("CreateMap", context)
+        return map_service_pb2.CreateMapResponse()
+
+    def GetMap(self, request, context):
+        self._note("GetMap", context)
+        return map_service_pb2.GetMapResponse()
+
+    def ListMaps(self, request, context):
+        self._note("ListMaps", context)
+        return map_service_pb2.ListMapsResponse()
+
+    def UpdateMap(self, request, context):
+        self._note("UpdateMap", context)
+        return map_service_pb2.UpdateMapResponse()
+
+    def DeleteMap(self, request, context):
+        self._note("DeleteMap", context)
+        return map_service_pb2.DeleteMapResponse()
+
+    def WatchMap(self, request, context):
+        self._note("WatchMap", context)
+        yield map_service_pb2.MapEvent(kind=map_service_pb2.MAP_EVENT_KIND_DELETED)
+
+    def Plan(self, request, context):
+        self._note("Plan", context)
+        return planner_service_pb2.PlanResponse()
+
+    def Navigate(self, request_iterator, context):
+        self._note("Navigate", context)
+        for request in request_iterator:
+            yield planner_service_pb2.NavigateResponse(
+                seq=request.seq, event=planner_service_pb2.NAVIGATE_EVENT_OPENED)
+
+
+class WireTest(unittest.TestCase):
+    """What the client sends, seen by a fake server."""
+
+    def setUp(self):
+        self.recorder = _Recorder()
+        self.server = grpc.server(futures.ThreadPoolExecutor(max_workers=4))
+        map_service_pb2_grpc.add_MapServiceServicer_to_server(self.recorder, self.server)
+        planner_service_pb2_grpc.add_PlannerServiceServicer_to_server(self.recorder, self.server)
+        port = self.server.add_insecure_port("127.0.0.1:0")
+        self.server.start()
+        self.addCleanup(self.server.stop, None)
+        self.client = PathdClient(f"127.0.0.1:{port}", timeout=7.5)
+        self.addCleanup(self.client.close)
+
+    def test_every_call_names_its_map_and_unary_calls_have_a_deadline(self):
+        c = self.client
+        c.create_map("m1", ["..."])
+        c.get_map("m2")
+        c.get_cells("m3")
+        c.update_map("m4", [SetCell(0, 0, 1)])
+        c.delete_map("m5")
+        c.plan("m6", (0, 0), (1, 0))
+        c.plan("m7", (0, 0), (1, 0), timeout=2.5)
+        c.list_maps()
+        self.assertEqual([event.kind for event in c.watch_map("m8")], ["DELETED"])
+        with c.navigate("m9", (0, 0), (1, 0)):
+            pass
+        calls = self.recorder.calls
+        self.assertEqual([(m, h) for m, h, _ in calls], [
+            ("CreateMap", "m1"), ("GetMap", "m2"), ("GetMap", "m3"), ("UpdateMap", "m4"),
+            ("DeleteMap", "m5"), ("Plan", "m6"), ("Plan", "m7"),
+            ("ListMaps", None),  # no map to name
+            ("WatchMap", "m8"), ("Navigate", "m9")])
+        # The server sees the deadline rounded (a few ms past the timeout):
+        # upper bounds that tell 7.5 s from the 10 s default and from none.
+        for method, _, remaining in calls[:6] + calls[7:8]:
+            self.assertIsNotNone(remaining, method)
+            self.assertTrue(0 < remaining < 8.0, f"{method}: {remaining}")
+        self.assertTrue(0 < calls[6][2] < 2.6, calls[6])
+
+    def test_unknown_planner_is_refused_before_sending(self):
+        with self.assertRaisesRegex(ValueError, "unknown planner 'warp'"):
+            self.client.plan("m", (0, 0), (1, 0), planner="warp")
+        self.assertEqual(self.recorder.calls, [])
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
