@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <memory>
 #include <random>
 #include <span>
@@ -33,6 +34,7 @@
 #include "client/map_source.h"
 #include "client/navigate_script.h"
 #include "client/navigate_session.h"
+#include "client/progress.h"
 #include "core/map_io.h"
 #include "core/status_macros.h"
 #include "google/protobuf/struct.pb.h"
@@ -81,6 +83,7 @@ constexpr char kSynopsis[] =
                        [--requests N] [--channels K] [--seed S]
                        [--planner P] [cost options]
   pathctl [flags] bench [NAME] --movingai FILE.map [...]
+  pathctl completion bash
   pathctl --help
 )";
 
@@ -118,25 +121,31 @@ class Env {
   int Fail(const absl::Status& status) {
     err_ << "error: " << absl::StatusCodeToString(status.code()) << ": "
          << status.message() << "\n";
-    return kExitError;
+    return ExitCodeForStatus(status.code());
   }
 
   // Prints `message` with protobuf's canonical proto3 JSON mapping. Default
   // values are printed too, so `"found": false` is visible to scripts.
   int PrintJson(const google::protobuf::Message& message) {
-    google::protobuf::util::JsonPrintOptions print_options;
-    print_options.add_whitespace = true;
-    print_options.always_print_primitive_fields = true;
-    std::string json;
-    auto status = google::protobuf::util::MessageToJsonString(message, &json,
-                                                              print_options);
-    if (!status.ok()) {
-      return Fail(absl::InternalError(absl::StrCat(
-          "cannot print the response as JSON: ", status.ToString())));
-    }
-    out_ << json;
-    if (json.empty() || json.back() != '\n') out_ << "\n";
+    absl::StatusOr<std::string> json = MessageToJson(message, false);
+    if (!json.ok()) return Fail(json.status());
+    out_ << *json;
     return kExitOk;
+  }
+
+  bool csv() const { return options_.output == OutputFormat::kCsv; }
+
+  int PrintCsv(const Table& table) {
+    out_ << table.Csv();
+    return kExitOk;
+  }
+
+  // The usage error of a command asked for a format it cannot print; `why`
+  // says what it prints instead.
+  int Unsupported(absl::string_view command, absl::string_view why) {
+    err_ << "error: " << command << " has no --output "
+         << OutputFormatName(options_.output) << ": " << why << "\n";
+    return kExitUsage;
   }
 
  private:
@@ -197,6 +206,45 @@ void PrintMapInfo(std::ostream& out, const v1::MapInfo& info) {
       info.free_cells(), info.blocked_cells());
 }
 
+// Maps as CSV: one row per map, every MapInfo figure in its own column.
+Table MapInfoCsv(std::span<const v1::MapInfo* const> maps) {
+  Table table({"name", "width", "height", "resolution", "origin_x", "origin_y",
+               "origin_yaw", "version", "free_cells", "blocked_cells"});
+  for (const v1::MapInfo* info : maps) {
+    table.AddRow({info->name(), absl::StrCat(info->width()),
+                  absl::StrCat(info->height()), FormatNumber(info->resolution()),
+                  FormatNumber(info->origin().x()), FormatNumber(info->origin().y()),
+                  FormatNumber(info->origin().yaw()), absl::StrCat(info->version()),
+                  absl::StrCat(info->free_cells()),
+                  absl::StrCat(info->blocked_cells())});
+  }
+  return table;
+}
+
+// CreateMap, with a progress line on stderr while the server receives and
+// parses `request` (--progress bars only): the call is unary, so the line
+// shows what is being sent and for how long, not a fraction. `file` names it.
+absl::StatusOr<v1::CreateMapResponse> CreateMapWithProgress(
+    Env& env, const v1::CreateMapRequest& request, const std::string& file) {
+  if (!env.options().progress_bars) return env.client().CreateMap(request);
+  const double bytes = static_cast<double>(request.ByteSizeLong());
+  ProgressBar bar(env.err(),
+                  absl::StrFormat("maps create %s: sending %s (%.1f MiB)",
+                                  request.name(), file, bytes / (1024 * 1024)),
+                  0, ProgressBar::Unit::kSeconds, true);
+  std::future<absl::StatusOr<v1::CreateMapResponse>> response =
+      std::async(std::launch::async,
+                 [&env, &request] { return env.client().CreateMap(request); });
+  const absl::Time started = absl::Now();
+  while (response.wait_for(absl::ToChronoMilliseconds(
+             ProgressBar::kRedrawInterval)) != std::future_status::ready) {
+    bar.Update(absl::ToDoubleSeconds(absl::Now() - started));
+  }
+  bar.Update(absl::ToDoubleSeconds(absl::Now() - started));
+  bar.Finish();
+  return response.get();
+}
+
 // --- maps ------------------------------------------------------------------
 
 int MapsCreate(Env& env, Args args) {
@@ -229,9 +277,13 @@ int MapsCreate(Env& env, Args args) {
     return env.Fail(status);
   }
   absl::StatusOr<v1::CreateMapResponse> response =
-      env.client().CreateMap(request);
+      CreateMapWithProgress(env, request, options.from);
   if (!response.ok()) return env.Fail(response.status());
   if (options.json) return env.PrintJson(*response);
+  if (env.csv()) {
+    const v1::MapInfo* info[] = {&response->info()};
+    return env.PrintCsv(MapInfoCsv(info));
+  }
   env.out() << (response->info().version() > 1 ? "replaced" : "created")
             << " map " << args[0] << "\n";
   PrintMapInfo(env.out(), response->info());
@@ -243,25 +295,31 @@ int MapsList(Env& env, Args args) {
   absl::StatusOr<v1::ListMapsResponse> response = env.client().ListMaps();
   if (!response.ok()) return env.Fail(response.status());
   if (env.options().json) return env.PrintJson(*response);
+  if (env.csv()) {
+    std::vector<const v1::MapInfo*> maps;
+    for (const v1::MapInfo& info : response->maps()) maps.push_back(&info);
+    return env.PrintCsv(MapInfoCsv(maps));
+  }
   if (response->maps().empty()) {
     env.out() << "no maps\n";
     return kExitOk;
   }
-  constexpr char kRow[] = "%-24s %11s %10s %8s %10s %10s\n";
-  env.out() << absl::StrFormat(kRow, "NAME", "SIZE", "RESOLUTION", "VERSION",
-                               "FREE", "BLOCKED");
+  Table table({"NAME", "SIZE", "RESOLUTION", "VERSION", "FREE", "BLOCKED"});
   for (const v1::MapInfo& info : response->maps()) {
-    env.out() << absl::StrFormat(
-        kRow, info.name(),
-        absl::StrFormat("%dx%d", info.width(), info.height()),
-        absl::StrFormat("%g", info.resolution()), absl::StrCat(info.version()),
-        absl::StrCat(info.free_cells()), absl::StrCat(info.blocked_cells()));
+    table.AddRow({info.name(), absl::StrFormat("%dx%d", info.width(), info.height()),
+                  absl::StrFormat("%g", info.resolution()), absl::StrCat(info.version()),
+                  absl::StrCat(info.free_cells()), absl::StrCat(info.blocked_cells())});
   }
+  env.out() << table.Aligned();
   return kExitOk;
 }
 
 int MapsGet(Env& env, Args args) {
   if (args.size() != 1) return env.Usage("maps get takes one NAME");
+  if (env.options().cells && env.csv()) {
+    return env.Unsupported("maps get --cells",
+                           "the cells print as ASCII (table) or base64 (json)");
+  }
   v1::GetMapRequest request;
   request.set_name(args[0]);
   request.set_include_cells(env.options().cells);
@@ -269,6 +327,10 @@ int MapsGet(Env& env, Args args) {
   if (!response.ok()) return env.Fail(response.status());
   if (env.options().json) return env.PrintJson(*response);
   const v1::MapInfo& info = response->info();
+  if (env.csv()) {
+    const v1::MapInfo* maps[] = {&info};
+    return env.PrintCsv(MapInfoCsv(maps));
+  }
   PrintMapInfo(env.out(), info);
   if (!env.options().cells) return kExitOk;
   const int64_t cell_count = int64_t{info.width()} * info.height();
@@ -294,6 +356,11 @@ int MapsDelete(Env& env, Args args) {
       env.client().DeleteMap(args[0]);
   if (!response.ok()) return env.Fail(response.status());
   if (env.options().json) return env.PrintJson(*response);
+  if (env.csv()) {
+    Table table({"name", "last_version"});
+    table.AddRow({args[0], absl::StrCat(response->last_version())});
+    return env.PrintCsv(table);
+  }
   env.out() << "deleted map " << args[0] << " (was at version "
             << response->last_version() << ")\n";
   return kExitOk;
@@ -307,6 +374,12 @@ int SendUpdate(Env& env, v1::UpdateMapRequest& request) {
       env.client().UpdateMap(request);
   if (!response.ok()) return env.Fail(response.status());
   if (env.options().json) return env.PrintJson(*response);
+  if (env.csv()) {
+    Table table({"name", "version", "cells_changed"});
+    table.AddRow({request.name(), absl::StrCat(response->version()),
+                  absl::StrCat(response->cells_changed())});
+    return env.PrintCsv(table);
+  }
   env.out() << "map " << request.name() << " now at version "
             << response->version() << " (" << response->cells_changed()
             << (response->cells_changed() == 1 ? " cell" : " cells")
@@ -400,6 +473,30 @@ std::string FormatMapEvent(const v1::MapEvent& event) {
   }
 }
 
+// The CSV columns of `maps watch`, one row per event: the kind without its
+// prefix, the map size of whole-map events, and the changed cells and
+// rectangles (all of them) of UPDATED ones.
+constexpr const char* kMapEventCsvHeader[] = {
+    "version", "kind", "width", "height", "changed_cells", "changed_rects", "rects"};
+
+std::vector<std::string> MapEventCsvRow(const v1::MapEvent& event) {
+  absl::string_view kind = v1::MapEventKind_Name(event.kind());
+  absl::ConsumePrefix(&kind, "MAP_EVENT_KIND_");
+  const bool whole_map = event.kind() == v1::MAP_EVENT_KIND_RESYNC ||
+                         event.kind() == v1::MAP_EVENT_KIND_REPLACED;
+  int64_t cells = 0;
+  std::vector<std::string> rects;
+  for (const v1::ChangedRect& change : event.changes()) {
+    cells += static_cast<int64_t>(change.costs().size());
+    rects.push_back(FormatRect(change.rect()));
+  }
+  return {absl::StrCat(event.version()), std::string(kind),
+          whole_map ? absl::StrCat(event.info().width()) : "",
+          whole_map ? absl::StrCat(event.info().height()) : "",
+          absl::StrCat(cells), absl::StrCat(event.changes_size()),
+          absl::StrJoin(rects, " ")};
+}
+
 // Streams until --count events, the map's deletion, or an error. No deadline:
 // watching is open-ended, so --timeout does not apply.
 int MapsWatch(Env& env, Args args) {
@@ -416,9 +513,16 @@ int MapsWatch(Env& env, Args args) {
   json_options.always_print_primitive_fields = true;
   int64_t printed = 0;
   bool stopped = false;
+  if (env.csv()) {
+    env.out() << CsvRecord({std::begin(kMapEventCsvHeader),
+                            std::end(kMapEventCsvHeader)})
+              << std::flush;
+  }
   v1::MapEvent event;
   while (reader->Read(&event)) {
-    if (options.json) {
+    if (env.csv()) {
+      env.out() << CsvRecord(MapEventCsvRow(event));
+    } else if (options.json) {
       std::string line;
       if (!google::protobuf::util::MessageToJsonString(event, &line,
                                                        json_options)
@@ -612,6 +716,20 @@ absl::Status AddViaPoints(const Options& options, v1::PlanRequest* request) {
   return absl::OkStatus();
 }
 
+// A plan's path as CSV, one row per cell (vertex when any-angle) with its
+// world point; only the header when there is no path.
+Table PlanPathCsv(const v1::PlanResponse& response) {
+  Table table({"x", "y", "world_x", "world_y"});
+  const bool has_world = response.world_path_size() == response.path_size();
+  for (int i = 0; i < response.path_size(); ++i) {
+    const v1::Cell& cell = response.path(i);
+    table.AddRow({absl::StrCat(cell.x()), absl::StrCat(cell.y()),
+                  has_world ? FormatNumber(response.world_path(i).x()) : "",
+                  has_world ? FormatNumber(response.world_path(i).y()) : ""});
+  }
+  return table;
+}
+
 int Plan(Env& env, Args args) {
   const Options& options = env.options();
   if (args.size() != 5) return env.Usage("plan takes NAME SX SY GX GY");
@@ -704,6 +822,10 @@ int Plan(Env& env, Args args) {
   if (options.json) {
     const int print_code = env.PrintJson(*response);
     return print_code == kExitOk ? code : print_code;
+  }
+  if (env.csv()) {
+    env.PrintCsv(PlanPathCsv(*response));
+    return code;
   }
   std::ostream& out = env.out();
   absl::string_view outcome = v1::PlanOutcome_Name(response->outcome());
@@ -826,6 +948,26 @@ std::string FormatBatchAnswer(const v1::PlanBatchResponse& answer) {
                          r.reason());
 }
 
+// The CSV columns of `batch`, one row per answer: status is found, no-path
+// or error; an error's status code and message fill code and message.
+constexpr const char* kBatchCsvHeader[] = {
+    "id", "status", "outcome", "cost", "length", "expansions", "time_us",
+    "code", "message"};
+
+std::vector<std::string> BatchAnswerCsvRow(const v1::PlanBatchResponse& answer) {
+  if (answer.has_error()) {
+    const v1::PlanError& e = answer.error();
+    return {answer.request_id(), "error", OutcomeName(e.outcome()), "", "", "", "",
+            absl::StatusCodeToString(static_cast<absl::StatusCode>(e.code())),
+            e.message()};
+  }
+  const v1::PlanResponse& r = answer.result();
+  return {answer.request_id(), r.found() ? "found" : "no-path",
+          OutcomeName(r.outcome()), r.found() ? FormatNumber(r.cost()) : "",
+          r.found() ? FormatNumber(r.length()) : "", absl::StrCat(r.expansions()),
+          absl::StrCat(r.planning_time_us()), "", r.reason()};
+}
+
 // Sends every item of a batch file through one PlanBatch stream (a writer
 // thread, because writes block while the server is at its in-flight bound)
 // and prints each answer as it arrives, then a summary. --timeout bounds the
@@ -888,6 +1030,12 @@ int Batch(Env& env, Args args) {
   int64_t found = 0;
   int64_t no_path = 0;
   int64_t errors = 0;
+  if (env.csv()) {
+    env.out() << CsvRecord({std::begin(kBatchCsvHeader), std::end(kBatchCsvHeader)})
+              << std::flush;
+  }
+  ProgressBar bar(env.err(), "batch", static_cast<double>(items->size()),
+                  ProgressBar::Unit::kCount, options.progress_bars);
   v1::PlanBatchResponse answer;
   while (stream->Read(&answer)) {
     if (answer.has_error()) {
@@ -897,7 +1045,11 @@ int Batch(Env& env, Args args) {
     } else {
       ++no_path;
     }
-    if (options.json) {
+    // The answers and the bar share the terminal: the answer goes above it.
+    bar.Clear();
+    if (env.csv()) {
+      env.out() << CsvRecord(BatchAnswerCsvRow(answer));
+    } else if (options.json) {
       std::string line;
       if (!google::protobuf::util::MessageToJsonString(answer, &line, json_options)
                .ok()) {
@@ -908,13 +1060,17 @@ int Batch(Env& env, Args args) {
       env.out() << FormatBatchAnswer(answer) << "\n";
     }
     env.out() << std::flush;
+    bar.Update(static_cast<double>(found + no_path + errors),
+               absl::StrFormat("%d found, %d no path, %d errors", found, no_path,
+                               errors));
   }
+  bar.Finish();
   writer.join();
   const grpc::Status status = stream->Finish();
   const double seconds = absl::ToDoubleSeconds(absl::Now() - started);
   const int64_t answered = found + no_path + errors;
-  // With --json stdout holds only answers, one JSON object per line.
-  (options.json ? env.err() : env.out()) << absl::StrFormat(
+  // With --json or --output csv stdout holds only answers, one per line.
+  (options.json || env.csv() ? env.err() : env.out()) << absl::StrFormat(
       "summary: %d of %d answered: %d found, %d no path, %d errors in %.3f s "
       "(%.1f plans/s)\n",
       answered, items->size(), found, no_path, errors, seconds,
@@ -926,6 +1082,12 @@ int Batch(Env& env, Args args) {
 int Navigate(Env& env, Args args) {
   const Options& options = env.options();
   if (args.size() != 5) return env.Usage("navigate takes NAME SX SY GX GY");
+  if (env.csv()) {
+    return env.Unsupported("navigate",
+                           "it prints a log of script steps and pushed paths; "
+                           "use --output table, or json for one NavigateResponse "
+                           "per line");
+  }
   if (options.world) {
     return env.Usage("navigate takes cells (a script moves the robot cell by "
                      "cell); --world does not apply");
@@ -1027,6 +1189,19 @@ int Check(Env& env, Args args) {
   if (options.json) {
     const int print_code = env.PrintJson(*response);
     return print_code == kExitOk ? code : print_code;
+  }
+  if (env.csv()) {
+    Table table({"valid", "map_version", "poses", "cost", "length",
+                 "invalid_poses", "invalid_steps", "reason"});
+    table.AddRow({response->valid() ? "true" : "false",
+                  absl::StrCat(response->map_version()),
+                  absl::StrCat(request.path_size()),
+                  response->valid() ? FormatNumber(response->cost()) : "",
+                  response->valid() ? FormatNumber(response->length()) : "",
+                  absl::StrJoin(response->invalid_indices(), " "),
+                  absl::StrJoin(response->invalid_steps(), " "), response->reason()});
+    env.PrintCsv(table);
+    return code;
   }
   std::ostream& out = env.out();
   out << "valid:         " << (response->valid() ? "yes" : "no") << "\n"
@@ -1143,6 +1318,17 @@ int CostToGo(Env& env, Args args) {
     }
   }
   if (options.json) return env.PrintJson(*response);
+  if (env.csv()) {
+    // Long form, one row per cell: what plotting and data-frame tools read.
+    Table table({"x", "y", "cost"});
+    for (int32_t y = 0; y < w.height(); ++y) {
+      for (int32_t x = 0; x < w.width(); ++x) {
+        table.AddRow({absl::StrCat(w.x() + x), absl::StrCat(w.y() + y),
+                      FormatNumber(response->cost(y * w.width() + x))});
+      }
+    }
+    return env.PrintCsv(table);
+  }
   const int64_t reachable =
       std::count_if(response->cost().begin(), response->cost().end(),
                     [](float v) { return std::isfinite(v); });
@@ -1180,17 +1366,27 @@ int CacheStats(Env& env, Args args) {
       env.client().GetCacheStats();
   if (!response.ok()) return env.Fail(response.status());
   if (env.options().json) return env.PrintJson(*response);
-  constexpr char kRow[] = "%-12s %8s %12s %12s %8s %8s %9s %8s %8s\n";
-  env.out() << absl::StrFormat(kRow, "CACHE", "ENTRIES", "BYTES", "BUDGET",
-                               "HITS", "MISSES", "EVICTIONS", "REPAIRS",
-                               "REBUILDS");
+  const bool csv = env.csv();
+  Table table(csv ? std::vector<std::string>{"cache", "entries", "bytes",
+                                             "budget_bytes", "hits", "misses",
+                                             "evictions", "repairs", "rebuilds"}
+                  : std::vector<std::string>{"CACHE", "ENTRIES", "BYTES", "BUDGET",
+                                             "HITS", "MISSES", "EVICTIONS",
+                                             "REPAIRS", "REBUILDS"});
   for (const v1::CacheStats& c : response->caches()) {
-    env.out() << absl::StrFormat(
-        kRow, c.name(), absl::StrCat(c.entries()), absl::StrCat(c.bytes()),
-        absl::StrCat(c.budget_bytes()), absl::StrCat(c.hits()),
-        absl::StrCat(c.misses()), absl::StrCat(c.evictions()),
-        absl::StrCat(c.repairs()), absl::StrCat(c.rebuilds()));
+    table.AddRow({c.name(), absl::StrCat(c.entries()), absl::StrCat(c.bytes()),
+                  absl::StrCat(c.budget_bytes()), absl::StrCat(c.hits()),
+                  absl::StrCat(c.misses()), absl::StrCat(c.evictions()),
+                  absl::StrCat(c.repairs()), absl::StrCat(c.rebuilds())});
   }
+  if (csv) {
+    // Navigate sessions' D* Lite state is memory like a cache's: one more
+    // row, so the CSV carries everything the table shows.
+    table.AddRow({"navigate_sessions", absl::StrCat(response->sessions()),
+                  absl::StrCat(response->session_bytes())});
+    return env.PrintCsv(table);
+  }
+  env.out() << table.Aligned();
   env.out() << absl::StrFormat("sessions:    %d open, %d bytes of D* Lite state\n",
                                response->sessions(), response->session_bytes());
   return kExitOk;
@@ -1207,6 +1403,10 @@ int Health(Env& env, Args args) {
   using grpc::health::v1::HealthCheckResponse;
   if (env.options().json) {
     if (const int code = env.PrintJson(*response); code != kExitOk) return code;
+  } else if (env.csv()) {
+    Table table({"service", "status"});
+    table.AddRow({service, HealthCheckResponse::ServingStatus_Name(response->status())});
+    env.PrintCsv(table);
   } else {
     env.out() << HealthCheckResponse::ServingStatus_Name(response->status())
               << "\n";
@@ -1260,6 +1460,11 @@ absl::StatusOr<std::string> FetchMetrics(const std::string& address,
 }
 
 int Metrics(Env& env, Args args) {
+  if (env.options().output != OutputFormat::kTable) {
+    return env.Unsupported("metrics",
+                           "it prints pathd's Prometheus text exposition, "
+                           "which Prometheus tools read; use --output table");
+  }
   absl::StatusOr<std::string> text =
       FetchMetrics(env.options().metrics_address, env.options().timeout);
   if (!text.ok()) return env.Fail(text.status());
@@ -1401,41 +1606,65 @@ absl::StatusOr<BenchQueries> MakeBenchQueries(Env& env, const v1::PlanRequest& b
   return queries;
 }
 
-// The live progress line: rewritten in place ("\r") about once a second.
-class ProgressLine {
+// The progress bar of a benchmark, fed by RunPlanLoad about once a second:
+// elapsed of --warmup, then elapsed of --duration (requests of --requests
+// when the run is bounded by a count only), with the requests, the current
+// rate and the errors as its detail.
+class BenchProgress {
  public:
-  explicit ProgressLine(std::ostream& err) : err_(err) {}
+  explicit BenchProgress(Env& env) : env_(env) {}
 
   void Update(const client::LoadProgress& p) {
-    if (p.warming_up != warming_up_) {
+    const Options& options = env_.options();
+    const bool by_count = !p.warming_up && options.duration == absl::ZeroDuration();
+    if (bar_ == nullptr || p.warming_up != warming_up_) {
+      if (bar_ != nullptr) bar_->Finish();
       warming_up_ = p.warming_up;
       last_requests_ = 0;
       last_elapsed_ = absl::ZeroDuration();
+      const double total =
+          p.warming_up ? absl::ToDoubleSeconds(options.warmup)
+          : by_count   ? static_cast<double>(options.requests)
+                       : absl::ToDoubleSeconds(options.duration);
+      // The phase began p.elapsed ago, so the bar shows at once and its own
+      // rate (for --requests) counts from the phase's start.
+      bar_ = std::make_unique<ProgressBar>(
+          env_.err(), p.warming_up ? "warm-up" : "bench  ", total,
+          by_count ? ProgressBar::Unit::kCount : ProgressBar::Unit::kSeconds,
+          true, &absl::Now, absl::Now() - p.elapsed);
     }
     const double seconds = absl::ToDoubleSeconds(p.elapsed - last_elapsed_);
     const double rate =
         seconds > 0 ? static_cast<double>(p.requests - last_requests_) / seconds : 0;
     last_requests_ = p.requests;
     last_elapsed_ = p.elapsed;
-    err_ << absl::StrFormat("\r%s %5.1fs  %d requests  %.0f req/s now  %d errors\x1b[K",
-                            p.warming_up ? "warm-up" : "bench  ",
-                            absl::ToDoubleSeconds(p.elapsed), p.requests, rate,
-                            p.errors)
-         << std::flush;
-    shown_ = true;
+    bar_->Update(by_count ? static_cast<double>(p.requests)
+                          : absl::ToDoubleSeconds(p.elapsed),
+                 absl::StrFormat("%d requests  %.0f req/s now  %d errors",
+                                 p.requests, rate, p.errors));
   }
 
-  // Ends the line so the report starts on a fresh one.
-  void Close() {
-    if (shown_) err_ << "\n" << std::flush;
+  // Ends the bar's line so the report starts on a fresh one; a completed
+  // run's bar shows its final figures rather than the last second's.
+  void Close(const absl::StatusOr<client::LoadReport>& report) {
+    if (bar_ == nullptr) return;
+    if (report.ok() && !warming_up_) {
+      const bool by_count = env_.options().duration == absl::ZeroDuration();
+      bar_->Update(by_count ? static_cast<double>(report->requests)
+                            : absl::ToDoubleSeconds(report->elapsed),
+                   absl::StrFormat("%d requests  %.0f req/s  %d errors",
+                                   report->requests, report->requests_per_second,
+                                   report->errors()));
+    }
+    bar_->Finish();
   }
 
  private:
-  std::ostream& err_;
-  bool warming_up_ = true;
+  Env& env_;
+  std::unique_ptr<ProgressBar> bar_;
+  bool warming_up_ = false;
   int64_t last_requests_ = 0;
   absl::Duration last_elapsed_;
-  bool shown_ = false;
 };
 
 double Micros(absl::Duration d) { return absl::ToDoubleMicroseconds(d); }
@@ -1471,6 +1700,36 @@ int PrintBenchJson(Env& env, const std::string& name, const std::string& source,
   latency["p99"].set_number_value(Micros(report.latency.p99));
   latency["max"].set_number_value(Micros(report.latency.max));
   return env.PrintJson(json);
+}
+
+// One row of figures, the same as --json's (latencies in microseconds, of
+// the OK answers); errors by code as "CODE N" pairs separated by spaces.
+int PrintBenchCsv(Env& env, const std::string& name, const std::string& source,
+                  const client::LoadReport& report) {
+  const Options& options = env.options();
+  std::vector<std::string> errors;
+  for (size_t c = 0; c < report.errors_by_code.size(); ++c) {
+    if (report.errors_by_code[c] == 0) continue;
+    errors.push_back(absl::StrCat(
+        absl::StatusCodeToString(static_cast<absl::StatusCode>(c)), " ",
+        report.errors_by_code[c]));
+  }
+  const client::LatencySummary& l = report.latency;
+  Table table({"map", "planner", "queries", "concurrency", "channels", "elapsed_s",
+               "requests", "ok", "no_path", "errors", "errors_by_code",
+               "requests_per_second", "latency_min_us", "latency_mean_us",
+               "latency_p50_us", "latency_p95_us", "latency_p99_us",
+               "latency_max_us"});
+  table.AddRow({name, options.planner.empty() ? "default" : options.planner, source,
+                absl::StrCat(options.concurrency), absl::StrCat(options.channels),
+                FormatNumber(absl::ToDoubleSeconds(report.elapsed)),
+                absl::StrCat(report.requests), absl::StrCat(report.ok),
+                absl::StrCat(report.no_path), absl::StrCat(report.errors()),
+                absl::StrJoin(errors, " "), FormatNumber(report.requests_per_second),
+                FormatNumber(Micros(l.min)), FormatNumber(Micros(l.mean)),
+                FormatNumber(Micros(l.p50)), FormatNumber(Micros(l.p95)),
+                FormatNumber(Micros(l.p99)), FormatNumber(Micros(l.max))});
+  return env.PrintCsv(table);
 }
 
 void PrintBenchText(Env& env, const std::string& name, const std::string& source,
@@ -1536,22 +1795,85 @@ int Bench(Env& env, Args args) {
   load.duration = options.duration;
   load.max_requests = options.requests;
   load.warmup = options.warmup;
-  ProgressLine line(env.err());
+  BenchProgress bar(env);
   std::function<void(const client::LoadProgress&)> progress;
-  if (options.stderr_is_terminal) {
-    progress = [&line](const client::LoadProgress& p) { line.Update(p); };
+  if (options.progress_bars) {
+    progress = [&bar](const client::LoadProgress& p) { bar.Update(p); };
   }
   absl::StatusOr<client::LoadReport> report =
       client::RunPlanLoad(options.server, options.channels, options.timeout,
                           queries->requests, load, progress);
-  line.Close();
+  bar.Close(report);
   if (!report.ok()) return env.Fail(report.status());
   if (options.json) return PrintBenchJson(env, name, queries->source, *report);
+  if (env.csv()) return PrintBenchCsv(env, name, queries->source, *report);
   PrintBenchText(env, name, queries->source, *report);
   return kExitOk;
 }
 
+// --- completion --------------------------------------------------------------
+
+int Completion(Env& env, Args args) {
+  if (args.size() != 1 || args[0] != "bash") {
+    return env.Usage("completion takes the shell: bash");
+  }
+  if (env.options().output != OutputFormat::kTable) {
+    return env.Unsupported("completion", "it prints a bash script");
+  }
+  env.out() << BashCompletionScript(PathctlCompletionSpec());
+  return kExitOk;
+}
+
 }  // namespace
+
+int ExitCodeForStatus(absl::StatusCode code) {
+  switch (code) {
+    case absl::StatusCode::kOk:
+      return kExitOk;
+    case absl::StatusCode::kUnavailable:
+      return kExitUnavailable;
+    case absl::StatusCode::kDeadlineExceeded:
+      return kExitDeadline;
+    case absl::StatusCode::kNotFound:
+      return kExitNotFound;
+    case absl::StatusCode::kUnauthenticated:
+    case absl::StatusCode::kPermissionDenied:
+      return kExitDenied;
+    default:
+      return kExitError;
+  }
+}
+
+CompletionSpec PathctlCompletionSpec() {
+  CompletionSpec spec;
+  spec.commands = {"maps",   "plan",        "batch",  "navigate", "cost-to-go",
+                   "check",  "cache-stats", "health", "metrics",  "bench",
+                   "completion", "help"};
+  spec.subcommands["maps"] = {"create", "list", "get", "delete", "set", "rect", "watch"};
+  spec.subcommands["completion"] = {"bash"};
+  spec.map_name_after = {"maps get", "maps delete", "maps set", "maps rect",
+                         "maps watch", "plan", "navigate", "cost-to-go",
+                         "check", "bench"};
+  spec.file_after = {"batch"};
+  // pathctl's own flags, not the ones Abseil and gRPC register.
+  for (const auto& [name, flag] : absl::GetAllFlags()) {
+    if (flag->IsRetired() || !absl::EndsWith(flag->Filename(), "pathctl_main.cc")) {
+      continue;
+    }
+    (flag->IsOfType<bool>() ? spec.bool_flags : spec.value_flags)
+        .emplace_back(name);
+  }
+  std::sort(spec.value_flags.begin(), spec.value_flags.end());
+  std::sort(spec.bool_flags.begin(), spec.bool_flags.end());
+  for (const PlannerName& p : kPlanners) {
+    spec.flag_values["planner"].emplace_back(p.name);
+  }
+  spec.flag_values["output"] = {"table", "json", "csv"};
+  spec.flag_values["connectivity"] = {"4", "8"};
+  spec.flag_values["pf_attractive"] = {"quadratic", "conic"};
+  spec.file_flags = {"from", "path_file", "script", "cost_to_go_file", "movingai"};
+  return spec;
+}
 
 std::string FilterMetricsText(absl::string_view text,
                               const std::vector<std::string>& prefixes) {
@@ -1763,7 +2085,12 @@ std::string UsageText() {
 flags (anywhere on the line, as --flag=value or --flag value):
   --server ADDR        pathd address; default $PATHD_SERVER, else 127.0.0.1:50051
   --timeout D          deadline of the call, e.g. 500ms, 30s (default 10s)
-  --json               print the response message as proto3 JSON
+  --json               print the response message as proto3 JSON (= --output json)
+  --output F           table (default: the text below), json (proto3 JSON; a
+                       stream prints one object per line) or csv (a header
+                       row, then rows: see "output formats")
+  --no_progress        no progress bars (batch, bench, maps create --from);
+                       they show only when stdout and stderr are terminals
   --from FILE          maps create: .map is sent as Moving AI text; .yaml/.yml
                        as a ROS map_server map (the YAML plus the image it
                        names, relative to the YAML's folder)
@@ -1852,9 +2179,9 @@ bench runs a closed-loop load of Plan calls. Its queries are the
 scenarios of --movingai's .scen file, or 1000 random pairs of free cells of
 NAME, shuffled with --seed and sent in a cycle. It prints throughput, latency
 percentiles of the OK answers (exact, from every recorded sample), and errors
-by status code; --json prints one object. When stderr is a terminal a
-progress line (elapsed, requests, current rate, errors) is rewritten there
-about once a second. The exit code is 0 when the run completed, whatever the
+by status code; --json prints one object. When stdout and stderr are
+terminals a progress bar (elapsed of the duration, requests, current rate,
+errors) is redrawn on stderr about once a second. The exit code is 0 when the run completed, whatever the
 answers; scripts read the error counts.
 
 With --json, navigate prints each NavigateResponse as one line of JSON. Its
@@ -1875,15 +2202,52 @@ first line; a ROS map's bottom image row):
   #    inscribed or lethal (253, 254)
   ?    unknown (255)
 
+output formats (--output csv): one header row, then
+  maps create/get/list  one row per map: name,width,height,resolution,
+                        origin_x,origin_y,origin_yaw,version,free_cells,
+                        blocked_cells (maps get --cells has no CSV)
+  maps delete           name,last_version
+  maps set/rect         name,version,cells_changed
+  maps watch            one row per event: version,kind,width,height,
+                        changed_cells,changed_rects,rects
+  plan                  one row per path cell: x,y,world_x,world_y
+  batch                 one row per answer: id,status,outcome,cost,length,
+                        expansions,time_us,code,message (summary on stderr)
+  check                 valid,map_version,poses,cost,length,invalid_poses,
+                        invalid_steps,reason
+  cost-to-go            one row per cell: x,y,cost (inf: unreachable)
+  cache-stats           one row per cache, then navigate_sessions
+  health                service,status
+  bench                 one row of the --json figures
+navigate has no CSV; metrics (Prometheus text) and completion (a script)
+print only as table. Asking for a format a command has not is a usage error
+(exit 2) naming the command and the format.
+
+progress bars: batch (answers of total, rate), bench (elapsed of --warmup,
+then of --duration) and maps create --from (what is being sent, for how
+long) draw a bar on stderr, redrawn in place at most 10 times a second and
+only after half a second of work, when stdout and stderr are both terminals
+and --no_progress is not given.
+
+completion: 'source <(pathctl completion bash)' completes commands, flags,
+planner names, --output formats, files and, when the server answers within a
+second, map names (from 'pathctl maps list' with the line's --server).
+
 exit codes:
   0  success
   1  the call failed (server error, or a local file could not be read);
      stderr says "error: <GRPC_CODE>: <message>"; health: not SERVING;
      navigate: a script's expect-push or follow failed
-  2  usage error, also a bad navigate script line (FILE:LINE: problem)
+     (codes 5-8 below take precedence for their status codes)
+  2  usage error, also a bad navigate script line (FILE:LINE: problem) and a
+     format a command cannot print
   3  plan ran but found no path (the outcome says why)
      (batch: 1 when any item errored, otherwise 0)
   4  check ran and the path is not valid on the map's current version
+  5  UNAVAILABLE: the server cannot be reached or is shutting down
+  6  DEADLINE_EXCEEDED: the call ran past --timeout
+  7  NOT_FOUND: the map (or a local file named on the line) does not exist
+  8  UNAUTHENTICATED or PERMISSION_DENIED (also a local file not writable)
 
 )",
       kNavigateScriptHelp);
@@ -1997,13 +2361,15 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (command == "metrics") return Metrics(env, rest);
   if (command == "batch") return Batch(env, rest);
   if (command == "bench") return Bench(env, rest);
+  if (command == "completion") return Completion(env, rest);
   if (command == "help") {
     out << UsageText();
     return kExitOk;
   }
   return env.Usage(absl::StrCat("unknown command '", command,
                                 "'; expected maps, plan, navigate, cost-to-go, "
-                                "check, cache-stats, health, metrics, batch or bench"));
+                                "check, cache-stats, health, metrics, batch, bench or "
+                                "completion"));
 }
 
 }  // namespace pathd::pathctl

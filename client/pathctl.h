@@ -11,10 +11,13 @@
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "absl/time/time.h"
 #include "client/client.h"
+#include "client/completion.h"
+#include "client/output.h"
 #include "pathd/v1/planner_service.pb.h"
 
 namespace pathd::pathctl {
@@ -26,7 +29,18 @@ enum ExitCode : int {
   kExitUsage = 2,   // bad command line
   kExitNoPath = 3,  // plan ran but found no path
   kExitInvalidPath = 4,  // check ran and the path is not valid on the map
+  // Status codes scripts react to differently from a plain failure; the rest
+  // exit kExitError. ExitCodeForStatus is the one place that maps them.
+  kExitUnavailable = 5,  // UNAVAILABLE: server unreachable or shutting down
+  kExitDeadline = 6,     // DEADLINE_EXCEEDED: --timeout ran out
+  kExitNotFound = 7,     // NOT_FOUND: no such map (or local file)
+  kExitDenied = 8,       // UNAUTHENTICATED or PERMISSION_DENIED
 };
+
+// The exit code of a command that failed with `code`: kExitUnavailable,
+// kExitDeadline, kExitNotFound or kExitDenied for those codes, kExitOk for
+// OK, kExitError for every other code.
+int ExitCodeForStatus(absl::StatusCode code);
 
 // Environment variable naming the server when --server is not given.
 inline constexpr char kServerEnvVar[] = "PATHD_SERVER";
@@ -69,7 +83,12 @@ absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name);
 struct Options {
   std::string server = client::kDefaultServerAddress;
   absl::Duration timeout = client::kDefaultTimeout;
+  // How results print (--output; --json is --output=json).
+  OutputFormat output = OutputFormat::kTable;
+  // output == kJson, which the commands' JSON branches test.
   bool json = false;
+  // Draw progress bars on stderr (ProgressBarsWanted: a person is watching).
+  bool progress_bars = false;
   // maps create
   std::string from;
   bool replace = false;
@@ -184,6 +203,10 @@ std::string FilterMetricsText(absl::string_view text,
 
 // Cells as "(x,y) (x,y) ...".
 std::string FormatPath(const google::protobuf::RepeatedPtrField<v1::Cell>& cells);
+
+// What `pathctl completion bash` completes: pathctl's commands, the flags
+// registered in pathctl_main.cc, planner names and output formats.
+CompletionSpec PathctlCompletionSpec();
 
 // The full --help text: commands, flags, cell glyphs and exit codes.
 std::string UsageText();

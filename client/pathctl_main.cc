@@ -16,12 +16,17 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/pathctl.h"
+#include "client/progress.h"
 
 ABSL_FLAG(std::string, server, "",
           "pathd address; default $PATHD_SERVER, else 127.0.0.1:50051");
 ABSL_FLAG(absl::Duration, timeout, pathd::client::kDefaultTimeout,
           "deadline of each call");
 ABSL_FLAG(bool, json, false, "print the response message as JSON");
+ABSL_FLAG(std::string, output, "",
+          "output format: table (default), json or csv (--json = --output=json)");
+ABSL_FLAG(bool, no_progress, false,
+          "no progress bars on stderr (batch, bench, maps create --from)");
 ABSL_FLAG(std::string, from, "", "maps create: the .map or .yaml/.yml file");
 ABSL_FLAG(bool, replace, false, "maps create: replace an existing map");
 ABSL_FLAG(double, resolution, 0.0, "maps create: metres per cell (.map files)");
@@ -121,7 +126,19 @@ int main(int argc, char** argv) {
   options.server = pathctl::ResolveServerAddress(
       absl::GetFlag(FLAGS_server), std::getenv(pathctl::kServerEnvVar));
   options.timeout = absl::GetFlag(FLAGS_timeout);
-  options.json = absl::GetFlag(FLAGS_json);
+  absl::StatusOr<pathctl::OutputFormat> output = pathctl::ResolveOutputFormat(
+      absl::GetFlag(FLAGS_output), absl::GetFlag(FLAGS_json));
+  if (!output.ok()) {
+    std::cerr << "error: " << output.status().message() << "\n\n"
+              << pathctl::SynopsisText()
+              << "run 'pathctl --help' for details\n";
+    return pathctl::kExitUsage;
+  }
+  options.output = *output;
+  options.json = *output == pathctl::OutputFormat::kJson;
+  options.progress_bars = pathctl::ProgressBarsWanted(
+      isatty(STDOUT_FILENO) != 0, isatty(STDERR_FILENO) != 0,
+      absl::GetFlag(FLAGS_no_progress));
   options.from = absl::GetFlag(FLAGS_from);
   options.replace = absl::GetFlag(FLAGS_replace);
   options.resolution = absl::GetFlag(FLAGS_resolution);

@@ -11,6 +11,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
   python3-grpcio python3-protobuf
+  libcsv-dev
 )
 
 missing=()

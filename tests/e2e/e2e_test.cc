@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/status/status.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -243,6 +244,15 @@ std::vector<std::pair<int, int>> PathCells(const v1::PlanResponse& response) {
   return cells;
 }
 
+// The status code whose name is `name`, e.g. "NOT_FOUND"; kUnknown if none.
+absl::StatusCode StatusCodeNamed(const std::string& name) {
+  for (int c = 0; c <= static_cast<int>(absl::StatusCode::kUnauthenticated); ++c) {
+    const auto code = static_cast<absl::StatusCode>(c);
+    if (absl::StatusCodeToString(code) == name) return code;
+  }
+  return absl::StatusCode::kUnknown;
+}
+
 class E2eTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -378,13 +388,14 @@ class E2eTest : public ::testing::Test {
     return ParseJson<v1::PlanResponse>(r.out);
   }
 
-  // Expects pathctl to fail with exit 1 and "error: <code>: ..." on stderr
-  // containing every one of `words`.
+  // Expects pathctl to fail with the exit code of `code` (1, or 5-8 for the
+  // codes scripts tell apart) and "error: <code>: ..." on stderr containing
+  // every one of `words`.
   void ExpectRpcError(const std::vector<std::string>& args,
                       const std::string& code,
                       const std::vector<std::string>& words = {}) {
     const ProcessResult r = Ctl(args);
-    EXPECT_EQ(r.exit_code, 1) << r;
+    EXPECT_EQ(r.exit_code, pathctl::ExitCodeForStatus(StatusCodeNamed(code))) << r;
     EXPECT_TRUE(absl::StartsWith(r.err, absl::StrCat("error: ", code, ": ")))
         << r;
     for (const std::string& word : words) {
@@ -826,10 +837,11 @@ TEST_F(E2eTest, ServerErrorsReachTheUser) {
       absl::StrContains(fresh.out, absl::StrCat("version ", version + 1)))
       << fresh;
 
-  // A local file that does not exist never reaches the server.
+  // A local file that does not exist never reaches the server; NOT_FOUND
+  // exits 7 whether the map or the file is missing.
   const ProcessResult missing = Ctl(
       {"maps", "create", "x", "--from", (temp_dir_ / "missing.map").string()});
-  EXPECT_EQ(missing.exit_code, 1) << missing;
+  EXPECT_EQ(missing.exit_code, 7) << missing;
   EXPECT_TRUE(absl::StrContains(missing.err, "missing.map")) << missing;
 }
 
@@ -1182,10 +1194,10 @@ TEST_F(E2eTest, SigtermExitsCleanly) {
   ASSERT_EQ(Ctl({"plan", "room", "0", "0", "9", "9"}).exit_code, 0);
   const std::string address = address_;
   EXPECT_EQ(StopDaemon(), 0);
-  // With the daemon gone the client reports the transport error, exit 1.
+  // With the daemon gone the client reports the transport error, exit 5.
   const ProcessResult r = RunPathctl(
       {absl::StrCat("--server=", address), "--timeout=5s", "maps", "list"});
-  EXPECT_EQ(r.exit_code, 1) << r;
+  EXPECT_EQ(r.exit_code, 5) << r;
   EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE: ")) << r;
 }
 
@@ -1441,7 +1453,7 @@ TEST_F(E2eTest, MetricsCountRequestsAndPathctlPrintsThem) {
   ASSERT_EQ(RunPathctl({server, "plan", "room", "0", "0", "9", "9", "--planner=jps"})
                 .exit_code,
             0);
-  EXPECT_EQ(RunPathctl({server, "plan", "nowhere", "0", "0", "9", "9"}).exit_code, 1);
+  EXPECT_EQ(RunPathctl({server, "plan", "nowhere", "0", "0", "9", "9"}).exit_code, 7);
 
   const ProcessResult filtered = RunPathctl(
       {"metrics", metrics_flag, "pathd_requests_total", "pathd_maps"});
@@ -1477,7 +1489,7 @@ TEST_F(E2eTest, MetricsCountRequestsAndPathctlPrintsThem) {
 
   // Nobody serves the endpoint any more.
   const ProcessResult gone = RunPathctl({"metrics", metrics_flag, "--timeout=5s"});
-  EXPECT_EQ(gone.exit_code, 1) << gone;
+  EXPECT_EQ(gone.exit_code, 5) << gone;
   EXPECT_TRUE(absl::StartsWith(gone.err, "error: UNAVAILABLE: cannot fetch")) << gone;
 }
 
@@ -1745,6 +1757,263 @@ TEST_F(E2eTest, BenchRunsAClosedLoopWithoutErrors) {
   EXPECT_EQ(Ctl({"bench", "room", "--duration=0"}).exit_code, 2);
   EXPECT_EQ(Ctl({"bench", "room", "--concurrency=0"}).exit_code, 2);
   EXPECT_EQ(Ctl({"bench", "room", "--planner=nope"}).exit_code, 2);
+}
+
+// --output csv: a header row, then rows, for a single result (maps get), a
+// list (maps list), a path (plan), a stream (maps watch, batch) and figures
+// (bench, check, cost-to-go).
+TEST_F(E2eTest, OutputCsvPrintsAHeaderAndRows) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("hall", OpenRoomMap(30, 5)));
+  const std::string kMapHeader =
+      "name,width,height,resolution,origin_x,origin_y,origin_yaw,version,"
+      "free_cells,blocked_cells\n";
+  const ProcessResult list = Ctl({"maps", "list", "--output", "csv"});
+  ASSERT_EQ(list.exit_code, 0) << list;
+  std::vector<std::string> rows = absl::StrSplit(list.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(rows.size(), 3u) << list;
+  EXPECT_EQ(rows[0] + "\n", kMapHeader);
+  std::sort(rows.begin() + 1, rows.end());
+  EXPECT_EQ(rows[1], "hall,30,5,1,0,0,0,1,150,0");
+  EXPECT_EQ(rows[2], "room,10,10,1,0,0,0,1,100,0");
+
+  const ProcessResult get = Ctl({"maps", "get", "room", "--output=csv"});
+  ASSERT_EQ(get.exit_code, 0) << get;
+  EXPECT_EQ(get.out, kMapHeader + "room,10,10,1,0,0,0,1,100,0\n");
+
+  const ProcessResult plan = Ctl({"plan", "room", "0", "0", "3", "3", "--output=csv"});
+  ASSERT_EQ(plan.exit_code, 0) << plan;
+  EXPECT_EQ(plan.out,
+            "x,y,world_x,world_y\n0,0,0.5,0.5\n1,1,1.5,1.5\n2,2,2.5,2.5\n3,3,3.5,3.5\n");
+  // No path: the header alone, and the exit code says why.
+  ASSERT_EQ(Ctl({"maps", "rect", "room", "0", "5", "9", "5", "lethal"}).exit_code, 0);
+  const ProcessResult none = Ctl({"plan", "room", "0", "0", "9", "9", "--output=csv"});
+  EXPECT_EQ(none.exit_code, 3) << none;
+  EXPECT_EQ(none.out, "x,y,world_x,world_y\n");
+
+  const ProcessResult check =
+      Ctl({"check", "room", "0", "0", "1", "1", "--output=csv"});
+  ASSERT_EQ(check.exit_code, 0) << check;
+  EXPECT_EQ(check.out,
+            "valid,map_version,poses,cost,length,invalid_poses,invalid_steps,reason\n"
+            "true,2,2,1.41421356,1.41421356,,,\n");
+
+  const ProcessResult field = Ctl(
+      {"cost-to-go", "room", "1", "1", "--window", "0,0,2,1", "--output=csv"});
+  ASSERT_EQ(field.exit_code, 0) << field;
+  EXPECT_EQ(field.out, "x,y,cost\n0,0,1.41421354\n1,0,1\n");
+
+  // A stream: one row per event, the header first.
+  std::unique_ptr<PathctlProcess> watch =
+      StartCtl({"maps", "watch", "hall", "--output=csv", "--count=2"});
+  ASSERT_TRUE(watch->WaitForLine("1,RESYNC,30,5,0,0,")) << watch->Finish();
+  ASSERT_EQ(Ctl({"maps", "rect", "hall", "2", "1", "3", "1", "lethal"}).exit_code, 0);
+  const ProcessResult events = watch->Finish();
+  ASSERT_EQ(events.exit_code, 0) << events;
+  EXPECT_EQ(events.out,
+            "version,kind,width,height,changed_cells,changed_rects,rects\n"
+            "1,RESYNC,30,5,0,0,\n"
+            "2,UPDATED,,,2,1,\"(2,1)-(3,1)\"\n");  // quoted: it holds commas
+
+  const std::string items = MapFile("items.txt",
+                                    "a hall 0 0 4 0\n"
+                                    "b nowhere 0 0 1 1\n");
+  const ProcessResult batch = Ctl({"batch", items, "--output=csv"});
+  EXPECT_EQ(batch.exit_code, 1) << batch;  // item b errored
+  rows = absl::StrSplit(batch.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(rows.size(), 3u) << batch;
+  EXPECT_EQ(rows[0], "id,status,outcome,cost,length,expansions,time_us,code,message");
+  std::sort(rows.begin() + 1, rows.end());
+  EXPECT_TRUE(absl::StartsWith(rows[1], "a,found,FOUND,4,4,")) << rows[1];
+  EXPECT_TRUE(absl::StartsWith(rows[2], "b,error,")) << rows[2];
+  EXPECT_TRUE(absl::StrContains(rows[2], ",NOT_FOUND,")) << rows[2];
+  // The summary is not a row: it goes to stderr.
+  EXPECT_TRUE(absl::StartsWith(batch.err, "summary: 2 of 2 answered")) << batch;
+
+  const ProcessResult bench = Ctl({"bench", "hall", "--duration=0", "--requests=20",
+                                   "--warmup=0s", "--output=csv"});
+  ASSERT_EQ(bench.exit_code, 0) << bench;
+  rows = absl::StrSplit(bench.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(rows.size(), 2u) << bench;
+  const std::vector<std::string> header = absl::StrSplit(rows[0], ',');
+  const std::vector<std::string> figures = absl::StrSplit(rows[1], ',');
+  ASSERT_EQ(header.size(), figures.size()) << bench;
+  EXPECT_EQ(header[0], "map");
+  EXPECT_EQ(figures[0], "hall");
+  EXPECT_EQ(header[6], "requests");
+  EXPECT_EQ(figures[6], "20");
+  EXPECT_EQ(header[9], "errors");
+  EXPECT_EQ(figures[9], "0");
+}
+
+TEST_F(E2eTest, OutputJsonIsTheJsonAliasAndTableTheDefault) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const ProcessResult alias = Ctl({"plan", "room", "0", "0", "9", "9", "--json"});
+  const ProcessResult json = Ctl({"plan", "room", "0", "0", "9", "9", "--output=json"});
+  ASSERT_EQ(json.exit_code, 0) << json;
+  const v1::PlanResponse a = ParseJson<v1::PlanResponse>(alias.out);
+  const v1::PlanResponse j = ParseJson<v1::PlanResponse>(json.out);
+  EXPECT_EQ(PathCells(a), PathCells(j));
+  EXPECT_EQ(j.cost(), a.cost());
+  EXPECT_EQ(Ctl({"maps", "list", "--output", "json"}).out,
+            Ctl({"maps", "list", "--json"}).out);
+
+  const ProcessResult table = Ctl({"maps", "list", "--output=table"});
+  EXPECT_EQ(table.out, Ctl({"maps", "list"}).out);
+  EXPECT_EQ(table.out,
+            "NAME  SIZE   RESOLUTION  VERSION  FREE  BLOCKED\n"
+            "room  10x10           1        1   100        0\n");
+  const ProcessResult health = Ctl({"health", "--output=csv"});
+  EXPECT_EQ(health.out, "service,status\n,SERVING\n") << health;
+}
+
+TEST_F(E2eTest, FormatsACommandCannotPrintAreUsageErrors) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {{"metrics", "--output=json"}, "metrics has no --output json"},
+      {{"metrics", "--output=csv"}, "metrics has no --output csv"},
+      {{"navigate", "room", "0", "0", "9", "9", "--output=csv"},
+       "navigate has no --output csv"},
+      {{"maps", "get", "room", "--cells", "--output=csv"},
+       "maps get --cells has no --output csv"},
+      {{"completion", "bash", "--json"}, "completion has no --output json"},
+      {{"maps", "list", "--output=xml"}, "--output: unknown format 'xml'"},
+      {{"maps", "list", "--output=csv", "--json"},
+       "--json is --output=json; it contradicts --output=csv"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(absl::StrJoin(c.args, " "));
+    const ProcessResult r = Ctl(c.args);
+    EXPECT_EQ(r.exit_code, 2) << r;
+    EXPECT_TRUE(absl::StartsWith(r.err, absl::StrCat("error: ", c.says))) << r;
+    EXPECT_EQ(r.out, "") << r;
+  }
+}
+
+// The exit codes scripts branch on, from real failures: every one is
+// documented in --help.
+TEST_F(E2eTest, ExitCodesTellScriptsWhatWentWrong) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", OpenRoomMap()));
+  ASSERT_EQ(Ctl({"maps", "rect", "walled", "0", "5", "9", "5", "lethal"}).exit_code, 0);
+  struct Case {
+    std::vector<std::string> args;
+    int exit_code;
+    std::string stderr_starts;
+  };
+  const std::vector<Case> cases = {
+      {{"plan", "room", "0", "0", "9", "9"}, 0, ""},
+      {{"maps", "create", "room", "--from", MapFile("again.map", OpenRoomMap())},
+       1, "error: ALREADY_EXISTS: "},
+      {{"plan", "room", "0", "0"}, 2, "error: plan takes"},
+      {{"plan", "walled", "0", "0", "9", "9"}, 3, ""},
+      {{"check", "walled", "0", "4", "0", "5"}, 4, ""},
+      // A deadline that has passed before the call is sent.
+      {{"plan", "room", "0", "0", "9", "9", "--timeout=1ns"}, 6,
+       "error: DEADLINE_EXCEEDED: "},
+      {{"plan", "nosuch", "0", "0", "9", "9"}, 7, "error: NOT_FOUND: "},
+      {{"cost-to-go", "room", "1", "1", "--cost_to_go_file",
+        (temp_dir_ / "no_such_dir" / "field.csv").string()},
+       8, "error: PERMISSION_DENIED: cannot write "},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(absl::StrJoin(c.args, " "));
+    const ProcessResult r = Ctl(c.args);
+    EXPECT_EQ(r.exit_code, c.exit_code) << r;
+    EXPECT_TRUE(absl::StartsWith(r.err, c.stderr_starts)) << r;
+  }
+  // Nobody listens on the daemon's port once it has stopped.
+  const std::string address = address_;
+  EXPECT_EQ(StopDaemon(), 0);
+  const ProcessResult down =
+      RunPathctl({absl::StrCat("--server=", address), "--timeout=5s", "health"});
+  EXPECT_EQ(down.exit_code, 5) << down;
+  EXPECT_TRUE(absl::StartsWith(down.err, "error: UNAVAILABLE: ")) << down;
+
+  const ProcessResult help = RunPathctl({"--help"});
+  for (const char* line :
+       {"\n  5  UNAVAILABLE", "\n  6  DEADLINE_EXCEEDED", "\n  7  NOT_FOUND",
+        "\n  8  UNAUTHENTICATED or PERMISSION_DENIED"}) {
+    EXPECT_TRUE(absl::StrContains(help.out, line)) << "missing " << line;
+  }
+}
+
+// Progress bars are for a person at a terminal: with stdout and stderr piped
+// (as here, and in every script) long work draws none.
+TEST_F(E2eTest, NoProgressBarsWhenOutputIsNotATerminal) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap(32, 32)));
+  std::string items;
+  for (int i = 0; i < 200; ++i) {
+    absl::StrAppend(&items, "q", i, " room 0 0 ", i % 32, " 31\n");
+  }
+  const ProcessResult batch = Ctl({"batch", MapFile("many.txt", items)});
+  ASSERT_EQ(batch.exit_code, 0) << batch;
+  EXPECT_EQ(batch.err, "") << batch;
+  EXPECT_FALSE(absl::StrContains(batch.out + batch.err, "\r")) << batch;
+  const ProcessResult quiet =
+      Ctl({"batch", MapFile("few.txt", "a room 0 0 1 1\n"), "--no_progress"});
+  EXPECT_EQ(quiet.exit_code, 0) << quiet;
+  EXPECT_EQ(quiet.err, "") << quiet;
+}
+
+// Runs `script` in bash after loading pathctl's completion script, with the
+// helper `complete_line WORD...` printing the candidates for the last word.
+ProcessResult RunCompletion(const std::string& completion_file,
+                            const std::string& script) {
+  const std::string program = absl::StrCat(
+      "source '", completion_file, "'\n",
+      "complete_line() {\n"
+      "  COMP_WORDS=(\"$@\"); COMP_CWORD=$(( ${#COMP_WORDS[@]} - 1 )); COMPREPLY=()\n"
+      "  _pathctl\n"
+      "  echo \"${COMPREPLY[*]}\"\n"
+      "}\n",
+      script);
+  return PathctlProcess({"--norc", "--noprofile", "-c", program}, {}, "/bin/bash")
+      .Finish();
+}
+
+TEST_F(E2eTest, BashCompletionCompletesCommandsFlagsPlannersAndMapNames) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_NO_FATAL_FAILURE(CreateMap("hall", OpenRoomMap(30, 5)));
+  const ProcessResult generated = RunPathctl({"completion", "bash"});
+  ASSERT_EQ(generated.exit_code, 0) << generated;
+  const std::string file = MapFile("pathctl.bash", generated.out);
+  const std::string ctl = PATHCTL_BIN;
+  const std::string server = absl::StrCat("--server=", address_);
+  const ProcessResult r = RunCompletion(
+      file, absl::StrCat("complete_line ", ctl, " ''\n",
+                         "complete_line ", ctl, " ma\n",
+                         "complete_line ", ctl, " maps ''\n",
+                         "complete_line ", ctl, " plan room 0 0 9 9 --plan\n",
+                         "complete_line ", ctl, " plan room --planner dstar\n",
+                         // Bash splits --flag=value at '='.
+                         "complete_line ", ctl, " --output = c\n",
+                         "complete_line ", ctl, " ", server, " maps get ''\n",
+                         "complete_line ", ctl, " ", server, " --json plan h\n",
+                         // An unreachable server completes no map names.
+                         "complete_line ", ctl, " --server=127.0.0.1:1 plan ''\n",
+                         "complete_line ", ctl, " completion ''\n"));
+  ASSERT_EQ(r.exit_code, 0) << r;
+  const std::vector<std::string> lines = absl::StrSplit(r.out, '\n');
+  ASSERT_GE(lines.size(), 10u) << r;
+  EXPECT_EQ(lines[0],
+            "maps plan batch navigate cost-to-go check cache-stats health metrics "
+            "bench completion help");
+  EXPECT_EQ(lines[1], "maps");
+  EXPECT_EQ(lines[2], "create list get delete set rect watch");
+  EXPECT_EQ(lines[3], "--planner");
+  EXPECT_EQ(lines[4], "dstar_lite");
+  EXPECT_EQ(lines[5], "csv");
+  std::vector<std::string> names = absl::StrSplit(lines[6], ' ');
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"hall", "room"})) << r;
+  EXPECT_EQ(lines[7], "hall");
+  EXPECT_EQ(lines[8], "");
+  EXPECT_EQ(lines[9], "bash");
 }
 
 }  // namespace
