@@ -22,6 +22,7 @@
 #include "absl/flags/commandlineflag.h"
 #include "absl/flags/reflection.h"
 #include "absl/status/status.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -31,10 +32,13 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "client/load_generator.h"
+#include "client/map_convert.h"
 #include "client/map_source.h"
 #include "client/navigate_script.h"
 #include "client/navigate_session.h"
 #include "client/progress.h"
+#include "client/render.h"
+#include "core/grid.h"
 #include "core/map_io.h"
 #include "core/status_macros.h"
 #include "google/protobuf/struct.pb.h"
@@ -59,6 +63,9 @@ constexpr char kSynopsis[] =
   pathctl [flags] maps set NAME X Y COST [--expected_version V]
   pathctl [flags] maps rect NAME X0 Y0 X1 Y1 COST [--expected_version V]
   pathctl [flags] maps watch NAME [--from_version V] [--count N]
+  pathctl [flags] maps import NAME FILE [--replace] [--resolution R]
+                       [--occupied_thresh T] [--free_thresh T] [--negate]
+  pathctl [flags] maps export NAME FILE
   pathctl [flags] plan NAME SX SY GX GY [--planner P] [--connectivity 4|8]
                        [--cost_weight W] [--unknown_is_free]
                        [--max_expansions N] [--world] [--simplify]
@@ -83,6 +90,9 @@ constexpr char kSynopsis[] =
                        [--requests N] [--channels K] [--seed S]
                        [--planner P] [cost options]
   pathctl [flags] bench [NAME] --movingai FILE.map [...]
+  pathctl [flags] render NAME [--plan SX SY GX GY [--planner P] [--expansions]
+                       [plan and cost options]]
+                       (-o FILE.png [--scale N] | --ascii) [--y_up]
   pathctl completion bash
   pathctl --help
 )";
@@ -548,10 +558,159 @@ int MapsWatch(Env& env, Args args) {
   return env.Fail(client::FromGrpcStatus(status));
 }
 
+// `maps import NAME FILE`: like `maps create --from`, plus PNG occupancy
+// images (alone, or named by a map_server YAML), decoded here.
+int MapsImport(Env& env, Args args) {
+  const Options& options = env.options();
+  if (args.size() != 2) return env.Usage("maps import takes NAME FILE");
+  const std::string& file = args[1];
+  const std::string lower = absl::AsciiStrToLower(file);
+  const bool png = absl::EndsWith(lower, ".png");
+  const bool yaml =
+      absl::EndsWith(lower, ".yaml") || absl::EndsWith(lower, ".yml");
+  if (!png && !yaml && !absl::EndsWith(lower, ".map")) {
+    return env.Usage(absl::StrCat(
+        file,
+        ": unknown map file type; expected .map (Moving AI), .yaml/.yml "
+        "(ROS map_server) or .png (occupancy image)"));
+  }
+  if (options.resolution < 0 || !std::isfinite(options.resolution)) {
+    return env.Usage(
+        "--resolution must be a positive number of metres per cell");
+  }
+  if (yaml && options.resolution != 0) {
+    return env.Usage(
+        "--resolution applies to .map and .png files; a ROS map's YAML sets "
+        "its own resolution");
+  }
+  const bool thresholds = options.occupied_thresh.has_value() ||
+                          options.free_thresh.has_value() || options.negate;
+  if (!png && thresholds) {
+    return env.Usage(
+        "--occupied_thresh, --free_thresh and --negate apply to .png files; a "
+        "ROS map's YAML sets its own");
+  }
+  PngImportOptions png_options;
+  if (options.resolution > 0) png_options.resolution = options.resolution;
+  png_options.occupied_thresh =
+      options.occupied_thresh.value_or(png_options.occupied_thresh);
+  png_options.free_thresh =
+      options.free_thresh.value_or(png_options.free_thresh);
+  png_options.negate = options.negate;
+  if (!(png_options.free_thresh >= 0 &&
+        png_options.free_thresh < png_options.occupied_thresh &&
+        png_options.occupied_thresh <= 1)) {
+    return env.Usage(absl::StrFormat(
+        "need 0 <= --free_thresh < --occupied_thresh <= 1, got %g and %g",
+        png_options.free_thresh, png_options.occupied_thresh));
+  }
+  v1::CreateMapRequest request;
+  request.set_name(args[0]);
+  request.set_replace(options.replace);
+  request.set_resolution(options.resolution);
+  absl::StatusOr<ImportKind> kind =
+      SetImportSource(file, png_options, &request);
+  if (!kind.ok()) return env.Fail(kind.status());
+  absl::StatusOr<v1::CreateMapResponse> response =
+      CreateMapWithProgress(env, request, file);
+  if (!response.ok()) return env.Fail(response.status());
+  if (options.json) return env.PrintJson(*response);
+  if (env.csv()) {
+    const v1::MapInfo* info[] = {&response->info()};
+    return env.PrintCsv(MapInfoCsv(info));
+  }
+  env.out() << (response->info().version() > 1 ? "replaced" : "created")
+            << " map " << args[0] << " from " << file << "\n";
+  PrintMapInfo(env.out(), response->info());
+  return kExitOk;
+}
+
+// The map's current cells as a Grid with its resolution and origin.
+absl::StatusOr<Grid> FetchGrid(Env& env, const std::string& name) {
+  v1::GetMapRequest request;
+  request.set_name(name);
+  request.set_include_cells(true);
+  PATHD_ASSIGN_OR_RETURN(const v1::GetMapResponse response,
+                         env.client().GetMap(request));
+  const v1::MapInfo& info = response.info();
+  const std::string& cells = response.cells();
+  absl::StatusOr<Grid> grid =
+      Grid::FromCells(info.width(), info.height(),
+                      std::vector<uint8_t>(cells.begin(), cells.end()));
+  if (!grid.ok()) {
+    return absl::InternalError(
+        absl::StrFormat("server sent %d cell bytes for a %dx%d map",
+                        cells.size(), info.width(), info.height()));
+  }
+  grid->set_resolution(info.resolution() > 0 ? info.resolution() : 1.0);
+  grid->set_origin(
+      GridOrigin{info.origin().x(), info.origin().y(), info.origin().yaw()});
+  return grid;
+}
+
+// `maps export NAME FILE`: .map or .yaml (+ .pgm), warning on stderr about
+// the cells the format cannot hold.
+int MapsExport(Env& env, Args args) {
+  if (args.size() != 2) return env.Usage("maps export takes NAME FILE");
+  const std::string& file = args[1];
+  const std::string lower = absl::AsciiStrToLower(file);
+  const bool yaml =
+      absl::EndsWith(lower, ".yaml") || absl::EndsWith(lower, ".yml");
+  if (!yaml && !absl::EndsWith(lower, ".map")) {
+    return env.Usage(absl::StrCat(
+        file,
+        ": unknown map file type; export writes .map (Moving AI) or "
+        ".yaml/.yml (ROS map_server YAML + PGM)"));
+  }
+  absl::StatusOr<Grid> grid = FetchGrid(env, args[0]);
+  if (!grid.ok()) return env.Fail(grid.status());
+  absl::StatusOr<ExportLoss> loss = ExportMapFile(*grid, file);
+  if (!loss.ok()) return env.Fail(loss.status());
+  const auto warn = [&](int64_t cells, absl::string_view what) {
+    if (cells == 0) return;
+    env.err() << "warning: " << cells << (cells == 1 ? " cell " : " cells ")
+              << what << "\n";
+  };
+  warn(loss->weighted,
+       yaml ? "of cost 1..252 written as free (trinary PGM)"
+            : "of cost 1..252 written as 'S' (passable, read back as free)");
+  warn(loss->inscribed, "inscribed (253) written as occupied");
+  warn(loss->unknown,
+       "unknown (255) written as 'O' (out of bounds, read back as lethal)");
+  const std::string pgm = yaml ? PgmPathFor(file) : "";
+  if (env.options().json) {
+    google::protobuf::Struct json;
+    auto& fields = *json.mutable_fields();
+    fields["map"].set_string_value(args[0]);
+    fields["file"].set_string_value(file);
+    if (yaml) fields["pgm"].set_string_value(pgm);
+    fields["width"].set_number_value(grid->width());
+    fields["height"].set_number_value(grid->height());
+    fields["weighted_cells"].set_number_value(static_cast<double>(loss->weighted));
+    fields["inscribed_cells"].set_number_value(static_cast<double>(loss->inscribed));
+    fields["unknown_cells"].set_number_value(static_cast<double>(loss->unknown));
+    return env.PrintJson(json);
+  }
+  if (env.csv()) {
+    Table table({"map", "file", "pgm", "width", "height", "weighted_cells",
+                 "inscribed_cells", "unknown_cells"});
+    table.AddRow({args[0], file, pgm, absl::StrCat(grid->width()),
+                  absl::StrCat(grid->height()), absl::StrCat(loss->weighted),
+                  absl::StrCat(loss->inscribed), absl::StrCat(loss->unknown)});
+    return env.PrintCsv(table);
+  }
+  env.out() << "wrote " << file;
+  if (yaml) env.out() << " and " << pgm;
+  env.out() << absl::StrFormat(" (%dx%d cells)\n", grid->width(),
+                               grid->height());
+  return kExitOk;
+}
+
 int Maps(Env& env, Args args) {
   if (args.empty()) {
     return env.Usage(
-        "maps needs a subcommand: create, list, get, delete, set, rect, watch");
+        "maps needs a subcommand: create, list, get, delete, set, rect, watch, "
+        "import, export");
   }
   const std::string& sub = args[0];
   Args rest = args.subspan(1);
@@ -562,9 +721,12 @@ int Maps(Env& env, Args args) {
   if (sub == "set") return MapsSet(env, rest);
   if (sub == "rect") return MapsRect(env, rest);
   if (sub == "watch") return MapsWatch(env, rest);
+  if (sub == "import") return MapsImport(env, rest);
+  if (sub == "export") return MapsExport(env, rest);
   return env.Usage(
       absl::StrCat("unknown maps subcommand '", sub,
-                   "'; expected create, list, get, delete, set, rect, watch"));
+                   "'; expected create, list, get, delete, set, rect, watch, "
+                   "import, export"));
 }
 
 // --- plan --------------------------------------------------------------------
@@ -1824,6 +1986,139 @@ int Completion(Env& env, Args args) {
   return kExitOk;
 }
 
+// --- render ------------------------------------------------------------------
+
+// The Plan request of `render NAME SX SY GX GY`: the plan command's options
+// that change the path (planner, cost options, limits, via points), and
+// always the expanded cells when --expansions asks to draw them.
+absl::StatusOr<v1::PlanRequest> RenderPlanRequest(const Options& options,
+                                                  const std::string& map,
+                                                  Args coordinates) {
+  v1::PlanRequest request;
+  request.set_map(map);
+  static constexpr const char* kStart[] = {"SX", "SY"};
+  static constexpr const char* kGoal[] = {"GX", "GY"};
+  PATHD_ASSIGN_OR_RETURN(
+      *request.mutable_start(),
+      PositionFromPair(coordinates.subspan(0, 2), options.world, kStart));
+  PATHD_ASSIGN_OR_RETURN(
+      *request.mutable_goal(),
+      PositionFromPair(coordinates.subspan(2, 2), options.world, kGoal));
+  if (!options.planner.empty()) {
+    PATHD_ASSIGN_OR_RETURN(const v1::Planner planner,
+                           PlannerFromName(options.planner));
+    request.set_planner(planner);
+  }
+  v1::PlanOptions* plan_options = request.mutable_options();
+  PATHD_RETURN_IF_ERROR(SetCostOptions(options, plan_options));
+  plan_options->set_max_expansions(options.max_expansions);
+  if (options.heuristic_weight.has_value()) {
+    plan_options->set_heuristic_weight(*options.heuristic_weight);
+  }
+  plan_options->set_simplify(options.simplify);
+  plan_options->set_lookahead(options.lookahead);
+  plan_options->set_return_expansions(options.expansions);
+  PATHD_RETURN_IF_ERROR(AddViaPoints(options, &request));
+  request.set_allow_partial(options.allow_partial);
+  return request;
+}
+
+Cell CoreCell(const v1::Cell& cell) { return Cell{cell.x(), cell.y()}; }
+
+// `render NAME [--plan SX SY GX GY] (-o FILE.png | --ascii)`: GetMap, an
+// optional Plan, then the picture.
+int Render(Env& env, Args args) {
+  const Options& options = env.options();
+  if (options.output != OutputFormat::kTable) {
+    return env.Unsupported(
+        "render", "it draws a picture; 'plan --output json' prints the path");
+  }
+  if (args.size() != 1 && args.size() != 5) {
+    return env.Usage("render takes NAME, or NAME --plan SX SY GX GY");
+  }
+  const bool plan = args.size() == 5;
+  if (options.plan && !plan)
+    return env.Usage("--plan needs SX SY GX GY after NAME");
+  if (options.expansions && !plan) {
+    return env.Usage(
+        "--expansions draws a plan's expanded cells; add --plan SX SY GX GY");
+  }
+  if (options.out.empty() && !options.ascii) {
+    return env.Usage("render needs -o FILE.png (a picture) or --ascii (text)");
+  }
+  if (!options.out.empty() &&
+      !absl::EndsWith(absl::AsciiStrToLower(options.out), ".png")) {
+    return env.Usage(absl::StrCat("-o ", options.out,
+                                  ": render writes PNG; name a .png file"));
+  }
+  if (options.scale < 0 || options.scale > kMaxScale) {
+    return env.Usage(
+        absl::StrFormat("--scale must be 1..%d pixels per cell, not %d",
+                        kMaxScale, options.scale));
+  }
+  std::optional<v1::PlanRequest> request;
+  if (plan) {
+    absl::StatusOr<v1::PlanRequest> built =
+        RenderPlanRequest(options, args[0], args.subspan(1));
+    if (!built.ok()) return env.Usage(built.status().message());
+    request = *std::move(built);
+  }
+
+  absl::StatusOr<Grid> grid = FetchGrid(env, args[0]);
+  if (!grid.ok()) return env.Fail(grid.status());
+  PlanOverlay overlay;
+  int code = kExitOk;
+  std::string summary;
+  if (request.has_value()) {
+    absl::StatusOr<v1::PlanResponse> response = env.client().Plan(*request);
+    if (!response.ok()) return env.Fail(response.status());
+    for (const v1::Cell& c : response->path())
+      overlay.path.push_back(CoreCell(c));
+    for (const v1::Cell& c : response->expanded())
+      overlay.expanded.push_back(CoreCell(c));
+    overlay.start = CoreCell(response->start());
+    overlay.goal = CoreCell(response->goal());
+    code = response->found() ? kExitOk : kExitNoPath;
+    summary =
+        response->path_size() > 0
+            ? absl::StrFormat(
+                  "path (%s): %d %s, cost %.6f, length %.6f, %d expansions",
+                  response->planner(), response->path_size(),
+                  response->any_angle() ? "vertices" : "cells",
+                  response->cost(), response->length(), response->expansions())
+            : absl::StrFormat("no path (%s): %s: %s", response->planner(),
+                              OutcomeName(response->outcome()),
+                              response->reason());
+    if (options.expansions) {
+      absl::StrAppendFormat(
+          &summary, ", %d expanded cells drawn%s", response->expanded_size(),
+          response->expanded_truncated()
+              ? " (truncated: the server's --max_returned_expansions)"
+              : "");
+    }
+  }
+  RenderOptions render_options;
+  render_options.scale = options.scale;
+  render_options.y_up = options.y_up;
+  if (options.ascii) {
+    absl::StatusOr<std::string> text =
+        RenderText(*grid, overlay, render_options);
+    if (!text.ok()) return env.Usage(text.status().message());
+    env.out() << *text;
+  }
+  if (!options.out.empty()) {
+    absl::StatusOr<Image> image = RenderImage(*grid, overlay, render_options);
+    if (!image.ok()) return env.Usage(image.status().message());
+    if (absl::Status s = WritePngFile(*image, options.out); !s.ok())
+      return env.Fail(s);
+    env.out() << absl::StrFormat("wrote %s (%dx%d pixels, %d per cell)\n",
+                                 options.out, image->width, image->height,
+                                 image->width / grid->width());
+  }
+  if (!summary.empty()) env.out() << summary << "\n";
+  return code;
+}
+
 }  // namespace
 
 int ExitCodeForStatus(absl::StatusCode code) {
@@ -1848,12 +2143,13 @@ CompletionSpec PathctlCompletionSpec() {
   CompletionSpec spec;
   spec.commands = {"maps",   "plan",        "batch",  "navigate", "cost-to-go",
                    "check",  "cache-stats", "health", "metrics",  "bench",
-                   "completion", "help"};
-  spec.subcommands["maps"] = {"create", "list", "get", "delete", "set", "rect", "watch"};
+                   "render", "completion", "help"};
+  spec.subcommands["maps"] = {"create", "list",  "get",    "delete", "set",
+                              "rect",   "watch", "import", "export"};
   spec.subcommands["completion"] = {"bash"};
   spec.map_name_after = {"maps get", "maps delete", "maps set", "maps rect",
                          "maps watch", "plan", "navigate", "cost-to-go",
-                         "check", "bench"};
+                         "check", "bench", "render", "maps export"};
   spec.file_after = {"batch"};
   // pathctl's own flags, not the ones Abseil and gRPC register.
   for (const auto& [name, flag] : absl::GetAllFlags()) {
@@ -1871,7 +2167,8 @@ CompletionSpec PathctlCompletionSpec() {
   spec.flag_values["output"] = {"table", "json", "csv"};
   spec.flag_values["connectivity"] = {"4", "8"};
   spec.flag_values["pf_attractive"] = {"quadratic", "conic"};
-  spec.file_flags = {"from", "path_file", "script", "cost_to_go_file", "movingai"};
+  spec.file_flags = {"from",     "path_file", "script", "cost_to_go_file",
+                     "movingai", "out",       "o"};
   return spec;
 }
 
@@ -2094,8 +2391,9 @@ flags (anywhere on the line, as --flag=value or --flag value):
   --from FILE          maps create: .map is sent as Moving AI text; .yaml/.yml
                        as a ROS map_server map (the YAML plus the image it
                        names, relative to the YAML's folder)
-  --replace            maps create: replace an existing map of that name
-  --resolution R       maps create: metres per cell for .map files (default 1)
+  --replace            maps create, import: replace an existing map of that name
+  --resolution R       maps create, import: metres per cell for .map (and
+                       import's .png) files (default 1)
   --cells              maps get: also print the cells (maps up to 1024 columns)
   --expected_version V maps set/rect: apply only if the map is at version V
   --from_version V     maps watch: the version you hold; other than the current
@@ -2147,6 +2445,20 @@ flags (anywhere on the line, as --flag=value or --flag value):
                        the file's stem), replacing a map of that name, and
                        take the queries from FILE.scen
   --seed S             bench: seed of the random queries and of the shuffle
+
+  --plan               render: plan from SX SY to GX GY (given after NAME) and
+                       draw the path; takes plan's options (--planner, --world,
+                       --via, --simplify, --max_expansions, cost options)
+  -o FILE, --out FILE  render: write the picture to FILE (PNG)
+  --ascii              render: print the picture as text (maps up to 200x200)
+  --scale N            render: pixels per cell, 1..64 (default: 16 for small
+                       maps, less so the longer side is about 1024 pixels)
+  --y_up               render: draw row 0 at the bottom (world y up), as a ROS
+                       map's image shows it; default row 0 on top, as in a
+                       .map file and maps get --cells
+  --occupied_thresh T, --free_thresh T, --negate
+                       maps import of a .png: map_server's thresholds (default
+                       0.65 and 0.196) and colour inversion; see below
 
 cost options (plan, navigate, cost-to-go, check):
   --connectivity N     4 or 8 (default 8)
@@ -2232,6 +2544,24 @@ and --no_progress is not given.
 completion: 'source <(pathctl completion bash)' completes commands, flags,
 planner names, --output formats, files and, when the server answers within a
 second, map names (from 'pathctl maps list' with the line's --server).
+render --ascii draws the same, then 'o' expanded cells, '*' the path, 'S'
+the start and 'G' the goal. Its PNG draws free cells white, weighted cells
+grey (lighter for cheaper), inscribed dark grey, lethal black, unknown
+blue-grey, expanded cells tinted amber, the path as a red line, the start as
+a green and the goal as a blue disc.
+
+maps import reads .map (Moving AI) and .yaml/.yml (ROS map_server) like maps
+create --from, and PNG occupancy images: a bare .png, or one a YAML names.
+A PNG pixel's grey level is the mean of its R, G and B; map_server's rules
+then apply: p = (255 - grey) / 255 (grey / 255 with --negate), p >
+occupied_thresh lethal, p < free_thresh free, otherwise unknown. A bare
+.png gets --resolution (default 1 m) and origin (0, 0); a YAML's values
+come from the YAML. maps export writes FILE by its extension: .map as Moving
+AI ('.' free, 'S' weighted, '@' inscribed or lethal, 'O' unknown), or
+.yaml/.yml plus a .pgm of the same name (map_server trinary: 254 free or
+weighted, 0 inscribed or lethal, 205 unknown). Weighted costs, inscribed and
+(in a .map) unknown cells do not survive the round trip; export warns with
+their counts on stderr.
 
 exit codes:
   0  success
@@ -2248,6 +2578,7 @@ exit codes:
   6  DEADLINE_EXCEEDED: the call ran past --timeout
   7  NOT_FOUND: the map (or a local file named on the line) does not exist
   8  UNAUTHENTICATED or PERMISSION_DENIED (also a local file not writable)
+     (render --plan: 3 when the plan found no path; the map is still drawn)
 
 )",
       kNavigateScriptHelp);
@@ -2362,6 +2693,7 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (command == "batch") return Batch(env, rest);
   if (command == "bench") return Bench(env, rest);
   if (command == "completion") return Completion(env, rest);
+  if (command == "render") return Render(env, rest);
   if (command == "help") {
     out << UsageText();
     return kExitOk;
@@ -2370,6 +2702,10 @@ int Run(const Options& options, const std::vector<std::string>& args,
                                 "'; expected maps, plan, navigate, cost-to-go, "
                                 "check, cache-stats, health, metrics, batch, bench or "
                                 "completion"));
+  return env.Usage(absl::StrCat(
+      "unknown command '", command,
+      "'; expected maps, plan, navigate, cost-to-go, "
+      "check, cache-stats, health, metrics, batch, bench or render"));
 }
 
 }  // namespace pathd::pathctl

@@ -159,6 +159,19 @@ struct Options {
   int64_t requests = 0;
   std::string movingai;
   uint64_t seed = 1;
+  // render: --plan (SX SY GX GY follow NAME), the PNG to write (-o / --out;
+  // empty: none), text instead of or as well as the PNG, pixels per cell (0:
+  // automatic) and row 0 at the bottom.
+  bool plan = false;
+  std::string out;
+  bool ascii = false;
+  int scale = 0;
+  bool y_up = false;
+  // maps import of a .png: map_server's thresholds (unset: 0.65 / 0.196) and
+  // colour inversion.
+  std::optional<double> occupied_thresh;
+  std::optional<double> free_thresh;
+  bool negate = false;
 };
 
 // One item of a `pathctl batch` file.

@@ -92,6 +92,19 @@ ABSL_FLAG(int64_t, requests, 0, "bench: stop after N measured requests (0: no li
 ABSL_FLAG(std::string, movingai, "",
           "bench: load this Moving AI .map and take queries from its .scen");
 ABSL_FLAG(uint64_t, seed, 1, "bench: seed of the random queries and the shuffle");
+ABSL_FLAG(bool, plan, false,
+          "render: plan from SX SY to GX GY and draw the path");
+ABSL_FLAG(std::string, out, "", "render: write the picture to this PNG file");
+// -o is --out's short spelling; Abseil flags have no aliases.
+ABSL_FLAG(std::string, o, "", "render: the same as --out");
+ABSL_FLAG(bool, ascii, false, "render: print the picture as text");
+ABSL_FLAG(int, scale, 0, "render: pixels per cell, 1..64 (0: automatic)");
+ABSL_FLAG(bool, y_up, false, "render: draw row 0 at the bottom (world y up)");
+ABSL_FLAG(std::optional<double>, occupied_thresh, std::nullopt,
+          "maps import of a .png: occupied above this (default 0.65)");
+ABSL_FLAG(std::optional<double>, free_thresh, std::nullopt,
+          "maps import of a .png: free below this (default 0.196)");
+ABSL_FLAG(bool, negate, false, "maps import of a .png: dark is free");
 
 int main(int argc, char** argv) {
   namespace pathctl = pathd::pathctl;
@@ -183,6 +196,22 @@ int main(int argc, char** argv) {
   options.requests = absl::GetFlag(FLAGS_requests);
   options.movingai = absl::GetFlag(FLAGS_movingai);
   options.seed = absl::GetFlag(FLAGS_seed);
+  options.plan = absl::GetFlag(FLAGS_plan);
+  const std::string out = absl::GetFlag(FLAGS_out);
+  const std::string o = absl::GetFlag(FLAGS_o);
+  if (!out.empty() && !o.empty() && out != o) {
+    std::cerr << "error: give -o or --out, not both\n\n"
+              << pathctl::SynopsisText()
+              << "run 'pathctl --help' for details\n";
+    return pathctl::kExitUsage;
+  }
+  options.out = out.empty() ? o : out;
+  options.ascii = absl::GetFlag(FLAGS_ascii);
+  options.scale = absl::GetFlag(FLAGS_scale);
+  options.y_up = absl::GetFlag(FLAGS_y_up);
+  options.occupied_thresh = absl::GetFlag(FLAGS_occupied_thresh);
+  options.free_thresh = absl::GetFlag(FLAGS_free_thresh);
+  options.negate = absl::GetFlag(FLAGS_negate);
 
   return pathctl::Run(
       options,
