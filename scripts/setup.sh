@@ -10,6 +10,7 @@ PACKAGES=(
   prometheus-cpp-dev libcurl4-openssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
+  openssl libssl-dev
 )
 
 missing=()
