@@ -1,12 +1,21 @@
 // Implementation of the pathd client wrappers.
 #include "client/client.h"
 
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
 #include <utility>
+#include <vector>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/strip.h"
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
+#include "grpcpp/support/client_interceptor.h"
 
 namespace pathd::client {
 namespace {
@@ -22,7 +31,162 @@ absl::StatusOr<Response> Invoke(absl::Duration timeout, Call&& call) {
   return response;
 }
 
+// Adds "authorization: Bearer <token>" to the initial metadata of every call
+// on its channel, unary and streaming alike.
+class BearerTokenInterceptor : public grpc::experimental::Interceptor {
+ public:
+  explicit BearerTokenInterceptor(std::shared_ptr<const std::string> header)
+      : header_(std::move(header)) {}
+
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+      methods->GetSendInitialMetadata()->emplace("authorization", *header_);
+    }
+    methods->Proceed();
+  }
+
+ private:
+  std::shared_ptr<const std::string> header_;
+};
+
+class BearerTokenInterceptorFactory
+    : public grpc::experimental::ClientInterceptorFactoryInterface {
+ public:
+  explicit BearerTokenInterceptorFactory(const std::string& token)
+      : header_(std::make_shared<const std::string>(absl::StrCat("Bearer ", token))) {}
+
+  grpc::experimental::Interceptor* CreateClientInterceptor(
+      grpc::experimental::ClientRpcInfo* /*info*/) override {
+    return new BearerTokenInterceptor(header_);
+  }
+
+ private:
+  std::shared_ptr<const std::string> header_;
+};
+
+// A file named by flag `flag`, with the flag in the error message.
+absl::StatusOr<std::string> ReadFlagFile(absl::string_view flag,
+                                         const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    return absl::NotFoundError(
+        absl::StrCat("--", flag, ": cannot open ", path, ": ", std::strerror(errno)));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) {
+    return absl::InternalError(absl::StrCat("--", flag, ": error reading ", path));
+  }
+  return text.str();
+}
+
+// Visible ASCII only: what a Bearer token in an HTTP/2 header can hold.
+bool IsTokenText(absl::string_view token) {
+  return !token.empty() && std::all_of(token.begin(), token.end(), [](char c) {
+    return c >= 0x21 && c <= 0x7e;
+  });
+}
+
 }  // namespace
+
+absl::StatusOr<ClientCredentials> LoadClientCredentials(
+    const CredentialSources& sources) {
+  if (sources.tls_cert.empty() != sources.tls_key.empty()) {
+    return absl::InvalidArgumentError(
+        "--tls_cert and --tls_key must be given together (mutual TLS)");
+  }
+  if (sources.tls_ca.empty()) {
+    for (const auto& [flag, value] :
+         {std::pair<absl::string_view, const std::string&>{"tls_cert", sources.tls_cert},
+          {"tls_server_name", sources.tls_server_name}}) {
+      if (!value.empty()) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            "--", flag, " needs --tls_ca (the CA that signed the server's "
+            "certificate), which turns TLS on"));
+      }
+    }
+  }
+  if (!sources.token.empty() && !sources.token_file.empty()) {
+    return absl::InvalidArgumentError("give --token or --token_file, not both");
+  }
+  ClientCredentials credentials;
+  credentials.tls_server_name = sources.tls_server_name;
+  if (!sources.tls_ca.empty()) {
+    absl::StatusOr<std::string> pem = ReadFlagFile("tls_ca", sources.tls_ca);
+    if (!pem.ok()) return pem.status();
+    credentials.tls_ca_pem = *std::move(pem);
+  }
+  if (!sources.tls_cert.empty()) {
+    absl::StatusOr<std::string> cert = ReadFlagFile("tls_cert", sources.tls_cert);
+    if (!cert.ok()) return cert.status();
+    absl::StatusOr<std::string> key = ReadFlagFile("tls_key", sources.tls_key);
+    if (!key.ok()) return key.status();
+    credentials.tls_cert_pem = *std::move(cert);
+    credentials.tls_key_pem = *std::move(key);
+  }
+  absl::string_view flag = "token";
+  std::string token = sources.token;
+  if (!sources.token_file.empty()) {
+    flag = "token_file";
+    absl::StatusOr<std::string> text = ReadFlagFile(flag, sources.token_file);
+    if (!text.ok()) return text.status();
+    token = std::string(absl::StripAsciiWhitespace(*text));
+    if (token.empty()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--token_file: ", sources.token_file, " is empty"));
+    }
+  }
+  if (!token.empty() && !IsTokenText(token)) {
+    // Describes the token without printing it.
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--", flag, ": a token may hold only visible ASCII characters (no "
+        "spaces or line breaks inside)"));
+  }
+  credentials.token = std::move(token);
+  return credentials;
+}
+
+std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
+                                           const ClientCredentials& credentials,
+                                           grpc::ChannelArguments args) {
+  // As in MakeChannel(address): whole maps and cost-to-go fields exceed
+  // gRPC's default 4 MiB receive limit.
+  args.SetMaxReceiveMessageSize(-1);
+  std::shared_ptr<grpc::ChannelCredentials> transport =
+      grpc::InsecureChannelCredentials();
+  if (!credentials.tls_ca_pem.empty()) {
+    grpc::SslCredentialsOptions ssl;
+    ssl.pem_root_certs = credentials.tls_ca_pem;
+    ssl.pem_cert_chain = credentials.tls_cert_pem;
+    ssl.pem_private_key = credentials.tls_key_pem;
+    transport = grpc::SslCredentials(ssl);
+    if (!credentials.tls_server_name.empty()) {
+      args.SetSslTargetNameOverride(credentials.tls_server_name);
+    }
+  }
+  std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>>
+      interceptors;
+  if (!credentials.token.empty()) {
+    interceptors.push_back(
+        std::make_unique<BearerTokenInterceptorFactory>(credentials.token));
+  }
+  return grpc::experimental::CreateCustomChannelWithInterceptors(
+      address, transport, args, std::move(interceptors));
+}
+
+bool IsLoopbackAddress(const std::string& address) {
+  absl::string_view host = address;
+  if (absl::StartsWith(host, "unix:") || absl::StartsWith(host, "unix-abstract:")) {
+    return true;
+  }
+  absl::ConsumePrefix(&host, "dns:///");
+  absl::ConsumePrefix(&host, "ipv4:");
+  absl::ConsumePrefix(&host, "ipv6:");
+  if (absl::StartsWith(host, "[::1]")) return true;
+  host = host.substr(0, host.rfind(':'));
+  return host == "localhost" || absl::StartsWith(host, "127.");
+}
 
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address) {
   grpc::ChannelArguments args;

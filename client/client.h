@@ -13,6 +13,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpcpp/channel.h"
 #include "grpcpp/client_context.h"
+#include "grpcpp/support/channel_arguments.h"
 #include "grpcpp/support/status.h"
 #include "grpcpp/support/sync_stream.h"
 #include "pathd/v1/map_service.grpc.pb.h"
@@ -26,8 +27,60 @@ inline constexpr char kDefaultServerAddress[] = "127.0.0.1:50051";
 inline constexpr absl::Duration kDefaultTimeout = absl::Seconds(10);
 
 // Opens a channel to `address` ("host:port", or any gRPC target URI).
-// Insecure for now: TLS and auth tokens arrive with the server's support.
+// Plaintext, no token; the overload below adds TLS and a token.
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address);
+
+// How a client reaches a pathd that uses TLS and / or tokens. All empty =
+// plaintext without a token, as MakeChannel(address).
+struct ClientCredentials {
+  // PEM CA certificate(s) the server's certificate must chain to; non-empty
+  // turns TLS on.
+  std::string tls_ca_pem;
+  // PEM client certificate chain and key, for a server with --tls_client_ca
+  // (mutual TLS); both or neither, and only with tls_ca_pem.
+  std::string tls_cert_pem;
+  std::string tls_key_pem;
+  // The name the server's certificate must carry when it differs from the
+  // address's host (e.g. the certificate says "pathd.internal" and the
+  // client dials an IP); empty = the address's host.
+  std::string tls_server_name;
+  // Sent as "authorization: Bearer <token>" on every call, streams included;
+  // empty = none. Without TLS anyone on the network path can read it.
+  std::string token;
+};
+
+// Where ClientCredentials come from, as pathctl's flags name them: file
+// paths (tls_*), the token itself or a file holding it.
+struct CredentialSources {
+  std::string tls_ca;
+  std::string tls_cert;
+  std::string tls_key;
+  std::string tls_server_name;
+  std::string token;
+  // One line holding the token (surrounding whitespace ignored); preferred
+  // over `token`, since a command line is visible to other local users.
+  std::string token_file;
+};
+
+// Reads the files `sources` names. INVALID_ARGUMENT naming the flags for a
+// cert without key (or the reverse), a client certificate, key or server
+// name without tls_ca, both token and token_file, or a token that is empty
+// or has characters a header cannot carry; NOT_FOUND / INTERNAL naming the
+// file when one cannot be read. Messages never contain the token.
+absl::StatusOr<ClientCredentials> LoadClientCredentials(
+    const CredentialSources& sources);
+
+// Opens a channel to `address` with `credentials`: TLS when tls_ca_pem is
+// set, the token added to every call by a client interceptor. An interceptor
+// rather than gRPC call credentials, because gRPC refuses to send call
+// credentials over a plaintext channel, and pathd accepts tokens on both.
+std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
+                                           const ClientCredentials& credentials,
+                                           grpc::ChannelArguments args = {});
+
+// True when `address` names this machine (localhost, 127.x, [::1], unix:),
+// where a token sent without TLS never crosses a network.
+bool IsLoopbackAddress(const std::string& address);
 
 // A context whose deadline is `timeout` from now. Returned by pointer because
 // grpc::ClientContext can be neither copied nor moved.

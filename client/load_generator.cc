@@ -12,8 +12,6 @@
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/notification.h"
 #include "grpc/grpc.h"
-#include "grpcpp/create_channel.h"
-#include "grpcpp/security/credentials.h"
 #include "grpcpp/support/channel_arguments.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 
@@ -187,6 +185,15 @@ absl::StatusOr<LoadReport> RunPlanLoad(
     const std::string& address, int channels, absl::Duration timeout,
     const std::vector<v1::PlanRequest>& requests, const LoadOptions& options,
     const std::function<void(const LoadProgress&)>& progress) {
+  return RunPlanLoad(address, ClientCredentials{}, channels, timeout, requests,
+                     options, progress);
+}
+
+absl::StatusOr<LoadReport> RunPlanLoad(
+    const std::string& address, const ClientCredentials& credentials, int channels,
+    absl::Duration timeout, const std::vector<v1::PlanRequest>& requests,
+    const LoadOptions& options,
+    const std::function<void(const LoadProgress&)>& progress) {
   if (requests.empty()) return absl::InvalidArgumentError("no requests to send");
   if (channels < 1) {
     return absl::InvalidArgumentError(
@@ -195,12 +202,11 @@ absl::StatusOr<LoadReport> RunPlanLoad(
   std::vector<std::unique_ptr<v1::PlannerService::Stub>> stubs;
   for (int c = 0; c < channels; ++c) {
     grpc::ChannelArguments args;
-    args.SetMaxReceiveMessageSize(-1);
     // Channels with equal arguments would share one connection through
     // gRPC's global subchannel pool; a local pool gives each its own.
     args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-    stubs.push_back(v1::PlannerService::NewStub(
-        grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args)));
+    stubs.push_back(
+        v1::PlannerService::NewStub(MakeChannel(address, credentials, args)));
   }
   // One response per worker, reused: parsing into it clears it first.
   std::vector<v1::PlanResponse> responses(

@@ -15,6 +15,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "client/client.h"
 #include "pathd/v1/planner_service.pb.h"
 
 namespace pathd::client {
@@ -111,6 +112,12 @@ absl::StatusOr<LoadReport> RunClosedLoop(
 absl::StatusOr<LoadReport> RunPlanLoad(
     const std::string& address, int channels, absl::Duration timeout,
     const std::vector<v1::PlanRequest>& requests, const LoadOptions& options,
+    const std::function<void(const LoadProgress&)>& progress = nullptr);
+// The same over TLS and / or with a token (client/client.h MakeChannel).
+absl::StatusOr<LoadReport> RunPlanLoad(
+    const std::string& address, const ClientCredentials& credentials, int channels,
+    absl::Duration timeout, const std::vector<v1::PlanRequest>& requests,
+    const LoadOptions& options,
     const std::function<void(const LoadProgress&)>& progress = nullptr);
 
 }  // namespace pathd::client

@@ -116,11 +116,33 @@ class Env {
 
   const client::PathdClient& client() {
     if (client_ == nullptr) {
-      client_ = std::make_unique<client::PathdClient>(options_.server,
-                                                      options_.timeout);
+      client_ = std::make_unique<client::PathdClient>(
+          client::MakeChannel(options_.server, credentials_), options_.timeout);
     }
     return *client_;
   }
+
+  // Reads the TLS and token files once, before any command connects;
+  // a message on `err` and the exit code when they are unusable.
+  std::optional<int> LoadCredentials() {
+    absl::StatusOr<client::ClientCredentials> credentials =
+        client::LoadClientCredentials(options_.credentials);
+    if (!credentials.ok()) {
+      return absl::IsInvalidArgument(credentials.status())
+                 ? Usage(credentials.status().message())
+                 : Fail(credentials.status());
+    }
+    credentials_ = *std::move(credentials);
+    if (!credentials_.token.empty() && credentials_.tls_ca_pem.empty() &&
+        !client::IsLoopbackAddress(options_.server)) {
+      err_ << "warning: sending the token without TLS: anyone on the network "
+              "path to "
+           << options_.server << " can read it; use --tls_ca\n";
+    }
+    return std::nullopt;
+  }
+
+  const client::ClientCredentials& credentials() const { return credentials_; }
 
   int Usage(absl::string_view problem) {
     err_ << "error: " << problem << "\n\n"
@@ -163,6 +185,7 @@ class Env {
   std::ostream& out_;
   std::ostream& err_;
   std::unique_ptr<client::PathdClient> client_;
+  client::ClientCredentials credentials_;
 };
 
 absl::Status BadArg(absl::string_view what, absl::string_view text,
@@ -1963,8 +1986,8 @@ int Bench(Env& env, Args args) {
     progress = [&bar](const client::LoadProgress& p) { bar.Update(p); };
   }
   absl::StatusOr<client::LoadReport> report =
-      client::RunPlanLoad(options.server, options.channels, options.timeout,
-                          queries->requests, load, progress);
+      client::RunPlanLoad(options.server, env.credentials(), options.channels,
+                          options.timeout, queries->requests, load, progress);
   bar.Close(report);
   if (!report.ok()) return env.Fail(report.status());
   if (options.json) return PrintBenchJson(env, name, queries->source, *report);
@@ -2388,6 +2411,19 @@ flags (anywhere on the line, as --flag=value or --flag value):
                        row, then rows: see "output formats")
   --no_progress        no progress bars (batch, bench, maps create --from);
                        they show only when stdout and stderr are terminals
+  --tls_ca FILE        use TLS, trusting the server certificate if this PEM
+                       CA (or the self-signed certificate itself) signed it
+  --tls_cert FILE, --tls_key FILE
+                       client certificate and key (PEM) for a pathd with
+                       --tls_client_ca (mutual TLS); need --tls_ca
+  --tls_server_name N  the name the server's certificate carries, when it
+                       differs from the --server host (e.g. dialing an IP)
+  --token_file FILE    send the token in FILE as 'authorization: Bearer ...'
+                       on every call (for a pathd with --auth_tokens)
+  --token T            the token itself (visible in the process list: prefer
+                       --token_file); default $PATHD_TOKEN. Without --tls_ca
+                       the token crosses the network in clear text (pathctl
+                       warns unless the server is on this machine)
   --from FILE          maps create: .map is sent as Moving AI text; .yaml/.yml
                        as a ROS map_server map (the YAML plus the image it
                        names, relative to the YAML's folder)
@@ -2682,6 +2718,10 @@ int Run(const Options& options, const std::vector<std::string>& args,
   if (args.empty()) return env.Usage("missing command");
   const std::string& command = args[0];
   Args rest = Args(args).subspan(1);
+  // metrics is plain HTTP to the metrics port: no TLS, no token.
+  if (command != "help" && command != "metrics") {
+    if (std::optional<int> failed = env.LoadCredentials()) return *failed;
+  }
   if (command == "maps") return Maps(env, rest);
   if (command == "plan") return Plan(env, rest);
   if (command == "navigate") return Navigate(env, rest);

@@ -44,6 +44,9 @@ int ExitCodeForStatus(absl::StatusCode code);
 
 // Environment variable naming the server when --server is not given.
 inline constexpr char kServerEnvVar[] = "PATHD_SERVER";
+// Environment variable holding the token when neither --token nor
+// --token_file is given.
+inline constexpr char kTokenEnvVar[] = "PATHD_TOKEN";
 
 // Where `pathctl metrics` looks when --metrics_address is not given: the
 // address the README runs `pathd --metrics_address` with.
@@ -82,6 +85,10 @@ absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name);
 // Every option a command may read, already parsed from flags.
 struct Options {
   std::string server = client::kDefaultServerAddress;
+  // TLS and token: --tls_ca, --tls_cert, --tls_key, --tls_server_name,
+  // --token, --token_file (or $PATHD_TOKEN); read when a command first
+  // connects.
+  client::CredentialSources credentials;
   absl::Duration timeout = client::kDefaultTimeout;
   // How results print (--output; --json is --output=json).
   OutputFormat output = OutputFormat::kTable;

@@ -22,6 +22,17 @@ ABSL_FLAG(std::string, server, "",
           "pathd address; default $PATHD_SERVER, else 127.0.0.1:50051");
 ABSL_FLAG(absl::Duration, timeout, pathd::client::kDefaultTimeout,
           "deadline of each call");
+ABSL_FLAG(std::string, tls_ca, "",
+          "PEM CA certificate of the server; turns TLS on");
+ABSL_FLAG(std::string, tls_cert, "",
+          "PEM client certificate for mutual TLS (needs --tls_key, --tls_ca)");
+ABSL_FLAG(std::string, tls_key, "", "PEM key of --tls_cert");
+ABSL_FLAG(std::string, tls_server_name, "",
+          "name the server certificate carries, if not the --server host");
+ABSL_FLAG(std::string, token, "",
+          "bearer token sent on every call; default $PATHD_TOKEN");
+ABSL_FLAG(std::string, token_file, "",
+          "file holding the bearer token (preferred over --token)");
 ABSL_FLAG(bool, json, false, "print the response message as JSON");
 ABSL_FLAG(std::string, output, "",
           "output format: table (default), json or csv (--json = --output=json)");
@@ -152,6 +163,17 @@ int main(int argc, char** argv) {
   options.progress_bars = pathctl::ProgressBarsWanted(
       isatty(STDOUT_FILENO) != 0, isatty(STDERR_FILENO) != 0,
       absl::GetFlag(FLAGS_no_progress));
+  options.credentials.tls_ca = absl::GetFlag(FLAGS_tls_ca);
+  options.credentials.tls_cert = absl::GetFlag(FLAGS_tls_cert);
+  options.credentials.tls_key = absl::GetFlag(FLAGS_tls_key);
+  options.credentials.tls_server_name = absl::GetFlag(FLAGS_tls_server_name);
+  options.credentials.token = absl::GetFlag(FLAGS_token);
+  options.credentials.token_file = absl::GetFlag(FLAGS_token_file);
+  if (options.credentials.token.empty() && options.credentials.token_file.empty()) {
+    if (const char* token = std::getenv(pathctl::kTokenEnvVar)) {
+      options.credentials.token = token;
+    }
+  }
   options.from = absl::GetFlag(FLAGS_from);
   options.replace = absl::GetFlag(FLAGS_replace);
   options.resolution = absl::GetFlag(FLAGS_resolution);

@@ -13,6 +13,7 @@ PACKAGES=(
   python3
   python3-grpcio python3-protobuf
   libcsv-dev
+  openssl libssl-dev
 )
 
 missing=()

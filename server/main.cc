@@ -100,6 +100,23 @@ ABSL_FLAG(absl::Duration, slow_request_threshold, absl::Seconds(1),
           "are logged at warn level and counted in pathd_slow_requests_total; "
           "0 = off");
 
+ABSL_FLAG(std::string, tls_cert, "",
+          "PEM certificate chain (server certificate first) to serve gRPC over "
+          "TLS; needs --tls_key; empty = plaintext. The --metrics_address "
+          "endpoint stays plain HTTP");
+ABSL_FLAG(std::string, tls_key, "",
+          "PEM private key of --tls_cert (unencrypted); needs --tls_cert");
+ABSL_FLAG(std::string, tls_client_ca, "",
+          "PEM CA certificate(s) for mutual TLS: clients must present a "
+          "certificate signed by one of them; needs --tls_cert; empty = no "
+          "client certificates");
+ABSL_FLAG(std::string, auth_tokens, "",
+          "YAML file mapping bearer tokens to roles (read, write, admin; see "
+          "README 'Security'); calls without a valid 'authorization: Bearer "
+          "<token>' get UNAUTHENTICATED, calls beyond the token's role "
+          "PERMISSION_DENIED; Health needs no token; empty = no "
+          "authentication");
+
 namespace {
 
 // absl 20220623's --help lists only flags from a file named after the binary
@@ -265,6 +282,18 @@ pathd::server::ServerOptions OptionsFromFlags() {
   if (options.slow_request_threshold < absl::ZeroDuration()) {
     FlagError("slow_request_threshold", "must not be negative");
   }
+  options.tls_cert = absl::GetFlag(FLAGS_tls_cert);
+  options.tls_key = absl::GetFlag(FLAGS_tls_key);
+  options.tls_client_ca = absl::GetFlag(FLAGS_tls_client_ca);
+  if (options.tls_cert.empty() != options.tls_key.empty()) {
+    FlagError(options.tls_cert.empty() ? "tls_key" : "tls_cert",
+              options.tls_cert.empty() ? "needs --tls_cert (both or neither)"
+                                       : "needs --tls_key (both or neither)");
+  }
+  if (!options.tls_client_ca.empty() && options.tls_cert.empty()) {
+    FlagError("tls_client_ca", "needs --tls_cert and --tls_key");
+  }
+  options.auth_tokens = absl::GetFlag(FLAGS_auth_tokens);
   return options;
 }
 

@@ -37,10 +37,12 @@ absl::Status ApplyRequestPose(const v1::CreateMapRequest& request, Grid& grid) {
 }  // namespace
 
 MapServiceImpl::MapServiceImpl(MapStore& store, std::string map_dir,
-                               MapWatchers::Options watch_options)
+                               MapWatchers::Options watch_options,
+                               const TokenAuthenticator* authenticator)
     : store_(store),
       map_dir_(std::move(map_dir)),
-      watchers_(store, watch_options) {}
+      watchers_(store, watch_options),
+      authenticator_(authenticator) {}
 
 absl::StatusOr<Grid> MapServiceImpl::BuildGrid(
     const v1::CreateMapRequest& request) const {
@@ -96,6 +98,9 @@ absl::Status MapServiceImpl::DoCreateMap(const v1::CreateMapRequest& request,
 grpc::ServerUnaryReactor* MapServiceImpl::CreateMap(
     grpc::CallbackServerContext* context, const v1::CreateMapRequest* request,
     v1::CreateMapResponse* response) {
+  if (auto* refused = RefuseUnauthorized(authenticator_, context, kMethodCreateMap)) {
+    return refused;
+  }
   const absl::Time received = absl::Now();
   const absl::Status status = DoCreateMap(*request, response);
   LogRequest("CreateMap", request->name(),
@@ -119,6 +124,9 @@ absl::Status MapServiceImpl::DoGetMap(const v1::GetMapRequest& request,
 grpc::ServerUnaryReactor* MapServiceImpl::GetMap(grpc::CallbackServerContext* context,
                                                  const v1::GetMapRequest* request,
                                                  v1::GetMapResponse* response) {
+  if (auto* refused = RefuseUnauthorized(authenticator_, context, kMethodGetMap)) {
+    return refused;
+  }
   const absl::Time received = absl::Now();
   const absl::Status status = DoGetMap(*request, response);
   LogRequest("GetMap", request->name(), "", status, received);
@@ -128,6 +136,9 @@ grpc::ServerUnaryReactor* MapServiceImpl::GetMap(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* MapServiceImpl::ListMaps(
     grpc::CallbackServerContext* context, const v1::ListMapsRequest* /*request*/,
     v1::ListMapsResponse* response) {
+  if (auto* refused = RefuseUnauthorized(authenticator_, context, kMethodListMaps)) {
+    return refused;
+  }
   const absl::Time received = absl::Now();
   for (const auto& snapshot : store_.List()) {
     FillMapInfo(*snapshot, response->add_maps());
@@ -140,6 +151,9 @@ grpc::ServerUnaryReactor* MapServiceImpl::ListMaps(
 grpc::ServerUnaryReactor* MapServiceImpl::DeleteMap(
     grpc::CallbackServerContext* context, const v1::DeleteMapRequest* request,
     v1::DeleteMapResponse* response) {
+  if (auto* refused = RefuseUnauthorized(authenticator_, context, kMethodDeleteMap)) {
+    return refused;
+  }
   const absl::Time received = absl::Now();
   absl::StatusOr<uint64_t> last = store_.Delete(request->name());
   if (last.ok()) response->set_last_version(*last);
@@ -163,6 +177,9 @@ absl::Status MapServiceImpl::DoUpdateMap(const v1::UpdateMapRequest& request,
 grpc::ServerUnaryReactor* MapServiceImpl::UpdateMap(
     grpc::CallbackServerContext* context, const v1::UpdateMapRequest* request,
     v1::UpdateMapResponse* response) {
+  if (auto* refused = RefuseUnauthorized(authenticator_, context, kMethodUpdateMap)) {
+    return refused;
+  }
   const absl::Time received = absl::Now();
   const absl::Status status = DoUpdateMap(*request, response);
   LogRequest("UpdateMap", request->name(),
@@ -174,6 +191,10 @@ grpc::ServerUnaryReactor* MapServiceImpl::UpdateMap(
 
 grpc::ServerWriteReactor<v1::MapEvent>* MapServiceImpl::WatchMap(
     grpc::CallbackServerContext* context, const v1::WatchMapRequest* request) {
+  if (auto* refused = RefuseUnauthorized<grpc::ServerWriteReactor<v1::MapEvent>>(
+          authenticator_, context, kMethodWatchMap)) {
+    return refused;
+  }
   return watchers_.Start(context, *request);
 }
 

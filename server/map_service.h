@@ -9,6 +9,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "pathd/v1/map_service.grpc.pb.h"
+#include "server/auth.h"
 #include "server/map_store.h"
 #include "server/map_watch.h"
 
@@ -20,8 +21,11 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
  public:
   // map_dir: the --map_dir used for CreateMap.map_dir_file; empty = none.
   // Registers WatchMap's store listener, so construct before serving.
+  // `authenticator` checks every call's token (--auth_tokens); null = none;
+  // it must outlive the service.
   MapServiceImpl(MapStore& store, std::string map_dir,
-                 MapWatchers::Options watch_options = {});
+                 MapWatchers::Options watch_options = {},
+                 const TokenAuthenticator* authenticator = nullptr);
 
   grpc::ServerUnaryReactor* CreateMap(grpc::CallbackServerContext* context,
                                       const v1::CreateMapRequest* request,
@@ -59,6 +63,7 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
   MapStore& store_;
   const std::string map_dir_;
   MapWatchers watchers_;
+  const TokenAuthenticator* const authenticator_;
 };
 
 }  // namespace pathd::server

@@ -35,8 +35,12 @@ using NavigateReactor = grpc::ServerBidiReactor<v1::NavigateRequest, v1::Navigat
 
 class NavigationSession final : public NavigateReactor {
  public:
-  NavigationSession(NavigationSessions& owner, uint64_t id)
-      : owner_(owner), id_(id), opened_at_(absl::Now()) {
+  NavigationSession(NavigationSessions& owner, uint64_t id,
+                    absl::Status shared_observations)
+      : owner_(owner),
+        id_(id),
+        opened_at_(absl::Now()),
+        shared_observations_(std::move(shared_observations)) {
     absl::MutexLock lock(&mu_);
     last_activity_ = opened_at_;
   }
@@ -362,6 +366,7 @@ class NavigationSession final : public NavigateReactor {
       return absl::InvalidArgumentError("observation has no changes");
     }
     if (!observe.session_only()) {
+      PATHD_RETURN_IF_ERROR(shared_observations_);
       PATHD_ASSIGN_OR_RETURN(const MapUpdateResult result,
                              owner_.store_.Update(snapshot_->name, changes, std::nullopt));
       PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
@@ -477,6 +482,8 @@ class NavigationSession final : public NavigateReactor {
   NavigationSessions& owner_;
   const uint64_t id_;
   const absl::Time opened_at_;
+  // What a shared observation gets: OK, or the caller's PERMISSION_DENIED.
+  const absl::Status shared_observations_;
   std::atomic<bool> cancelled_{false};
   std::atomic<int64_t> bytes_{0};
 
@@ -553,13 +560,14 @@ void NavigationSessions::Shutdown() {
 }
 
 grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>*
-NavigationSessions::Start(grpc::CallbackServerContext* /*context*/) {
+NavigationSessions::Start(grpc::CallbackServerContext* /*context*/,
+                          absl::Status shared_observations) {
   uint64_t id;
   {
     absl::MutexLock lock(&mu_);
     id = next_id_++;
   }
-  auto* session = new NavigationSession(*this, id);
+  auto* session = new NavigationSession(*this, id, std::move(shared_observations));
   session->Begin(Add(session));
   return session;
 }

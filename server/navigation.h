@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
@@ -53,8 +54,12 @@ class NavigationSessions {
   NavigationSessions& operator=(const NavigationSessions&) = delete;
 
   // The reactor for one Navigate call (gRPC deletes it when done).
+  // `shared_observations`: what an observation that would update the shared
+  // map (session_only = false) gets instead; OK = allowed, else the session
+  // ends with it (e.g. PERMISSION_DENIED for a read-only token).
   grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>* Start(
-      grpc::CallbackServerContext* context);
+      grpc::CallbackServerContext* context,
+      absl::Status shared_observations = absl::OkStatus());
 
   // Refuses new sessions and ends every open one with UNAVAILABLE (after the
   // message it is handling, if any), so a draining server need not wait for

@@ -1310,12 +1310,23 @@ PlannerServiceImpl::PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
 
 grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>*
 PlannerServiceImpl::Navigate(grpc::CallbackServerContext* context) {
-  return sessions_.Start(context);
+  if (auto* refused = RefuseUnauthorized<
+          grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>>(
+          options_.authenticator, context, kMethodNavigate)) {
+    return refused;
+  }
+  // Decided now, while the call's metadata is at hand; the session applies
+  // it to each observation that would write the shared map.
+  return sessions_.Start(context, Authorize(options_.authenticator, *context,
+                                            kNavigateSharedObservation));
 }
 
 grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
     grpc::CallbackServerContext* context, const v1::PlanRequest* request,
     v1::PlanResponse* response) {
+  if (auto* refused = RefuseUnauthorized(options_.authenticator, context, kMethodPlan)) {
+    return refused;
+  }
   auto call = std::make_shared<PlanCall>();
   call->received = absl::Now();
   call->request = request;
@@ -1342,6 +1353,10 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Plan(
 grpc::ServerUnaryReactor* PlannerServiceImpl::CostToGo(
     grpc::CallbackServerContext* context, const v1::CostToGoRequest* request,
     v1::CostToGoResponse* response) {
+  if (auto* refused =
+          RefuseUnauthorized(options_.authenticator, context, kMethodCostToGo)) {
+    return refused;
+  }
   auto call = std::make_shared<CostToGoCall>();
   call->received = absl::Now();
   call->request = request;
@@ -1368,6 +1383,10 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::CostToGo(
 grpc::ServerUnaryReactor* PlannerServiceImpl::IsPathValid(
     grpc::CallbackServerContext* context, const v1::IsPathValidRequest* request,
     v1::IsPathValidResponse* response) {
+  if (auto* refused =
+          RefuseUnauthorized(options_.authenticator, context, kMethodIsPathValid)) {
+    return refused;
+  }
   auto call = std::make_shared<PathCheckCall>();
   call->received = absl::Now();
   call->request = request;
@@ -1422,6 +1441,10 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::IsPathValid(
 grpc::ServerUnaryReactor* PlannerServiceImpl::GetCacheStats(
     grpc::CallbackServerContext* context, const v1::GetCacheStatsRequest* /*request*/,
     v1::GetCacheStatsResponse* response) {
+  if (auto* refused =
+          RefuseUnauthorized(options_.authenticator, context, kMethodGetCacheStats)) {
+    return refused;
+  }
   const absl::Time received = absl::Now();
   for (const IncrementalCache::Kind kind :
        {IncrementalCache::Kind::kSpm, IncrementalCache::Kind::kDStarLite}) {
@@ -1437,6 +1460,10 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::GetCacheStats(
 
 grpc::ServerWriteReactor<v1::PlanStreamEvent>* PlannerServiceImpl::PlanStream(
     grpc::CallbackServerContext* context, const v1::PlanRequest* request) {
+  if (auto* refused = RefuseUnauthorized<grpc::ServerWriteReactor<v1::PlanStreamEvent>>(
+          options_.authenticator, context, kMethodPlanStream)) {
+    return refused;
+  }
   auto call = std::make_shared<PlanCall>();
   call->received = absl::Now();
   call->request = request;
@@ -1463,6 +1490,11 @@ grpc::ServerWriteReactor<v1::PlanStreamEvent>* PlannerServiceImpl::PlanStream(
 
 grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>*
 PlannerServiceImpl::PlanBatch(grpc::CallbackServerContext* context) {
+  if (auto* refused = RefuseUnauthorized<
+          grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>>(
+          options_.authenticator, context, kMethodPlanBatch)) {
+    return refused;
+  }
   const size_t max_inflight =
       options_.batch_max_inflight > 0
           ? static_cast<size_t>(options_.batch_max_inflight)

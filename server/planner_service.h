@@ -9,6 +9,7 @@
 
 #include "absl/time/time.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
+#include "server/auth.h"
 #include "server/incremental_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
@@ -48,6 +49,9 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     int batch_max_inflight = 0;
     // Most cells PlanResponse.expanded holds (--max_returned_expansions).
     int64_t max_returned_expansions = 1'000'000;
+    // Checks every call's token (--auth_tokens); null = none. Must outlive
+    // the service.
+    const TokenAuthenticator* authenticator = nullptr;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,

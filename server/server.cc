@@ -18,6 +18,7 @@
 #include "core/status_macros.h"
 #include "server/map_dir.h"
 #include "server/request_log.h"
+#include "server/tls.h"
 #include "spdlog/spdlog.h"
 
 namespace pathd::server {
@@ -77,6 +78,17 @@ absl::StatusOr<int> PathdServer::LoadMapDir() {
 }
 
 absl::Status PathdServer::Start() {
+  // Checked before anything starts, so a bad file leaves nothing to undo.
+  PATHD_ASSIGN_OR_RETURN(
+      const std::shared_ptr<grpc::ServerCredentials> credentials,
+      MakeServerCredentials(
+          TlsFiles{options_.tls_cert, options_.tls_key, options_.tls_client_ca}));
+  if (!options_.auth_tokens.empty()) {
+    PATHD_ASSIGN_OR_RETURN(authenticator_,
+                           TokenAuthenticator::LoadFile(options_.auth_tokens));
+    spdlog::info("--auth_tokens {}: {} token(s); Health needs none",
+                 options_.auth_tokens, authenticator_->entries().size());
+  }
   if (!options_.map_dir.empty()) {
     PATHD_ASSIGN_OR_RETURN(const int loaded, LoadMapDir());
     spdlog::info("loaded {} map(s) from --map_dir {}", loaded, options_.map_dir);
@@ -87,7 +99,8 @@ absl::Status PathdServer::Start() {
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
   map_service_ = std::make_unique<MapServiceImpl>(
-      store_, options_.map_dir, MapWatchers::Options{options_.watch_queue_events});
+      store_, options_.map_dir, MapWatchers::Options{options_.watch_queue_events},
+      authenticator_.get());
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
@@ -100,6 +113,7 @@ absl::Status PathdServer::Start() {
   planner_options.progress_interval = options_.progress_interval;
   planner_options.batch_max_inflight = options_.batch_max_inflight;
   planner_options.max_returned_expansions = options_.max_returned_expansions;
+  planner_options.authenticator = authenticator_.get();
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 
@@ -126,8 +140,7 @@ absl::Status PathdServer::Start() {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
 
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(options_.address, grpc::InsecureServerCredentials(),
-                           &port_);
+  builder.AddListeningPort(options_.address, credentials, &port_);
   builder.RegisterService(map_service_.get());
   builder.RegisterService(planner_service_.get());
   // gRPC refuses a larger request with RESOURCE_EXHAUSTED before reading it
@@ -153,6 +166,11 @@ absl::Status PathdServer::Start() {
       "batch, messages up to {} bytes",
       listen_address(), pool_->threads(), pool_->queue_depth(),
       pool_->queue_depth(WorkerPool::Priority::kBatch), max_message_bytes());
+  spdlog::info("transport: {}; authentication: {}",
+               options_.tls_cert.empty()     ? "plaintext"
+               : options_.tls_client_ca.empty() ? "TLS"
+                                                : "mutual TLS (client certificates required)",
+               authenticator_ == nullptr ? "none" : "bearer tokens");
   return absl::OkStatus();
 }
 

@@ -15,6 +15,7 @@
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "server/auth.h"
 #include "server/incremental_cache.h"
 #include "server/map_service.h"
 #include "server/map_store.h"
@@ -74,6 +75,15 @@ struct ServerOptions {
   absl::Duration progress_interval = absl::Milliseconds(100);
   // PlanBatch: items in flight per stream; 0 = twice the worker threads.
   int batch_max_inflight = 0;
+  // TLS: PEM certificate chain and key (both or neither; neither =
+  // plaintext) and the CA of client certificates (non-empty = mutual TLS).
+  // The metrics endpoint stays plain HTTP.
+  std::string tls_cert;
+  std::string tls_key;
+  std::string tls_client_ca;
+  // YAML file of tokens and their roles (server/auth.h); empty = every
+  // caller may do everything.
+  std::string auth_tokens;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -87,7 +97,8 @@ class PathdServer {
 
   // Loads every .map/.yaml in map_dir (a bad file is logged and skipped),
   // starts the pool and listens. UNAVAILABLE when the address cannot be bound;
-  // NOT_FOUND / INVALID_ARGUMENT when map_dir is missing or not a directory.
+  // NOT_FOUND / INVALID_ARGUMENT when map_dir is missing or not a directory,
+  // or a TLS or token file is missing or malformed (server/tls.h, auth.h).
   absl::Status Start();
 
   // Health NOT_SERVING, stop accepting, give in-flight calls the grace
@@ -121,6 +132,9 @@ class PathdServer {
   InflationCache inflation_;
   IncrementalCache cache_;
   std::unique_ptr<WorkerPool> pool_;
+  // Loaded from auth_tokens; null = no token checks. The services hold a
+  // pointer to it, so it is declared before them.
+  std::unique_ptr<TokenAuthenticator> authenticator_;
   // Registers a store listener: lives while the store can change.
   std::unique_ptr<NavigationSessions> sessions_;
   std::unique_ptr<MapServiceImpl> map_service_;

@@ -43,6 +43,7 @@
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/server/test_certs.h"
 
 namespace pathd {
 namespace {
@@ -2194,6 +2195,88 @@ TEST_F(E2eTest, MapsImportAndExportRoundTrip) {
   ExpectRpcError({"maps", "import", "x", (temp_dir_ / "missing.png").string()},
                  "NOT_FOUND", {"missing.png"});
   ExpectRpcError({"maps", "export", "nope", yaml}, "NOT_FOUND", {"nope"});
+}
+
+// pathd with TLS and --auth_tokens, driven by pathctl with --tls_ca and
+// --token_file / $PATHD_TOKEN; the daemon's whole log (trace level) is
+// captured and must not contain a token.
+TEST_F(E2eTest, TlsAndTokensThroughPathctl) {
+  const fs::path cert_dir = temp_dir_ / "certs";
+  fs::create_directory(cert_dir);
+  testing::TestCerts certs;
+  ASSERT_TRUE(testing::MakeTestCerts(cert_dir, &certs))
+      << "the openssl tool failed (is Debian's openssl package installed?)";
+  const std::string read_token(64, 'r');
+  const std::string write_token = "w0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcd";
+  const fs::path tokens = temp_dir_ / "tokens.yaml";
+  WriteFile(tokens, absl::StrCat("tokens:\n  - {name: robot-7, role: read, token: ",
+                                 read_token, "}\n  - {name: mapper, role: write, token: ",
+                                 write_token, "}\n"));
+  fs::permissions(tokens, fs::perms::owner_read | fs::perms::owner_write);
+  const fs::path read_file = temp_dir_ / "read.token";
+  const fs::path write_file = temp_dir_ / "write.token";
+  WriteFile(read_file, read_token + "\n");
+  WriteFile(write_file, write_token + "\n");
+
+  PathctlProcess daemon({"--address=127.0.0.1:0", "--tls_cert=" + certs.server_cert,
+                         "--tls_key=" + certs.server_key,
+                         "--auth_tokens=" + tokens.string(), "--log_level=trace"},
+                        {}, PATHD_BIN);
+  ASSERT_TRUE(daemon.WaitForLine(kListeningPrefix)) << daemon.err();
+  std::string address = daemon.out().substr(daemon.out().find(kListeningPrefix) +
+                                            strlen(kListeningPrefix));
+  address = std::string(absl::StripTrailingAsciiWhitespace(address));
+  const std::string server = "--server=" + address;
+  const std::string tls = "--tls_ca=" + certs.ca;
+
+  const std::string map = MapFile("room.map", OpenRoomMap());
+  ProcessResult r = RunPathctl({server, tls, "--token_file=" + write_file.string(),
+                                "maps", "create", "room", "--from", map});
+  ASSERT_EQ(r.exit_code, 0) << r;
+  r = RunPathctl({server, tls, "--token_file=" + read_file.string(), "plan", "room",
+                  "0", "0", "9", "9"});
+  EXPECT_EQ(r.exit_code, 0) << r;
+  EXPECT_EQ(r.err, "") << r;
+  r = RunPathctl({server, tls, "--token_file=" + read_file.string(), "maps", "set",
+                  "room", "5", "5", "lethal"});
+  EXPECT_EQ(r.exit_code, 8) << r;
+  EXPECT_EQ(r.err,
+            "error: PERMISSION_DENIED: token 'robot-7' has role read; "
+            "/pathd.v1.MapService/UpdateMap needs role write\n");
+  // The token from the environment.
+  r = RunPathctl({server, tls, "maps", "set", "room", "5", "5", "lethal"},
+                 {"PATHD_TOKEN=" + write_token});
+  EXPECT_EQ(r.exit_code, 0) << r;
+  r = RunPathctl({server, tls, "maps", "list"});
+  EXPECT_EQ(r.exit_code, 8) << r;
+  EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAUTHENTICATED: missing")) << r;
+  r = RunPathctl({server, tls, "--token=" + std::string(64, 'x'), "maps", "list"});
+  EXPECT_EQ(r.err, "error: UNAUTHENTICATED: unknown token\n") << r;
+  // Health needs no token; plaintext cannot reach a TLS server.
+  r = RunPathctl({server, tls, "health"});
+  EXPECT_EQ(r.out, "SERVING\n") << r;
+  r = RunPathctl({server, "--token_file=" + read_file.string(), "health"});
+  EXPECT_EQ(r.exit_code, 5) << r;
+  EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE")) << r;
+  // Flag mistakes are usage errors.
+  r = RunPathctl({server, tls, "--tls_cert=" + certs.client_cert, "health"});
+  EXPECT_EQ(r.exit_code, 2) << r;
+  EXPECT_TRUE(absl::StrContains(r.err, "--tls_cert and --tls_key must be given together"))
+      << r;
+  r = RunPathctl({server, "--token_file=" + (temp_dir_ / "none").string(), "health"});
+  EXPECT_EQ(r.exit_code, 7) << r;
+  EXPECT_TRUE(absl::StrContains(r.err, "--token_file: cannot open")) << r;
+
+  daemon.Signal(SIGTERM);
+  const ProcessResult log = daemon.Finish();
+  EXPECT_EQ(log.exit_code, 0) << log;
+  EXPECT_TRUE(absl::StrContains(log.err, "transport: TLS; authentication: bearer tokens"))
+      << log.err;
+  EXPECT_TRUE(absl::StrContains(log.err, "refused UpdateMap")) << log.err;
+  EXPECT_TRUE(absl::StrContains(log.err, "rpc=UpdateMap map=room")) << log.err;
+  for (const std::string& token : {read_token, write_token}) {
+    EXPECT_FALSE(absl::StrContains(log.err, token)) << "a token is in pathd's log";
+  }
 }
 
 }  // namespace
