@@ -4,6 +4,7 @@
 #ifndef PATHD_SERVER_MAP_SERVICE_H_
 #define PATHD_SERVER_MAP_SERVICE_H_
 
+#include <cstdint>
 #include <string>
 
 #include "absl/status/status.h"
@@ -19,9 +20,12 @@ namespace pathd::server {
 class MapServiceImpl final : public v1::MapService::CallbackService {
  public:
   // map_dir: the --map_dir used for CreateMap.map_dir_file; empty = none.
-  // Registers WatchMap's store listener, so construct before serving.
+  // max_message_bytes: the largest GetMap response (--max_message_bytes; 0:
+  // unchecked). Registers WatchMap's store listener, so construct before
+  // serving.
   MapServiceImpl(MapStore& store, std::string map_dir,
-                 MapWatchers::Options watch_options = {});
+                 MapWatchers::Options watch_options = {},
+                 int64_t max_message_bytes = 0);
 
   grpc::ServerUnaryReactor* CreateMap(grpc::CallbackServerContext* context,
                                       const v1::CreateMapRequest* request,
@@ -59,6 +63,7 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
   MapStore& store_;
   const std::string map_dir_;
   MapWatchers watchers_;
+  const int64_t max_message_bytes_;
 };
 
 }  // namespace pathd::server
