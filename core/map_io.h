@@ -23,7 +23,9 @@ inline constexpr int64_t kDefaultMaxReaderCells = int64_t{1} << 28;
 // "width W", "map", then H rows of W characters). Passable '.', 'G', 'S' become
 // kFreeCost; '@', 'O', 'T', 'W' become kLethalCost; any other character is an
 // error. Accepts CRLF line endings and a missing final newline. Resolution 1,
-// origin 0. Errors are INVALID_ARGUMENT "<source>:<line>: <problem>".
+// origin 0. Errors are INVALID_ARGUMENT "<source>:<line>: <problem>", or
+// RESOURCE_EXHAUSTED when the header's width x height exceeds max_cells
+// (checked before anything is allocated).
 absl::StatusOr<Grid> ParseMovingAiMap(std::string_view text,
                                       std::string_view source,
                                       int64_t max_cells = kDefaultMaxReaderCells);
@@ -93,6 +95,7 @@ absl::StatusOr<RosMapMetadata> ParseRosMapYaml(std::string_view yaml,
 // value itself (clamped to 255). Rows are flipped so row 0 is the image's
 // bottom row (OccupancyGrid convention). Also checks the metadata (resolution,
 // origin, thresholds), since callers may build it without ParseRosMapYaml.
+// RESOURCE_EXHAUSTED when the image has more than max_cells pixels.
 absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
                                  std::string_view pgm, std::string_view source,
                                  int64_t max_cells = kDefaultMaxReaderCells);

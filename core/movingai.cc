@@ -153,10 +153,10 @@ absl::StatusOr<Grid> ParseMap(absl::string_view text, absl::string_view source,
       ParseDimension(line, "width", "height", source, reader.line_number()));
   const int64_t cells = int64_t{width} * height;
   if (cells > max_cells) {
-    return Error(
-        source, reader.line_number(),
-        absl::StrCat("map of ", width, " x ", height, " = ", cells,
-                     " cells exceeds the limit of ", max_cells, " cells"));
+    // A size limit, not a syntax error: the caller may allow bigger maps.
+    return absl::ResourceExhaustedError(absl::StrCat(
+        source, ":", reader.line_number(), ": map of ", width, " x ", height,
+        " = ", cells, " cells exceeds the limit of ", max_cells, " cells"));
   }
   PATHD_RETURN_IF_ERROR(next_header_line("map"));
   if (line != "map") {

@@ -10,13 +10,18 @@
 
 namespace pathd {
 
-absl::Status ValidateVia(const Grid& grid, const std::vector<Cell>& via,
-                         const CostParams& cost) {
-  if (via.size() > static_cast<size_t>(kMaxViaPoints)) {
+absl::Status CheckViaCount(size_t count) {
+  if (count > static_cast<size_t>(kMaxViaPoints)) {
     return absl::InvalidArgumentError(
         absl::StrFormat("via has %d points; a plan may pass through at most %d",
-                        via.size(), kMaxViaPoints));
+                        count, kMaxViaPoints));
   }
+  return absl::OkStatus();
+}
+
+absl::Status ValidateVia(const Grid& grid, const std::vector<Cell>& via,
+                         const CostParams& cost) {
+  PATHD_RETURN_IF_ERROR(CheckViaCount(via.size()));
   for (size_t i = 0; i < via.size(); ++i) {
     const Cell c = via[i];
     if (!grid.InBounds(c)) {

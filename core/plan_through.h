@@ -4,6 +4,7 @@
 #ifndef PATHD_CORE_PLAN_THROUGH_H_
 #define PATHD_CORE_PLAN_THROUGH_H_
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -47,6 +48,10 @@ struct ThroughResult {
   // The leg that ended without a path (leg i ends at goal i), -1 when none.
   int32_t failed_leg = -1;
 };
+
+// INVALID_ARGUMENT naming "via" when `count` is more than kMaxViaPoints, so a
+// caller can refuse before sizing anything by the count.
+absl::Status CheckViaCount(size_t count);
 
 // INVALID_ARGUMENT naming "via" when there are more than kMaxViaPoints, or
 // "via[i]" when a point is off the grid or on a cell the robot centre may not

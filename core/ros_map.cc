@@ -345,9 +345,10 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
                          cursor.HeaderNumber("height", kMaxGridDimension));
   const int64_t cells = int64_t{width} * height;
   if (cells > max_cells) {
-    return cursor.Error(absl::StrCat("image of ", width, " x ", height, " = ",
-                                     cells, " pixels exceeds the limit of ",
-                                     max_cells, " cells"));
+    // A size limit, not a syntax error: the caller may allow bigger maps.
+    return absl::ResourceExhaustedError(cursor.Error(absl::StrCat(
+        "image of ", width, " x ", height, " = ", cells,
+        " pixels exceeds the limit of ", max_cells, " cells")).message());
   }
   PATHD_ASSIGN_OR_RETURN(const int32_t maxval,
                          cursor.HeaderNumber("maxval", 65535));

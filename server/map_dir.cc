@@ -50,6 +50,13 @@ absl::StatusOr<fs::path> ResolveMapDirFile(const std::string& map_dir,
   if (relative.empty()) {
     return absl::InvalidArgumentError("map_dir_file is empty");
   }
+  // Checked before the path is quoted in any message: a 1 MiB path would not
+  // fit in gRPC's metadata and reach the client as an unrelated error.
+  if (relative.size() > kMaxMapDirFileLength) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "map_dir_file is %d bytes long; the limit is %d", relative.size(),
+        kMaxMapDirFileLength));
+  }
   if (relative.find('\0') != std::string_view::npos) {
     return absl::InvalidArgumentError("map_dir_file contains a NUL byte");
   }

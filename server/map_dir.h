@@ -4,6 +4,7 @@
 #ifndef PATHD_SERVER_MAP_DIR_H_
 #define PATHD_SERVER_MAP_DIR_H_
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -15,9 +16,13 @@
 
 namespace pathd::server {
 
+// Longest map_dir_file accepted (Linux's PATH_MAX).
+inline constexpr size_t kMaxMapDirFileLength = 4096;
+
 // The canonical path of `relative` inside `map_dir`. Errors:
 // FAILED_PRECONDITION when map_dir is empty (no --map_dir);
-// INVALID_ARGUMENT for an empty or absolute path or one that resolves outside
+// INVALID_ARGUMENT for an empty, absolute or over-long (kMaxMapDirFileLength)
+// path, one with a NUL byte, or one that resolves outside
 // map_dir (through "..", or a symlink pointing out); NOT_FOUND when it does
 // not exist; INVALID_ARGUMENT when it is not a regular file.
 absl::StatusOr<std::filesystem::path> ResolveMapDirFile(const std::string& map_dir,

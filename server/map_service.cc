@@ -5,6 +5,7 @@
 #include <optional>
 #include <utility>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "core/map_io.h"
@@ -38,10 +39,12 @@ absl::Status ApplyRequestPose(const v1::CreateMapRequest& request, Grid& grid) {
 
 MapServiceImpl::MapServiceImpl(MapStore& store, std::string map_dir,
                                MapWatchers::Options watch_options,
+                               int64_t max_message_bytes,
                                const TokenAuthenticator* authenticator)
     : store_(store),
       map_dir_(std::move(map_dir)),
       watchers_(store, watch_options),
+      max_message_bytes_(max_message_bytes),
       authenticator_(authenticator) {}
 
 absl::StatusOr<Grid> MapServiceImpl::BuildGrid(
@@ -87,7 +90,13 @@ absl::Status MapServiceImpl::DoCreateMap(const v1::CreateMapRequest& request,
                                          v1::CreateMapResponse* response) {
   // Checked first so a bad name is not reported after an expensive parse.
   PATHD_RETURN_IF_ERROR(MapStore::ValidateName(request.name()));
-  PATHD_ASSIGN_OR_RETURN(Grid grid, BuildGrid(request));
+  absl::StatusOr<Grid> built = BuildGrid(request);
+  if (absl::IsResourceExhausted(built.status())) {
+    // The readers know their limit only as a number; say which flag sets it.
+    return absl::ResourceExhaustedError(
+        absl::StrCat(built.status().message(), " (--max_map_cells)"));
+  }
+  PATHD_ASSIGN_OR_RETURN(Grid grid, std::move(built));
   PATHD_ASSIGN_OR_RETURN(
       const std::shared_ptr<const MapSnapshot> snapshot,
       store_.Create(request.name(), std::move(grid), request.replace()));
@@ -116,6 +125,17 @@ absl::Status MapServiceImpl::DoGetMap(const v1::GetMapRequest& request,
   FillMapInfo(*snapshot, response->mutable_info());
   if (request.include_cells()) {
     const std::vector<uint8_t>& cells = snapshot->grid->cells();
+    // Checked before the copy: gRPC's own refusal ("Sent message larger than
+    // max") names neither the response nor the flag. The bytes field costs
+    // its length plus a tag and a length varint of at most 6 bytes.
+    const size_t bytes = response->ByteSizeLong() + cells.size() + 6;
+    if (max_message_bytes_ > 0 && bytes > static_cast<size_t>(max_message_bytes_)) {
+      return absl::ResourceExhaustedError(absl::StrFormat(
+          "the cells of map '%s' (%d x %d) make a %d-byte response, more than "
+          "the limit of %d bytes (--max_message_bytes)",
+          snapshot->name, snapshot->grid->width(), snapshot->grid->height(), bytes,
+          max_message_bytes_));
+    }
     response->set_cells(reinterpret_cast<const char*>(cells.data()), cells.size());
   }
   return absl::OkStatus();

@@ -4,6 +4,7 @@
 #ifndef PATHD_SERVER_MAP_SERVICE_H_
 #define PATHD_SERVER_MAP_SERVICE_H_
 
+#include <cstdint>
 #include <string>
 
 #include "absl/status/status.h"
@@ -20,11 +21,13 @@ namespace pathd::server {
 class MapServiceImpl final : public v1::MapService::CallbackService {
  public:
   // map_dir: the --map_dir used for CreateMap.map_dir_file; empty = none.
-  // Registers WatchMap's store listener, so construct before serving.
-  // `authenticator` checks every call's token (--auth_tokens); null = none;
-  // it must outlive the service.
+  // max_message_bytes: the largest GetMap response (--max_message_bytes; 0:
+  // unchecked). Registers WatchMap's store listener, so construct before
+  // serving. `authenticator` checks every call's token (--auth_tokens);
+  // null = none; it must outlive the service.
   MapServiceImpl(MapStore& store, std::string map_dir,
                  MapWatchers::Options watch_options = {},
+                 int64_t max_message_bytes = 0,
                  const TokenAuthenticator* authenticator = nullptr);
 
   grpc::ServerUnaryReactor* CreateMap(grpc::CallbackServerContext* context,
@@ -63,6 +66,7 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
   MapStore& store_;
   const std::string map_dir_;
   MapWatchers watchers_;
+  const int64_t max_message_bytes_;
   const TokenAuthenticator* const authenticator_;
 };
 

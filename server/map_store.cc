@@ -35,11 +35,26 @@ struct RowSpan {
 // r spans (rows summed over the changes). This is what lets an update find
 // its changed cells without scanning the batch's bounding box (two far-apart
 // cells span the map).
-std::vector<RowSpan> CoveredSpans(absl::Span<const MapChange> changes) {
+//
+// The spans take 12 bytes per row of every change, which for many tall
+// rectangles would be far more than the map itself; past the map's own size
+// in bytes the whole rows from the first to the last touched one are
+// returned instead: comparing them costs one pass over at most the map (what
+// a full copy of it costs) and finds the same changed cells.
+std::vector<RowSpan> CoveredSpans(absl::Span<const MapChange> changes,
+                                  const Grid& grid) {
   int32_t y_lo = changes.front().y_min, y_hi = changes.front().y_max;
+  size_t rows = 0;
   for (const MapChange& c : changes) {
     y_lo = std::min(y_lo, c.y_min);
     y_hi = std::max(y_hi, c.y_max);
+    rows += static_cast<size_t>(c.y_max - c.y_min) + 1;
+  }
+  if (rows > grid.size() / sizeof(RowSpan)) {
+    std::vector<RowSpan> whole;
+    whole.reserve(static_cast<size_t>(y_hi - y_lo) + 1);
+    for (int32_t y = y_lo; y <= y_hi; ++y) whole.push_back(RowSpan{y, 0, grid.width() - 1});
+    return whole;
   }
   // first[y - y_lo] .. first[y - y_lo + 1]: the spans of row y.
   std::vector<size_t> first(static_cast<size_t>(y_hi - y_lo) + 2, 0);
@@ -239,6 +254,32 @@ absl::Status MapStore::ValidateChange(const MapChange& change, size_t index,
   return absl::OkStatus();
 }
 
+int64_t MapStore::MaxBatchWrites(const Grid& grid) {
+  return std::max(kMaxWritesPerCell * static_cast<int64_t>(grid.size()), kMinBatchWrites);
+}
+
+absl::Status MapStore::ValidateChanges(absl::Span<const MapChange> changes,
+                                       const Grid& grid) {
+  // Each change covers at most 2^32 cells and the sum stops just past the
+  // limit, so it cannot overflow.
+  const int64_t limit = MaxBatchWrites(grid);
+  int64_t writes = 0;
+  for (size_t i = 0; i < changes.size(); ++i) {
+    if (absl::Status s = ValidateChange(changes[i], i, grid); !s.ok()) return s;
+    const MapChange& c = changes[i];
+    writes += (int64_t{c.x_max} - c.x_min + 1) * (int64_t{c.y_max} - c.y_min + 1);
+    if (writes > limit) {
+      return absl::ResourceExhaustedError(absl::StrFormat(
+          "changes 0..%d write %d cells in total (overlaps counted each time), "
+          "more than the limit of %d for this %d x %d map (%d per map cell, at "
+          "least %d): merge overlapping rectangles",
+          i, writes, limit, grid.width(), grid.height(), kMaxWritesPerCell,
+          kMinBatchWrites));
+    }
+  }
+  return absl::OkStatus();
+}
+
 MapStore::MapStore(int64_t max_cells) : max_cells_(max_cells) {}
 
 absl::Status MapStore::ValidateName(std::string_view name) {
@@ -249,8 +290,9 @@ absl::Status MapStore::ValidateName(std::string_view name) {
                         name.size(), kMaxNameLength));
   }
   if (name.front() == '.') {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("map name '%s' must not start with '.'", name));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "map name '%s' must not start with '.'",
+        absl::CHexEscape(absl::string_view(name.data(), name.size()))));
   }
   for (size_t i = 0; i < name.size(); ++i) {
     if (!IsNameChar(name[i])) {
@@ -328,6 +370,12 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
 
 absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Get(
     std::string_view name) const {
+  // Lookups check the name first: a name no map can have is a bad request,
+  // not a missing map, and only a valid name (at most kMaxNameLength plain
+  // characters) may be quoted back in NotFound's message. Quoting a 1 MiB
+  // name would overflow gRPC's metadata limit and reach the client as an
+  // unrelated RESOURCE_EXHAUSTED.
+  if (absl::Status s = ValidateName(name); !s.ok()) return s;
   absl::ReaderMutexLock lock(&mu_);
   auto it = maps_.find(name);
   if (it == maps_.end()) return NotFound(name);
@@ -343,6 +391,7 @@ std::vector<std::shared_ptr<const MapSnapshot>> MapStore::List() const {
 }
 
 absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
+  if (absl::Status s = ValidateName(name); !s.ok()) return s;
   // Releasing the snapshot happens outside the lock: freeing a large grid
   // (when nobody else holds it) should not stall other callers.
   std::shared_ptr<const MapSnapshot> removed;
@@ -362,6 +411,7 @@ absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
 absl::StatusOr<MapUpdateResult> MapStore::Update(
     std::string_view name, absl::Span<const MapChange> changes,
     std::optional<uint64_t> expected_version) {
+  if (absl::Status s = ValidateName(name); !s.ok()) return s;
   // Loops only when the map was replaced or deleted-and-recreated while this
   // update copied it; the retry then validates against the new version.
   for (;;) {
@@ -395,11 +445,7 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
           absl::StrFormat("update of map '%s' has no changes", name));
     }
     const Grid& old_grid = *base->grid;
-    for (size_t i = 0; i < changes.size(); ++i) {
-      if (absl::Status s = ValidateChange(changes[i], i, old_grid); !s.ok()) {
-        return s;
-      }
-    }
+    if (absl::Status s = ValidateChanges(changes, old_grid); !s.ok()) return s;
 
     std::unique_ptr<Grid> grid = AcquireGrid(*pool, *base);
     uint8_t* after = grid->mutable_cells().data();
@@ -418,7 +464,7 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     const size_t track_limit = std::min(kMaxTrackedChanges, old_grid.size() / 8 + 1);
     snapshot->changes_known = true;
     int64_t cells_changed = 0;
-    for (const RowSpan& span : CoveredSpans(changes)) {
+    for (const RowSpan& span : CoveredSpans(changes, old_grid)) {
       const size_t row = old_grid.Index(0, span.y);
       // Counted first in a loop the compiler vectorises: a large batch then
       // costs a pass over its cells, and cells are listed only while tracked.

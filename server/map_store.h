@@ -135,6 +135,17 @@ class MapStore {
   // has a cost over 255, a rectangle with min > max, or reaches off `grid`.
   static absl::Status ValidateChange(const MapChange& change, size_t index,
                                      const Grid& grid);
+  // Every change of a batch as ValidateChange, and the batch as a whole:
+  // RESOURCE_EXHAUSTED when its changes together write more than
+  // MaxBatchWrites(grid) cells (overlapping rectangles counted each time).
+  // Without it a 1 MiB request of whole-map rectangles would rewrite a large
+  // map ~10^5 times while holding the map's update lock.
+  static absl::Status ValidateChanges(absl::Span<const MapChange> changes,
+                                      const Grid& grid);
+  // kMaxWritesPerCell writes per cell of `grid`, at least kMinBatchWrites.
+  static int64_t MaxBatchWrites(const Grid& grid);
+  static constexpr int64_t kMaxWritesPerCell = 16;
+  static constexpr int64_t kMinBatchWrites = int64_t{1} << 20;
   // RESOURCE_EXHAUSTED naming the limit when a width x height map would exceed
   // max_cells; OK otherwise. Lets callers refuse before parsing/allocating.
   absl::Status CheckSize(int64_t width, int64_t height) const;
@@ -148,22 +159,26 @@ class MapStore {
                                                             Grid grid,
                                                             bool replace);
 
-  // The current version of `name`; NOT_FOUND "map 'x' not found".
+  // The current version of `name`; NOT_FOUND "map 'x' not found",
+  // INVALID_ARGUMENT (as ValidateName) for a name no map can have.
   absl::StatusOr<std::shared_ptr<const MapSnapshot>> Get(std::string_view name) const;
 
   // The current version of every map, sorted by name.
   std::vector<std::shared_ptr<const MapSnapshot>> List() const;
 
-  // Removes `name` and returns its last version; NOT_FOUND when unknown.
+  // Removes `name` and returns its last version; NOT_FOUND when unknown,
+  // INVALID_ARGUMENT for an invalid name.
   // Snapshots already handed out stay valid.
   absl::StatusOr<uint64_t> Delete(std::string_view name);
 
   // Applies `changes` in order to a copy of the current version (a recycled
   // buffer, see the class comment) and installs it as version + 1; all or
-  // nothing. Errors: NOT_FOUND for an unknown map;
+  // nothing. Errors: NOT_FOUND for an unknown map, INVALID_ARGUMENT for an
+  // invalid name;
   // ABORTED when expected_version is set and differs from the current version;
   // INVALID_ARGUMENT for an empty batch, a cost > 255, a rectangle with
-  // min > max, or a change reaching off the map (naming the change index).
+  // min > max, or a change reaching off the map (naming the change index);
+  // RESOURCE_EXHAUSTED for a batch over MaxBatchWrites (ValidateChanges).
   absl::StatusOr<MapUpdateResult> Update(std::string_view name,
                                          absl::Span<const MapChange> changes,
                                          std::optional<uint64_t> expected_version);

@@ -287,8 +287,24 @@ class MapWatcher final : public grpc::ServerWriteReactor<v1::MapEvent> {
   }
 
   void StartNextWriteLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    std::shared_ptr<const v1::MapEvent> next = queue_->Pop();
+    const int64_t max_bytes = owner_.options_.max_message_bytes;
+    if (const size_t bytes = next->ByteSizeLong();
+        max_bytes > 0 && bytes > static_cast<size_t>(max_bytes)) {
+      // gRPC would fail the write with a message naming neither the event
+      // nor the flag; the client cannot keep a copy without it, so end here.
+      queue_.reset();
+      finish_requested_ = true;
+      final_status_ = absl::ResourceExhaustedError(absl::StrFormat(
+          "the %s event of map '%s' version %d is %d bytes, more than the "
+          "limit of %d bytes (--max_message_bytes)",
+          v1::MapEventKind_Name(next->kind()), name_, next->version(), bytes,
+          max_bytes));
+      DoFinishLocked();
+      return;
+    }
     writing_ = true;
-    current_ = queue_->Pop();
+    current_ = std::move(next);
     StartWrite(current_.get());
   }
 

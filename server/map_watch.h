@@ -123,6 +123,10 @@ class MapWatchers {
     // Events queued per watcher before its backlog is replaced by one RESYNC
     // (--watch_queue_events).
     size_t max_queued_events = 64;
+    // Largest event the stream may send (--max_message_bytes; 0: unchecked).
+    // A larger one ends the stream with RESOURCE_EXHAUSTED naming the flag,
+    // where gRPC's own refusal would name neither the event nor the flag.
+    int64_t max_message_bytes = 0;
   };
 
   // Registers a listener on `store`, so construct before serving; `store`

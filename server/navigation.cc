@@ -373,9 +373,7 @@ class NavigationSession final : public NavigateReactor {
       return result.snapshot->version;
     }
     const Grid& stored = *snapshot_->grid;
-    for (size_t i = 0; i < changes.size(); ++i) {
-      PATHD_RETURN_IF_ERROR(MapStore::ValidateChange(changes[i], i, stored));
-    }
+    PATHD_RETURN_IF_ERROR(MapStore::ValidateChanges(changes, stored));
     for (const MapChange& change : changes) {
       for (int32_t y = change.y_min; y <= change.y_max; ++y) {
         for (int32_t x = change.x_min; x <= change.x_max; ++x) {

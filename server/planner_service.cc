@@ -349,6 +349,9 @@ absl::Status PrepareViaAndExpansions(int64_t max_returned_expansions,
         "options.return_cost_to_go: a cost-to-go field belongs to one goal, "
         "and a plan through via points has several");
   }
+  // Counted before anything is sized by the request (ValidateVia repeats
+  // the check for core's other callers).
+  PATHD_RETURN_IF_ERROR(CheckViaCount(static_cast<size_t>(request.via_size())));
   const Grid& grid = *call.snapshot->grid;
   call.via.reserve(request.via_size());
   for (int i = 0; i < request.via_size(); ++i) {

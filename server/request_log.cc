@@ -1,10 +1,13 @@
 // Request log line, slow-request warnings and the metrics hook.
 #include "server/request_log.h"
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
 #include "absl/base/thread_annotations.h"
+#include "absl/strings/escaping.h"
+#include "absl/strings/str_cat.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "spdlog/spdlog.h"
@@ -24,6 +27,21 @@ struct RequestLogSettings {
 RequestLogSettings& Settings() {
   static auto* const settings = new RequestLogSettings();
   return *settings;
+}
+
+// The map name as a request gave it may be anything (1 MiB long, NUL bytes,
+// newlines that would forge log lines): quote at most kMaxLoggedName bytes of
+// it, C-escaped, when it is not plain.
+std::string LoggableName(std::string_view map) {
+  constexpr size_t kMaxLoggedName = 128;
+  const bool plain =
+      map.size() <= kMaxLoggedName &&
+      std::all_of(map.begin(), map.end(), [](char c) { return c > ' ' && c < 0x7f; });
+  if (plain) return std::string(map);
+  std::string out = absl::CHexEscape(
+      absl::string_view(map.data(), std::min(map.size(), kMaxLoggedName)));
+  if (map.size() > kMaxLoggedName) absl::StrAppend(&out, "...(", map.size(), " bytes)");
+  return out;
 }
 
 }  // namespace
@@ -54,7 +72,7 @@ void LogRequest(std::string_view rpc, std::string_view map, std::string_view det
   const std::string error =
       status.ok() ? std::string() : "error=\"" + std::string(status.message()) + "\"";
   spdlog::log(level, "{}rpc={} map={} {}{}status={} us={}{}{}",
-              slow ? "slow request: " : "", rpc, map, detail, detail.empty() ? "" : " ",
+              slow ? "slow request: " : "", rpc, LoggableName(map), detail, detail.empty() ? "" : " ",
               code, us, error.empty() ? "" : " ", error);
 }
 

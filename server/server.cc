@@ -17,6 +17,7 @@
 #include "core/inflation.h"
 #include "core/status_macros.h"
 #include "server/map_dir.h"
+#include "server/parse_error_interceptor.h"
 #include "server/request_log.h"
 #include "server/tls.h"
 #include "spdlog/spdlog.h"
@@ -99,8 +100,9 @@ absl::Status PathdServer::Start() {
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
   map_service_ = std::make_unique<MapServiceImpl>(
-      store_, options_.map_dir, MapWatchers::Options{options_.watch_queue_events},
-      authenticator_.get());
+      store_, options_.map_dir,
+      MapWatchers::Options{options_.watch_queue_events, max_message_bytes()},
+      max_message_bytes(), authenticator_.get());
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
@@ -147,6 +149,10 @@ absl::Status PathdServer::Start() {
   // into memory, and fails a larger response the same way.
   builder.SetMaxReceiveMessageSize(max_message_bytes());
   builder.SetMaxSendMessageSize(max_message_bytes());
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>>
+      interceptors;
+  interceptors.push_back(std::make_unique<ParseErrorInterceptorFactory>());
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   server_ = builder.BuildAndStart();
   if (server_ == nullptr || port_ == 0) {
     server_.reset();

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -153,6 +154,72 @@ TEST(MapStoreTest, UnknownMapsAreNotFound) {
                 .status()
                 .code(),
             absl::StatusCode::kNotFound);
+}
+
+// A name no map can have is a bad request on lookups too, and the answer
+// never quotes it whole (a 1 MiB name used to come back inside NOT_FOUND's
+// message, beyond what gRPC's metadata can carry).
+TEST(MapStoreTest, LookupsOfInvalidNamesAreInvalidArgument) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(2, 2), false).ok());
+  for (const std::string& bad :
+       {std::string(), std::string(1 << 20, 'n'), std::string("a/b"), std::string(".."),
+        std::string("m\0", 2)}) {
+    const absl::Status get = store.Get(bad).status();
+    EXPECT_EQ(get.code(), absl::StatusCode::kInvalidArgument) << bad.size();
+    EXPECT_THAT(get.message(), HasSubstr("map name")) << bad.size();
+    EXPECT_LE(get.message().size(), 512u);
+    EXPECT_EQ(store.Delete(bad).status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_EQ(store.Update(bad, {MapChange::ForCell(0, 0, 1)}, std::nullopt)
+                  .status()
+                  .code(),
+              absl::StatusCode::kInvalidArgument);
+  }
+  EXPECT_EQ((*store.Get("m"))->version, 1u);
+}
+
+// Overlapping rectangles are legal, but a batch may write at most
+// MaxBatchWrites cells in total; checked before the copy is made.
+TEST(MapStoreTest, BatchesWritingTooManyCellsAreRefused) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(16, 16), false).ok());
+  const Grid& grid = *(*store.Get("m"))->grid;
+  const int64_t limit = MapStore::MaxBatchWrites(grid);
+  EXPECT_EQ(limit, MapStore::kMinBatchWrites);
+  // Exactly at the limit is fine, one cell more is not.
+  std::vector<MapChange> changes(static_cast<size_t>(limit / 256),
+                                 MapChange::ForRect(0, 0, 15, 15, 9));
+  ASSERT_TRUE(store.Update("m", changes, std::nullopt).ok());
+  changes.push_back(MapChange::ForCell(3, 3, 1));
+  const auto over = store.Update("m", changes, std::nullopt);
+  EXPECT_EQ(over.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(over.status().message(),
+              HasSubstr(absl::StrFormat("write %d cells in total", limit + 1)));
+  EXPECT_EQ((*store.Get("m"))->version, 2u);
+  EXPECT_EQ(MapStore::MaxBatchWrites(FreeGrid(1024, 1024)),
+            MapStore::kMaxWritesPerCell * 1024 * 1024);
+}
+
+// Many tall rectangles would need more row spans than the map has bytes; the
+// update then compares whole rows and must find exactly the same cells.
+TEST(MapStoreTest, ChangedCellsAreExactForBatchesOfManyRows) {
+  MapStore store(1 << 20);
+  // 6000 cells: 588 rows of spans (7 kB) outweigh them, and the 561 changed
+  // cells stay within what an update lists.
+  ASSERT_TRUE(store.Create("m", FreeGrid(200, 30), false).ok());
+  std::vector<MapChange> changes;
+  for (int32_t x = 2; x < 65; x += 3) changes.push_back(MapChange::ForRect(x, 1, x, 28, 7));
+  // Undone again: counted as no change.
+  changes.push_back(MapChange::ForRect(5, 1, 5, 28, 0));
+  changes.push_back(MapChange::ForCell(19, 29, 4));
+  const Grid before = *(*store.Get("m"))->grid;
+  auto result = store.Update("m", changes, std::nullopt);
+  ASSERT_TRUE(result.ok()) << result.status();
+  const std::vector<Cell> expected = Differences(before, *result->snapshot->grid);
+  EXPECT_EQ(expected.size(), 20u * 28u + 1u);
+  ASSERT_TRUE(result->snapshot->changes_known);
+  EXPECT_EQ(result->snapshot->changed_cells, expected);
+  EXPECT_EQ(result->cells_changed, static_cast<int64_t>(expected.size()));
 }
 
 TEST(MapStoreTest, DeleteReturnsLastVersionAndKeepsHeldSnapshots) {
