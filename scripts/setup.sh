@@ -10,6 +10,10 @@ PACKAGES=(
   prometheus-cpp-dev libcurl4-openssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
+  # The loopback scale-out test (tests/e2e/scaleout_test.cc) runs nginx as
+  # the test's user with its own config; the package's system service is not
+  # used (on a machine without a policy-rc.d, apt starts it on port 80).
+  nginx
 )
 
 missing=()

@@ -74,6 +74,10 @@ struct ServerOptions {
   absl::Duration progress_interval = absl::Milliseconds(100);
   // PlanBatch: items in flight per stream; 0 = twice the worker threads.
   int batch_max_inflight = 0;
+  // Sent in the "pathd-replica" initial metadata of every response, so a
+  // client behind a load balancer sees which replica served it; empty = not
+  // sent. Printable ASCII (a metadata value).
+  std::string replica_name;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
