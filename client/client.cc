@@ -20,11 +20,13 @@
 namespace pathd::client {
 namespace {
 
-// Runs one unary call with a fresh deadline. `call` is the stub method bound
-// to its request: (ClientContext*, Response*) -> grpc::Status.
+// Runs one unary call about `map` (routed by kMapHeader; empty: a call about
+// no map) with a fresh deadline. `call` is the stub method bound to its
+// request: (ClientContext*, Response*) -> grpc::Status.
 template <typename Response, typename Call>
-absl::StatusOr<Response> Invoke(absl::Duration timeout, Call&& call) {
-  std::unique_ptr<grpc::ClientContext> context = MakeContext(timeout);
+absl::StatusOr<Response> InvokeOnMap(absl::Duration timeout,
+                                     const std::string& map, Call&& call) {
+  std::unique_ptr<grpc::ClientContext> context = MakeContext(timeout, map);
   Response response;
   grpc::Status status = std::forward<Call>(call)(context.get(), &response);
   if (!status.ok()) return FromGrpcStatus(status);
@@ -86,6 +88,13 @@ bool IsTokenText(absl::string_view token) {
   return !token.empty() && std::all_of(token.begin(), token.end(), [](char c) {
     return c >= 0x21 && c <= 0x7e;
   });
+}
+
+// The same for a call about no map (ListMaps, health): a load balancer
+// routing by map sends it to any replica.
+template <typename Response, typename Call>
+absl::StatusOr<Response> Invoke(absl::Duration timeout, Call&& call) {
+  return InvokeOnMap<Response>(timeout, "", std::forward<Call>(call));
 }
 
 }  // namespace
@@ -202,6 +211,35 @@ std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout) {
   return context;
 }
 
+std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout,
+                                                 const std::string& map) {
+  std::unique_ptr<grpc::ClientContext> context = MakeContext(timeout);
+  SetMapHeader(*context, map);
+  return context;
+}
+
+void SetMapHeader(grpc::ClientContext& context, const std::string& map) {
+  // gRPC fails the whole call locally (INTERNAL) on a metadata value outside
+  // printable ASCII. Such a name is not a valid map name, so any replica
+  // answers it with the INVALID_ARGUMENT that says why: leave it unrouted.
+  const bool printable = std::all_of(map.begin(), map.end(), [](char c) {
+    return c >= 0x20 && c <= 0x7e;
+  });
+  if (map.empty() || !printable) return;
+  context.AddMetadata(kMapHeader, map);
+}
+
+std::string ServedBy(const grpc::ClientContext& context) {
+  for (const auto* metadata : {&context.GetServerInitialMetadata(),
+                               &context.GetServerTrailingMetadata()}) {
+    auto it = metadata->find(kReplicaHeader);
+    if (it != metadata->end()) {
+      return std::string(it->second.data(), it->second.size());
+    }
+  }
+  return "";
+}
+
 absl::Status FromGrpcStatus(const grpc::Status& status) {
   // grpc::StatusCode and absl::StatusCode use the same numbers (both follow
   // google.rpc.Code), so the cast keeps the code exactly.
@@ -231,8 +269,8 @@ PathdClient::PathdClient(const std::string& address, absl::Duration timeout)
 
 absl::StatusOr<v1::CreateMapResponse> PathdClient::CreateMap(
     const v1::CreateMapRequest& request) const {
-  return Invoke<v1::CreateMapResponse>(
-      timeout_,
+  return InvokeOnMap<v1::CreateMapResponse>(
+      timeout_, request.name(),
       [&](grpc::ClientContext* context, v1::CreateMapResponse* response) {
         return maps_->CreateMap(context, request, response);
       });
@@ -240,8 +278,8 @@ absl::StatusOr<v1::CreateMapResponse> PathdClient::CreateMap(
 
 absl::StatusOr<v1::GetMapResponse> PathdClient::GetMap(
     const v1::GetMapRequest& request) const {
-  return Invoke<v1::GetMapResponse>(
-      timeout_,
+  return InvokeOnMap<v1::GetMapResponse>(
+      timeout_, request.name(),
       [&](grpc::ClientContext* context, v1::GetMapResponse* response) {
         return maps_->GetMap(context, request, response);
       });
@@ -259,8 +297,8 @@ absl::StatusOr<v1::DeleteMapResponse> PathdClient::DeleteMap(
     const std::string& name) const {
   v1::DeleteMapRequest request;
   request.set_name(name);
-  return Invoke<v1::DeleteMapResponse>(
-      timeout_,
+  return InvokeOnMap<v1::DeleteMapResponse>(
+      timeout_, name,
       [&](grpc::ClientContext* context, v1::DeleteMapResponse* response) {
         return maps_->DeleteMap(context, request, response);
       });
@@ -268,8 +306,8 @@ absl::StatusOr<v1::DeleteMapResponse> PathdClient::DeleteMap(
 
 absl::StatusOr<v1::UpdateMapResponse> PathdClient::UpdateMap(
     const v1::UpdateMapRequest& request) const {
-  return Invoke<v1::UpdateMapResponse>(
-      timeout_,
+  return InvokeOnMap<v1::UpdateMapResponse>(
+      timeout_, request.name(),
       [&](grpc::ClientContext* context, v1::UpdateMapResponse* response) {
         return maps_->UpdateMap(context, request, response);
       });
@@ -277,16 +315,17 @@ absl::StatusOr<v1::UpdateMapResponse> PathdClient::UpdateMap(
 
 absl::StatusOr<v1::PlanResponse> PathdClient::Plan(
     const v1::PlanRequest& request) const {
-  return Invoke<v1::PlanResponse>(
-      timeout_, [&](grpc::ClientContext* context, v1::PlanResponse* response) {
+  return InvokeOnMap<v1::PlanResponse>(
+      timeout_, request.map(),
+      [&](grpc::ClientContext* context, v1::PlanResponse* response) {
         return planner_->Plan(context, request, response);
       });
 }
 
 absl::StatusOr<v1::CostToGoResponse> PathdClient::CostToGo(
     const v1::CostToGoRequest& request) const {
-  return Invoke<v1::CostToGoResponse>(
-      timeout_,
+  return InvokeOnMap<v1::CostToGoResponse>(
+      timeout_, request.map(),
       [&](grpc::ClientContext* context, v1::CostToGoResponse* response) {
         return planner_->CostToGo(context, request, response);
       });
@@ -294,8 +333,8 @@ absl::StatusOr<v1::CostToGoResponse> PathdClient::CostToGo(
 
 absl::StatusOr<v1::IsPathValidResponse> PathdClient::IsPathValid(
     const v1::IsPathValidRequest& request) const {
-  return Invoke<v1::IsPathValidResponse>(
-      timeout_,
+  return InvokeOnMap<v1::IsPathValidResponse>(
+      timeout_, request.map(),
       [&](grpc::ClientContext* context, v1::IsPathValidResponse* response) {
         return planner_->IsPathValid(context, request, response);
       });
@@ -312,25 +351,31 @@ absl::StatusOr<v1::GetCacheStatsResponse> PathdClient::GetCacheStats() const {
 
 std::unique_ptr<
     grpc::ClientReaderWriterInterface<v1::NavigateRequest, v1::NavigateResponse>>
-PathdClient::Navigate(grpc::ClientContext* context) const {
+PathdClient::Navigate(grpc::ClientContext* context,
+                      const std::string& map) const {
+  SetMapHeader(*context, map);
   return planner_->Navigate(context);
 }
 
 std::unique_ptr<grpc::ClientReaderInterface<v1::PlanStreamEvent>>
 PathdClient::PlanStream(grpc::ClientContext* context,
                         const v1::PlanRequest& request) const {
+  SetMapHeader(*context, request.map());
   return planner_->PlanStream(context, request);
 }
 
 std::unique_ptr<grpc::ClientReaderWriterInterface<v1::PlanBatchRequest,
                                                   v1::PlanBatchResponse>>
-PathdClient::PlanBatch(grpc::ClientContext* context) const {
+PathdClient::PlanBatch(grpc::ClientContext* context,
+                       const std::string& map) const {
+  SetMapHeader(*context, map);
   return planner_->PlanBatch(context);
 }
 
 std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>>
 PathdClient::WatchMap(grpc::ClientContext* context,
                       const v1::WatchMapRequest& request) const {
+  SetMapHeader(*context, request.name());
   return maps_->WatchMap(context, request);
 }
 

@@ -25,6 +25,13 @@ namespace pathd::client {
 inline constexpr char kDefaultServerAddress[] = "127.0.0.1:50051";
 // Deadline of every call unless the caller picks another.
 inline constexpr absl::Duration kDefaultTimeout = absl::Seconds(10);
+// Request metadata naming the map a call works on. A load balancer in front
+// of several pathd replicas hashes on it so every call for one map reaches
+// the replica that holds the map (docker/nginx/pathd.conf.template).
+inline constexpr char kMapHeader[] = "x-pathd-map";
+// Response metadata (initial, or trailing for an error answered without a
+// response) naming the replica that served the call: pathd's --replica_name.
+inline constexpr char kReplicaHeader[] = "pathd-replica";
 
 // Opens a channel to `address` ("host:port", or any gRPC target URI).
 // Plaintext, no token; the overload below adds TLS and a token.
@@ -85,13 +92,25 @@ bool IsLoopbackAddress(const std::string& address);
 // A context whose deadline is `timeout` from now. Returned by pointer because
 // grpc::ClientContext can be neither copied nor moved.
 std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout);
+// The same with kMapHeader set to `map` (not set when `map` is empty).
+std::unique_ptr<grpc::ClientContext> MakeContext(absl::Duration timeout,
+                                                 const std::string& map);
+
+// Adds kMapHeader = `map` to a context whose call has not started; nothing
+// when `map` is empty. For code that calls the stubs directly.
+void SetMapHeader(grpc::ClientContext& context, const std::string& map);
+
+// The replica that answered a finished call on `context` (kReplicaHeader from
+// the initial or else the trailing metadata); empty when the server sent none.
+std::string ServedBy(const grpc::ClientContext& context);
 
 // The same code (gRPC and Abseil share numbering) and message.
 absl::Status FromGrpcStatus(const grpc::Status& status);
 
 // Typed calls to one pathd server. Every call gets its own deadline of
-// `timeout`. Thread-safe: the stubs are, and the object is immutable after
-// construction.
+// `timeout`, and every call that names a map carries it in kMapHeader, so the
+// same client works through a load balancer routing by map. Thread-safe: the
+// stubs are, and the object is immutable after construction.
 class PathdClient {
  public:
   explicit PathdClient(std::shared_ptr<grpc::ChannelInterface> channel,
@@ -125,10 +144,12 @@ class PathdClient {
   // Opens a Navigate stream on `context`, which the caller owns and must keep
   // alive until the stream's Finish() returned. Unlike the unary calls no
   // deadline is set: a session lasts as long as the robot drives, so the
-  // caller bounds each wait itself (and cancels through `context`).
+  // caller bounds each wait itself (and cancels through `context`). `map` is
+  // the map the session's NavigateOpen will name: the stream is routed before
+  // its first message is sent.
   std::unique_ptr<grpc::ClientReaderWriterInterface<v1::NavigateRequest,
                                                     v1::NavigateResponse>>
-  Navigate(grpc::ClientContext* context) const;
+  Navigate(grpc::ClientContext* context, const std::string& map) const;
 
   // Opens a WatchMap stream on `context` (caller-owned, alive until the
   // reader's Finish() returned). No deadline is set: a watch lasts until the
@@ -145,10 +166,12 @@ class PathdClient {
   // Opens a PlanBatch stream on `context` (caller-owned, alive until the
   // stream's Finish() returned; the caller sets its deadline). Writes may
   // block while the server holds the stream at its in-flight bound, so write
-  // from one thread and read the answers from another.
+  // from one thread and read the answers from another. The whole stream is
+  // routed by `map` (normally its items' map): through a balancer that routes
+  // by map, items naming a map held by another replica answer NOT_FOUND.
   std::unique_ptr<grpc::ClientReaderWriterInterface<v1::PlanBatchRequest,
                                                     v1::PlanBatchResponse>>
-  PlanBatch(grpc::ClientContext* context) const;
+  PlanBatch(grpc::ClientContext* context, const std::string& map) const;
 
   // grpc.health.v1.Health/Check; `service` empty asks about the whole server.
   absl::StatusOr<grpc::health::v1::HealthCheckResponse> CheckHealth(

@@ -11,6 +11,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/notification.h"
+#include "client/client.h"
 #include "grpc/grpc.h"
 #include "grpcpp/support/channel_arguments.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
@@ -215,12 +216,14 @@ absl::StatusOr<LoadReport> RunPlanLoad(
   return RunClosedLoop(
       options,
       [&](int worker, int64_t index) {
+        const v1::PlanRequest& request = requests[static_cast<size_t>(index % count)];
         grpc::ClientContext context;
         context.set_deadline(absl::ToChronoTime(absl::Now() + timeout));
+        SetMapHeader(context, request.map());
         v1::PlanResponse& response = responses[static_cast<size_t>(worker)];
         const grpc::Status status =
-            stubs[static_cast<size_t>(worker % channels)]->Plan(
-                &context, requests[static_cast<size_t>(index % count)], &response);
+            stubs[static_cast<size_t>(worker % channels)]->Plan(&context, request,
+                                                                 &response);
         CallResult result;
         result.code = static_cast<absl::StatusCode>(status.error_code());
         result.found = status.ok() && response.found();

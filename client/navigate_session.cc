@@ -80,11 +80,13 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
 // gRPC allows one reader and one writer on a stream at the same time.
 class Session {
  public:
-  Session(const client::PathdClient& client, bool json, std::ostream& out)
+  // `map`: the map `open` will name, which routes the stream.
+  Session(const client::PathdClient& client, const std::string& map, bool json,
+          std::ostream& out)
       : timeout_(client.timeout()),
         json_(json),
         out_(out),
-        stream_(client.Navigate(&context_)) {}
+        stream_(client.Navigate(&context_, map)) {}
 
   absl::Status Run(const v1::NavigateOpen& open,
                    const std::vector<ScriptStep>& script) {
@@ -317,7 +319,7 @@ absl::Status RunNavigateSession(const client::PathdClient& client,
                                 const v1::NavigateOpen& open,
                                 const std::vector<ScriptStep>& script, bool json,
                                 std::ostream& out) {
-  Session session(client, json, out);
+  Session session(client, open.map(), json, out);
   return session.Run(open, script);
 }
 

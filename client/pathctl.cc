@@ -1199,7 +1199,10 @@ int Batch(Env& env, Args args) {
 
   const absl::Time started = absl::Now();
   std::unique_ptr<grpc::ClientContext> context = client::MakeContext(options.timeout);
-  auto stream = env.client().PlanBatch(context.get());
+  // A load balancer routing by map sends the whole stream to the replica of
+  // the first item's map (see UsageText).
+  auto stream = env.client().PlanBatch(
+      context.get(), items->empty() ? "" : items->front().request.map());
   std::thread writer([&stream, &items] {
     v1::PlanBatchRequest message;
     for (BatchItem& item : *items) {
@@ -2523,6 +2526,12 @@ errors in S s" with the rate in plans/s. With --json each answer is a
 PlanBatchResponse line and the summary goes to stderr. --timeout bounds the
 whole batch. Exit code 0 when no item errored (no path is not an error), 1
 when any item errored or the stream failed.
+Every call about a map sends its name in the x-pathd-map header, which a load
+balancer in front of several pathd replicas routes by (README, Deployment).
+Through such a balancer a batch goes to the replica of its first line's map:
+give it one map per file (lines naming a map held elsewhere answer NOT_FOUND),
+and maps list, cache-stats and health reach whichever replica the balancer
+picks; give --server a replica's own address to ask that one.
 bench runs a closed-loop load of Plan calls. Its queries are the
 scenarios of --movingai's .scen file, or 1000 random pairs of free cells of
 NAME, shuffled with --seed and sent in a cycle. It prints throughput, latency

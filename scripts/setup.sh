@@ -14,6 +14,10 @@ PACKAGES=(
   python3-grpcio python3-protobuf
   libcsv-dev
   openssl libssl-dev
+  # The loopback scale-out test (tests/e2e/scaleout_test.cc) runs nginx as
+  # the test's user with its own config; the package's system service is not
+  # used (on a machine without a policy-rc.d, apt starts it on port 80).
+  nginx
 )
 
 missing=()

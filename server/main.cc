@@ -99,6 +99,10 @@ ABSL_FLAG(absl::Duration, slow_request_threshold, absl::Seconds(1),
           "requests (not Navigate/WatchMap streams) taking at least this long "
           "are logged at warn level and counted in pathd_slow_requests_total; "
           "0 = off");
+ABSL_FLAG(std::string, replica_name, "",
+          "name sent in the 'pathd-replica' response metadata of every call, "
+          "so clients behind a load balancer see which replica served them "
+          "(printable ASCII); empty = not sent");
 
 ABSL_FLAG(std::string, tls_cert, "",
           "PEM certificate chain (server certificate first) to serve gRPC over "
@@ -278,6 +282,12 @@ pathd::server::ServerOptions OptionsFromFlags() {
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
   options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  options.replica_name = absl::GetFlag(FLAGS_replica_name);
+  for (const char c : options.replica_name) {
+    if (c < 0x20 || c > 0x7e) {
+      FlagError("replica_name", "must be printable ASCII (a gRPC metadata value)");
+    }
+  }
   options.slow_request_threshold = absl::GetFlag(FLAGS_slow_request_threshold);
   if (options.slow_request_threshold < absl::ZeroDuration()) {
     FlagError("slow_request_threshold", "must not be negative");

@@ -5,11 +5,13 @@
 #include <climits>
 #include <filesystem>
 #include <utility>
+#include <vector>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server_builder.h>
+#include <grpcpp/support/server_interceptor.h>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -27,6 +29,44 @@ namespace {
 
 // Room for the non-cell fields of a CreateMap request (name, YAML text).
 constexpr int64_t kMessageOverheadBytes = int64_t{1} << 20;
+
+// Response metadata naming the replica (client/client.h kReplicaHeader).
+constexpr char kReplicaHeader[] = "pathd-replica";
+
+// Adds kReplicaHeader to the initial metadata of every call, whichever
+// service answers it, so routing through a load balancer can be observed by
+// clients and tests.
+class ReplicaHeaderInterceptor : public grpc::experimental::Interceptor {
+ public:
+  explicit ReplicaHeaderInterceptor(const std::string& name) : name_(name) {}
+
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+      methods->GetSendInitialMetadata()->emplace(kReplicaHeader, name_);
+    }
+    methods->Proceed();
+  }
+
+ private:
+  const std::string& name_;
+};
+
+class ReplicaHeaderFactory
+    : public grpc::experimental::ServerInterceptorFactoryInterface {
+ public:
+  // `name` must outlive the server.
+  explicit ReplicaHeaderFactory(const std::string& name) : name_(name) {}
+
+  grpc::experimental::Interceptor* CreateServerInterceptor(
+      grpc::experimental::ServerRpcInfo*) override {
+    // gRPC owns the interceptor and deletes it when the call ends.
+    return new ReplicaHeaderInterceptor(name_);
+  }
+
+ private:
+  const std::string& name_;
+};
 
 }  // namespace
 
@@ -152,6 +192,10 @@ absl::Status PathdServer::Start() {
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>>
       interceptors;
   interceptors.push_back(std::make_unique<ParseErrorInterceptorFactory>());
+  if (!options_.replica_name.empty()) {
+    interceptors.push_back(
+        std::make_unique<ReplicaHeaderFactory>(options_.replica_name));
+  }
   builder.experimental().SetInterceptorCreators(std::move(interceptors));
   server_ = builder.BuildAndStart();
   if (server_ == nullptr || port_ == 0) {

@@ -84,6 +84,10 @@ struct ServerOptions {
   // YAML file of tokens and their roles (server/auth.h); empty = every
   // caller may do everything.
   std::string auth_tokens;
+  // Sent in the "pathd-replica" initial metadata of every response, so a
+  // client behind a load balancer sees which replica served it; empty = not
+  // sent. Printable ASCII (a metadata value).
+  std::string replica_name;
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be

@@ -551,7 +551,7 @@ TEST_F(SecurityTest, NavigateSharedObservationsNeedTheWriteRole) {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() +
                          std::chrono::seconds(20));
-    auto stream = client.Navigate(&context);
+    auto stream = client.Navigate(&context, "room");
     v1::NavigateRequest open;
     open.set_seq(1);
     open.mutable_open()->set_map("room");
