@@ -8,6 +8,7 @@ PACKAGES=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libyaml-cpp-dev
   prometheus-cpp-dev libcurl4-openssl-dev
+  libisal-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
 )
