@@ -9,6 +9,7 @@ PACKAGES=(
   libabsl-dev libspdlog-dev libyaml-cpp-dev
   prometheus-cpp-dev libcurl4-openssl-dev
   libpng-dev
+  libisal-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
   python3-grpcio python3-protobuf

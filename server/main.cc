@@ -120,6 +120,18 @@ ABSL_FLAG(std::string, auth_tokens, "",
           "<token>' get UNAUTHENTICATED, calls beyond the token's role "
           "PERMISSION_DENIED; Health needs no token; empty = no "
           "authentication");
+ABSL_FLAG(std::string, data_dir, "",
+          "directory keeping the maps across restarts: every acknowledged "
+          "CreateMap/UpdateMap/DeleteMap is in its log, synced to disk before "
+          "the reply; start-up recovers them (recovered maps win over "
+          "--map_dir files of the same name); empty = maps live in memory only");
+ABSL_FLAG(int64_t, snapshot_log_bytes, int64_t{64} << 20,
+          "with --data_dir: once the active log segment holds this many bytes, "
+          "snapshot the maps changed since their last snapshot and delete the "
+          "older log segments (bounds start-up replay)");
+ABSL_FLAG(absl::Duration, snapshot_interval, absl::Minutes(10),
+          "with --data_dir: the same after this long when the log holds any "
+          "record; 0 = only by --snapshot_log_bytes");
 
 namespace {
 
@@ -289,6 +301,13 @@ pathd::server::ServerOptions OptionsFromFlags() {
     }
   }
   options.slow_request_threshold = absl::GetFlag(FLAGS_slow_request_threshold);
+  options.data_dir = absl::GetFlag(FLAGS_data_dir);
+  options.snapshot_log_bytes = absl::GetFlag(FLAGS_snapshot_log_bytes);
+  if (options.snapshot_log_bytes < 1) FlagError("snapshot_log_bytes", "must be >= 1");
+  options.snapshot_interval = absl::GetFlag(FLAGS_snapshot_interval);
+  if (options.snapshot_interval < absl::ZeroDuration()) {
+    FlagError("snapshot_interval", "must not be negative");
+  }
   if (options.slow_request_threshold < absl::ZeroDuration()) {
     FlagError("slow_request_threshold", "must not be negative");
   }

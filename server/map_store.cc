@@ -329,43 +329,102 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
     return absl::InvalidArgumentError(absl::StrFormat("map '%s' is empty", name));
   }
   if (absl::Status s = CheckSize(grid.width(), grid.height()); !s.ok()) return s;
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->Writable(); !s.ok()) return s;
+  }
 
   auto buffer = std::make_unique<Grid>(std::move(grid));
   auto pool = std::make_shared<GridPool>(buffer->size());
+  // The journal record holds the version, which is only settled under the
+  // lock; it is encoded (a copy of the whole map) before taking it, for the
+  // version the map would get then, and again in the rare case that a
+  // concurrent writer changed that meanwhile.
+  std::string record;
+  uint64_t record_version = 0;
+  uint64_t sequence = 0;
   bool replaced = false;
   // A replaced version and its pool are released after unlocking: freeing
   // large grids should not stall other callers.
   std::shared_ptr<const MapSnapshot> old_current;
   std::shared_ptr<GridPool> old_pool;
-  absl::ReleasableMutexLock lock(&mu_);
-  auto it = maps_.find(name);
-  if (it != maps_.end() && !replace) {
-    return absl::AlreadyExistsError(absl::StrFormat(
-        "map '%s' already exists (version %d); set replace to overwrite it", name,
-        it->second.current->version));
+  std::shared_ptr<const MapSnapshot> published;
+  for (;;) {
+    if (journal_ != nullptr) {
+      uint64_t version = 1;
+      {
+        absl::ReaderMutexLock lock(&mu_);
+        auto it = maps_.find(name);
+        if (it != maps_.end()) version = it->second.current->version + 1;
+      }
+      if (version != record_version) {
+        absl::StatusOr<std::string> encoded = journal_->EncodeCreate(name, version, *buffer);
+        if (!encoded.ok()) return encoded.status();
+        record = *std::move(encoded);
+        record_version = version;
+      }
+    }
+    absl::MutexLock lock(&mu_);
+    auto it = maps_.find(name);
+    if (it != maps_.end() && !replace) {
+      return absl::AlreadyExistsError(absl::StrFormat(
+          "map '%s' already exists (version %d); set replace to overwrite it", name,
+          it->second.current->version));
+    }
+    // Continuing the count on replace keeps "version" monotonic per name, so a
+    // client holding expected_version from the old map cannot update the new
+    // one by accident.
+    const uint64_t version = it == maps_.end() ? 1 : it->second.current->version + 1;
+    if (journal_ != nullptr && version != record_version) continue;
+    auto snapshot = std::make_shared<MapSnapshot>();
+    snapshot->name = std::string(name);
+    snapshot->map_id = ++last_map_id_;
+    snapshot->version = version;
+    snapshot->grid = GridPool::Publish(pool, std::move(buffer), snapshot->version);
+    if (it == maps_.end()) {
+      maps_.emplace(std::string(name),
+                    Entry{snapshot, std::make_shared<absl::Mutex>(), std::move(pool)});
+    } else {
+      old_current = std::exchange(it->second.current, snapshot);
+      // The new map gets its own pool: the old one's buffers have the old
+      // size, and an update still working on the old map must not feed it.
+      old_pool = std::exchange(it->second.pool, std::move(pool));
+      replaced = true;
+    }
+    if (journal_ != nullptr) sequence = journal_->Append(name, std::move(record), snapshot);
+    published = std::move(snapshot);
+    break;
+  }
+  if (replaced) Notify(name, published);
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) return s;
+  }
+  return published;
+}
+
+absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Restore(
+    std::string_view name, Grid grid, uint64_t version) {
+  if (absl::Status s = ValidateName(name); !s.ok()) return s;
+  if (grid.size() == 0) {
+    return absl::InvalidArgumentError(absl::StrFormat("map '%s' is empty", name));
+  }
+  if (absl::Status s = CheckSize(grid.width(), grid.height()); !s.ok()) return s;
+  auto buffer = std::make_unique<Grid>(std::move(grid));
+  auto pool = std::make_shared<GridPool>(buffer->size());
+  absl::MutexLock lock(&mu_);
+  if (maps_.find(name) != maps_.end()) {
+    return absl::FailedPreconditionError(
+        absl::StrFormat("map '%s' exists already; cannot restore it", name));
   }
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->name = std::string(name);
+  // A fresh id: caches built before a restart do not exist, so nothing can
+  // mistake the restored map for another.
   snapshot->map_id = ++last_map_id_;
-  // Continuing the count on replace keeps "version" monotonic per name, so a
-  // client holding expected_version from the old map cannot update the new
-  // one by accident.
-  snapshot->version = it == maps_.end() ? 1 : it->second.current->version + 1;
-  snapshot->grid = GridPool::Publish(pool, std::move(buffer), snapshot->version);
-  if (it == maps_.end()) {
-    maps_.emplace(std::string(name),
-                  Entry{snapshot, std::make_shared<absl::Mutex>(), std::move(pool)});
-  } else {
-    old_current = std::exchange(it->second.current, snapshot);
-    // The new map gets its own pool: the old one's buffers have the old
-    // size, and an update still working on the old map must not feed it.
-    old_pool = std::exchange(it->second.pool, std::move(pool));
-    replaced = true;
-  }
-  lock.Release();
-  std::shared_ptr<const MapSnapshot> published = std::move(snapshot);
-  if (replaced) Notify(name, published);
-  return published;
+  snapshot->version = version;
+  snapshot->grid = GridPool::Publish(pool, std::move(buffer), version);
+  maps_.emplace(std::string(name),
+                Entry{snapshot, std::make_shared<absl::Mutex>(), std::move(pool)});
+  return std::shared_ptr<const MapSnapshot>(std::move(snapshot));
 }
 
 absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Get(
@@ -396,6 +455,10 @@ absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
   // (when nobody else holds it) should not stall other callers.
   std::shared_ptr<const MapSnapshot> removed;
   std::shared_ptr<GridPool> pool;
+  uint64_t sequence = 0;
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->Writable(); !s.ok()) return s;
+  }
   {
     absl::MutexLock lock(&mu_);
     auto it = maps_.find(name);
@@ -403,8 +466,16 @@ absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
     removed = std::move(it->second.current);
     pool = std::move(it->second.pool);
     maps_.erase(it);
+    if (journal_ != nullptr) {
+      // A few bytes: encoding under the lock costs nothing worth avoiding.
+      sequence = journal_->Append(name, journal_->EncodeDelete(name, removed->version),
+                                  nullptr);
+    }
   }
   Notify(name, nullptr);
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) return s;
+  }
   return removed->version;
 }
 
@@ -412,6 +483,11 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     std::string_view name, absl::Span<const MapChange> changes,
     std::optional<uint64_t> expected_version) {
   if (absl::Status s = ValidateName(name); !s.ok()) return s;
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->Writable(); !s.ok()) return s;
+  }
+  MapUpdateResult result;
+  uint64_t sequence = 0;
   // Loops only when the map was replaced or deleted-and-recreated while this
   // update copied it; the retry then validates against the new version.
   for (;;) {
@@ -488,6 +564,8 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     snapshot->map_id = base->map_id;
     snapshot->version = base->version + 1;
     snapshot->grid = GridPool::Publish(pool, std::move(grid), snapshot->version);
+    std::string record;
+    if (journal_ != nullptr) record = journal_->EncodeUpdate(name, snapshot->version, changes);
     {
       absl::MutexLock lock(&mu_);
       auto it = maps_.find(name);
@@ -495,14 +573,22 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
       if (it == maps_.end()) return NotFound(name);
       if (it->second.current != base) continue;  // replaced meanwhile
       it->second.current = snapshot;
+      if (journal_ != nullptr) sequence = journal_->Append(name, std::move(record), snapshot);
     }
     // Under update_mu, so the next update of this map sees this version
     // logged.
     pool->Record(*snapshot);
     // Still under update_mu: listeners see this map's versions in order.
     Notify(name, snapshot);
-    return MapUpdateResult{std::move(snapshot), cells_changed};
+    result = MapUpdateResult{std::move(snapshot), cells_changed};
+    break;
   }
+  // Outside update_mu, so further updates of this map can queue their records
+  // behind this one and share its disk sync.
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) return s;
+  }
+  return result;
 }
 
 std::unique_ptr<Grid> MapStore::AcquireGrid(GridPool& pool, const MapSnapshot& base) {

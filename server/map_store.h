@@ -67,6 +67,39 @@ struct MapChange {
   }
 };
 
+// Makes a store's changes durable (server/durable_store.h). The store calls
+// Encode* without holding its locks, Append under the lock that publishes the
+// change (so the log order is the order versions are published, per map and
+// between a map's Create, Update and Delete), and WaitDurable after releasing
+// its locks, before it returns: writers waiting together share one disk sync.
+// Implementations are thread-safe.
+class MapJournal {
+ public:
+  virtual ~MapJournal() = default;
+  // OK while changes can be logged; otherwise the error the store returns
+  // without applying the change.
+  virtual absl::Status Writable() = 0;
+  // A record of creating `name` at `version` with `grid`; RESOURCE_EXHAUSTED
+  // when the map is too large to log.
+  virtual absl::StatusOr<std::string> EncodeCreate(std::string_view name,
+                                                   uint64_t version,
+                                                   const Grid& grid) = 0;
+  // A record of the update of `name` that produced `version`.
+  virtual std::string EncodeUpdate(std::string_view name, uint64_t version,
+                                   absl::Span<const MapChange> changes) = 0;
+  // A record of deleting `name` at `last_version`.
+  virtual std::string EncodeDelete(std::string_view name, uint64_t last_version) = 0;
+  // Queues `record` (from an Encode* above) for the change that made
+  // `current` the version of `name` (null: deleted). Called with the store's
+  // lock held: must not block on I/O. Returns the record's sequence number.
+  virtual uint64_t Append(std::string_view name, std::string record,
+                          std::shared_ptr<const MapSnapshot> current) = 0;
+  // Blocks until record `sequence` and every earlier one are on disk. An
+  // error means the change is applied in memory but will not survive a
+  // restart; later changes are refused (Writable).
+  virtual absl::Status WaitDurable(uint64_t sequence) = 0;
+};
+
 struct MapUpdateResult {
   std::shared_ptr<const MapSnapshot> snapshot;
   // Cells whose cost differs between the old and the new version.
@@ -183,6 +216,18 @@ class MapStore {
                                          absl::Span<const MapChange> changes,
                                          std::optional<uint64_t> expected_version);
 
+  // Installs `grid` as `name` at `version`, as recovered from --data_dir:
+  // not journaled, no listener called. Errors as Create; FAILED_PRECONDITION
+  // when the name exists. For start-up, before serving.
+  absl::StatusOr<std::shared_ptr<const MapSnapshot>> Restore(std::string_view name,
+                                                             Grid grid,
+                                                             uint64_t version);
+
+  // Logs every later Create, Update and Delete to `journal` (which must
+  // outlive the store's writers) before they return; null stops logging.
+  // Not thread-safe with respect to writers: set at start-up.
+  void SetJournal(MapJournal* journal) { journal_ = journal; }
+
   size_t size() const;
 
   BufferStats buffer_stats() const;
@@ -222,6 +267,7 @@ class MapStore {
   std::atomic<int64_t> grids_copied_{0};
   std::atomic<int64_t> grids_allocated_{0};
   std::vector<Listener> listeners_;
+  MapJournal* journal_ = nullptr;
 };
 
 }  // namespace pathd::server

@@ -95,6 +95,12 @@ absl::StatusOr<int> PathdServer::LoadMapDir() {
   int loaded = 0;
   for (const std::string& file : files) {
     const std::string name = std::filesystem::path(file).stem().string();
+    if (store_.Get(name).ok()) {
+      // Recovered from --data_dir: its updates since it was loaded win over
+      // the file (docs/decisions.md, "Durable maps").
+      spdlog::info("map '{}' was recovered from --data_dir; not loading {}", name, file);
+      continue;
+    }
     const absl::Time start = absl::Now();
     absl::StatusOr<Grid> grid =
         LoadMapDirFile(options_.map_dir, file, store_.max_cells());
@@ -129,6 +135,13 @@ absl::Status PathdServer::Start() {
                            TokenAuthenticator::LoadFile(options_.auth_tokens));
     spdlog::info("--auth_tokens {}: {} token(s); Health needs none",
                  options_.auth_tokens, authenticator_->entries().size());
+  }
+  if (!options_.data_dir.empty()) {
+    PATHD_ASSIGN_OR_RETURN(
+        durable_, DurableStore::Open(DurableStore::Options{options_.data_dir,
+                                                           options_.snapshot_log_bytes,
+                                                           options_.snapshot_interval},
+                                     store_));
   }
   if (!options_.map_dir.empty()) {
     PATHD_ASSIGN_OR_RETURN(const int loaded, LoadMapDir());

@@ -16,6 +16,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/auth.h"
+#include "server/durable_store.h"
 #include "server/incremental_cache.h"
 #include "server/map_service.h"
 #include "server/map_store.h"
@@ -88,6 +89,14 @@ struct ServerOptions {
   // client behind a load balancer sees which replica served it; empty = not
   // sent. Printable ASCII (a metadata value).
   std::string replica_name;
+  // Directory keeping the maps across restarts (server/durable_store.h);
+  // empty = in memory only.
+  std::string data_dir;
+  // With data_dir: snapshot changed maps and drop old log segments once the
+  // active segment holds this many bytes, or after snapshot_interval (zero =
+  // only by size).
+  int64_t snapshot_log_bytes = int64_t{64} << 20;
+  absl::Duration snapshot_interval = absl::Minutes(10);
 };
 
 // Start() once, Shutdown() once (the destructor calls it). Shutdown may be
@@ -99,10 +108,13 @@ class PathdServer {
   PathdServer(const PathdServer&) = delete;
   PathdServer& operator=(const PathdServer&) = delete;
 
-  // Loads every .map/.yaml in map_dir (a bad file is logged and skipped),
-  // starts the pool and listens. UNAVAILABLE when the address cannot be bound;
-  // NOT_FOUND / INVALID_ARGUMENT when map_dir is missing or not a directory,
-  // or a TLS or token file is missing or malformed (server/tls.h, auth.h).
+  // Checks the TLS and token files, recovers data_dir's maps, then loads
+  // every .map/.yaml in map_dir whose name is not taken (a bad file is
+  // logged and skipped), starts the pool and listens. DATA_LOSS /
+  // FAILED_PRECONDITION / INTERNAL from DurableStore::Open. UNAVAILABLE when
+  // the address cannot be bound; NOT_FOUND / INVALID_ARGUMENT when map_dir is
+  // missing or not a directory, or a TLS or token file is missing or
+  // malformed (server/tls.h, auth.h).
   absl::Status Start();
 
   // Health NOT_SERVING, stop accepting, give in-flight calls the grace
@@ -121,6 +133,8 @@ class PathdServer {
   int metrics_port() const { return metrics_ == nullptr ? 0 : metrics_->port(); }
 
   MapStore& store() { return store_; }
+  // The --data_dir journal; null without data_dir or before Start.
+  const DurableStore* durable_store() const { return durable_.get(); }
   const InflationCache& inflation_cache() const { return inflation_; }
   const IncrementalCache& incremental_cache() const { return cache_; }
   const ServerOptions& options() const { return options_; }
@@ -133,6 +147,9 @@ class PathdServer {
 
   const ServerOptions options_;
   MapStore store_;
+  // Declared after the store it journals, before everything that writes to
+  // it, so it is destroyed after them.
+  std::unique_ptr<DurableStore> durable_;
   InflationCache inflation_;
   IncrementalCache cache_;
   std::unique_ptr<WorkerPool> pool_;
