@@ -10,6 +10,8 @@ PACKAGES=(
   prometheus-cpp-dev libcurl4-openssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
+  # make fuzz: clang, its libFuzzer runtime, llvm-symbolizer for the reports.
+  clang libclang-rt-14-dev llvm
 )
 
 missing=()
