@@ -165,7 +165,12 @@ absl::StatusOr<Grid> ParseMap(absl::string_view text, absl::string_view source,
   }
 
   std::vector<uint8_t> costs;
-  costs.reserve(static_cast<size_t>(cells));
+  // Every row takes `width` bytes of the text, so reserving more than the
+  // text's size would only let a short header ("height 16384 / width
+  // 16384") allocate far more than the input it arrived in; such a text
+  // fails below with the row it ends at.
+  costs.reserve(static_cast<size_t>(
+      std::min(cells, static_cast<int64_t>(text.size()))));
   for (int32_t y = 0; y < height; ++y) {
     if (!reader.Next(line)) {
       return Error(source, reader.line_number() + 1,

@@ -354,7 +354,10 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
                          cursor.HeaderNumber("maxval", 65535));
 
   const std::vector<uint8_t> cost_of = MakeCostTable(metadata, maxval);
-  std::vector<uint8_t> costs(static_cast<size_t>(cells));
+  // Allocated only once the pixel data is known to be all there, so a short
+  // header ("P5 16384 16384 255") cannot make the reader allocate far more
+  // than the input it arrived in.
+  std::vector<uint8_t> costs;
   // Image row r (top first) becomes grid row height-1-r: the grid is stored
   // bottom row first, like nav_msgs/OccupancyGrid.
   const auto put = [&](int64_t i, int32_t value) {
@@ -365,6 +368,11 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
   };
 
   if (plain) {
+    // Each value takes at least two bytes (a digit and a separator), which
+    // bounds the reservation by the input.
+    std::vector<uint16_t> values;
+    values.reserve(static_cast<size_t>(
+        std::min(cells, static_cast<int64_t>(pgm.size() / 2 + 1))));
     for (int64_t i = 0; i < cells; ++i) {
       const size_t before = cursor.pos();
       const absl::string_view token = cursor.Token();
@@ -384,7 +392,7 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
         return cursor.Error(
             absl::StrCat("pixel value ", value, " exceeds maxval ", maxval));
       }
-      put(i, static_cast<int32_t>(value));
+      values.push_back(static_cast<uint16_t>(value));
     }
     cursor.SkipSpaceAndComments();
     if (!cursor.AtEnd()) {
@@ -394,6 +402,8 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
                                        " pixel values of a ", width, " x ",
                                        height, " image"));
     }
+    costs.resize(static_cast<size_t>(cells));
+    for (int64_t i = 0; i < cells; ++i) put(i, values[static_cast<size_t>(i)]);
   } else {
     // Exactly one whitespace character separates maxval from the raster.
     // Some writers put a comment there, which ends at that newline.
@@ -414,6 +424,7 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
     // Bytes after the raster are ignored: netpbm allows several images in
     // one file and some writers append a newline.
     const auto* bytes = reinterpret_cast<const unsigned char*>(raster.data());
+    costs.resize(static_cast<size_t>(cells));
     for (int64_t i = 0; i < cells; ++i) {
       const int32_t value =
           bytes_per_sample == 1

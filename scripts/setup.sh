@@ -19,6 +19,8 @@ PACKAGES=(
   # the test's user with its own config; the package's system service is not
   # used (on a machine without a policy-rc.d, apt starts it on port 80).
   nginx
+  # make fuzz: clang, its libFuzzer runtime, llvm-symbolizer for the reports.
+  clang libclang-rt-14-dev llvm
 )
 
 missing=()

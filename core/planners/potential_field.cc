@@ -321,6 +321,13 @@ class PotentialFieldPlanner final : public Planner {
     int64_t steps = 0;
     while (true) {
       if (CellOf(q) == request.goal) {
+        // A step can end exactly on the goal cell's left or lower edge,
+        // which floor() counts as inside the goal cell but which the step's
+        // supercover only touches; finishing at the centre makes the cell
+        // chain, and so the path, end in the goal cell.
+        if (q.x != goal_point.x || q.y != goal_point.y) {
+          result.trajectory.push_back(goal_point);
+        }
         result.outcome = PlanOutcome::kFound;
         break;
       }

@@ -262,6 +262,24 @@ TEST(PotentialFieldTest, StepSizeSetsTheTrajectorySpacing) {
   }
 }
 
+// Found by request_fuzz: with no final approach (a tiny influence distance)
+// half-cell steps from a cell centre land exactly on the goal cell's left
+// edge, which counts as inside the goal but which the last step only
+// touched, so the path ended one cell short of the goal.
+TEST(PotentialFieldTest, DescentStoppingOnTheGoalCellsEdgeEndsThePathInIt) {
+  const Grid grid = Grid::Create(8, 8).value();
+  for (const Cell goal : {Cell{7, 0}, Cell{0, 7}, Cell{7, 7}}) {
+    PlanRequest request = PlanRequest::Between({0, 0}, goal);
+    request.potential.attractive = AttractiveShape::kConic;
+    request.potential.influence_distance = 1e-3;
+    request.potential.step_size = 0.5;
+    const absl::StatusOr<PlanResult> r = Plan(grid, request);
+    ASSERT_TRUE(r.ok()) << r.status();
+    ASSERT_TRUE(r->found()) << CellToString(goal);
+    ExpectConsistent(grid, request, *r);
+  }
+}
+
 TEST(PotentialFieldTest, UnknownCellsFollowTheOption) {
   std::vector<std::string> rows(15, std::string(30, '.'));
   for (auto& row : rows) row[15] = '?';
