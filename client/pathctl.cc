@@ -1890,11 +1890,8 @@ int PrintBenchJson(Env& env, const std::string& name, const std::string& source,
   return env.PrintJson(json);
 }
 
-// One row of figures, the same as --json's (latencies in microseconds, of
-// the OK answers); errors by code as "CODE N" pairs separated by spaces.
-int PrintBenchCsv(Env& env, const std::string& name, const std::string& source,
-                  const client::LoadReport& report) {
-  const Options& options = env.options();
+// "CODE N" for every status code the load saw errors of.
+std::vector<std::string> ErrorsByCode(const client::LoadReport& report) {
   std::vector<std::string> errors;
   for (size_t c = 0; c < report.errors_by_code.size(); ++c) {
     if (report.errors_by_code[c] == 0) continue;
@@ -1902,6 +1899,15 @@ int PrintBenchCsv(Env& env, const std::string& name, const std::string& source,
         absl::StatusCodeToString(static_cast<absl::StatusCode>(c)), " ",
         report.errors_by_code[c]));
   }
+  return errors;
+}
+
+// One row of figures, the same as --json's (latencies in microseconds, of
+// the OK answers); errors by code as "CODE N" pairs separated by spaces.
+int PrintBenchCsv(Env& env, const std::string& name, const std::string& source,
+                  const client::LoadReport& report) {
+  const Options& options = env.options();
+  const std::vector<std::string> errors = ErrorsByCode(report);
   const client::LatencySummary& l = report.latency;
   Table table({"map", "planner", "queries", "concurrency", "channels", "elapsed_s",
                "requests", "ok", "no_path", "errors", "errors_by_code",
@@ -1923,13 +1929,7 @@ int PrintBenchCsv(Env& env, const std::string& name, const std::string& source,
 void PrintBenchText(Env& env, const std::string& name, const std::string& source,
                     const client::LoadReport& report) {
   const Options& options = env.options();
-  std::vector<std::string> errors;
-  for (size_t c = 0; c < report.errors_by_code.size(); ++c) {
-    if (report.errors_by_code[c] == 0) continue;
-    errors.push_back(absl::StrCat(
-        absl::StatusCodeToString(static_cast<absl::StatusCode>(c)), " ",
-        report.errors_by_code[c]));
-  }
+  const std::vector<std::string> errors = ErrorsByCode(report);
   const client::LatencySummary& l = report.latency;
   env.out() << absl::StrFormat(
       "map:         %s\n"
