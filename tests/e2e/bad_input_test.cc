@@ -43,6 +43,8 @@ namespace pathd {
 namespace {
 
 namespace fs = std::filesystem;
+using e2e::ReadFile;
+using e2e::WriteFile;
 using Clock = std::chrono::steady_clock;
 using grpc::StatusCode;
 using ::testing::HasSubstr;
@@ -63,18 +65,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int32_t kIntMax = std::numeric_limits<int32_t>::max();
 constexpr int32_t kIntMin = std::numeric_limits<int32_t>::min();
 
-void WriteFile(const fs::path& path, const std::string& contents) {
-  std::ofstream out(path, std::ios::binary);
-  out << contents;
-  ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // A width x height Moving AI map, open except for the blocked cell (5, 5)
 // when the map is big enough to hold it.

@@ -49,6 +49,8 @@ namespace pathd {
 namespace {
 
 namespace fs = std::filesystem;
+using e2e::ReadFile;
+using e2e::WriteFile;
 using Clock = std::chrono::steady_clock;
 
 // Hang guards, not timing assertions: generous enough for a loaded CI
@@ -68,18 +70,7 @@ std::string OpenRoomMap(int width = 10, int height = 10) {
   return text;
 }
 
-void WriteFile(const fs::path& path, const std::string& contents) {
-  std::ofstream out(path, std::ios::binary);
-  out << contents;
-  ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
 
 struct ProcessResult {
   int exit_code = -1;  // -1: killed by a signal

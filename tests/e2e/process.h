@@ -12,6 +12,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -21,6 +24,22 @@
 extern char** environ;
 
 namespace pathd::e2e {
+
+// A file's whole content, "" when it cannot be read (a log not written yet).
+inline std::string ReadFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Writes `contents` to `path`, failing the test when it cannot.
+inline void WriteFile(const std::filesystem::path& path,
+                      const std::string& contents) {
+  std::ofstream out(path, std::ios::binary);
+  out << contents;
+  ASSERT_TRUE(out.good()) << "cannot write " << path;
+}
 
 // Starts argv[0] with the test's environment minus PATHD_SERVER plus
 // `extra_env` ("NAME=value"), stdout/stderr redirected to the given fds (or

@@ -43,6 +43,8 @@ namespace pathd {
 namespace {
 
 namespace fs = std::filesystem;
+using e2e::ReadFile;
+using e2e::WriteFile;
 using Clock = std::chrono::steady_clock;
 
 // Hang guard only: a process that never comes up fails the test instead of
@@ -71,12 +73,6 @@ std::string FindNginx() {
   return "";
 }
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // A port free at the time of the call, for nginx, which cannot listen on
 // port 0 and report the port it got.
