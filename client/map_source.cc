@@ -8,7 +8,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
-#include "core/map_io.h"
+#include "core/map_io/map_io.h"
 #include "core/status_macros.h"
 
 namespace pathd::client {

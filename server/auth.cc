@@ -17,7 +17,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "core/map_io.h"
+#include "core/map_io/map_io.h"
 #include "server/request_log.h"
 #include "spdlog/spdlog.h"
 

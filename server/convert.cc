@@ -1,13 +1,17 @@
 // proto <-> core translation.
 #include "server/convert.h"
 
+#include "proto/planner_names.h"
+
 #include <cmath>
 #include <optional>
 #include <utility>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/search/endpoints.h"
 #include "core/status_macros.h"
+#include "proto/planner_names.h"
 
 namespace pathd::server {
 namespace {
@@ -91,32 +95,6 @@ absl::StatusOr<int64_t> EffectiveMaxExpansions(const v1::PlanOptions& options,
 
 namespace {
 
-// The one table between wire planner values and registry names.
-struct PlannerEntry {
-  v1::Planner wire;
-  std::string_view name;
-};
-constexpr PlannerEntry kPlanners[] = {
-    {v1::PLANNER_ASTAR, "astar"},
-    {v1::PLANNER_DIJKSTRA, "dijkstra"},
-    {v1::PLANNER_BFS, "bfs"},
-    {v1::PLANNER_DFS, "dfs"},
-    {v1::PLANNER_GREEDY, "greedy"},
-    {v1::PLANNER_WEIGHTED_ASTAR, "weighted_astar"},
-    {v1::PLANNER_WAVEFRONT, "wavefront"},
-    {v1::PLANNER_DISTANCE_TRANSFORM, "distance_transform"},
-    {v1::PLANNER_DISTANCE_TRANSFORM_EXACT, "distance_transform_exact"},
-    {v1::PLANNER_JPS, "jps"},
-    {v1::PLANNER_THETA_STAR, "theta_star"},
-    {v1::PLANNER_LAZY_THETA_STAR, "lazy_theta_star"},
-    {v1::PLANNER_RTAA_STAR, "rtaa_star"},
-    {v1::PLANNER_LRTA_STAR, "lrta_star"},
-    {v1::PLANNER_POTENTIAL_FIELD, "potential_field"},
-    {v1::PLANNER_LPA_STAR, "lpa_star"},
-    {v1::PLANNER_DSTAR_LITE, "dstar_lite"},
-    {v1::PLANNER_SPM, "spm"},
-};
-
 // Checks a potential-field option: 0 (unset) keeps the default, otherwise it
 // must be finite and > 0.
 absl::Status SetPositive(double value, std::string_view field, double* out) {
@@ -133,9 +111,7 @@ absl::Status SetPositive(double value, std::string_view field, double* out) {
 
 absl::StatusOr<std::string_view> PlannerName(int planner) {
   if (planner == v1::PLANNER_UNSPECIFIED) return std::string_view("astar");
-  for (const PlannerEntry& e : kPlanners) {
-    if (e.wire == planner) return e.name;
-  }
+  if (std::optional<std::string_view> name = WirePlannerName(planner)) return *name;
   return absl::InvalidArgumentError(absl::StrFormat("unknown planner %d", planner));
 }
 

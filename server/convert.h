@@ -10,8 +10,9 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/grid.h"
-#include "core/planner.h"
+#include "core/search/endpoints.h"
+#include "core/map/grid.h"
+#include "core/search/planner.h"
 #include "pathd/v1/common.pb.h"
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"

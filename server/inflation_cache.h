@@ -12,7 +12,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
-#include "core/grid.h"
+#include "core/map/grid.h"
 
 namespace pathd::server {
 

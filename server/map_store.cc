@@ -8,7 +8,7 @@
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_format.h"
-#include "core/grid.h"
+#include "core/map/grid.h"
 
 namespace pathd::server {
 namespace {

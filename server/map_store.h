@@ -19,7 +19,7 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/types/span.h"
-#include "core/grid.h"
+#include "core/map/grid.h"
 
 namespace pathd::server {
 
@@ -67,7 +67,7 @@ struct MapChange {
   }
 };
 
-// Makes a store's changes durable (server/durable_store.h). The store calls
+// Makes a store's changes durable (server/storage/durable_store.h). The store calls
 // Encode* without holding its locks, Append under the lock that publishes the
 // change (so the log order is the order versions are published, per map and
 // between a map's Create, Update and Delete), and WaitDurable after releasing

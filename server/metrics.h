@@ -18,8 +18,8 @@
 #include "server/incremental_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
-#include "server/map_watch.h"
-#include "server/navigation.h"
+#include "server/rpc/watch_map.h"
+#include "server/rpc/navigate.h"
 #include "server/request_log.h"
 #include "server/worker_pool.h"
 

@@ -16,13 +16,13 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/auth.h"
-#include "server/durable_store.h"
+#include "server/storage/durable_store.h"
 #include "server/incremental_cache.h"
-#include "server/map_service.h"
+#include "server/rpc/map_service.h"
 #include "server/map_store.h"
 #include "server/metrics.h"
-#include "server/navigation.h"
-#include "server/planner_service.h"
+#include "server/rpc/navigate.h"
+#include "server/rpc/planner_service.h"
 #include "server/worker_pool.h"
 
 namespace pathd::server {
@@ -89,7 +89,7 @@ struct ServerOptions {
   // client behind a load balancer sees which replica served it; empty = not
   // sent. Printable ASCII (a metadata value).
   std::string replica_name;
-  // Directory keeping the maps across restarts (server/durable_store.h);
+  // Directory keeping the maps across restarts (server/storage/durable_store.h);
   // empty = in memory only.
   std::string data_dir;
   // With data_dir: snapshot changed maps and drop old log segments once the

@@ -10,7 +10,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "core/map_io.h"
+#include "core/map_io/map_io.h"
 #include "core/status_macros.h"
 
 namespace pathd::server {

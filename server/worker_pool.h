@@ -18,7 +18,7 @@
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
-#include "core/search_scratch.h"
+#include "core/search/search_scratch.h"
 
 namespace pathd::server {
 

@@ -6,8 +6,9 @@
 #include <memory>
 
 #include "absl/time/clock.h"
+#include "core/search/endpoints.h"
 #include "core/planners/planners.h"
-#include "core/planners/search_common.h"
+#include "core/search/grid_view.h"
 #include "core/status_macros.h"
 
 namespace pathd {

@@ -2,13 +2,14 @@
 // each query builds the incremental object for that one query, so the typed
 // planner suite and the Moving AI conformance check the incremental search
 // against Dijkstra like any other planner. Sessions that keep the state
-// between queries use core/incremental.h directly.
+// between queries use core/incremental/incremental_search.h directly.
 #include <memory>
 
 #include "absl/status/status.h"
 #include "absl/time/clock.h"
-#include "core/incremental.h"
-#include "core/incremental_engine.h"
+#include "core/search/endpoints.h"
+#include "core/incremental/incremental_search.h"
+#include "core/incremental/engine.h"
 #include "core/planners/planners.h"
 #include "core/status_macros.h"
 

@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "core/planner.h"
+#include "core/search/planner.h"
 
 namespace pathd {
 

@@ -8,7 +8,7 @@
 // the path found is measured under the cost model.
 //
 // Per query the obstacle distance costs one exact distance transform of the
-// map (core/distance_field.h), O(cells) but bounded by the influence
+// map (core/map/euclidean_distance.h), O(cells) but bounded by the influence
 // distance: about 1 ms on a 512 x 512 map.
 #include <algorithm>
 #include <cmath>
@@ -19,10 +19,12 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "core/distance_field.h"
-#include "core/line_of_sight.h"
+#include "core/search/path_measure.h"
+#include "core/search/endpoints.h"
+#include "core/map/euclidean_distance.h"
+#include "core/search/line_of_sight.h"
 #include "core/planners/planners.h"
-#include "core/planners/search_common.h"
+#include "core/search/grid_view.h"
 #include "core/status_macros.h"
 
 namespace pathd {
@@ -68,7 +70,7 @@ class ObstacleDistance {
     const double bound = std::ceil(far_ * far_);
     squared_ = &transform_.Compute(
         grid, sources,
-        bound >= 1e15 ? DistanceTransform::kFar : static_cast<int64_t>(bound));
+        bound >= 1e15 ? EuclideanDistanceField::kFar : static_cast<int64_t>(bound));
   }
   // Holds a pointer into its own transform.
   ObstacleDistance(const ObstacleDistance&) = delete;
@@ -109,14 +111,14 @@ class ObstacleDistance {
     const int64_t sq =
         (*squared_)[static_cast<size_t>(y) * static_cast<size_t>(width_) +
                     static_cast<size_t>(x)];
-    return sq == DistanceTransform::kFar ? far_
+    return sq == EuclideanDistanceField::kFar ? far_
                                          : std::sqrt(static_cast<double>(sq));
   }
 
   int32_t width_;
   int32_t height_;
   double far_;
-  DistanceTransform transform_;
+  EuclideanDistanceField transform_;
   const std::vector<int64_t>* squared_;
 };
 

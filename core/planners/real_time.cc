@@ -14,9 +14,11 @@
 #include <vector>
 
 #include "absl/time/clock.h"
-#include "core/planners/best_first.h"
+#include "core/search/path_measure.h"
+#include "core/search/endpoints.h"
+#include "core/search/best_first.h"
 #include "core/planners/planners.h"
-#include "core/planners/search_common.h"
+#include "core/search/grid_view.h"
 #include "core/status_macros.h"
 
 namespace pathd {

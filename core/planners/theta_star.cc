@@ -33,10 +33,12 @@
 #include <memory>
 
 #include "absl/time/clock.h"
-#include "core/line_of_sight.h"
-#include "core/planners/best_first.h"
+#include "core/search/path_measure.h"
+#include "core/search/endpoints.h"
+#include "core/search/line_of_sight.h"
+#include "core/search/best_first.h"
 #include "core/planners/planners.h"
-#include "core/planners/search_common.h"
+#include "core/search/grid_view.h"
 #include "core/status_macros.h"
 
 namespace pathd {

@@ -4,6 +4,7 @@
 // the start is labelled, then walk from the start to a neighbour labelled one
 // less until the goal. The labels count moves, so the path has the fewest
 // moves; cell costs only decide what is blocked.
+#include "core/search/endpoints.h"
 #include "core/planners/wavefront.h"
 
 #include <memory>
@@ -11,8 +12,8 @@
 
 #include "absl/time/clock.h"
 #include "core/planners/planners.h"
-#include "core/planners/search_common.h"
-#include "core/search_scratch.h"
+#include "core/search/grid_view.h"
+#include "core/search/search_scratch.h"
 #include "core/status_macros.h"
 
 namespace pathd {

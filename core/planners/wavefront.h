@@ -9,9 +9,9 @@
 #include <optional>
 #include <vector>
 
-#include "core/cost_model.h"
-#include "core/grid.h"
-#include "core/planner.h"
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "core/search/planner.h"
 
 namespace pathd {
 

@@ -18,8 +18,9 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
-#include "core/map_io.h"
-#include "core/planner.h"
+#include "core/search/registry.h"
+#include "core/map_io/map_io.h"
+#include "core/search/planner.h"
 #include "tests/bench/movingai_maps.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",

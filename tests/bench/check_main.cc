@@ -17,8 +17,10 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
-#include "core/map_io.h"
-#include "core/planner.h"
+#include "core/search/registry.h"
+#include "core/search/path_measure.h"
+#include "core/map_io/map_io.h"
+#include "core/search/planner.h"
 #include "tests/bench/movingai_maps.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",

@@ -13,9 +13,9 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
-#include "core/grid.h"
-#include "core/inflation.h"
-#include "core/map_io.h"
+#include "core/map/grid.h"
+#include "core/map/inflation.h"
+#include "core/map_io/map_io.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
           "folder holding <set>/<map>.map files");

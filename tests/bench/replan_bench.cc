@@ -9,7 +9,7 @@
 //  - Memory per cell of D* Lite's state and of a field.
 //  - With --threshold: repairing a field after k changed cells (scattered or
 //    in one square cluster) against rebuilding it, which is how the repair
-//    or rebuild rule in core/incremental.cc was chosen, and what
+//    or rebuild rule in core/incremental/incremental_search.cc was chosen, and what
 //    ShortestPathMap::UpdateMap with that rule then takes.
 // Maps: a 1024 x 1024 grid with random obstacles (fixed seed) and the shared
 // Moving AI maps (start and goal of each map's longest scenario). Figures,
@@ -26,10 +26,11 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/time/clock.h"
-#include "core/incremental.h"
-#include "core/incremental_engine.h"
-#include "core/map_io.h"
-#include "core/planner.h"
+#include "core/search/registry.h"
+#include "core/incremental/incremental_search.h"
+#include "core/incremental/engine.h"
+#include "core/map_io/map_io.h"
+#include "core/search/planner.h"
 #include "tests/bench/movingai_maps.h"
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "proto/planner_names.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -37,13 +38,13 @@
 #include "google/protobuf/struct.pb.h"
 #include "google/protobuf/util/json_util.h"
 #include "gtest/gtest.h"
-#include "client/pathctl.h"
-#include "client/png_io.h"
-#include "client/render.h"
+#include "client/pathctl/pathctl.h"
+#include "client/pathctl/png_io.h"
+#include "client/pathctl/render.h"
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
 #include "tests/e2e/process.h"
-#include "tests/server/test_certs.h"
+#include "tests/testing/test_certs.h"
 
 namespace pathd {
 namespace {
@@ -555,7 +556,7 @@ std::string WalledRoomMap() {
 
 TEST_F(E2eTest, EveryPlannerRunsThroughPathctl) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
-  for (const pathctl::PlannerName& entry : pathctl::kPlanners) {
+  for (const WirePlanner& entry : WirePlanners()) {
     const std::string planner(entry.name);
     SCOPED_TRACE(planner);
     const ProcessResult r = Ctl({"plan", "walled", "2", "2", "17", "3",

@@ -1,4 +1,4 @@
-// Fuzz target: the Moving AI readers (core/map_io.h). Every input is parsed
+// Fuzz target: the Moving AI readers (core/map_io/map_io.h). Every input is parsed
 // both as a .map and as a .map.scen file. Besides "no crash, no UB", a map
 // that parses must survive a round trip: written back as '.'/'@' text it
 // parses to the same grid, and scenarios that parse keep the promises
@@ -11,8 +11,8 @@
 #include <string>
 #include <string_view>
 
-#include "core/grid.h"
-#include "core/map_io.h"
+#include "core/map/grid.h"
+#include "core/map_io/map_io.h"
 #include "tests/fuzz/fuzz_check.h"
 
 namespace pathd {

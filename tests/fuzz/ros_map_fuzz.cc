@@ -1,4 +1,4 @@
-// Fuzz target: the ROS map_server reader (core/map_io.h ParseRosMapYaml and
+// Fuzz target: the ROS map_server reader (core/map_io/map_io.h ParseRosMapYaml and
 // ParseRosMap). The input is "<yaml>\0<pgm>"; without a NUL byte the whole
 // input is offered to both parsers. When the YAML half does not parse, the
 // image is still read with default metadata (the mode picked by the input's
@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <string_view>
 
-#include "core/grid.h"
-#include "core/map_io.h"
+#include "core/map/grid.h"
+#include "core/map_io/map_io.h"
 #include "tests/fuzz/fuzz_check.h"
 
 namespace pathd {

@@ -1,4 +1,4 @@
-// Fuzz target: the --data_dir file readers (server/wal_format.h). Every input
+// Fuzz target: the --data_dir file readers (server/storage/wal_format.h). Every input
 // is read as a log segment and as a snapshot file, as start-up reads them.
 // Besides "no crash, no UB": a segment that parses reports offsets inside the
 // input in increasing order and a valid prefix no longer than the input,
@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "absl/status/status.h"
-#include "server/wal_format.h"
+#include "server/storage/wal_format.h"
 #include "tests/fuzz/fuzz_check.h"
 
 namespace pathd::server::wal {

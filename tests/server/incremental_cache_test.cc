@@ -16,8 +16,10 @@
 
 #include "absl/synchronization/mutex.h"
 #include "absl/synchronization/notification.h"
-#include "core/inflation.h"
-#include "core/planner.h"
+#include "core/search/registry.h"
+#include "core/search/path_measure.h"
+#include "core/map/inflation.h"
+#include "core/search/planner.h"
 #include "gtest/gtest.h"
 #include "server/map_store.h"
 #include "server/worker_pool.h"

@@ -29,7 +29,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/auth.h"
 #include "server/server.h"
-#include "tests/server/test_certs.h"
+#include "tests/testing/test_certs.h"
 
 namespace pathd::server {
 namespace {

@@ -1,0 +1,242 @@
+// pathctl: the command-line client of pathd. Defines the flags and hands the
+// parsed command to pathd::pathctl::Run (client/pathctl/pathctl.h), where the commands
+// live.
+#include <unistd.h>
+
+#include <cstdlib>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "client/pathctl/pathctl.h"
+#include "client/pathctl/progress.h"
+
+ABSL_FLAG(std::string, server, "",
+          "pathd address; default $PATHD_SERVER, else 127.0.0.1:50051");
+ABSL_FLAG(absl::Duration, timeout, pathd::client::kDefaultTimeout,
+          "deadline of each call");
+ABSL_FLAG(std::string, tls_ca, "",
+          "PEM CA certificate of the server; turns TLS on");
+ABSL_FLAG(std::string, tls_cert, "",
+          "PEM client certificate for mutual TLS (needs --tls_key, --tls_ca)");
+ABSL_FLAG(std::string, tls_key, "", "PEM key of --tls_cert");
+ABSL_FLAG(std::string, tls_server_name, "",
+          "name the server certificate carries, if not the --server host");
+ABSL_FLAG(std::string, token, "",
+          "bearer token sent on every call; default $PATHD_TOKEN");
+ABSL_FLAG(std::string, token_file, "",
+          "file holding the bearer token (preferred over --token)");
+ABSL_FLAG(bool, json, false, "print the response message as JSON");
+ABSL_FLAG(std::string, output, "",
+          "output format: table (default), json or csv (--json = --output=json)");
+ABSL_FLAG(bool, no_progress, false,
+          "no progress bars on stderr (batch, bench, maps create --from)");
+ABSL_FLAG(std::string, from, "", "maps create: the .map or .yaml/.yml file");
+ABSL_FLAG(bool, replace, false, "maps create: replace an existing map");
+ABSL_FLAG(double, resolution, 0.0, "maps create: metres per cell (.map files)");
+ABSL_FLAG(bool, cells, false, "maps get: print the cells as ASCII");
+ABSL_FLAG(std::optional<uint64_t>, expected_version, std::nullopt,
+          "maps set/rect: apply only at this map version");
+ABSL_FLAG(uint64_t, from_version, 0,
+          "maps watch: the version already held (0: start with the whole map)");
+ABSL_FLAG(int64_t, count, 0, "maps watch: stop after N events (0: no limit)");
+ABSL_FLAG(std::string, planner, "", "plan: planner name (default: server's)");
+ABSL_FLAG(int, connectivity, 0, "plan, navigate, cost-to-go: 4 or 8 (default 8)");
+ABSL_FLAG(std::optional<double>, cost_weight, std::nullopt,
+          "plan, navigate, cost-to-go: cell cost weight (default 1)");
+ABSL_FLAG(bool, world, false, "plan, cost-to-go: coordinates are world metres");
+ABSL_FLAG(bool, unknown_is_free, false, "plan, navigate, cost-to-go: unknown cells are free");
+ABSL_FLAG(int64_t, max_expansions, 0, "plan: expansion budget (0: server's)");
+ABSL_FLAG(std::optional<double>, heuristic_weight, std::nullopt,
+          "plan: weighted_astar heuristic weight w >= 1 (default 1.5)");
+ABSL_FLAG(std::optional<double>, robot_radius, std::nullopt,
+          "plan, navigate, cost-to-go: robot radius in metres");
+ABSL_FLAG(std::optional<double>, robot_radius_cells, std::nullopt,
+          "plan, navigate, cost-to-go: robot radius in cells");
+ABSL_FLAG(std::optional<double>, goal_tolerance, std::nullopt,
+          "plan: substitute the nearest free cell within this many cells for a "
+          "blocked goal");
+ABSL_FLAG(std::optional<double>, goal_tolerance_m, std::nullopt,
+          "plan: the goal tolerance in metres");
+ABSL_FLAG(std::string, via, "",
+          "plan: via points X,Y[;X,Y...] visited in order before the goal");
+ABSL_FLAG(bool, allow_partial, false,
+          "plan: with --via, return the path to the last reached goal when a "
+          "leg finds no path");
+ABSL_FLAG(bool, expansions, false,
+          "plan: return the expanded cells (prints the count; --json: the cells)");
+ABSL_FLAG(std::string, path_file, "", "check: the path, one \"X Y\" per line");
+ABSL_FLAG(bool, simplify, false, "plan: simplify the path by ray-shooting");
+ABSL_FLAG(int, lookahead, 0, "plan: rtaa_star/lrta_star look-ahead (0: 64)");
+ABSL_FLAG(std::string, cost_to_go_file, "",
+          "plan, cost-to-go: write the cost-to-go field as CSV");
+ABSL_FLAG(std::string, pf_attractive, "",
+          "plan: potential_field attractive potential, quadratic or conic");
+ABSL_FLAG(double, pf_attractive_gain, 0.0, "plan: potential_field k_att");
+ABSL_FLAG(double, pf_switch_distance, 0.0,
+          "plan: potential_field quadratic-to-conic distance, cells");
+ABSL_FLAG(double, pf_repulsive_gain, 0.0, "plan: potential_field eta");
+ABSL_FLAG(double, pf_influence, 0.0,
+          "plan: potential_field obstacle influence distance, cells");
+ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
+ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
+ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
+ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
+ABSL_FLAG(std::string, metrics_address, pathd::pathctl::kDefaultMetricsAddress,
+          "metrics: pathd's --metrics_address (HOST:PORT)");
+ABSL_FLAG(bool, progress, false,
+          "plan: stream the search's progress to stderr (PlanStream)");
+ABSL_FLAG(int, concurrency, 4, "bench: requests in flight (closed-loop workers)");
+ABSL_FLAG(int, channels, 1, "bench: gRPC connections the workers share");
+ABSL_FLAG(absl::Duration, duration, absl::Seconds(10),
+          "bench: measured time (0: until --requests are done)");
+ABSL_FLAG(absl::Duration, warmup, absl::Seconds(1),
+          "bench: unmeasured load before the measured time");
+ABSL_FLAG(int64_t, requests, 0, "bench: stop after N measured requests (0: no limit)");
+ABSL_FLAG(std::string, movingai, "",
+          "bench: load this Moving AI .map and take queries from its .scen");
+ABSL_FLAG(uint64_t, seed, 1, "bench: seed of the random queries and the shuffle");
+ABSL_FLAG(bool, plan, false,
+          "render: plan from SX SY to GX GY and draw the path");
+ABSL_FLAG(std::string, out, "", "render: write the picture to this PNG file");
+// -o is --out's short spelling; Abseil flags have no aliases.
+ABSL_FLAG(std::string, o, "", "render: the same as --out");
+ABSL_FLAG(bool, ascii, false, "render: print the picture as text");
+ABSL_FLAG(int, scale, 0, "render: pixels per cell, 1..64 (0: automatic)");
+ABSL_FLAG(bool, y_up, false, "render: draw row 0 at the bottom (world y up)");
+ABSL_FLAG(std::optional<double>, occupied_thresh, std::nullopt,
+          "maps import of a .png: occupied above this (default 0.65)");
+ABSL_FLAG(std::optional<double>, free_thresh, std::nullopt,
+          "maps import of a .png: free below this (default 0.196)");
+ABSL_FLAG(bool, negate, false, "maps import of a .png: dark is free");
+
+int main(int argc, char** argv) {
+  namespace pathctl = pathd::pathctl;
+  // Debian's Abseil checks every absl::Mutex acquisition (gRPC's too) for
+  // deadlock cycles; that costs bench a few per cent of each call's CPU.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
+  absl::SetProgramUsageMessage(pathctl::UsageText());
+
+  absl::StatusOr<pathctl::CommandLine> line =
+      pathctl::SplitCommandLine(argc, argv);
+  if (!line.ok()) {
+    std::cerr << "error: " << line.status().message() << "\n\n"
+              << pathctl::SynopsisText()
+              << "run 'pathctl --help' for details\n";
+    return pathctl::kExitUsage;
+  }
+  if (line->help) {
+    std::cout << pathctl::UsageText();
+    return pathctl::kExitOk;
+  }
+  // Flags first, then "--", so positional arguments that look like flags
+  // (negative numbers) stay positional.
+  std::vector<char*> normalized = {argv[0]};
+  for (std::string& flag : line->flags) normalized.push_back(flag.data());
+  std::string end_of_flags = "--";
+  normalized.push_back(end_of_flags.data());
+  for (std::string& arg : line->positional) normalized.push_back(arg.data());
+  std::vector<char*> positional = absl::ParseCommandLine(
+      static_cast<int>(normalized.size()), normalized.data());
+
+  pathctl::Options options;
+  options.server = pathctl::ResolveServerAddress(
+      absl::GetFlag(FLAGS_server), std::getenv(pathctl::kServerEnvVar));
+  options.timeout = absl::GetFlag(FLAGS_timeout);
+  absl::StatusOr<pathctl::OutputFormat> output = pathctl::ResolveOutputFormat(
+      absl::GetFlag(FLAGS_output), absl::GetFlag(FLAGS_json));
+  if (!output.ok()) {
+    std::cerr << "error: " << output.status().message() << "\n\n"
+              << pathctl::SynopsisText()
+              << "run 'pathctl --help' for details\n";
+    return pathctl::kExitUsage;
+  }
+  options.output = *output;
+  options.json = *output == pathctl::OutputFormat::kJson;
+  options.progress_bars = pathctl::ProgressBarsWanted(
+      isatty(STDOUT_FILENO) != 0, isatty(STDERR_FILENO) != 0,
+      absl::GetFlag(FLAGS_no_progress));
+  options.credentials.tls_ca = absl::GetFlag(FLAGS_tls_ca);
+  options.credentials.tls_cert = absl::GetFlag(FLAGS_tls_cert);
+  options.credentials.tls_key = absl::GetFlag(FLAGS_tls_key);
+  options.credentials.tls_server_name = absl::GetFlag(FLAGS_tls_server_name);
+  options.credentials.token = absl::GetFlag(FLAGS_token);
+  options.credentials.token_file = absl::GetFlag(FLAGS_token_file);
+  if (options.credentials.token.empty() && options.credentials.token_file.empty()) {
+    if (const char* token = std::getenv(pathctl::kTokenEnvVar)) {
+      options.credentials.token = token;
+    }
+  }
+  options.from = absl::GetFlag(FLAGS_from);
+  options.replace = absl::GetFlag(FLAGS_replace);
+  options.resolution = absl::GetFlag(FLAGS_resolution);
+  options.cells = absl::GetFlag(FLAGS_cells);
+  options.expected_version = absl::GetFlag(FLAGS_expected_version);
+  options.from_version = absl::GetFlag(FLAGS_from_version);
+  options.count = absl::GetFlag(FLAGS_count);
+  options.planner = absl::GetFlag(FLAGS_planner);
+  options.connectivity = absl::GetFlag(FLAGS_connectivity);
+  options.cost_weight = absl::GetFlag(FLAGS_cost_weight);
+  options.world = absl::GetFlag(FLAGS_world);
+  options.unknown_is_free = absl::GetFlag(FLAGS_unknown_is_free);
+  options.max_expansions = absl::GetFlag(FLAGS_max_expansions);
+  options.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
+  options.robot_radius_m = absl::GetFlag(FLAGS_robot_radius);
+  options.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
+  options.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance);
+  options.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance_m);
+  options.via = absl::GetFlag(FLAGS_via);
+  options.allow_partial = absl::GetFlag(FLAGS_allow_partial);
+  options.expansions = absl::GetFlag(FLAGS_expansions);
+  options.path_file = absl::GetFlag(FLAGS_path_file);
+  options.simplify = absl::GetFlag(FLAGS_simplify);
+  options.lookahead = absl::GetFlag(FLAGS_lookahead);
+  options.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
+  options.pf_attractive = absl::GetFlag(FLAGS_pf_attractive);
+  options.pf_attractive_gain = absl::GetFlag(FLAGS_pf_attractive_gain);
+  options.pf_switch_distance = absl::GetFlag(FLAGS_pf_switch_distance);
+  options.pf_repulsive_gain = absl::GetFlag(FLAGS_pf_repulsive_gain);
+  options.pf_influence = absl::GetFlag(FLAGS_pf_influence);
+  options.pf_step = absl::GetFlag(FLAGS_pf_step);
+  options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
+  options.script = absl::GetFlag(FLAGS_script);
+  options.window = absl::GetFlag(FLAGS_window);
+  options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  options.progress = absl::GetFlag(FLAGS_progress);
+  options.stderr_is_terminal = isatty(STDERR_FILENO) != 0;
+  options.concurrency = absl::GetFlag(FLAGS_concurrency);
+  options.channels = absl::GetFlag(FLAGS_channels);
+  options.duration = absl::GetFlag(FLAGS_duration);
+  options.warmup = absl::GetFlag(FLAGS_warmup);
+  options.requests = absl::GetFlag(FLAGS_requests);
+  options.movingai = absl::GetFlag(FLAGS_movingai);
+  options.seed = absl::GetFlag(FLAGS_seed);
+  options.plan = absl::GetFlag(FLAGS_plan);
+  const std::string out = absl::GetFlag(FLAGS_out);
+  const std::string o = absl::GetFlag(FLAGS_o);
+  if (!out.empty() && !o.empty() && out != o) {
+    std::cerr << "error: give -o or --out, not both\n\n"
+              << pathctl::SynopsisText()
+              << "run 'pathctl --help' for details\n";
+    return pathctl::kExitUsage;
+  }
+  options.out = out.empty() ? o : out;
+  options.ascii = absl::GetFlag(FLAGS_ascii);
+  options.scale = absl::GetFlag(FLAGS_scale);
+  options.y_up = absl::GetFlag(FLAGS_y_up);
+  options.occupied_thresh = absl::GetFlag(FLAGS_occupied_thresh);
+  options.free_thresh = absl::GetFlag(FLAGS_free_thresh);
+  options.negate = absl::GetFlag(FLAGS_negate);
+
+  return pathctl::Run(
+      options,
+      std::vector<std::string>(positional.begin() + 1, positional.end()),
+      std::cout, std::cerr);
+}

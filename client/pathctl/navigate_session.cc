@@ -1,0 +1,326 @@
+// Implementation of the pathctl navigate session driver.
+#include "client/pathctl/navigate_session.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <iterator>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/strip.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+#include "client/pathctl/pathctl.h"
+#include "google/protobuf/util/json_util.h"
+#include "grpcpp/client_context.h"
+
+namespace pathd::pathctl {
+namespace {
+
+// "1 cell", "2 cells".
+std::string Count(int64_t n, absl::string_view noun) {
+  return absl::StrCat(n, " ", noun, n == 1 ? "" : "s");
+}
+
+using Stream =
+    grpc::ClientReaderWriterInterface<v1::NavigateRequest, v1::NavigateResponse>;
+
+std::string FormatCell(const v1::Cell& cell) {
+  return absl::StrFormat("(%d,%d)", cell.x(), cell.y());
+}
+
+// "OPENED" for NAVIGATE_EVENT_OPENED.
+std::string EventName(v1::NavigateEvent event) {
+  absl::string_view name = v1::NavigateEvent_Name(event);
+  absl::ConsumePrefix(&name, "NAVIGATE_EVENT_");
+  return name.empty() ? absl::StrCat(static_cast<int>(event)) : std::string(name);
+}
+
+// One response as two lines: what happened and the path.
+std::string FormatResponse(const v1::NavigateResponse& response) {
+  const v1::PlanResponse& plan = response.plan();
+  std::string text = absl::StrFormat(
+      "[%s%s] seq %d, session %d, map version %d: ", EventName(response.event()),
+      response.event() == v1::NAVIGATE_EVENT_MAP_CHANGED ? ", unasked" : "",
+      response.seq(), response.session_id(), plan.map_version());
+  if (plan.found()) {
+    absl::StrAppendFormat(&text, "found, cost %.6f, %d cells", plan.cost(),
+                          plan.path_size());
+  } else {
+    absl::string_view outcome = v1::PlanOutcome_Name(plan.outcome());
+    absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
+    absl::StrAppend(&text, "no path (", outcome,
+                    plan.reason().empty() ? "" : ": ", plan.reason(), ")");
+  }
+  absl::StrAppendFormat(&text, ", %d expansions", plan.expansions());
+  if (plan.cache_hit()) absl::StrAppend(&text, ", cache hit");
+  if (plan.repaired_cells() > 0) {
+    absl::StrAppend(&text, ", ", Count(plan.repaired_cells(), "cell"), " repaired");
+  }
+  if (response.applied_version() > 0) {
+    absl::StrAppend(&text, ", observation applied as map version ",
+                    response.applied_version());
+  }
+  text.push_back('\n');
+  if (plan.found()) {
+    absl::StrAppend(&text, "  path (", plan.path_size(),
+                    " cells): ", FormatPath(plan.path()), "\n");
+  }
+  return text;
+}
+
+// One Navigate stream. The main thread writes (Write/WritesDone are never
+// called concurrently with each other) while a reader thread reads and prints;
+// gRPC allows one reader and one writer on a stream at the same time.
+class Session {
+ public:
+  // `map`: the map `open` will name, which routes the stream.
+  Session(const client::PathdClient& client, const std::string& map, bool json,
+          std::ostream& out)
+      : timeout_(client.timeout()),
+        json_(json),
+        out_(out),
+        stream_(client.Navigate(&context_, map)) {}
+
+  absl::Status Run(const v1::NavigateOpen& open,
+                   const std::vector<ScriptStep>& script) {
+    reader_ = std::thread([this] { ReadLoop(); });
+    absl::Status status = RunScript(open, script);
+    if (status.ok()) status = Close();
+    // A local failure leaves the stream open: cancelling ends it so the
+    // reader stops and Finish() returns. A stream that already ended (the
+    // reader will see it, if it has not yet) must not be cancelled, or
+    // Finish() would report CANCELLED instead of the server's status.
+    if (!status.ok() && !stream_lost_) {
+      absl::MutexLock lock(&mu_);
+      if (!ended_) context_.TryCancel();
+    }
+    reader_.join();
+    const grpc::Status final_status = stream_->Finish();
+    // The server's own error says more than "the stream ended".
+    if (stream_lost_ && !final_status.ok()) {
+      return client::FromGrpcStatus(final_status);
+    }
+    if (!status.ok()) return status;
+    if (!final_status.ok()) return client::FromGrpcStatus(final_status);
+    std::string summary;
+    {
+      absl::MutexLock lock(&mu_);
+      summary = absl::StrCat("closed: ", Count(answers_, "answer"), ", ",
+                             Count(pushes_total_, "unasked path"), "\n");
+    }
+    Log(summary);
+    return absl::OkStatus();
+  }
+
+ private:
+  absl::Status RunScript(const v1::NavigateOpen& open,
+                         const std::vector<ScriptStep>& script) {
+    robot_ = open.start().cell();
+    v1::NavigateRequest request;
+    *request.mutable_open() = open;
+    Log(absl::StrFormat("> open %s %s -> %s\n", open.map(), FormatCell(robot_),
+                        FormatCell(open.goal().cell())));
+    if (absl::Status s = Exchange(request, "open"); !s.ok()) return s;
+    for (const ScriptStep& step : script) {
+      if (absl::Status s = RunStep(step); !s.ok()) return s;
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status RunStep(const ScriptStep& step) {
+    Log(absl::StrCat("> ", step.text, "\n"));
+    switch (step.kind) {
+      case ScriptStep::Kind::kMove:
+        return Move(step.cell, step.where);
+      case ScriptStep::Kind::kFollow:
+        return Follow(step);
+      case ScriptStep::Kind::kObserve: {
+        v1::NavigateRequest request;
+        *request.mutable_observe() = step.observation;
+        return Exchange(request, step.where);
+      }
+      case ScriptStep::Kind::kWait: {
+        absl::MutexLock lock(&mu_);
+        mu_.AwaitWithTimeout(absl::Condition(&ended_), step.duration);
+        return ended_ ? Lost() : absl::OkStatus();
+      }
+      case ScriptStep::Kind::kExpectPush: {
+        absl::MutexLock lock(&mu_);
+        auto pushed_or_ended = [this]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+          return unclaimed_pushes_ > 0 || ended_;
+        };
+        mu_.AwaitWithTimeout(absl::Condition(&pushed_or_ended), step.duration);
+        if (unclaimed_pushes_ > 0) {
+          --unclaimed_pushes_;
+          return absl::OkStatus();
+        }
+        if (ended_) return Lost();
+        return absl::DeadlineExceededError(absl::StrCat(
+            step.where, ": expect-push: no unasked MAP_CHANGED path within ",
+            absl::FormatDuration(step.duration)));
+      }
+    }
+    return absl::InternalError("unknown script step");
+  }
+
+  absl::Status Move(const v1::Cell& cell, absl::string_view where) {
+    v1::NavigateRequest request;
+    *request.mutable_pose()->mutable_cell() = cell;
+    if (absl::Status s = Exchange(request, where); !s.ok()) return s;
+    robot_ = cell;
+    return absl::OkStatus();
+  }
+
+  // Each step takes the cell after the robot's on the latest path, which may
+  // be one the server pushed since the previous step.
+  absl::Status Follow(const ScriptStep& step) {
+    for (int32_t i = 0; i < step.steps; ++i) {
+      v1::PlanResponse plan;
+      {
+        absl::MutexLock lock(&mu_);
+        plan = last_plan_;
+      }
+      if (!plan.found()) {
+        return absl::FailedPreconditionError(
+            absl::StrCat(step.where, ": follow: the last answer has no path to "
+                                     "follow"));
+      }
+      const auto& path = plan.path();
+      auto here = std::find_if(path.begin(), path.end(), [&](const v1::Cell& c) {
+        return c.x() == robot_.x() && c.y() == robot_.y();
+      });
+      if (here == path.end()) {
+        return absl::FailedPreconditionError(absl::StrCat(
+            step.where, ": follow: the last path does not pass the robot's cell ",
+            FormatCell(robot_)));
+      }
+      if (std::next(here) == path.end()) {
+        Log(absl::StrFormat("  at the goal %s after %d of %d steps\n",
+                            FormatCell(robot_), i, step.steps));
+        return absl::OkStatus();
+      }
+      const v1::Cell next = *std::next(here);
+      Log(absl::StrFormat("> step %d/%d: pose %s\n", i + 1, step.steps,
+                          FormatCell(next)));
+      if (absl::Status s = Move(next, step.where); !s.ok()) return s;
+    }
+    return absl::OkStatus();
+  }
+
+  // Sends `request` with the next seq and waits for its answer.
+  absl::Status Exchange(v1::NavigateRequest& request, absl::string_view where) {
+    const uint64_t seq = ++last_seq_;
+    request.set_seq(seq);
+    if (!stream_->Write(request)) return Lost();
+    absl::MutexLock lock(&mu_);
+    auto answered_or_ended = [this, seq]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      return answered_seq_ >= seq || ended_;
+    };
+    if (!mu_.AwaitWithTimeout(absl::Condition(&answered_or_ended), timeout_)) {
+      return absl::DeadlineExceededError(
+          absl::StrCat(where, ": no answer to message ", seq, " within ",
+                       absl::FormatDuration(timeout_)));
+    }
+    return answered_seq_ >= seq ? absl::OkStatus() : Lost();
+  }
+
+  // Closes the client side and waits for the server to end the stream.
+  absl::Status Close() {
+    if (!stream_->WritesDone()) return Lost();
+    absl::MutexLock lock(&mu_);
+    if (!mu_.AwaitWithTimeout(absl::Condition(&ended_), timeout_)) {
+      return absl::DeadlineExceededError(
+          absl::StrCat("the server did not end the session within ",
+                       absl::FormatDuration(timeout_), " of the script's end"));
+    }
+    return absl::OkStatus();
+  }
+
+  // The stream ended before the script did; Run() reports the server's status
+  // instead when it has one.
+  absl::Status Lost() {
+    stream_lost_ = true;
+    return absl::UnavailableError(
+        "the server ended the session before the script finished");
+  }
+
+  void ReadLoop() {
+    v1::NavigateResponse response;
+    while (stream_->Read(&response)) {
+      absl::MutexLock lock(&mu_);
+      PrintLocked(response);
+      if (response.event() == v1::NAVIGATE_EVENT_MAP_CHANGED) {
+        ++unclaimed_pushes_;
+        ++pushes_total_;
+      } else {
+        ++answers_;
+        answered_seq_ = std::max(answered_seq_, response.seq());
+      }
+      last_plan_ = response.plan();
+    }
+    absl::MutexLock lock(&mu_);
+    ended_ = true;
+  }
+
+  void PrintLocked(const v1::NavigateResponse& response)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (!json_) {
+      out_ << FormatResponse(response) << std::flush;
+      return;
+    }
+    google::protobuf::util::JsonPrintOptions options;
+    options.always_print_primitive_fields = true;
+    std::string line;
+    if (google::protobuf::util::MessageToJsonString(response, &line, options)
+            .ok()) {
+      out_ << line << "\n" << std::flush;
+    }
+  }
+
+  // Script progress lines; JSON output carries responses only.
+  void Log(const std::string& text) {
+    if (json_) return;
+    absl::MutexLock lock(&mu_);
+    out_ << text << std::flush;
+  }
+
+  const absl::Duration timeout_;
+  const bool json_;
+  grpc::ClientContext context_;
+  std::ostream& out_;  // guarded by mu_ once the reader runs
+  std::unique_ptr<Stream> stream_;
+  std::thread reader_;
+
+  // Main thread only.
+  uint64_t last_seq_ = 0;
+  v1::Cell robot_;
+  bool stream_lost_ = false;
+
+  absl::Mutex mu_;
+  bool ended_ ABSL_GUARDED_BY(mu_) = false;
+  uint64_t answered_seq_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t answers_ ABSL_GUARDED_BY(mu_) = 0;
+  // MAP_CHANGED pushes not yet claimed by an expect-push.
+  int64_t unclaimed_pushes_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t pushes_total_ ABSL_GUARDED_BY(mu_) = 0;
+  v1::PlanResponse last_plan_ ABSL_GUARDED_BY(mu_);
+};
+
+}  // namespace
+
+absl::Status RunNavigateSession(const client::PathdClient& client,
+                                const v1::NavigateOpen& open,
+                                const std::vector<ScriptStep>& script, bool json,
+                                std::ostream& out) {
+  Session session(client, open.map(), json, out);
+  return session.Run(open, script);
+}
+
+}  // namespace pathd::pathctl

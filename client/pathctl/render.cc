@@ -1,0 +1,230 @@
+// Drawing maps and plans as RGB images and as text.
+#include "client/pathctl/render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/pathctl/pathctl.h"
+
+namespace pathd::pathctl {
+namespace {
+
+// Calls visit(x, y) for every point of Bresenham's line from (x0, y0) to
+// (x1, y1), both ends included.
+template <typename Visit>
+void ForEachLinePoint(int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                      Visit visit) {
+  const int64_t dx = std::abs(x1 - x0);
+  const int64_t dy = -std::abs(y1 - y0);
+  const int64_t sx = x0 < x1 ? 1 : -1;
+  const int64_t sy = y0 < y1 ? 1 : -1;
+  int64_t error = dx + dy;
+  while (true) {
+    visit(x0, y0);
+    if (x0 == x1 && y0 == y1) return;
+    const int64_t e2 = 2 * error;
+    if (e2 >= dy) {
+      error += dy;
+      x0 += sx;
+    }
+    if (e2 <= dx) {
+      error += dx;
+      y0 += sy;
+    }
+  }
+}
+
+Rgb Blend(Rgb a, Rgb b) {
+  return Rgb{static_cast<uint8_t>((a.r + b.r + 1) / 2),
+             static_cast<uint8_t>((a.g + b.g + 1) / 2),
+             static_cast<uint8_t>((a.b + b.b + 1) / 2)};
+}
+
+// The row a grid row is drawn at, top first.
+int32_t DrawnRow(const Grid& grid, int32_t y, bool y_up) {
+  return y_up ? grid.height() - 1 - y : y;
+}
+
+// An RGB canvas with clipped writes.
+class Canvas {
+ public:
+  Canvas(int32_t width, int32_t height) {
+    image_.width = width;
+    image_.height = height;
+    image_.channels = 3;
+    image_.pixels.resize(static_cast<size_t>(width) *
+                         static_cast<size_t>(height) * 3);
+  }
+
+  void Set(int64_t x, int64_t y, Rgb c) {
+    if (x < 0 || y < 0 || x >= image_.width || y >= image_.height) return;
+    const size_t i =
+        (static_cast<size_t>(y) * static_cast<size_t>(image_.width) +
+         static_cast<size_t>(x)) *
+        3;
+    image_.pixels[i] = c.r;
+    image_.pixels[i + 1] = c.g;
+    image_.pixels[i + 2] = c.b;
+  }
+
+  void FillRect(int64_t x0, int64_t y0, int64_t size, Rgb c) {
+    for (int64_t y = y0; y < y0 + size; ++y) {
+      for (int64_t x = x0; x < x0 + size; ++x) Set(x, y, c);
+    }
+  }
+
+  // A disc of `radius` pixels around the continuous point (cx, cy); a pixel
+  // belongs to it when its centre does.
+  void FillDisc(double cx, double cy, double radius, Rgb c) {
+    const int64_t x_min = static_cast<int64_t>(std::floor(cx - radius));
+    const int64_t x_max = static_cast<int64_t>(std::ceil(cx + radius));
+    const int64_t y_min = static_cast<int64_t>(std::floor(cy - radius));
+    const int64_t y_max = static_cast<int64_t>(std::ceil(cy + radius));
+    for (int64_t y = y_min; y <= y_max; ++y) {
+      for (int64_t x = x_min; x <= x_max; ++x) {
+        const double ddx = x + 0.5 - cx;
+        const double ddy = y + 0.5 - cy;
+        if (ddx * ddx + ddy * ddy <= radius * radius) Set(x, y, c);
+      }
+    }
+  }
+
+  Image Take() { return std::move(image_); }
+
+ private:
+  Image image_;
+};
+
+}  // namespace
+
+Rgb CostColour(uint8_t cost) {
+  if (cost == kFreeCost) return kFreeColour;
+  if (cost <= kMaxTraversableCost) {
+    // 1 -> 230 (clearly not free) .. 252 -> 80 (clearly not lethal).
+    const int level = 230 - (cost - 1) * 150 / (kMaxTraversableCost - 1);
+    const auto v = static_cast<uint8_t>(level);
+    return Rgb{v, v, v};
+  }
+  if (cost == kInscribedCost) return kInscribedColour;
+  if (cost == kLethalCost) return kLethalColour;
+  return kUnknownColour;
+}
+
+int DefaultScale(int32_t width, int32_t height) {
+  const int32_t side = std::max(width, height);
+  if (side <= 0) return 1;
+  return std::clamp(kTargetImageSide / side, 1, 16);
+}
+
+absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
+                                  const RenderOptions& options) {
+  if (options.scale < 0 || options.scale > kMaxScale) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--scale must be 1..%d pixels per cell (0: automatic), not %d",
+        kMaxScale, options.scale));
+  }
+  const int scale = options.scale == 0
+                        ? DefaultScale(grid.width(), grid.height())
+                        : options.scale;
+  const int64_t width = int64_t{grid.width()} * scale;
+  const int64_t height = int64_t{grid.height()} * scale;
+  if (width * height > kMaxImagePixels) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "a %dx%d map at %d pixels per cell is a %dx%d picture, above the "
+        "limit of %d pixels%s",
+        grid.width(), grid.height(), scale, width, height, kMaxImagePixels,
+        scale > 1 ? "; use a smaller --scale" : ""));
+  }
+  Canvas canvas(static_cast<int32_t>(width), static_cast<int32_t>(height));
+  std::vector<bool> expanded(grid.size(), false);
+  for (const Cell& c : overlay.expanded) {
+    if (grid.InBounds(c)) expanded[grid.Index(c)] = true;
+  }
+  for (int32_t y = 0; y < grid.height(); ++y) {
+    const int64_t top = int64_t{DrawnRow(grid, y, options.y_up)} * scale;
+    for (int32_t x = 0; x < grid.width(); ++x) {
+      const Rgb base = CostColour(grid.cost(x, y));
+      canvas.FillRect(
+          int64_t{x} * scale, top, scale,
+          expanded[grid.Index(x, y)] ? Blend(base, kExpandedTint) : base);
+    }
+  }
+
+  // Pixel coordinates of a cell's centre.
+  const auto centre_x = [&](const Cell& c) {
+    return int64_t{c.x} * scale + scale / 2;
+  };
+  const auto centre_y = [&](const Cell& c) {
+    return int64_t{DrawnRow(grid, c.y, options.y_up)} * scale + scale / 2;
+  };
+  // A third of a cell wide, at least 3 pixels from 3 pixels per cell on, so
+  // the path stands out yet the costs beside it remain visible.
+  const int64_t half_width = scale < 3 ? 0 : std::max(1, scale / 6);
+  const auto stamp = [&](int64_t x, int64_t y) {
+    canvas.FillRect(x - half_width, y - half_width, 2 * half_width + 1,
+                    kPathColour);
+  };
+  for (size_t i = 0; i < overlay.path.size(); ++i) {
+    const Cell& a = overlay.path[i];
+    const Cell& b = i + 1 < overlay.path.size() ? overlay.path[i + 1] : a;
+    if (!grid.InBounds(a) || !grid.InBounds(b)) continue;
+    ForEachLinePoint(centre_x(a), centre_y(a), centre_x(b), centre_y(b), stamp);
+  }
+
+  // Markers stay visible at one pixel per cell: a few pixels across at least.
+  const double radius = std::max(3.5, 0.45 * scale);
+  const auto marker = [&](const std::optional<Cell>& cell, Rgb colour) {
+    if (!cell.has_value() || !grid.InBounds(*cell)) return;
+    const double cx = (cell->x + 0.5) * scale;
+    const double cy = (DrawnRow(grid, cell->y, options.y_up) + 0.5) * scale;
+    canvas.FillDisc(cx, cy, radius + 1.0, kMarkerOutlineColour);
+    canvas.FillDisc(cx, cy, radius, colour);
+  };
+  marker(overlay.start, kStartColour);
+  marker(overlay.goal, kGoalColour);
+  return canvas.Take();
+}
+
+absl::StatusOr<std::string> RenderText(const Grid& grid,
+                                       const PlanOverlay& overlay,
+                                       const RenderOptions& options) {
+  if (grid.width() > kMaxTextWidth || grid.height() > kMaxTextHeight) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--ascii draws maps up to %dx%d cells; this one is %dx%d: write a PNG "
+        "with -o FILE.png instead",
+        kMaxTextWidth, kMaxTextHeight, grid.width(), grid.height()));
+  }
+  std::vector<char> glyphs(grid.size());
+  for (size_t i = 0; i < grid.size(); ++i)
+    glyphs[i] = CellGlyph(grid.cells()[i]);
+  const auto put = [&](const Cell& c, char glyph) {
+    if (grid.InBounds(c)) glyphs[grid.Index(c)] = glyph;
+  };
+  for (const Cell& c : overlay.expanded) put(c, kExpandedGlyph);
+  for (size_t i = 0; i < overlay.path.size(); ++i) {
+    const Cell& a = overlay.path[i];
+    const Cell& b = i + 1 < overlay.path.size() ? overlay.path[i + 1] : a;
+    if (!grid.InBounds(a) || !grid.InBounds(b)) continue;
+    ForEachLinePoint(a.x, a.y, b.x, b.y, [&](int64_t x, int64_t y) {
+      put(Cell{static_cast<int32_t>(x), static_cast<int32_t>(y)}, kPathGlyph);
+    });
+  }
+  if (overlay.start.has_value()) put(*overlay.start, kStartGlyph);
+  if (overlay.goal.has_value()) put(*overlay.goal, kGoalGlyph);
+
+  std::string text;
+  text.reserve(static_cast<size_t>(grid.width() + 1) * grid.height());
+  for (int32_t row = 0; row < grid.height(); ++row) {
+    const int32_t y = DrawnRow(grid, row, options.y_up);
+    text.append(&glyphs[grid.Index(0, y)], static_cast<size_t>(grid.width()));
+    text.push_back('\n');
+  }
+  return text;
+}
+
+}  // namespace pathd::pathctl

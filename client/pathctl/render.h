@@ -1,0 +1,102 @@
+// Pictures of maps and plans for `pathctl render`: a cost grid with an
+// optional path, start, goal and expanded cells drawn as an RGB image (for
+// PNG) or as text (for a terminal). Pure functions of their inputs, so tests
+// check pixels and characters without a server.
+#ifndef PATHD_CLIENT_PATHCTL_RENDER_H_
+#define PATHD_CLIENT_PATHCTL_RENDER_H_
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "client/pathctl/png_io.h"
+#include "core/map/grid.h"
+
+namespace pathd::pathctl {
+
+struct Rgb {
+  uint8_t r = 0;
+  uint8_t g = 0;
+  uint8_t b = 0;
+  friend bool operator==(const Rgb&, const Rgb&) = default;
+};
+
+// Colours of the picture; README's "Pictures of plans" describes them.
+inline constexpr Rgb kFreeColour = {255, 255, 255};
+inline constexpr Rgb kLethalColour = {0, 0, 0};
+inline constexpr Rgb kInscribedColour = {48, 48, 48};
+inline constexpr Rgb kUnknownColour = {150, 162, 190};  // blue-grey
+inline constexpr Rgb kPathColour = {230, 25, 25};       // red
+inline constexpr Rgb kStartColour = {0, 170, 60};       // green
+inline constexpr Rgb kGoalColour = {30, 90, 255};       // blue
+inline constexpr Rgb kMarkerOutlineColour = {0, 0, 0};
+// Expanded cells are their cost's colour blended half-way towards this.
+inline constexpr Rgb kExpandedTint = {255, 170, 0};  // amber
+
+// Text glyphs drawn over pathctl's cell glyphs (CellGlyph).
+inline constexpr char kPathGlyph = '*';
+inline constexpr char kStartGlyph = 'S';
+inline constexpr char kGoalGlyph = 'G';
+inline constexpr char kExpandedGlyph = 'o';
+
+// Largest map RenderText draws; beyond it a terminal wraps the lines.
+inline constexpr int32_t kMaxTextWidth = 200;
+inline constexpr int32_t kMaxTextHeight = 200;
+// Largest picture RenderImage draws (width * height pixels, 96 MiB of RGB).
+inline constexpr int64_t kMaxImagePixels = int64_t{1} << 25;
+// Pixels per cell RenderImage accepts, and the longest side DefaultScale aims
+// for.
+inline constexpr int kMaxScale = 64;
+inline constexpr int32_t kTargetImageSide = 1024;
+
+// What to draw over the map; every part is optional.
+struct PlanOverlay {
+  // Path vertices; consecutive ones are joined by straight lines, so grid
+  // paths (neighbouring cells) and any-angle paths (turning points) both work.
+  std::vector<Cell> path;
+  std::vector<Cell> expanded;
+  std::optional<Cell> start;
+  std::optional<Cell> goal;
+};
+
+struct RenderOptions {
+  // Pixels per cell, 1..kMaxScale; 0: DefaultScale.
+  int scale = 0;
+  // Draw row 0 at the bottom (world y up), as ROS map images show their map;
+  // by default row 0 is the top row, as in a Moving AI file and in
+  // `maps get --cells`.
+  bool y_up = false;
+};
+
+// The colour of a cost byte: free white, weighted 1..252 from light grey
+// (230) to dark grey (80), inscribed dark grey, lethal black, unknown
+// blue-grey.
+Rgb CostColour(uint8_t cost);
+
+// The pixels per cell that make the longer side about kTargetImageSide
+// pixels: 16 for tiny maps, 1 for maps of 1024 cells or more.
+int DefaultScale(int32_t width, int32_t height);
+
+// Draws the grid, the expanded cells (tinted), the path (lines through cell
+// centres, about a third of a cell wide and at least 3 pixels from 3 pixels
+// per cell on) and the start and goal (discs with a black outline, about a
+// cell across and never less than 9 pixels). Overlay cells
+// outside the grid are skipped. INVALID_ARGUMENT for a scale outside
+// 0..kMaxScale or a picture above kMaxImagePixels (the message suggests a
+// smaller --scale). Returns an RGB Image.
+absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
+                                  const RenderOptions& options);
+
+// The same as text: one line per row, CellGlyph per cell, overdrawn by
+// kExpandedGlyph, then kPathGlyph along the path's lines, then kStartGlyph and
+// kGoalGlyph. INVALID_ARGUMENT above kMaxTextWidth x kMaxTextHeight, saying
+// to write a PNG instead.
+absl::StatusOr<std::string> RenderText(const Grid& grid,
+                                       const PlanOverlay& overlay,
+                                       const RenderOptions& options);
+
+}  // namespace pathd::pathctl
+
+#endif  // PATHD_CLIENT_PATHCTL_RENDER_H_

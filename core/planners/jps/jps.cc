@@ -1,0 +1,559 @@
+// Jump Point Search (Harabor & Grastien 2011, "Online Graph Pruning for
+// Pathfinding on Grid Maps", AAAI) on pathd's uniform-cost 8-connected grids
+// without corner cutting, with the block-based scans and intermediate-node
+// pruning of Harabor & Grastien 2014, "Improving Jump Point Search", ICAPS.
+//
+// Pruning rules when a diagonal move needs both side cells free:
+//  - A diagonal move has no forced neighbours: every cell behind it is reached
+//    at least as cheaply by straight moves through its side cells, which the
+//    move itself needs free. It continues straight along both of its axes and
+//    diagonally.
+//  - A straight move into n (say east, from m = n - 1) forces the side
+//    neighbour s of n (north or south) when s is free but the cell beside m on
+//    that side is blocked: no other canonical path reaches s as cheaply. Then
+//    n is a jump point whose successors are the side direction and the
+//    diagonal between it and the move; otherwise the move only continues.
+//  - Diagonal scans run the two straight scans at every step and relax the
+//    jump points those find directly (the "intermediate node" the 2011 paper
+//    puts in the open list is skipped), so only straight-arrival jump points,
+//    the start and the goal ever reach the open list.
+//
+// Scans read 64 cells per word from bit maps of the passability (by rows and,
+// transposed, by columns) and of where a scan in each direction must stop.
+// They live in the SearchScratch between queries; each query re-packs the
+// grid to check they still match it (a Grid may be edited in place) and
+// derives the rest again only if something changed.
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <vector>
+
+#include "absl/time/clock.h"
+#include "core/search/path_measure.h"
+#include "core/search/endpoints.h"
+#include "core/search/best_first.h"
+#include "core/planners/jps/bit_grid.h"
+#include "core/planners/planners.h"
+#include "core/status_macros.h"
+
+namespace pathd {
+namespace {
+
+using internal::BitLines;
+using internal::PackIsa;
+using internal::PackRule;
+
+// The map as JPS reads it: passability bits by rows and by columns, and for
+// each of the four straight directions a "go" map whose bit is set where a
+// scan in that direction passes the cell without stopping (traversable, no
+// forced neighbour), so a scan reads one word per 64 cells. Update() makes it
+// match a grid exactly.
+class JpsMap {
+ public:
+  // Re-packs the grid's rows, comparing them with what is held; when any
+  // changed, rebuilds the columns of the 64 x 64 tiles that did and the go
+  // maps. Returns false when the rule's uniform-cost check fails (the bits
+  // are then still exact). The grid is read in full on every call because a
+  // Grid may be edited in place between queries; everything else is derived
+  // only when that finds a change.
+  bool Update(const Grid& grid, const PackRule& rule) {
+    static const PackIsa kIsa = internal::BestPackIsa();
+    const int32_t w = grid.width();
+    const int32_t h = grid.height();
+    const int32_t tiles_x = (w + 63) / 64;
+    const int32_t tiles_y = (h + 63) / 64;
+    bool resized = false;
+    if (w != width_ || h != height_ ||
+        rule.unknown_is_free != unknown_is_free_) {
+      width_ = w;
+      height_ = h;
+      unknown_is_free_ = rule.unknown_is_free;
+      rows_.Reset(h, w);
+      cols_.Reset(w, h);
+      east_.Reset(h, w);
+      west_.Reset(h, w);
+      south_.Reset(w, h);
+      north_.Reset(w, h);
+      resized = true;
+    }
+    dirty_.assign(static_cast<size_t>(tiles_x) * tiles_y, resized ? 1 : 0);
+    const bool uniform = internal::PackRows(kIsa, grid, rule, rows_, dirty_);
+    bool changed = false;
+    for (int32_t ty = 0; ty < tiles_y; ++ty) {
+      for (int32_t tx = 0; tx < tiles_x; ++tx) {
+        if (dirty_[static_cast<size_t>(ty) * tiles_x + tx]) {
+          TransposeTile(tx, ty);
+          changed = true;
+        }
+      }
+    }
+    if (changed) {
+      BuildGo(rows_, h, w, east_, west_);
+      BuildGo(cols_, w, h, south_, north_);
+    }
+    return uniform;
+  }
+
+  const BitLines& rows() const { return rows_; }
+  const BitLines& cols() const { return cols_; }
+  // Go maps of scans along rows towards +x (east) and -x (west), and along
+  // columns towards +y (south) and -y (north).
+  const BitLines& east() const { return east_; }
+  const BitLines& west() const { return west_; }
+  const BitLines& south() const { return south_; }
+  const BitLines& north() const { return north_; }
+
+  size_t MemoryBytes() const {
+    return rows_.MemoryBytes() + cols_.MemoryBytes() + east_.MemoryBytes() +
+           west_.MemoryBytes() + south_.MemoryBytes() + north_.MemoryBytes() +
+           dirty_.capacity();
+  }
+
+ private:
+  void TransposeTile(int32_t tx, int32_t ty) {
+    uint64_t block[64];
+    for (int32_t i = 0; i < 64; ++i) {
+      const int32_t y = 64 * ty + i;
+      block[i] = y < height_ ? rows_.Line(y)[1 + tx] : 0;
+    }
+    internal::Transpose64(block);
+    for (int32_t j = 0; j < 64 && 64 * tx + j < width_; ++j) {
+      cols_.MutableLine(64 * tx + j)[1 + ty] = block[j];
+    }
+  }
+
+  // Go maps of `lines` lines of `length` cells for scans towards increasing
+  // (`forward`) and decreasing (`backward`) positions: a cell stops a scan
+  // when it is blocked, or when a side cell is open but the side cell one
+  // step back along the scan is blocked (a forced neighbour).
+  static void BuildGo(const BitLines& open, int32_t lines, int32_t length,
+                      BitLines& forward, BitLines& backward) {
+    const int32_t words = (length + 63) / 64;
+    for (int32_t l = 0; l < lines; ++l) {
+      const uint64_t* c = open.Line(l);
+      const uint64_t* u = open.Line(l - 1);
+      const uint64_t* d = open.Line(l + 1);
+      uint64_t* fwd = forward.MutableLine(l);
+      uint64_t* bwd = backward.MutableLine(l);
+      // Word 0 and word words + 1 are the blocked padding.
+      for (int32_t k = 1; k <= words; ++k) {
+        // Bit i of *_before = the side cell one position lower, of *_after
+        // one higher, carried across word boundaries.
+        const uint64_t u_before = (u[k] << 1) | (u[k - 1] >> 63);
+        const uint64_t d_before = (d[k] << 1) | (d[k - 1] >> 63);
+        const uint64_t u_after = (u[k] >> 1) | (u[k + 1] << 63);
+        const uint64_t d_after = (d[k] >> 1) | (d[k + 1] << 63);
+        fwd[k] = c[k] & ~((u[k] & ~u_before) | (d[k] & ~d_before));
+        bwd[k] = c[k] & ~((u[k] & ~u_after) | (d[k] & ~d_after));
+      }
+    }
+  }
+
+  int32_t width_ = -1;
+  int32_t height_ = -1;
+  bool unknown_is_free_ = false;
+  BitLines rows_;
+  BitLines cols_;
+  BitLines east_;
+  BitLines west_;
+  BitLines south_;
+  BitLines north_;
+  // Per 64 x 64 tile during Update(): its rows changed.
+  std::vector<uint8_t> dirty_;
+};
+
+// Where a straight scan stopped: at a jump point, or at a blocked cell (or the
+// map edge) with nothing of interest before it.
+struct ScanStop {
+  int32_t pos;
+  bool jump;
+};
+
+// Scans forward from `from` (exclusive) along a line with go map `go` and
+// passability `open` to the first cell that stops it.
+inline ScanStop ScanForward(const uint64_t* go, const uint64_t* open,
+                            int32_t from) {
+  for (int32_t p = from + 1;; p += 64) {
+    const uint64_t stop = ~BitLines::From(go, p);
+    if (stop != 0) {
+      const int32_t pos = p + std::countr_zero(stop);
+      return {pos, BitLines::Get(open, pos)};
+    }
+  }
+}
+
+// ScanForward towards decreasing positions.
+inline ScanStop ScanBackward(const uint64_t* go, const uint64_t* open,
+                             int32_t from) {
+  for (int32_t p = from - 1;; p -= 64) {
+    const uint64_t stop = ~BitLines::To(go, p);
+    if (stop != 0) {
+      const int32_t pos = p - std::countl_zero(stop);
+      return {pos, BitLines::Get(open, pos)};
+    }
+  }
+}
+
+int Sign(int32_t v) { return (v > 0) - (v < 0); }
+
+// A jump point met by the current query.
+struct JumpPoint {
+  int32_t x;
+  int32_t y;
+};
+
+// Numbers the jump points of one query densely, in the order the search meets
+// them. Their SearchScratch records are indexed by that number, so the few
+// hundred a query touches share a few cache lines instead of being scattered
+// over a map-sized array, where every relaxation would miss the cache.
+class JumpPointTable {
+ public:
+  // Forgets the previous query's points. O(1) except when the 32-bit stamp
+  // wraps.
+  void Clear() {
+    points_.clear();
+    if (++stamp_ == 0) {
+      for (Slot& slot : slots_) slot.stamp = 0;
+      stamp_ = 1;
+    }
+    if (slots_.empty()) Rehash(kInitialSlots);
+  }
+
+  // The number of cell (x, y) with row-major index `cell`, assigned now if
+  // the cell is new to this query.
+  uint32_t Id(uint32_t cell, int32_t x, int32_t y) {
+    for (uint32_t i = Hash(cell);; i = (i + 1) & mask_) {
+      Slot& slot = slots_[i];
+      if (slot.stamp != stamp_) {
+        const auto id = static_cast<uint32_t>(points_.size());
+        slot = Slot{stamp_, cell, id};
+        points_.push_back(JumpPoint{x, y});
+        // Keep the table at most half full so probes stay short.
+        if (2 * points_.size() > slots_.size()) Rehash(2 * slots_.size());
+        return id;
+      }
+      if (slot.cell == cell) return slot.id;
+    }
+  }
+
+  const JumpPoint& point(uint32_t id) const { return points_[id]; }
+
+  size_t MemoryBytes() const {
+    return slots_.capacity() * sizeof(Slot) +
+           points_.capacity() * sizeof(JumpPoint);
+  }
+
+ private:
+  static constexpr size_t kInitialSlots = 1024;
+
+  struct Slot {
+    uint32_t stamp;
+    uint32_t cell;
+    uint32_t id;
+  };
+
+  uint32_t Hash(uint32_t cell) const {
+    // Fibonacci hashing: the top bits of a multiplicative hash.
+    return static_cast<uint32_t>((cell * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
+
+  void Rehash(size_t slots) {
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(slots, Slot{0, 0, 0});
+    mask_ = static_cast<uint32_t>(slots - 1);
+    shift_ = 64 - std::countr_zero(slots);
+    for (const Slot& slot : old) {
+      if (slot.stamp != stamp_) continue;
+      uint32_t i = Hash(slot.cell);
+      while (slots_[i].stamp == stamp_) i = (i + 1) & mask_;
+      slots_[i] = slot;
+    }
+  }
+
+  std::vector<Slot> slots_;
+  uint32_t mask_ = 0;
+  int shift_ = 64;
+  uint32_t stamp_ = 0;
+  std::vector<JumpPoint> points_;
+};
+
+// What JPS keeps in a SearchScratch between queries.
+struct JpsScratch final : public SearchScratch::Extension {
+  JpsMap map;
+  JumpPointTable points;
+  size_t MemoryBytes() const override {
+    return map.MemoryBytes() + points.MemoryBytes();
+  }
+};
+
+// One JPS query. Searches with unit cell factor (the map's single factor
+// scales every path alike); the caller scales the reported cost. Node records
+// in the SearchScratch are indexed by JumpPointTable ids, not cells.
+class JpsSearch {
+ public:
+  // Expanded jump points go to `recorder` unless it is null.
+  JpsSearch(const JpsMap& map, JumpPointTable& points, int32_t width,
+            SearchScratch& scratch, Cell goal, ExpansionRecorder* recorder)
+      : map_(map),
+        rows_(map.rows()),
+        points_(points),
+        width_(width),
+        scratch_(scratch),
+        open_(scratch),
+        goal_(goal),
+        recorder_(recorder) {}
+
+  // Searches from `start`; returns kFound, kNoPath or the stop condition's
+  // outcome. `expansions` counts the jump points taken from the open list.
+  // On kFound, goal_id() names the goal's record.
+  PlanOutcome Run(Cell start, const StopCondition& stop, int64_t& expansions) {
+    const uint32_t start_id =
+        points_.Id(Index(start.x, start.y), start.x, start.y);
+    goal_id_ = points_.Id(Index(goal_.x, goal_.y), goal_.x, goal_.y);
+    scratch_.At(start_id).g = 0.0;
+    open_.Push(start_id, H(start.x, start.y), 0.0);
+    while (!open_.empty()) {
+      if (const PlanOutcome why = stop.Check(expansions, open_.Top().f);
+          why != PlanOutcome::kFound) {
+        return why;
+      }
+      const SearchScratch::OpenEntry best = open_.Pop();
+      ++expansions;
+      if (recorder_ != nullptr) {
+        const JumpPoint& p = points_.point(best.index);
+        recorder_->Record(Cell{p.x, p.y});
+      }
+      if (best.index == goal_id_) return PlanOutcome::kFound;
+      Expand(best.index, best.g);
+    }
+    return PlanOutcome::kNoPath;
+  }
+
+  uint32_t goal_id() const { return goal_id_; }
+
+ private:
+  uint32_t Index(int32_t x, int32_t y) const {
+    return static_cast<uint32_t>(y) * static_cast<uint32_t>(width_) +
+           static_cast<uint32_t>(x);
+  }
+  bool Free(int32_t x, int32_t y) const {
+    return BitLines::Get(rows_.Line(y), x);
+  }
+
+  // Octile distance: consistent for unit straight and sqrt(2) diagonal moves.
+  double H(int32_t x, int32_t y) const {
+    const int32_t dx = std::abs(x - goal_.x);
+    const int32_t dy = std::abs(y - goal_.y);
+    return dx > dy ? dx + (kSqrt2 - 1.0) * dy : dy + (kSqrt2 - 1.0) * dx;
+  }
+
+  void Relax(int32_t x, int32_t y, double g, uint32_t parent) {
+    const uint32_t id = points_.Id(Index(x, y), x, y);
+    SearchScratch::Node& node = scratch_.At(id);
+    if (node.open_pos == SearchScratch::kClosed || g >= node.g) return;
+    node.g = g;
+    node.parent = parent;
+    open_.Push(id, g + H(x, y), g);
+  }
+
+  // Generates the successors of jump point `id`, pruned by the direction its
+  // parent reached it in.
+  void Expand(uint32_t id, double g) {
+    const auto [x, y] = points_.point(id);
+    const uint32_t parent = scratch_.Raw(id).parent;
+    if (parent == SearchScratch::kNoParent) {
+      for (int d = -1; d <= 1; d += 2) {
+        Straight(x, y, d, 0, g, id);
+        Straight(x, y, 0, d, g, id);
+        Diagonal(x, y, d, -1, g, id);
+        Diagonal(x, y, d, 1, g, id);
+      }
+      return;
+    }
+    // Paths between jump points go diagonally first, so the last move is
+    // along the longer axis of the offset from the parent.
+    const JumpPoint& from = points_.point(parent);
+    const int32_t ox = x - from.x;
+    const int32_t oy = y - from.y;
+    if (std::abs(ox) > std::abs(oy)) {
+      const int dx = Sign(ox);
+      Straight(x, y, dx, 0, g, id);
+      for (int s = -1; s <= 1; s += 2) {
+        if (Free(x, y + s) && !Free(x - dx, y + s)) {
+          Straight(x, y, 0, s, g, id);
+          Diagonal(x, y, dx, s, g, id);
+        }
+      }
+    } else {
+      // Only the goal is ever reached by a purely diagonal path, and it is
+      // never expanded, so |oy| > |ox| here.
+      const int dy = Sign(oy);
+      Straight(x, y, 0, dy, g, id);
+      for (int s = -1; s <= 1; s += 2) {
+        if (Free(x + s, y) && !Free(x + s, y - dy)) {
+          Straight(x, y, s, 0, g, id);
+          Diagonal(x, y, s, dy, g, id);
+        }
+      }
+    }
+  }
+
+  // Scans from (x, y) in the straight direction (dx, dy) and relaxes the goal
+  // or the jump point found; (x, y) is reached at cost g from `parent`.
+  void Straight(int32_t x, int32_t y, int dx, int dy, double g,
+                uint32_t parent) {
+    if (dx != 0) {
+      const uint64_t* open = map_.rows().Line(y);
+      const ScanStop stop = dx > 0 ? ScanForward(map_.east().Line(y), open, x)
+                                   : ScanBackward(map_.west().Line(y), open, x);
+      if (goal_.y == y && (goal_.x - x) * dx > 0 &&
+          (stop.pos - goal_.x) * dx >= 0) {
+        Relax(goal_.x, y, g + std::abs(goal_.x - x), parent);
+      } else if (stop.jump) {
+        Relax(stop.pos, y, g + std::abs(stop.pos - x), parent);
+      }
+    } else {
+      const uint64_t* open = map_.cols().Line(x);
+      const ScanStop stop = dy > 0
+                                ? ScanForward(map_.south().Line(x), open, y)
+                                : ScanBackward(map_.north().Line(x), open, y);
+      if (goal_.x == x && (goal_.y - y) * dy > 0 &&
+          (stop.pos - goal_.y) * dy >= 0) {
+        Relax(x, goal_.y, g + std::abs(goal_.y - y), parent);
+      } else if (stop.jump) {
+        Relax(x, stop.pos, g + std::abs(stop.pos - y), parent);
+      }
+    }
+  }
+
+  // Steps diagonally from (x, y) while the move is legal, scanning straight
+  // along both axes at every step; jump points found that way get `parent`
+  // (the expanded node) as their parent.
+  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g,
+                uint32_t parent) {
+    for (int32_t k = 1;; ++k) {
+      if (!Free(x + dx, y) || !Free(x, y + dy) || !Free(x + dx, y + dy)) return;
+      x += dx;
+      y += dy;
+      const double gk = g + k * kSqrt2;
+      if (x == goal_.x && y == goal_.y) {
+        Relax(x, y, gk, parent);
+        return;
+      }
+      Straight(x, y, dx, 0, gk, parent);
+      Straight(x, y, 0, dy, gk, parent);
+    }
+  }
+
+  const JpsMap& map_;
+  const BitLines& rows_;
+  JumpPointTable& points_;
+  const int32_t width_;
+  SearchScratch& scratch_;
+  internal::OpenList open_;
+  const Cell goal_;
+  ExpansionRecorder* const recorder_;
+  uint32_t goal_id_ = 0;
+};
+
+class JpsPlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "jps"; }
+  const PlannerTraits& traits() const override {
+    static const PlannerTraits kTraits{
+        .optimal = true,
+        .needs_uniform_cost = true,
+        .needs_eight_connected = true,
+        .description =
+            "Jump Point Search with block-based scans; optimal, for "
+            "8-connected maps whose traversable cells all cost the "
+            "same; expansions count jump points"};
+    return kTraits;
+  }
+
+  // result.expansions counts jump points taken from the open list (the start
+  // and goal included), not the cells the scans pass over.
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch& scratch) const override {
+    // The uniform-cost precondition needs every cell read, and so does the
+    // map update: it checks the precondition in the same pass, and the full
+    // ValidateRequest runs only to word the error when it fails.
+    PlannerTraits endpoint_traits = traits();
+    endpoint_traits.needs_uniform_cost = false;
+    PATHD_RETURN_IF_ERROR(
+        ValidateRequest(grid, request, name(), endpoint_traits));
+    const absl::Time started = absl::Now();
+    const uint8_t start_cost = grid.cost(request.start);
+    const PackRule rule{
+        .unknown_is_free = request.cost.unknown_is_free,
+        .check_uniform = request.cost.cost_weight != 0.0,
+        .uniform_cost = start_cost == kUnknownCost ? kFreeCost : start_cost,
+    };
+    JpsScratch& state = scratch.extension<JpsScratch>();
+    if (!state.map.Update(grid, rule)) {
+      return ValidateRequest(grid, request, name(), traits());
+    }
+    scratch.BeginSearch(grid.size());
+    state.points.Clear();
+
+    JpsSearch search(state.map, state.points, grid.width(), scratch,
+                     request.goal, request.expansion_recorder);
+    PlanResult result;
+    result.outcome = search.Run(request.start, stop, result.expansions);
+    if (result.found()) {
+      // Every traversable cell has the factor of the start cell.
+      const double factor = CellFactor(start_cost, request.cost.cost_weight);
+      FillPath(state.points, scratch, search.goal_id(), factor, result);
+    }
+    result.planning_time = absl::Now() - started;
+    return result;
+  }
+
+ private:
+  // Expands the chain of jump points ending at `goal` into single moves
+  // (diagonal first between consecutive jump points, as the scans went) and
+  // sums cost and length step by step in path order, as MeasurePath does.
+  static void FillPath(const JumpPointTable& points,
+                       const SearchScratch& scratch, uint32_t goal,
+                       double factor, PlanResult& result) {
+    std::vector<uint32_t> jumps;
+    for (uint32_t at = goal; at != SearchScratch::kNoParent;
+         at = scratch.Raw(at).parent) {
+      jumps.push_back(at);
+    }
+    auto cell = [&points](uint32_t id) {
+      const JumpPoint& p = points.point(id);
+      return Cell{p.x, p.y};
+    };
+    std::vector<Cell>& path = result.path;
+    path.push_back(cell(jumps.back()));
+    for (size_t j = jumps.size() - 1; j-- > 0;) {
+      const Cell to = cell(jumps[j]);
+      Cell at = path.back();
+      const int sx = Sign(to.x - at.x);
+      const int sy = Sign(to.y - at.y);
+      while (at.x != to.x || at.y != to.y) {
+        const int mx = at.x != to.x ? sx : 0;
+        const int my = at.y != to.y ? sy : 0;
+        at.x += mx;
+        at.y += my;
+        const double length = mx != 0 && my != 0 ? kSqrt2 : 1.0;
+        result.length += length;
+        result.cost += length * factor;
+        path.push_back(at);
+      }
+    }
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Planner> MakeJpsPlanner() {
+  return std::make_unique<JpsPlanner>();
+}
+
+}  // namespace pathd

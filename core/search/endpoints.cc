@@ -1,0 +1,194 @@
+// Endpoint and option validation, endpoint faults as status payloads, and the
+// nearest traversable cell.
+#include "core/search/endpoints.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/strings/cord.h"
+#include "absl/strings/str_format.h"
+
+namespace pathd {
+
+namespace {
+
+// Payload key of EndpointFault; the value is the enumerator's number.
+constexpr char kEndpointFaultUrl[] = "type.pathd.dev/pathd.EndpointFault";
+
+absl::Status ValidateEndpoint(const Grid& grid, Cell c, std::string_view what,
+                              const CostParams& cost) {
+  if (!grid.InBounds(c)) {
+    return WithEndpointFault(
+        absl::InvalidArgumentError(
+            absl::StrFormat("%s %s is outside the %d x %d map", what,
+                            CellToString(c), grid.width(), grid.height())),
+        *EndpointFaultFor(what, /*outside=*/true));
+  }
+  const uint8_t v = grid.cost(c);
+  if (!Traversable(v, cost.unknown_is_free)) {
+    return WithEndpointFault(
+        absl::InvalidArgumentError(absl::StrFormat(
+            "%s %s is on a blocked cell (cost %d)", what, CellToString(c), v)),
+        *EndpointFaultFor(what, /*outside=*/false));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status WithEndpointFault(absl::Status status, EndpointFault fault) {
+  status.SetPayload(kEndpointFaultUrl,
+                    absl::Cord(std::to_string(static_cast<int>(fault))));
+  return status;
+}
+
+std::optional<EndpointFault> EndpointFaultOf(const absl::Status& status) {
+  const auto payload = status.GetPayload(kEndpointFaultUrl);
+  if (!payload.has_value()) return std::nullopt;
+  for (const EndpointFault fault :
+       {EndpointFault::kStartOutsideMap, EndpointFault::kGoalOutsideMap,
+        EndpointFault::kStartBlocked, EndpointFault::kGoalBlocked}) {
+    if (*payload == std::to_string(static_cast<int>(fault))) return fault;
+  }
+  return std::nullopt;
+}
+
+std::optional<EndpointFault> EndpointFaultFor(std::string_view what, bool outside) {
+  if (what == "start") {
+    return outside ? EndpointFault::kStartOutsideMap : EndpointFault::kStartBlocked;
+  }
+  if (what == "goal") {
+    return outside ? EndpointFault::kGoalOutsideMap : EndpointFault::kGoalBlocked;
+  }
+  return std::nullopt;
+}
+
+absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request) {
+  // Search records index cells with uint32 and reserve the largest value.
+  if (grid.size() == 0 || grid.size() >= SearchScratch::kNoParent) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("map has %d cells; planners need 1..%d", grid.size(),
+                        SearchScratch::kNoParent - 1));
+  }
+  if (!std::isfinite(request.cost.cost_weight) || request.cost.cost_weight < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "cost_weight %g must be finite and >= 0", request.cost.cost_weight));
+  }
+  if (request.cost.connectivity != Connectivity::kFour &&
+      request.cost.connectivity != Connectivity::kEight) {
+    return absl::InvalidArgumentError("connectivity must be 4 or 8");
+  }
+  if (!(request.heuristic_weight >= 1.0) || !std::isfinite(request.heuristic_weight)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "heuristic_weight %g must be finite and >= 1", request.heuristic_weight));
+  }
+  if (request.lookahead < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("lookahead %d must be >= 0", request.lookahead));
+  }
+  const PotentialFieldParams& pf = request.potential;
+  for (const auto& [name, value] : {
+           std::pair<const char*, double>{"attractive_gain", pf.attractive_gain},
+           {"switch_distance", pf.switch_distance},
+           {"repulsive_gain", pf.repulsive_gain},
+           {"influence_distance", pf.influence_distance},
+           {"step_size", pf.step_size},
+       }) {
+    if (!std::isfinite(value) || value <= 0.0) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("potential field %s %g must be finite and > 0", name, value));
+    }
+  }
+  if (pf.max_steps < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("potential field max_steps %d must be >= 0", pf.max_steps));
+  }
+  if (absl::Status s = ValidateEndpoint(grid, request.start, "start", request.cost);
+      !s.ok()) {
+    return s;
+  }
+  return ValidateEndpoint(grid, request.goal, "goal", request.cost);
+}
+
+absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
+                             std::string_view planner, const PlannerTraits& traits) {
+  if (absl::Status s = ValidateEndpoints(grid, request); !s.ok()) return s;
+  if (traits.needs_eight_connected &&
+      request.cost.connectivity != Connectivity::kEight) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "planner %s needs 8-connectivity; use astar for 4-connected search",
+        planner));
+  }
+  if (traits.needs_uniform_cost && request.cost.cost_weight != 0.0) {
+    // Traversable cells all cost the same only if they share one cost value.
+    const std::vector<uint8_t>& cells = grid.cells();
+    int first = -1;
+    for (size_t i = 0; i < cells.size(); ++i) {
+      if (!Traversable(cells[i], request.cost.unknown_is_free)) continue;
+      // Unknown cells traversed as free cost like free cells.
+      const int v = cells[i] == kUnknownCost ? kFreeCost : cells[i];
+      if (first < 0) {
+        first = v;
+      } else if (v != first) {
+        return absl::FailedPreconditionError(absl::StrFormat(
+            "planner %s needs a map where every traversable cell costs the same, "
+            "but cell %s has cost %d and others %d; use astar, or cost_weight 0 "
+            "to ignore cell costs",
+            planner, CellToString(grid.CellAt(i)), v, first));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
+                                           double max_distance,
+                                           const CostParams& cost) {
+  if (!(max_distance >= 0.0)) return std::nullopt;
+  const double max_d2 = max_distance * max_distance;
+  // Rings beyond the grid's extent hold no cell, whatever max_distance says.
+  const int64_t extent = std::max<int64_t>(grid.width(), grid.height());
+  const int64_t max_ring =
+      std::min<int64_t>(static_cast<int64_t>(std::floor(max_distance)), extent);
+  std::optional<Cell> best;
+  int64_t best_d2 = 0;
+  auto consider = [&](int64_t x, int64_t y) {
+    if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height()) return;
+    const int64_t dx = x - target.x;
+    const int64_t dy = y - target.y;
+    const int64_t d2 = dx * dx + dy * dy;
+    if (static_cast<double>(d2) > max_d2) return;
+    const Cell c{static_cast<int32_t>(x), static_cast<int32_t>(y)};
+    if (!Traversable(grid.cost(c), cost.unknown_is_free)) return;
+    if (!best.has_value() || d2 < best_d2 ||
+        (d2 == best_d2 &&
+         (c.y < best->y || (c.y == best->y && c.x < best->x)))) {
+      best = c;
+      best_d2 = d2;
+    }
+  };
+  for (int64_t r = 0; r <= max_ring; ++r) {
+    // Every cell of ring r is at least r from the target.
+    if (best.has_value() && best_d2 < r * r) break;
+    if (r == 0) {
+      consider(target.x, target.y);
+      continue;
+    }
+    // Top and bottom rows of the ring, then its side columns between them.
+    for (int64_t x = int64_t{target.x} - r; x <= int64_t{target.x} + r; ++x) {
+      consider(x, int64_t{target.y} - r);
+      consider(x, int64_t{target.y} + r);
+    }
+    for (int64_t y = int64_t{target.y} - r + 1; y <= int64_t{target.y} + r - 1;
+         ++y) {
+      consider(int64_t{target.x} - r, y);
+      consider(int64_t{target.x} + r, y);
+    }
+  }
+  return best;
+}
+
+}  // namespace pathd

@@ -1,0 +1,63 @@
+// Validation of a query's endpoints and options before any search, the typed
+// fault attached to an endpoint error, and the nearest cell a robot may occupy.
+#ifndef PATHD_CORE_SEARCH_ENDPOINTS_H_
+#define PATHD_CORE_SEARCH_ENDPOINTS_H_
+
+#include <optional>
+#include <string_view>
+
+#include "absl/status/status.h"
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "core/search/plan_types.h"
+#include "core/search/planner.h"
+
+namespace pathd {
+
+// Which endpoint a rejected request got wrong. Validation attaches it to its
+// INVALID_ARGUMENT status (as a payload, which survives being passed up
+// unchanged), so callers can report a typed reason without parsing messages.
+enum class EndpointFault {
+  kStartOutsideMap,
+  kGoalOutsideMap,
+  kStartBlocked,
+  kGoalBlocked,
+};
+
+// `status` with `fault` attached.
+absl::Status WithEndpointFault(absl::Status status, EndpointFault fault);
+// The fault attached to `status`, nullopt when none is.
+std::optional<EndpointFault> EndpointFaultOf(const absl::Status& status);
+// The fault of endpoint `what` ("start" or "goal"; nullopt for any other
+// name) being outside the map or blocked.
+std::optional<EndpointFault> EndpointFaultFor(std::string_view what, bool outside);
+
+// INVALID_ARGUMENT naming "start" or "goal" when one is off the grid or on a
+// cell that is not traversable under request.cost, or naming the field when
+// the cost parameters are invalid (weight negative or not finite,
+// connectivity not 4/8, heuristic_weight < 1, lookahead < 0, potential-field
+// parameters not positive and finite) or the grid is empty or too large to
+// search. Endpoint errors carry their EndpointFault.
+absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request);
+
+// ValidateEndpoints plus the planner's own preconditions from its traits:
+// FAILED_PRECONDITION naming the planner and the first weighted cell when it
+// needs uniform cost, or when it needs 8-connectivity. Every planner's Plan()
+// calls this first.
+absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
+                             std::string_view planner, const PlannerTraits& traits);
+
+// The nearest cell to `target` the robot centre may occupy under `cost`
+// (on the grid and Traversable), by the Euclidean distance between cell
+// centres, at most `max_distance` cells (inclusive); ties go to the smaller
+// y, then the smaller x. `target` itself when it qualifies; nullopt when no
+// cell does. Visits rings of growing Chebyshev radius and stops once no
+// further ring can be nearer, so the cost is O(d^2) for the answer's distance
+// d, O(max_distance^2) when there is none.
+std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
+                                           double max_distance,
+                                           const CostParams& cost);
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_SEARCH_ENDPOINTS_H_

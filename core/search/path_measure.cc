@@ -1,0 +1,98 @@
+// The move rule on given paths and path measurement.
+#include "core/search/path_measure.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <vector>
+
+#include "core/search/line_of_sight.h"
+
+namespace pathd {
+
+PathMeasure MeasureAnyAnglePath(const Grid& grid, const std::vector<Cell>& path,
+                                const CostParams& cost) {
+  PathMeasure m;
+  if (path.empty()) return m;
+  if (!grid.InBounds(path[0]) ||
+      !Traversable(grid.cost(path[0]), cost.unknown_is_free)) {
+    m.first_invalid = 0;
+    return m;
+  }
+  for (size_t i = 1; i < path.size(); ++i) {
+    if (!grid.InBounds(path[i]) || !LineOfSight(grid, path[i - 1], path[i], cost)) {
+      m.first_invalid = i;
+      return m;
+    }
+    m.length += SegmentLength(path[i - 1], path[i]);
+    m.cost += SegmentCost(grid, path[i - 1], path[i], cost);
+  }
+  m.valid = true;
+  return m;
+}
+
+PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
+                              const CostParams& cost) {
+  return result.any_angle ? MeasureAnyAnglePath(grid, result.path, cost)
+                          : MeasurePath(grid, result.path, cost);
+}
+
+std::string_view MoveFaultName(MoveFault fault) {
+  switch (fault) {
+    case MoveFault::kNone:
+      return "legal";
+    case MoveFault::kNotAdjacent:
+      return "not adjacent";
+    case MoveFault::kDiagonalOnFourConnected:
+      return "diagonal on a 4-connected grid";
+    case MoveFault::kCornerCut:
+      return "cuts a corner";
+  }
+  return "unknown";
+}
+
+MoveFault CheckMove(const Grid& grid, Cell a, Cell b, const CostParams& cost) {
+  // int64: cells given by clients may be anywhere in int32.
+  const int64_t dx = int64_t{b.x} - a.x;
+  const int64_t dy = int64_t{b.y} - a.y;
+  if (std::abs(dx) > 1 || std::abs(dy) > 1 || (dx == 0 && dy == 0)) {
+    return MoveFault::kNotAdjacent;
+  }
+  if (dx == 0 || dy == 0) return MoveFault::kNone;
+  if (cost.connectivity != Connectivity::kEight) {
+    return MoveFault::kDiagonalOnFourConnected;
+  }
+  auto open = [&](int32_t x, int32_t y) {
+    return grid.InBounds(x, y) &&
+           Traversable(grid.cost(x, y), cost.unknown_is_free);
+  };
+  if (!open(b.x, a.y) || !open(a.x, b.y)) return MoveFault::kCornerCut;
+  return MoveFault::kNone;
+}
+
+PathMeasure MeasurePath(const Grid& grid, const std::vector<Cell>& path,
+                        const CostParams& cost) {
+  PathMeasure m;
+  if (path.empty()) return m;
+  auto ok_cell = [&](Cell c) {
+    return grid.InBounds(c) && Traversable(grid.cost(c), cost.unknown_is_free);
+  };
+  if (!ok_cell(path[0])) {
+    m.first_invalid = 0;
+    return m;
+  }
+  for (size_t i = 1; i < path.size(); ++i) {
+    const Cell a = path[i - 1];
+    const Cell b = path[i];
+    if (!ok_cell(b) || CheckMove(grid, a, b, cost) != MoveFault::kNone) {
+      m.first_invalid = i;
+      return m;
+    }
+    const double len = (a.x != b.x && a.y != b.y) ? kSqrt2 : 1.0;
+    m.length += len;
+    m.cost += len * CellFactor(grid.cost(b), cost.cost_weight);
+  }
+  m.valid = true;
+  return m;
+}
+
+}  // namespace pathd

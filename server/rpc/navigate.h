@@ -1,0 +1,99 @@
+// Navigate sessions: one D* Lite search per bidirectional stream, kept
+// between the robot's messages and repaired when it moves, when its sensors
+// report changed cells, and when anyone else changes the shared map, in which
+// case the session pushes the new path unasked.
+#ifndef PATHD_SERVER_RPC_NAVIGATE_H_
+#define PATHD_SERVER_RPC_NAVIGATE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string_view>
+#include <thread>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "pathd/v1/planner_service.grpc.pb.h"
+#include "server/inflation_cache.h"
+#include "server/map_store.h"
+#include "server/worker_pool.h"
+
+namespace pathd::server {
+
+class NavigationSession;
+
+// Thread-safe registry and factory of sessions. Planning for a session runs
+// on the worker pool; messages of one session are handled one at a time in
+// arrival order (the next message is read only once the previous one has
+// been answered), and pushes are serialised with them.
+class NavigationSessions {
+ public:
+  struct Options {
+    // A session without a client message for this long ends with
+    // DEADLINE_EXCEEDED (--session_idle_timeout).
+    absl::Duration idle_timeout = absl::Minutes(10);
+    // Open sessions at most; further Navigate calls get RESOURCE_EXHAUSTED
+    // (--max_sessions).
+    size_t max_sessions = 1024;
+    // Expansion cap per session search; 0 = none (--max_expansions).
+    int64_t max_expansions = 0;
+  };
+
+  // `store`, `pool` and `inflation` must outlive this object. Registers a
+  // map listener on `store` (so construct before serving) and starts the
+  // thread that ends idle sessions.
+  NavigationSessions(MapStore& store, WorkerPool& pool, InflationCache& inflation,
+                     Options options);
+  // Stops the idle reaper. Every session must have ended (the gRPC server
+  // shut down and the pool joined) before this runs.
+  ~NavigationSessions();
+  NavigationSessions(const NavigationSessions&) = delete;
+  NavigationSessions& operator=(const NavigationSessions&) = delete;
+
+  // The reactor for one Navigate call (gRPC deletes it when done).
+  // `shared_observations`: what an observation that would update the shared
+  // map (session_only = false) gets instead; OK = allowed, else the session
+  // ends with it (e.g. PERMISSION_DENIED for a read-only token).
+  grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>* Start(
+      grpc::CallbackServerContext* context,
+      absl::Status shared_observations = absl::OkStatus());
+
+  // Refuses new sessions and ends every open one with UNAVAILABLE (after the
+  // message it is handling, if any), so a draining server need not wait for
+  // robots to hang up.
+  void Shutdown();
+
+  // Open sessions and the bytes of their D* Lite state.
+  int64_t count() const;
+  int64_t bytes() const;
+
+ private:
+  friend class NavigationSession;
+
+  // MapStore listener: schedules a repair-and-maybe-push on every session of
+  // the map (or ends them with NOT_FOUND when it was deleted).
+  void OnMapChanged(std::string_view name,
+                    const std::shared_ptr<const MapSnapshot>& snapshot);
+  // Registers a new session; RESOURCE_EXHAUSTED beyond max_sessions.
+  absl::Status Add(NavigationSession* session) ABSL_LOCKS_EXCLUDED(mu_);
+  void Remove(NavigationSession* session) ABSL_LOCKS_EXCLUDED(mu_);
+  void ReapIdle();
+
+  MapStore& store_;
+  WorkerPool& pool_;
+  InflationCache& inflation_;
+  const Options options_;
+
+  mutable absl::Mutex mu_;
+  uint64_t next_id_ ABSL_GUARDED_BY(mu_) = 1;
+  std::map<uint64_t, NavigationSession*> sessions_ ABSL_GUARDED_BY(mu_);
+  bool stopping_ ABSL_GUARDED_BY(mu_) = false;
+  std::thread reaper_;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_RPC_NAVIGATE_H_

@@ -1,0 +1,168 @@
+// --data_dir: the MapStore's journal. Every Create/Update/Delete is appended
+// to a log segment and fdatasync'ed before the call returns (writers waiting
+// together share one sync); snapshots of changed maps let old segments go;
+// start-up rebuilds the maps from the snapshots and the log. File formats in
+// server/storage/wal_format.h; decisions in docs/decisions.md ("Durable maps").
+#ifndef PATHD_SERVER_STORAGE_DURABLE_STORE_H_
+#define PATHD_SERVER_STORAGE_DURABLE_STORE_H_
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "server/map_store.h"
+
+namespace pathd::server {
+
+// Thread-safe. Files in the directory:
+//   LOCK                    flock'ed while a pathd uses the directory
+//   wal-<first seq>.log     log segments (20-digit sequence numbers)
+//   map-<name>.snap         the latest snapshot of one map
+//   *.tmp                   a snapshot being written (removed at start-up)
+class DurableStore final : public MapJournal {
+ public:
+  struct Options {
+    std::string dir;
+    // Once the active segment holds this many bytes a new one starts and the
+    // maps changed since their last snapshot are snapshotted, after which
+    // the old segments are deleted.
+    int64_t snapshot_log_bytes = int64_t{64} << 20;
+    // The same after this long when the active segment holds any record;
+    // zero = only by size.
+    absl::Duration snapshot_interval = absl::Minutes(10);
+  };
+
+  // Counters since Open, for logs and benchmarks.
+  struct Stats {
+    int64_t records = 0;
+    // fdatasync calls that made records durable (group commits).
+    int64_t syncs = 0;
+    int64_t snapshots_written = 0;
+    int64_t segments_deleted = 0;
+  };
+
+  // What start-up found.
+  struct Recovery {
+    int maps = 0;
+    int snapshots = 0;
+    int segments = 0;
+    int64_t records_replayed = 0;
+    // "FILE: offset N: problem" when the newest segment ended in a torn or
+    // corrupt record that was cut away; empty otherwise.
+    std::string torn_tail;
+  };
+
+  // Creates `options.dir` if needed, locks it, rebuilds its maps into
+  // `store` (which must be empty), starts a new log segment and becomes the
+  // store's journal. Errors: DATA_LOSS naming the file (and offset) for a
+  // corrupt or truncated snapshot, corruption before the last record of the
+  // log, a missing segment, or records that do not follow from each other;
+  // FAILED_PRECONDITION when another process holds the directory;
+  // RESOURCE_EXHAUSTED when a recovered map exceeds the store's max_cells;
+  // INTERNAL for I/O errors. A torn final record is cut away and reported
+  // with a warning (and in recovery()).
+  static absl::StatusOr<std::unique_ptr<DurableStore>> Open(Options options,
+                                                             MapStore& store);
+
+  // Stops the snapshot thread and detaches from the store. Precondition: no
+  // writer is inside the store.
+  ~DurableStore() override;
+  DurableStore(const DurableStore&) = delete;
+  DurableStore& operator=(const DurableStore&) = delete;
+
+  // Snapshots every map changed since its last snapshot, removes the
+  // snapshots of deleted maps and deletes the log segments that are then
+  // covered. The background thread calls it; exposed for tests.
+  absl::Status Checkpoint();
+
+  Stats stats() const;
+  const Recovery& recovery() const { return recovery_; }
+
+  // MapJournal.
+  absl::Status Writable() override;
+  absl::StatusOr<std::string> EncodeCreate(std::string_view name, uint64_t version,
+                                           const Grid& grid) override;
+  std::string EncodeUpdate(std::string_view name, uint64_t version,
+                           absl::Span<const MapChange> changes) override;
+  std::string EncodeDelete(std::string_view name, uint64_t last_version) override;
+  uint64_t Append(std::string_view name, std::string record,
+                  std::shared_ptr<const MapSnapshot> current) override;
+  absl::Status WaitDurable(uint64_t sequence) override;
+
+ private:
+  // Per map name: what a checkpoint needs to know.
+  struct NameState {
+    // The current version; null once deleted.
+    std::shared_ptr<const MapSnapshot> current;
+    // The last record of this name (or the snapshot it was recovered from).
+    uint64_t last_sequence = 0;
+    // The record the name's snapshot file includes; 0 = no file.
+    uint64_t snapshot_sequence = 0;
+  };
+
+  DurableStore(Options options, MapStore& store);
+
+  absl::Status Recover();
+  // Creates wal-<first_sequence>.log with its magic, synced, and makes it the
+  // segment appends go to. Only the sync leader (or Open) calls it.
+  absl::Status StartSegment(uint64_t first_sequence);
+  // Writes the pending records and syncs them, starting a new segment
+  // afterwards when the active one is full or `rotate` (and it holds
+  // records). Called with mu_ held and no leader; mu_ is released meanwhile.
+  absl::Status LeadSync(bool rotate) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  absl::Status WriteSnapshotFile(const MapSnapshot& snapshot, uint64_t sequence);
+  absl::Status SyncDir();
+  void SnapshotLoop();
+  bool NoLeader() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return !leader_; }
+  bool SnapshotDue() const ABSL_SHARED_LOCKS_REQUIRED(mu_) {
+    return stopping_ || checkpoint_wanted_;
+  }
+  std::string Path(std::string_view file) const;
+
+  const Options options_;
+  MapStore& store_;
+  int lock_fd_ = -1;
+  int dir_fd_ = -1;
+  Recovery recovery_;
+
+  // The active segment. Written only by the sync leader (leader_ true) or
+  // before the store is journaled, so not guarded by mu_.
+  int segment_fd_ = -1;
+  std::string segment_path_;
+  int64_t segment_bytes_ = 0;
+
+  mutable absl::Mutex mu_;
+  // Framed records appended but not yet written.
+  std::string pending_ ABSL_GUARDED_BY(mu_);
+  uint64_t next_sequence_ ABSL_GUARDED_BY(mu_) = 1;
+  // Every record up to this one is on disk.
+  uint64_t durable_sequence_ ABSL_GUARDED_BY(mu_) = 0;
+  // A writer is writing and syncing (the others wait for it).
+  bool leader_ ABSL_GUARDED_BY(mu_) = false;
+  // Set by the first failed write or sync: nothing is logged after it.
+  absl::Status failed_ ABSL_GUARDED_BY(mu_);
+  // First sequence of the active segment and of every older one kept.
+  uint64_t segment_first_ ABSL_GUARDED_BY(mu_) = 1;
+  std::vector<uint64_t> sealed_segments_ ABSL_GUARDED_BY(mu_);
+  std::map<std::string, NameState, std::less<>> names_ ABSL_GUARDED_BY(mu_);
+  bool checkpoint_wanted_ ABSL_GUARDED_BY(mu_) = false;
+  bool stopping_ ABSL_GUARDED_BY(mu_) = false;
+  Stats stats_ ABSL_GUARDED_BY(mu_);
+
+  // One checkpoint at a time.
+  absl::Mutex checkpoint_mu_ ABSL_ACQUIRED_BEFORE(mu_);
+  std::thread snapshot_thread_;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_STORAGE_DURABLE_STORE_H_

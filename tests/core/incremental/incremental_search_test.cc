@@ -1,0 +1,813 @@
+// LPA*, D* Lite and the shortest path map (core/incremental/incremental_search.h): the lecture
+// notes' D* Lite example value for value, long random sequences of map changes
+// and robot moves checked after every step against an independent Dijkstra,
+// and the edge cases (blocked ends, bad updates, stops, memory, the
+// repair-or-rebuild rule, the extraction guard).
+#include "core/search/path_measure.h"
+#include "core/incremental/incremental_search.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <queue>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "absl/time/clock.h"
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "core/incremental/engine.h"
+#include "core/map_io/map_io.h"
+#include "core/search/planner.h"
+#include "gtest/gtest.h"
+#include "tests/testing/test_grids.h"
+
+namespace pathd {
+namespace {
+
+using internal::IncrementalAccess;
+using internal::MoveRules;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::shared_ptr<const Grid> Share(Grid grid) {
+  return std::make_shared<const Grid>(std::move(grid));
+}
+
+// Cost-to-go of every cell to `goal` (+infinity where unreachable) by a plain
+// Dijkstra over the move table, backwards: a move v -> u costs its length
+// times the factor of the entered cell u. Shares no code with the engine.
+std::vector<double> ReferenceCostToGo(const Grid& grid, Cell goal, const CostParams& p) {
+  std::vector<double> dist(grid.size(), kInf);
+  auto ok = [&](int x, int y) {
+    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), p.unknown_is_free);
+  };
+  if (!ok(goal.x, goal.y)) return dist;
+  using Item = std::pair<double, size_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  dist[grid.Index(goal)] = 0.0;
+  open.push({0.0, grid.Index(goal)});
+  while (!open.empty()) {
+    const auto [d, i] = open.top();
+    open.pop();
+    if (d > dist[i]) continue;
+    const Cell u = grid.CellAt(i);
+    const double into_u_factor = CellFactor(grid.cost(u), p.cost_weight);
+    for (int m = 0; m < MoveCount(p.connectivity); ++m) {
+      const int vx = u.x + kMoves[m].dx, vy = u.y + kMoves[m].dy;
+      if (!ok(vx, vy)) continue;
+      if (kMoves[m].dx != 0 && kMoves[m].dy != 0 &&
+          (!ok(u.x + kMoves[m].dx, u.y) || !ok(u.x, u.y + kMoves[m].dy))) {
+        continue;
+      }
+      const double nd = d + kMoves[m].length * into_u_factor;
+      const size_t j = grid.Index(vx, vy);
+      if (nd < dist[j]) {
+        dist[j] = nd;
+        open.push({nd, j});
+      }
+    }
+  }
+  return dist;
+}
+
+bool Near(double a, double b, double rel) {
+  if (std::isinf(a) || std::isinf(b)) return a == b;
+  return std::abs(a - b) <= rel * (1.0 + std::abs(b));
+}
+
+// ---------------------------------------------------------------------------
+// The D* Lite example of the lecture notes (seed 000, "D* Lite – Example"):
+// a 5 x 4 grid labelled "row,col" with row 0 at the bottom, goal 0,0, start
+// 2,4, obstacles 1,1, 1,2 and 0,2; 8-connected, straight moves cost 1 and
+// diagonal ones 1.4, moves only to and from obstacles are infinite (slide 6
+// gives 2,1 rhs 2.4 through the corner of obstacle 1,1), h = 0. The robot
+// follows the g gradient from 2,4 to 2,3; while it moves on towards 2,2 that
+// cell turns out to be an obstacle (slide 25) and D* Lite replans.
+//
+// The notes print full tables only up to slide 10; the tables below are the
+// states the slides narrate, and every value the text states is one of them:
+// first search (slides 12-22), the start 2,4 settles at g = rhs = 5.4 after
+// 1,3 and 3,3 at 4.8 push 0,3 and 0,4 on the open list; replan: 3,3 stays
+// consistent at 4.8 through 3,2 (slide 27), 2,3 ends at 5.2 = 3.8 + 1.4
+// through 3,2 (slides 28, 37), 2,4 becomes inconsistent, 1,4 keeps rhs 5.8
+// then rises, 0,3 and 0,4 end consistent at infinity (slide 35), and 1,3
+// ends inconsistent (slide 38).
+//
+// Rows top (row 3) to bottom (row 0), columns 0..4, each "g/rhs" ("#" is an
+// obstacle: g = rhs = infinity).
+const std::vector<std::string> kAfterFirstSearch = {
+    "3/3     3.4/3.4  3.8/3.8  4.8/4.8  inf/5.8",
+    "2/2     2.4/2.4  3.4/3.4  4.4/4.4  5.4/5.4",
+    "1/1     #        #        4.8/4.8  inf/5.8",
+    "0/0     1/1      #        inf/5.8  inf/6.2",
+};
+const std::vector<std::string> kAfterReplan = {
+    "3/3     3.4/3.4  3.8/3.8  4.8/4.8  inf/5.8",
+    "2/2     2.4/2.4  #        5.2/5.2  5.4/6.2",
+    "1/1     #        #        inf/6.2  inf/6.4",
+    "0/0     1/1      #        inf/inf  inf/inf",
+};
+
+// Notes' "row,col" to our cell: column is x, row is y.
+Cell NotesCell(int row, int col) { return Cell{col, row}; }
+
+double ParseValue(const std::string& s) { return s == "inf" ? kInf : std::stod(s); }
+
+void ExpectTable(const DStarLite& dstar, const std::vector<std::string>& table,
+                 const std::string& when) {
+  for (int r = 0; r < 4; ++r) {
+    const int row = 3 - r;
+    const std::vector<std::string> entries =
+        absl::StrSplit(table[r], ' ', absl::SkipWhitespace());
+    ASSERT_EQ(entries.size(), 5u);
+    for (int col = 0; col < 5; ++col) {
+      double g = kInf, rhs = kInf;
+      if (entries[col] != "#") {
+        const std::vector<std::string> parts = absl::StrSplit(entries[col], '/');
+        g = ParseValue(parts[0]);
+        rhs = ParseValue(parts[1]);
+      }
+      const Cell c = NotesCell(row, col);
+      const std::string where = absl::StrFormat("%s: cell %d,%d", when, row, col);
+      EXPECT_TRUE(Near(dstar.g(c), g, 1e-12)) << where << " g " << dstar.g(c);
+      EXPECT_TRUE(Near(dstar.rhs(c), rhs, 1e-12)) << where << " rhs " << dstar.rhs(c);
+    }
+  }
+}
+
+// The notes' robot step: to the neighbour minimising c + g under the notes'
+// move rules (diagonals 1.4, corners may be cut).
+Cell NotesStep(const DStarLite& dstar, Cell from) {
+  Cell best = from;
+  double best_sum = kInf;
+  for (const Move& m : kMoves) {
+    const Cell n{from.x + m.dx, from.y + m.dy};
+    if (!dstar.grid().InBounds(n) || dstar.grid().cost(n) != kFreeCost) continue;
+    const double sum = (m.dx != 0 && m.dy != 0 ? 1.4 : 1.0) + dstar.g(n);
+    if (sum < best_sum) {
+      best_sum = sum;
+      best = n;
+    }
+  }
+  return best;
+}
+
+TEST(DStarLiteNotesExample, GAndRhsMatchTheNotesAfterSearchAndReplan) {
+  Grid grid = Grid::Create(5, 4).value();
+  for (const Cell c : {NotesCell(1, 1), NotesCell(1, 2), NotesCell(0, 2)}) {
+    grid.set_cost(c, kLethalCost);
+  }
+  const MoveRules notes_rules{.diagonal_length = 1.4, .corner_cutting = true,
+                              .heuristic = false};
+  auto dstar = IncrementalAccess::CreateDStarLite(Share(grid), NotesCell(0, 0),
+                                                  CostParams{}, notes_rules);
+  ASSERT_TRUE(dstar.ok()) << dstar.status();
+  DStarLite& d = **dstar;
+  // Initialisation (slide 1): rhs(goal) = 0, everything else infinite.
+  EXPECT_EQ(d.rhs(NotesCell(0, 0)), 0.0);
+  EXPECT_EQ(d.g(NotesCell(0, 0)), kInf);
+  EXPECT_EQ(d.rhs(NotesCell(2, 4)), kInf);
+
+  ASSERT_TRUE(d.SetStart(NotesCell(2, 4)).ok());
+  ASSERT_EQ(IncrementalAccess::ComputeShortestPath(d, StopCondition::None()),
+            PlanOutcome::kFound);
+  ExpectTable(d, kAfterFirstSearch, "after the first search");
+
+  // Slides 23-25: the robot follows the gradient to 2,3 and would go on to
+  // 2,2, which it then sees blocked.
+  const Cell robot = NotesStep(d, NotesCell(2, 4));
+  EXPECT_EQ(robot, NotesCell(2, 3));
+  EXPECT_EQ(NotesStep(d, robot), NotesCell(2, 2));
+  ASSERT_TRUE(d.SetStart(robot).ok());
+  EXPECT_EQ(d.km(), 0.0);  // h = 0
+  grid.set_cost(NotesCell(2, 2), kLethalCost);
+  const std::vector<Cell> changed{NotesCell(2, 2)};
+  ASSERT_TRUE(d.UpdateMap(Share(grid), changed).ok());
+  // Slides 26-29: the update alone makes 2,2, 2,3 and 1,3 inconsistent.
+  EXPECT_EQ(d.rhs(NotesCell(2, 2)), kInf);
+  EXPECT_NEAR(d.rhs(NotesCell(2, 3)), 5.2, 1e-12);
+  EXPECT_NEAR(d.g(NotesCell(2, 3)), 4.4, 1e-12);
+  EXPECT_NEAR(d.rhs(NotesCell(1, 3)), 5.4, 1e-12);
+  EXPECT_NEAR(d.rhs(NotesCell(3, 3)), 4.8, 1e-12);
+  EXPECT_NEAR(d.g(NotesCell(3, 3)), 4.8, 1e-12);
+
+  ASSERT_EQ(IncrementalAccess::ComputeShortestPath(d, StopCondition::None()),
+            PlanOutcome::kFound);
+  ExpectTable(d, kAfterReplan, "after the replan");
+  // Slide 39: the new path leaves 2,3 diagonally for 3,2.
+  EXPECT_EQ(NotesStep(d, robot), NotesCell(3, 2));
+}
+
+// The same map under DESIGN.md's rules (sqrt(2) diagonals, no corner cutting,
+// octile heuristic) through the public API: the replanned path goes around.
+TEST(DStarLiteNotesExample, PublicApiReplansAroundTheNewObstacle) {
+  Grid grid = MakeGrid({"..#..", ".##..", ".....", "....."});
+  auto shared = Share(grid);
+  auto dstar = DStarLite::Create(shared, {0, 0}, CostParams{});
+  ASSERT_TRUE(dstar.ok());
+  ASSERT_TRUE((*dstar)->SetStart({4, 2}).ok());
+  auto first = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(first.ok() && first->found());
+  const std::vector<double> ref = ReferenceCostToGo(grid, {0, 0}, {});
+  EXPECT_NEAR(first->cost, ref[grid.Index(4, 2)], 1e-9);
+  ASSERT_TRUE((*dstar)->SetStart({3, 2}).ok());
+  grid.set_cost(2, 2, kLethalCost);
+  const std::vector<Cell> changed{{2, 2}};
+  ASSERT_TRUE((*dstar)->UpdateMap(Share(grid), changed).ok());
+  auto second = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(second.ok() && second->found()) << second.status();
+  EXPECT_NEAR(second->cost, ReferenceCostToGo(grid, {0, 0}, {})[grid.Index(3, 2)], 1e-9);
+  for (const Cell c : second->path) EXPECT_NE(c, (Cell{2, 2}));
+  EXPECT_EQ((*dstar)->last_stats().changed_cells, 1);
+  EXPECT_GT((*dstar)->last_stats().expansions, 0);
+}
+
+// ---------------------------------------------------------------------------
+// Random sequences.
+
+struct World {
+  Grid grid;
+  CostParams cost;
+};
+
+uint8_t RandomCellValue(std::mt19937& rng, bool weighted) {
+  const int roll = static_cast<int>(rng() % 100);
+  if (roll < 22) return rng() % 4 == 0 ? kUnknownCost : kLethalCost;
+  if (weighted && roll < 55) return static_cast<uint8_t>(rng() % 253);
+  return kFreeCost;
+}
+
+Cell RandomCell(std::mt19937& rng, const Grid& grid) {
+  return Cell{static_cast<int32_t>(rng() % grid.width()),
+              static_cast<int32_t>(rng() % grid.height())};
+}
+
+// After every step of thousands of random sequences (map changes: single
+// cells and clusters that block, free or re-weight; robot moves along the path
+// or jumps), D* Lite, LPA* (fixed start) and the shortest path map agree with
+// a fresh Dijkstra: same cost (double searches to 1e-9, the float field's
+// descent to 1e-5 relative), found exactly when reachable, legal paths that
+// cost what they claim, the whole field within float rounding of the
+// reference, and the repaired field equal bit for bit to one built from
+// scratch on the same map.
+TEST(IncrementalEquivalence, RandomChangesAndMovesMatchDijkstra) {
+  std::mt19937 rng(5150);
+  constexpr int kSequences = 4000;
+  constexpr int kSteps = 24;
+  int64_t checks = 0, found = 0, repaired = 0, rebuilt = 0;
+  for (int seq = 0; seq < kSequences; ++seq) {
+    const int w = 4 + static_cast<int>(rng() % 29);
+    const int h = 4 + static_cast<int>(rng() % 29);
+    const bool weighted = seq % 3 != 0;
+    World world{Grid::Create(w, h).value(), CostParams{}};
+    for (uint8_t& v : world.grid.mutable_cells()) v = RandomCellValue(rng, weighted);
+    world.cost.connectivity = seq % 2 ? Connectivity::kFour : Connectivity::kEight;
+    world.cost.cost_weight = seq % 5 == 0 ? 0.0 : static_cast<double>(rng() % 400) / 100.0;
+    world.cost.unknown_is_free = seq % 7 == 0;
+    const Cell goal = RandomCell(rng, world.grid);
+    Cell robot = RandomCell(rng, world.grid);
+    world.grid.set_cost(goal, kFreeCost);
+    world.grid.set_cost(robot, kFreeCost);
+    const Cell lpa_start = robot;
+    auto grid = Share(world.grid);
+
+    auto dstar = DStarLite::Create(grid, goal, world.cost);
+    auto lpa = LpaStar::Create(grid, lpa_start, goal, world.cost);
+    auto spm = ShortestPathMap::Build(grid, goal, world.cost, StopCondition::None());
+    ASSERT_TRUE(dstar.ok() && lpa.ok() && spm.ok()) << "sequence " << seq;
+    ASSERT_TRUE((*dstar)->SetStart(robot).ok());
+    std::vector<Cell> last_path;
+
+    for (int step = 0; step < kSteps; ++step) {
+      const std::string where = absl::StrFormat("sequence %d step %d", seq, step);
+      if (step > 0) {
+        const int action = static_cast<int>(rng() % 10);
+        if (action < 6) {
+          // A map change: one cell, a small cluster or a few scattered cells;
+          // the ends are spared most of the time.
+          Grid next = *grid;
+          std::vector<Cell> changed;
+          const int kind = static_cast<int>(rng() % 3);
+          const Cell at = RandomCell(rng, next);
+          const uint8_t value = RandomCellValue(rng, weighted);
+          const int count = kind == 0 ? 1 : 2 + static_cast<int>(rng() % 7);
+          for (int k = 0; k < count; ++k) {
+            Cell c = at;
+            if (kind == 1) {
+              c = Cell{at.x + static_cast<int32_t>(rng() % 3) - 1,
+                       at.y + static_cast<int32_t>(rng() % 3) - 1};
+            } else if (kind == 2) {
+              c = RandomCell(rng, next);
+            }
+            if (!next.InBounds(c)) continue;
+            if ((c == goal || c == robot || c == lpa_start) && rng() % 8 != 0) continue;
+            const uint8_t v = kind == 2 ? RandomCellValue(rng, weighted) : value;
+            next.set_cost(c, v);
+            changed.push_back(c);  // cells may repeat, unchanged ones too
+          }
+          grid = Share(std::move(next));
+          ASSERT_TRUE((*dstar)->UpdateMap(grid, changed).ok()) << where;
+          ASSERT_TRUE((*lpa)->UpdateMap(grid, changed).ok()) << where;
+          ASSERT_TRUE((*spm)->UpdateMap(grid, changed).ok()) << where;
+          ((*spm)->last_stats().rebuilt ? rebuilt : repaired) += 1;
+        } else if (action < 9 && last_path.size() > 1) {
+          // Along the current path.
+          robot = last_path[1 + rng() % std::min<size_t>(last_path.size() - 1, 4)];
+          ASSERT_TRUE((*dstar)->SetStart(robot).ok());
+        } else {
+          robot = RandomCell(rng, *grid);
+          ASSERT_TRUE((*dstar)->SetStart(robot).ok());
+        }
+      }
+
+      const std::vector<double> ref = ReferenceCostToGo(*grid, goal, world.cost);
+      const bool robot_free = Traversable(grid->cost(robot), world.cost.unknown_is_free);
+
+      // D* Lite, sometimes stopped by a small budget first and then resumed.
+      if (rng() % 5 == 0) {
+        auto partial = (*dstar)->Plan(
+            StopCondition(absl::InfiniteFuture(), nullptr, 1 + rng() % 16));
+        if (!robot_free) {
+          ASSERT_EQ(partial.status().code(), absl::StatusCode::kInvalidArgument) << where;
+        } else {
+          ASSERT_TRUE(partial.ok()) << where << ": " << partial.status();
+        }
+      }
+      auto d = (*dstar)->Plan(StopCondition::None());
+      last_path.clear();
+      if (!robot_free) {
+        ASSERT_EQ(d.status().code(), absl::StatusCode::kInvalidArgument) << where;
+      } else {
+        ASSERT_TRUE(d.ok()) << where << ": " << d.status();
+        const double optimum = ref[grid->Index(robot)];
+        ASSERT_EQ(d->found(), std::isfinite(optimum)) << where;
+        if (d->found()) {
+          ++found;
+          const PathMeasure m = MeasurePath(*grid, d->path, world.cost);
+          ASSERT_TRUE(m.valid) << where;
+          ASSERT_EQ(d->path.front(), robot);
+          ASSERT_EQ(d->path.back(), goal);
+          ASSERT_TRUE(Near(d->cost, m.cost, 1e-12)) << where;
+          ASSERT_TRUE(Near(d->cost, optimum, 1e-9)) << where << ": " << d->cost
+                                                    << " vs " << optimum;
+          last_path = d->path;
+        } else {
+          ASSERT_EQ(d->outcome, PlanOutcome::kNoPath) << where;
+        }
+      }
+
+      // LPA* from its fixed start.
+      auto l = (*lpa)->Plan(StopCondition::None());
+      ASSERT_TRUE(l.ok()) << where << ": " << l.status();
+      const bool lpa_start_free =
+          Traversable(grid->cost(lpa_start), world.cost.unknown_is_free);
+      const double lpa_optimum = lpa_start_free ? ref[grid->Index(lpa_start)] : kInf;
+      ASSERT_EQ(l->found(), std::isfinite(lpa_optimum)) << where;
+      if (l->found()) {
+        const PathMeasure m = MeasurePath(*grid, l->path, world.cost);
+        ASSERT_TRUE(m.valid) << where;
+        ASSERT_EQ(l->path.front(), lpa_start);
+        ASSERT_EQ(l->path.back(), goal);
+        ASSERT_TRUE(Near(l->cost, lpa_optimum, 1e-9)) << where;
+      }
+
+      // The shortest path map: every cell, and a descent from the robot.
+      const absl::Span<const float> field = (*spm)->field();
+      for (size_t i = 0; i < grid->size(); ++i) {
+        if (grid->CellAt(i) == goal) {
+          // Blocked or not, the goal is the root of the field.
+          ASSERT_EQ(field[i], 0.0f) << where;
+          continue;
+        }
+        if (!Traversable(grid->cost(grid->CellAt(i)), world.cost.unknown_is_free)) {
+          ASSERT_TRUE(std::isinf(field[i])) << where << " cell " << i;
+          continue;
+        }
+        ASSERT_TRUE(Near(field[i], ref[i], 1e-5))
+            << where << " cell " << CellToString(grid->CellAt(i)) << ": " << field[i]
+            << " vs " << ref[i];
+      }
+      if (Traversable(grid->cost(goal), world.cost.unknown_is_free)) {
+        auto fresh =
+            ShortestPathMap::Build(grid, goal, world.cost, StopCondition::None());
+        ASSERT_TRUE(fresh.ok()) << where << ": " << fresh.status();
+        ASSERT_TRUE(std::equal(field.begin(), field.end(), (*fresh)->field().begin()))
+            << where << ": the repaired field differs from a rebuilt one";
+      }
+      auto s = (*spm)->PathFrom(robot);
+      if (!robot_free) {
+        ASSERT_EQ(s.status().code(), absl::StatusCode::kInvalidArgument) << where;
+      } else {
+        ASSERT_TRUE(s.ok()) << where << ": " << s.status();
+        const double optimum = ref[grid->Index(robot)];
+        ASSERT_EQ(s->found(), std::isfinite(optimum)) << where;
+        if (s->found()) {
+          const PathMeasure m = MeasurePath(*grid, s->path, world.cost);
+          ASSERT_TRUE(m.valid) << where;
+          ASSERT_EQ(s->path.back(), goal);
+          ASSERT_TRUE(Near(s->cost, m.cost, 1e-12)) << where;
+          // The float field's descent is optimal up to its rounding.
+          ASSERT_TRUE(Near(s->cost, optimum, 1e-5)) << where;
+        }
+      }
+      ++checks;
+    }
+  }
+  // The sequences exercise what they are meant to.
+  EXPECT_GT(found, checks / 3);
+  EXPECT_GT(repaired, 1000);
+  EXPECT_GT(rebuilt, 100);
+}
+
+// ---------------------------------------------------------------------------
+// Edge cases.
+
+TEST(Incremental, StartEqualsGoal) {
+  auto grid = Share(MakeGrid({"...", "...", "..."}));
+  auto lpa = LpaStar::Create(grid, {1, 1}, {1, 1}, {});
+  ASSERT_TRUE(lpa.ok());
+  auto l = (*lpa)->Plan(StopCondition::None());
+  ASSERT_TRUE(l.ok() && l->found());
+  EXPECT_EQ(l->path, (std::vector<Cell>{Cell{1, 1}}));
+  EXPECT_EQ(l->cost, 0.0);
+
+  auto dstar = DStarLite::Create(grid, {1, 1}, {});
+  ASSERT_TRUE(dstar.ok() && (*dstar)->SetStart({1, 1}).ok());
+  auto d = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(d.ok() && d->found());
+  EXPECT_EQ(d->path, (std::vector<Cell>{Cell{1, 1}}));
+  EXPECT_EQ(d->cost, 0.0);
+
+  auto spm = ShortestPathMap::Build(grid, {1, 1}, {}, StopCondition::None());
+  ASSERT_TRUE(spm.ok());
+  auto s = (*spm)->PathFrom({1, 1});
+  ASSERT_TRUE(s.ok() && s->found());
+  EXPECT_EQ(s->path, (std::vector<Cell>{Cell{1, 1}}));
+  EXPECT_EQ((*spm)->CostToGo({1, 1}), 0.0f);
+}
+
+TEST(Incremental, GoalBlockedThenFreedAgain) {
+  Grid grid = MakeGrid({".....", ".#...", "....."});
+  const Cell start{0, 0}, goal{4, 2};
+  auto dstar = DStarLite::Create(Share(grid), goal, {});
+  auto lpa = LpaStar::Create(Share(grid), start, goal, {});
+  auto spm = ShortestPathMap::Build(Share(grid), goal, {}, StopCondition::None());
+  ASSERT_TRUE(dstar.ok() && lpa.ok() && spm.ok());
+  ASSERT_TRUE((*dstar)->SetStart(start).ok());
+  const double optimum = ReferenceCostToGo(grid, goal, {})[grid.Index(start)];
+  ASSERT_TRUE((*dstar)->Plan(StopCondition::None())->found());
+  ASSERT_TRUE((*lpa)->Plan(StopCondition::None())->found());
+
+  const std::vector<Cell> changed{goal};
+  grid.set_cost(goal, kLethalCost);
+  auto blocked = Share(grid);
+  ASSERT_TRUE((*dstar)->UpdateMap(blocked, changed).ok());
+  ASSERT_TRUE((*lpa)->UpdateMap(blocked, changed).ok());
+  ASSERT_TRUE((*spm)->UpdateMap(blocked, changed).ok());
+  auto d = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(d.ok());
+  EXPECT_EQ(d->outcome, PlanOutcome::kNoPath);
+  auto l = (*lpa)->Plan(StopCondition::None());
+  ASSERT_TRUE(l.ok());
+  EXPECT_EQ(l->outcome, PlanOutcome::kNoPath);
+  auto s = (*spm)->PathFrom(start);
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(s->outcome, PlanOutcome::kNoPath);
+  EXPECT_TRUE(std::isinf((*spm)->CostToGo(start)));
+
+  grid.set_cost(goal, kFreeCost);
+  auto freed = Share(grid);
+  ASSERT_TRUE((*dstar)->UpdateMap(freed, changed).ok());
+  ASSERT_TRUE((*lpa)->UpdateMap(freed, changed).ok());
+  ASSERT_TRUE((*spm)->UpdateMap(freed, changed).ok());
+  d = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(d.ok() && d->found());
+  EXPECT_NEAR(d->cost, optimum, 1e-9);
+  l = (*lpa)->Plan(StopCondition::None());
+  ASSERT_TRUE(l.ok() && l->found());
+  EXPECT_NEAR(l->cost, optimum, 1e-9);
+  s = (*spm)->PathFrom(start);
+  ASSERT_TRUE(s.ok() && s->found());
+  EXPECT_NEAR(s->cost, optimum, 1e-9);
+}
+
+TEST(Incremental, BlockedStart) {
+  Grid grid = MakeGrid({"....", ".#..", "...."});
+  auto shared = Share(grid);
+  EXPECT_EQ(LpaStar::Create(shared, {1, 1}, {3, 2}, {}).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  auto dstar = DStarLite::Create(shared, {3, 2}, {});
+  ASSERT_TRUE(dstar.ok());
+  EXPECT_EQ((*dstar)->Plan(StopCondition::None()).status().code(),
+            absl::StatusCode::kFailedPrecondition);
+  ASSERT_TRUE((*dstar)->SetStart({1, 1}).ok());
+  auto d = (*dstar)->Plan(StopCondition::None());
+  EXPECT_EQ(d.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(d.status().message().find("start (1, 1)"), std::string::npos) << d.status();
+  EXPECT_EQ((*dstar)->SetStart({4, 0}).code(), absl::StatusCode::kInvalidArgument);
+  // Moving off the blocked cell recovers.
+  ASSERT_TRUE((*dstar)->SetStart({0, 0}).ok());
+  d = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(d.ok() && d->found());
+
+  auto spm = ShortestPathMap::Build(shared, {3, 2}, {}, StopCondition::None());
+  ASSERT_TRUE(spm.ok());
+  EXPECT_EQ((*spm)->PathFrom({1, 1}).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*spm)->PathFrom({-1, 1}).status().code(),
+            absl::StatusCode::kInvalidArgument);
+
+  // Blocked goals are refused up front, naming the goal.
+  auto bad = DStarLite::Create(shared, {1, 1}, {});
+  EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.status().message().find("goal"), std::string::npos) << bad.status();
+  EXPECT_EQ(ShortestPathMap::Build(shared, {9, 9}, {}, StopCondition::None())
+                .status()
+                .code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+TEST(Incremental, BadUpdatesAreInvalidArgument) {
+  auto grid = Share(MakeGrid({"....", "....", "...."}));
+  auto other = Share(MakeGrid({"...", "...", "..."}));
+  auto dstar = DStarLite::Create(grid, {0, 0}, {});
+  auto lpa = LpaStar::Create(grid, {3, 2}, {0, 0}, {});
+  auto spm = ShortestPathMap::Build(grid, {0, 0}, {}, StopCondition::None());
+  ASSERT_TRUE(dstar.ok() && lpa.ok() && spm.ok());
+  const std::vector<Cell> off_map{{1, 1}, {4, 0}};
+  for (const absl::Status& s :
+       {(*dstar)->UpdateMap(grid, off_map), (*lpa)->UpdateMap(grid, off_map),
+        (*spm)->UpdateMap(grid, off_map)}) {
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(s.message().find("(4, 0)"), std::string::npos) << s;
+  }
+  const std::vector<Cell> none;
+  EXPECT_EQ((*dstar)->UpdateMap(other, none).code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*lpa)->UpdateMap(other, none).code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*spm)->UpdateMap(other, none).code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*spm)->UpdateMap(nullptr, none).code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(Incremental, ChangedCellsListsDifferencesInRowMajorOrder) {
+  Grid a = MakeGrid({"...", "...", "..."});
+  Grid b = MakeGrid({"..#", "...", "#.5"});
+  auto changed = ChangedCells(a, b);
+  ASSERT_TRUE(changed.ok());
+  EXPECT_EQ(*changed, (std::vector<Cell>{{2, 0}, {0, 2}, {2, 2}}));
+  EXPECT_EQ(ChangedCells(a, MakeGrid({"..", ".."})).status().code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+// A budget of one expansion stops every Plan() after one expansion; calling
+// again continues where the last one stopped, and the result is the optimum.
+TEST(Incremental, StopAndResume) {
+  Grid grid = Grid::Create(40, 30).value();
+  for (int y = 0; y < 25; ++y) grid.set_cost(20, y, kLethalCost);
+  auto shared = Share(grid);
+  const Cell start{2, 3}, goal{37, 4};
+  const double optimum = ReferenceCostToGo(grid, goal, {})[grid.Index(start)];
+  const StopCondition one(absl::InfiniteFuture(), nullptr, 1);
+
+  auto dstar = DStarLite::Create(shared, goal, {});
+  ASSERT_TRUE(dstar.ok() && (*dstar)->SetStart(start).ok());
+  int stops = 0;
+  absl::StatusOr<PlanResult> d;
+  while (true) {
+    d = (*dstar)->Plan(one);
+    ASSERT_TRUE(d.ok()) << d.status();
+    if (d->outcome != PlanOutcome::kExpansionLimit) break;
+    EXPECT_EQ(d->expansions, 1);
+    EXPECT_TRUE(d->path.empty());
+    ++stops;
+  }
+  ASSERT_TRUE(d->found());
+  EXPECT_GT(stops, 50);
+  EXPECT_NEAR(d->cost, optimum, 1e-9);
+
+  auto lpa = LpaStar::Create(shared, start, goal, {});
+  ASSERT_TRUE(lpa.ok());
+  absl::StatusOr<PlanResult> l = (*lpa)->Plan(one);
+  ASSERT_TRUE(l.ok());
+  EXPECT_EQ(l->outcome, PlanOutcome::kExpansionLimit);
+  std::atomic<bool> cancelled{true};
+  l = (*lpa)->Plan(StopCondition(absl::InfiniteFuture(), &cancelled, 0));
+  ASSERT_TRUE(l.ok());
+  EXPECT_EQ(l->outcome, PlanOutcome::kCancelled);
+  l = (*lpa)->Plan(StopCondition(absl::Now() - absl::Seconds(1), nullptr, 0));
+  ASSERT_TRUE(l.ok());
+  EXPECT_EQ(l->outcome, PlanOutcome::kTimeout);
+  l = (*lpa)->Plan(StopCondition::None());
+  ASSERT_TRUE(l.ok() && l->found());
+  EXPECT_NEAR(l->cost, optimum, 1e-9);
+
+  EXPECT_EQ(ShortestPathMap::Build(shared, goal, {}, one).status().code(),
+            absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(ShortestPathMap::Build(shared, goal, {},
+                                   StopCondition(absl::Now() - absl::Seconds(1),
+                                                 nullptr, 0))
+                .status()
+                .code(),
+            absl::StatusCode::kDeadlineExceeded);
+}
+
+// The memory targets on a 512 x 512 map: D* Lite keeps 16 bytes per cell
+// (g and rhs as doubles) plus its open list, the shortest path map 4 bytes per
+// cell (the float field) and nothing else once built or repaired.
+TEST(Incremental, MemoryPerCellOn512By512) {
+  std::mt19937 rng(7);
+  Grid grid = Grid::Create(512, 512).value();
+  for (uint8_t& v : grid.mutable_cells()) v = rng() % 5 == 0 ? kLethalCost : kFreeCost;
+  const Cell start{3, 5}, goal{500, 490};
+  grid.set_cost(start, kFreeCost);
+  grid.set_cost(goal, kFreeCost);
+  auto shared = Share(grid);
+  const double cells = static_cast<double>(grid.size());
+
+  auto dstar = DStarLite::Create(shared, goal, {});
+  ASSERT_TRUE(dstar.ok() && (*dstar)->SetStart(start).ok());
+  ASSERT_TRUE((*dstar)->Plan(StopCondition::None())->found());
+  const double dstar_per_cell = static_cast<double>((*dstar)->MemoryBytes()) / cells;
+  EXPECT_GE(dstar_per_cell, 16.0);
+  EXPECT_LE(dstar_per_cell, 17.0) << "the open list should be a small fraction";
+
+  auto spm = ShortestPathMap::Build(shared, goal, {}, StopCondition::None());
+  ASSERT_TRUE(spm.ok());
+  EXPECT_GE((*spm)->MemoryBytes(), 4 * grid.size());
+  EXPECT_LE((*spm)->MemoryBytes(), 4 * grid.size() + 8192);
+  Grid next = grid;
+  std::vector<Cell> changed;
+  for (int i = 0; i < 20; ++i) {
+    const Cell c{static_cast<int32_t>(200 + i), 250};
+    next.set_cost(c, kLethalCost);
+    changed.push_back(c);
+  }
+  ASSERT_TRUE((*spm)->UpdateMap(Share(next), changed).ok());
+  EXPECT_FALSE((*spm)->last_stats().rebuilt);
+  EXPECT_LE((*spm)->MemoryBytes(), 4 * grid.size() + 8192);
+}
+
+// A few changed cells are repaired, touching a fraction of the map; a change
+// of a large part of the map is rebuilt. Either way the field equals a fresh
+// build.
+TEST(Incremental, ShortestPathMapRepairsSmallChangesAndRebuildsLargeOnes) {
+  std::mt19937 rng(11);
+  Grid grid = Grid::Create(200, 200).value();
+  for (uint8_t& v : grid.mutable_cells()) v = rng() % 5 == 0 ? kLethalCost : kFreeCost;
+  const Cell goal{100, 100};
+  grid.set_cost(goal, kFreeCost);
+  auto spm = ShortestPathMap::Build(Share(grid), goal, {}, StopCondition::None());
+  ASSERT_TRUE(spm.ok());
+  const int64_t build_expansions = (*spm)->last_stats().expansions;
+  EXPECT_TRUE((*spm)->last_stats().rebuilt);
+
+  std::vector<Cell> changed{{150, 150}, {151, 150}};
+  for (const Cell c : changed) grid.set_cost(c, kLethalCost);
+  ASSERT_TRUE((*spm)->UpdateMap(Share(grid), changed).ok());
+  EXPECT_FALSE((*spm)->last_stats().rebuilt);
+  EXPECT_EQ((*spm)->last_stats().changed_cells, 2);
+  EXPECT_LT((*spm)->last_stats().expansions, build_expansions / 10);
+  auto fresh = ShortestPathMap::Build(Share(grid), goal, {}, StopCondition::None());
+  ASSERT_TRUE(fresh.ok());
+  EXPECT_TRUE(std::equal((*spm)->field().begin(), (*spm)->field().end(),
+                         (*fresh)->field().begin()));
+
+  // 2.5% of the cells, scattered: below the size rule, but the repair runs
+  // over its budget and turns into a rebuild.
+  changed.clear();
+  for (int i = 0; i < 1000; ++i) {
+    const Cell c{static_cast<int32_t>(rng() % 200), static_cast<int32_t>(rng() % 200)};
+    if (c == goal) continue;
+    grid.set_cost(c, grid.cost(c) == kFreeCost ? kLethalCost : kFreeCost);
+    changed.push_back(c);
+  }
+  ASSERT_TRUE((*spm)->UpdateMap(Share(grid), changed).ok());
+  EXPECT_TRUE((*spm)->last_stats().rebuilt);
+  EXPECT_GT((*spm)->last_stats().expansions, build_expansions / 5);
+  fresh = ShortestPathMap::Build(Share(grid), goal, {}, StopCondition::None());
+  ASSERT_TRUE(fresh.ok());
+  EXPECT_TRUE(std::equal((*spm)->field().begin(), (*spm)->field().end(),
+                         (*fresh)->field().begin()));
+
+  // 10% of the cells: rebuilt at once.
+  changed.clear();
+  for (int i = 0; i < 4000; ++i) {
+    const Cell c{static_cast<int32_t>(rng() % 200), static_cast<int32_t>(rng() % 200)};
+    if (c == goal) continue;
+    grid.set_cost(c, grid.cost(c) == kFreeCost ? kLethalCost : kFreeCost);
+    changed.push_back(c);
+  }
+  ASSERT_TRUE((*spm)->UpdateMap(Share(grid), changed).ok());
+  EXPECT_TRUE((*spm)->last_stats().rebuilt);
+  // No repair was tried: the expansions are the build's alone.
+  fresh = ShortestPathMap::Build(Share(grid), goal, {}, StopCondition::None());
+  ASSERT_TRUE(fresh.ok());
+  EXPECT_EQ((*spm)->last_stats().expansions, (*fresh)->last_stats().expansions);
+  EXPECT_TRUE(std::equal((*spm)->field().begin(), (*spm)->field().end(),
+                         (*fresh)->field().begin()));
+}
+
+TEST(Incremental, CloneIsIndependent) {
+  Grid grid = MakeGrid({".....", ".....", "....."});
+  auto spm = ShortestPathMap::Build(Share(grid), {4, 2}, {}, StopCondition::None());
+  ASSERT_TRUE(spm.ok());
+  std::unique_ptr<ShortestPathMap> copy = (*spm)->Clone();
+  grid.set_cost(3, 2, kLethalCost);
+  grid.set_cost(3, 1, kLethalCost);
+  const std::vector<Cell> changed{{3, 2}, {3, 1}};
+  ASSERT_TRUE(copy->UpdateMap(Share(grid), changed).ok());
+  EXPECT_NE(copy->CostToGo({0, 2}), (*spm)->CostToGo({0, 2}));
+  EXPECT_EQ((*spm)->grid().cost(3, 2), kFreeCost);
+  EXPECT_NEAR((*spm)->CostToGo({0, 2}), 4.0, 1e-6);
+}
+
+TEST(Incremental, KmGrowsByTheHeuristicDistanceOfEachMove) {
+  auto grid = Share(Grid::Create(10, 10).value());
+  auto dstar = DStarLite::Create(grid, {9, 9}, {});
+  ASSERT_TRUE(dstar.ok());
+  ASSERT_TRUE((*dstar)->SetStart({0, 0}).ok());
+  EXPECT_EQ((*dstar)->km(), 0.0);
+  ASSERT_TRUE((*dstar)->Plan(StopCondition::None())->found());
+  ASSERT_TRUE((*dstar)->SetStart({1, 1}).ok());
+  EXPECT_NEAR((*dstar)->km(), kSqrt2, 1e-12);
+  ASSERT_TRUE((*dstar)->SetStart({3, 1}).ok());
+  EXPECT_NEAR((*dstar)->km(), kSqrt2 + 2.0, 1e-12);
+  auto d = (*dstar)->Plan(StopCondition::None());
+  ASSERT_TRUE(d.ok() && d->found());
+  EXPECT_NEAR(d->cost, 6 * kSqrt2 + 2.0, 1e-9);
+}
+
+// A broken state is reported, naming the cell, instead of looping.
+TEST(Incremental, ExtractionGuardReportsBrokenState) {
+  auto grid = Share(Grid::Create(12, 12).value());
+  auto spm = ShortestPathMap::Build(grid, {11, 11}, {}, StopCondition::None());
+  ASSERT_TRUE(spm.ok());
+  // A false sink: the descent runs into (5, 5) and finds nothing lower.
+  IncrementalAccess::CorruptField(**spm, {5, 5}, 0.5f);
+  auto s = (*spm)->PathFrom({0, 0});
+  EXPECT_EQ(s.status().code(), absl::StatusCode::kInternal);
+  EXPECT_NE(s.status().message().find("(5, 5)"), std::string::npos) << s.status();
+  EXPECT_EQ(IncrementalAccess::PathCosts(**spm).status().code(),
+            absl::StatusCode::kInternal);
+
+  auto dstar = DStarLite::Create(grid, {11, 11}, {});
+  ASSERT_TRUE(dstar.ok() && (*dstar)->SetStart({0, 0}).ok());
+  ASSERT_TRUE((*dstar)->Plan(StopCondition::None())->found());
+  IncrementalAccess::CorruptG(**dstar, {1, 1}, 0.25);
+  auto d = (*dstar)->Plan(StopCondition::None());
+  EXPECT_EQ(d.status().code(), absl::StatusCode::kInternal);
+  EXPECT_NE(d.status().message().find("(1, 1)"), std::string::npos) << d.status();
+}
+
+// The float field's descent is optimal to 1e-9 (what the Moving AI conformance
+// demands of optimal planners) from every cell of the shared Moving AI maps, a
+// few goals each: its rounding never flips a choice between two routes there.
+TEST(ShortestPathMapOnMovingAi, DescentFromEveryCellIsOptimal) {
+  const std::filesystem::path root = "../shared/benchmarks/movingai";
+  std::vector<std::filesystem::path> maps;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(root, ec)) {
+    if (e.path().extension() == ".map") maps.push_back(e.path());
+  }
+  if (maps.empty()) GTEST_SKIP() << "no Moving AI maps under " << root;
+  std::sort(maps.begin(), maps.end());
+  std::mt19937 rng(99);
+  int64_t cells_checked = 0, worse = 0;
+  double worst = 0.0;
+  for (const auto& path : maps) {
+    auto grid = ReadMovingAiMapFile(path.string());
+    ASSERT_TRUE(grid.ok()) << grid.status();
+    auto shared = Share(*std::move(grid));
+    for (int k = 0; k < 2; ++k) {
+      Cell goal;
+      do {
+        goal = RandomCell(rng, *shared);
+      } while (!Traversable(shared->cost(goal), false));
+      auto spm = ShortestPathMap::Build(shared, goal, {}, StopCondition::None());
+      ASSERT_TRUE(spm.ok());
+      auto costs = IncrementalAccess::PathCosts(**spm);
+      ASSERT_TRUE(costs.ok()) << costs.status();
+      const std::vector<double> ref = ReferenceCostToGo(*shared, goal, {});
+      for (size_t i = 0; i < ref.size(); ++i) {
+        if (std::isinf(ref[i])) continue;
+        ++cells_checked;
+        const double rel = ((*costs)[i] - ref[i]) / (1.0 + ref[i]);
+        worst = std::max(worst, rel);
+        if (rel > 1e-9) ++worse;
+      }
+    }
+  }
+  std::printf("%lld cells, %lld suboptimal, worst relative excess %g\n",
+              static_cast<long long>(cells_checked), static_cast<long long>(worse), worst);
+  EXPECT_EQ(worse, 0);
+}
+
+}  // namespace
+}  // namespace pathd
