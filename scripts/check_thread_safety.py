@@ -9,6 +9,7 @@ warning fails the check. The build directory only has to be configured and
 have its protoc outputs generated (`make check-thread-safety` does both).
 
   scripts/check_thread_safety.py [BUILD_DIR] [--jobs N] [--clang clang++]
+                                 [--only PATH ...]
 """
 
 import argparse
@@ -16,6 +17,7 @@ import concurrent.futures
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import sys
 import time
@@ -56,8 +58,13 @@ def main():
     parser.add_argument("build_dir", nargs="?", default="build")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--clang", default="clang++")
+    parser.add_argument("--only", nargs="+", default=[], metavar="PATH",
+                        help="check only these files or folders (relative to the source root)")
     opts = parser.parse_args()
 
+    if shutil.which(opts.clang) is None:
+        sys.exit(f"check_thread_safety: {opts.clang} not found "
+                 "(scripts/setup.sh test installs clang)")
     source_root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     database = os.path.join(opts.build_dir, "compile_commands.json")
     try:
@@ -68,17 +75,21 @@ def main():
                  "(configure the build directory first)")
 
     roots = tuple(os.path.join(source_root, d) + os.sep for d in CHECKED_FOLDERS)
+    only = tuple(os.path.join(source_root, p) for p in opts.only)
     seen = set()
     units = []
     for entry in entries:
         path = os.path.abspath(os.path.join(entry["directory"], entry["file"]))
         if not path.startswith(roots) or path in seen:
             continue
+        if only and not any(path == p or path.startswith(p.rstrip(os.sep) + os.sep)
+                            for p in only):
+            continue
         seen.add(path)
         entry = dict(entry, file=path)
         units.append((path, entry["directory"], clang_command(entry, opts.clang)))
     if not units:
-        sys.exit(f"check_thread_safety: no core/, server/ or client/ sources in {database}")
+        sys.exit(f"check_thread_safety: no core/, server/ or client/ sources to check in {database}")
 
     def run(unit):
         path, directory, cmd = unit
