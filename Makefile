@@ -66,9 +66,9 @@ format:
 # ...) are only checked by clang: every core/, server/ and client/ source of
 # $(BUILD_DIR)'s compile database is compiled with -fsyntax-only
 # -Wthread-safety -Werror (scripts/check_thread_safety.py). It needs the
-# generated protobuf headers, so it builds pathd_proto first.
+# generated protobuf headers (protoc only, nothing compiled).
 check-thread-safety: setup-test configure
-	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd_proto
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd_proto_generated
 	python3 scripts/check_thread_safety.py $(BUILD_DIR) --jobs $(JOBS)
 
 # ThreadSanitizer: its own build directory, only the targets of the tests
