@@ -1,36 +1,59 @@
-# The commands of the README's quick start, plus a few conveniences.
-#   make serve  - install what is missing, build, run pathd on 127.0.0.1:50051
-#   make test   - install what is missing, build, run every test with ctest
+# The commands of the README's quick start, plus a few conveniences
+# (docs/testing.md, "Builds", says what each builds and installs).
+#   make serve  - install what serving needs (scripts/setup.sh serve), build
+#                 pathd and pathctl only, run pathd on 127.0.0.1:50051
+#   make build-serve - the same without running pathd
+#   make test   - install what the tests need too (scripts/setup.sh test),
+#                 build everything, run every test with ctest
+#   make build  - the same without running the tests
 #   make test-tsan - the tests labelled tsan (the concurrency test) built with
 #                 ThreadSanitizer in $(TSAN_BUILD_DIR); any report fails
 #   make test-asan - every test built with AddressSanitizer + UBSan in
 #                 $(ASAN_BUILD_DIR); any report fails
 #   make fuzz   - the libFuzzer targets (clang, $(FUZZ_BUILD_DIR)), each for
 #                 FUZZ_SECONDS
+#   make check-thread-safety - core/, server/ and client/ through clang's
+#                 -Wthread-safety -Werror, syntax only; any warning fails
+# ccache is picked by CMakeLists.txt (PATHD_CCACHE), not here, so every
+# configure of a build directory agrees and a second build rebuilds nothing.
 BUILD_DIR ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 ADDRESS ?= 127.0.0.1:50051
-CMAKE_LAUNCHER := $(shell command -v ccache >/dev/null 2>&1 && echo -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+CMAKE_CONFIGURE = cmake -S . -G Ninja
 
-.PHONY: setup configure build serve test bench clean format test-tsan
+.PHONY: setup-serve setup-test configure configure-test build-serve serve \
+        build test bench clean format test-tsan test-asan fuzz check-thread-safety
 
-setup:
-	@bash scripts/setup.sh
+setup-serve:
+	@bash scripts/setup.sh serve
 
-configure: setup
-	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_LAUNCHER) >/dev/null
+setup-test:
+	@bash scripts/setup.sh test
 
-build: configure
-	@cmake --build $(BUILD_DIR) -j $(JOBS)
+# Tests are configured when GoogleTest is installed (PATHD_BUILD_TESTS=AUTO,
+# or whatever an earlier configure of $(BUILD_DIR) chose); serving never
+# needs them.
+configure: setup-serve
+	@$(CMAKE_CONFIGURE) -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) >/dev/null
 
-serve: build
+configure-test: setup-test
+	@$(CMAKE_CONFIGURE) -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPATHD_BUILD_TESTS=ON >/dev/null
+
+build-serve: configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd pathctl
+
+serve: build-serve
 	exec $(BUILD_DIR)/server/pathd --address=$(ADDRESS) --map_dir=maps
+
+build: configure-test
+	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
-bench: build
+bench: configure-test
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd_bench
 	$(BUILD_DIR)/tests/bench/pathd_bench --movingai_dir=../shared/benchmarks/movingai
 
 clean:
@@ -39,14 +62,23 @@ clean:
 format:
 	clang-format -i $$(git ls-files '*.h' '*.cc')
 
+# Abseil's lock annotations (ABSL_GUARDED_BY, ABSL_EXCLUSIVE_LOCKS_REQUIRED,
+# ...) are only checked by clang: every core/, server/ and client/ source of
+# $(BUILD_DIR)'s compile database is compiled with -fsyntax-only
+# -Wthread-safety -Werror (scripts/check_thread_safety.py). It needs the
+# generated protobuf headers (protoc only, nothing compiled).
+check-thread-safety: setup-test configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd_proto_generated
+	python3 scripts/check_thread_safety.py $(BUILD_DIR) --jobs $(JOBS)
+
 # ThreadSanitizer: its own build directory, only the targets of the tests
 # labelled tsan (tests/*/CMakeLists.txt), which ctest runs with the
 # TSAN_OPTIONS set in CMakeLists.txt (halt_on_error, tests/tsan/tsan.supp).
 TSAN_BUILD_DIR ?= build-tsan
 TSAN_TARGETS ?= concurrency_test
 
-test-tsan: setup
-	@cmake -S . -B $(TSAN_BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_TSAN=ON $(CMAKE_LAUNCHER) >/dev/null
+test-tsan: setup-test
+	@$(CMAKE_CONFIGURE) -B $(TSAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_TSAN=ON >/dev/null
 	@cmake --build $(TSAN_BUILD_DIR) -j $(JOBS) --target $(TSAN_TARGETS)
 	cd $(TSAN_BUILD_DIR) && ctest --output-on-failure -L tsan
 
@@ -64,10 +96,8 @@ ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE)
 
-.PHONY: test-asan fuzz
-
-test-asan: setup
-	@cmake -S . -B $(ASAN_BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_ASAN=ON $(CMAKE_LAUNCHER) >/dev/null
+test-asan: setup-test
+	@$(CMAKE_CONFIGURE) -B $(ASAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_ASAN=ON >/dev/null
 	@cmake --build $(ASAN_BUILD_DIR) -j $(JOBS)
 	cd $(ASAN_BUILD_DIR) && $(ASAN_ENV) ctest --output-on-failure -j $(JOBS)
 
@@ -78,7 +108,7 @@ FUZZ_BUILD_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_TARGETS ?=
 
-fuzz: setup
-	@cmake -S . -B $(FUZZ_BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DPATHD_FUZZ=ON $(CMAKE_LAUNCHER) >/dev/null
+fuzz: setup-test
+	@$(CMAKE_CONFIGURE) -B $(FUZZ_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DPATHD_FUZZ=ON >/dev/null
 	@cmake --build $(FUZZ_BUILD_DIR) -j $(JOBS) --target pathd_fuzzers
 	tests/fuzz/run_fuzzers.sh $(FUZZ_BUILD_DIR) $(FUZZ_SECONDS) $(FUZZ_TARGETS)

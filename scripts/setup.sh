@@ -1,27 +1,50 @@
 #!/usr/bin/env bash
-# Installs the Debian packages pathd needs to build and test. Idempotent: when
-# every package is already installed it does nothing (no apt-get update).
+# Installs the Debian packages pathd needs, as root or through sudo.
+#   scripts/setup.sh [serve]  build and run pathd and pathctl (make serve,
+#                             docker/Dockerfile)
+#   scripts/setup.sh test     that, plus what the tests, benchmarks, sanitizer
+#                             and fuzz builds and the thread-safety check need
+#                             (make test, test-tsan, test-asan, fuzz,
+#                             check-thread-safety)
+# Idempotent: when every package of the set is already installed it does
+# nothing (no apt-get update).
 set -euo pipefail
 
-PACKAGES=(
+SERVE_PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libyaml-cpp-dev
   prometheus-cpp-dev libcurl4-openssl-dev
   libpng-dev
   libisal-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
-  python3
-  python3-grpcio python3-protobuf
   libcsv-dev
+  # libssl-dev: pathd's token hashing and PEM checks; openssl: the tool that
+  # makes the TLS certificates and auth tokens docs/security.md describes.
   openssl libssl-dev
+)
+
+TEST_PACKAGES=(
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # The Python client and its tests (client/python, tests/client), the crash
+  # test (tests/e2e/crash_test.py).
+  python3 python3-grpcio python3-protobuf
   # The loopback scale-out test (tests/e2e/scaleout_test.cc) runs nginx as
   # the test's user with its own config; the package's system service is not
   # used (on a machine without a policy-rc.d, apt starts it on port 80).
   nginx
-  # make fuzz: clang, its libFuzzer runtime, llvm-symbolizer for the reports.
+  # make fuzz: clang, its libFuzzer runtime, llvm-symbolizer for the reports;
+  # make check-thread-safety: clang's -Wthread-safety.
   clang libclang-rt-14-dev llvm
 )
+
+case "${1:-serve}" in
+  serve) PACKAGES=("${SERVE_PACKAGES[@]}") ;;
+  test) PACKAGES=("${SERVE_PACKAGES[@]}" "${TEST_PACKAGES[@]}") ;;
+  *)
+    echo "usage: $0 [serve|test]" >&2
+    exit 2
+    ;;
+esac
 
 missing=()
 for pkg in "${PACKAGES[@]}"; do

@@ -24,36 +24,6 @@ absl::StatusOr<std::vector<Cell>> ChangesBetween(const Grid& before,
   return ChangedCells(before, after);
 }
 
-// The state of one key. `mu` serialises everything that reads or changes the
-// state: builds, repairs and D* Lite plans. Shortest path map readers never
-// take it: they use the field published in the index node.
-struct IncrementalCache::Slot {
-  Slot(Kind kind, Key key) : kind(kind), key(std::move(key)) {}
-
-  const Kind kind;
-  const Key key;
-  absl::Mutex mu;
-  At at ABSL_GUARDED_BY(mu);
-  // kSpm.
-  std::shared_ptr<const ShortestPathMap> field ABSL_GUARDED_BY(mu);
-  // kDStarLite; `has_start` once a request has set the robot's position, so a
-  // background repair can run the search to the end.
-  std::unique_ptr<DStarLite> dstar ABSL_GUARDED_BY(mu);
-  bool has_start ABSL_GUARDED_BY(mu) = false;
-
-  size_t MemoryBytes() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    if (field != nullptr) return field->MemoryBytes();
-    if (dstar != nullptr) return dstar->MemoryBytes();
-    return 0;
-  }
-  void Reset() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    at = At();
-    field.reset();
-    dstar.reset();
-    has_start = false;
-  }
-};
-
 namespace {
 
 // A build stopped by its stop condition reports the stop as a status

@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "absl/base/thread_annotations.h"
@@ -139,24 +140,53 @@ class IncrementalCache {
   // grid or the cost parameters are invalid; errors of the inflation.
   absl::StatusOr<SpmAnswer> GetSpm(const Key& key,
                                    const std::shared_ptr<const MapSnapshot>& snapshot,
-                                   const StopCondition& stop);
+                                   const StopCondition& stop)
+      ABSL_LOCKS_EXCLUDED(mu_);
 
   // Moves the key's D* Lite search to `start` and plans, after bringing it to
   // `snapshot` as GetSpm does. A stop leaves the search valid for the next
   // request. Errors as DStarLite::Create/SetStart/Plan.
   absl::StatusOr<DStarAnswer> PlanDStarLite(
       const Key& key, const std::shared_ptr<const MapSnapshot>& snapshot,
-      Cell start, const StopCondition& stop);
+      Cell start, const StopCondition& stop) ABSL_LOCKS_EXCLUDED(mu_);
 
-  Stats stats(Kind kind) const;
+  Stats stats(Kind kind) const ABSL_LOCKS_EXCLUDED(mu_);
 
  private:
-  struct Slot;
   // The version a slot is at; map_id 0 = no state.
   struct At {
     uint64_t map_id = 0;
     uint64_t version = 0;
     std::shared_ptr<const Grid> grid;
+  };
+  // The state of one key. `mu` serialises everything that reads or changes
+  // the state: builds, repairs and D* Lite plans. Shortest path map readers
+  // never take it: they use the field published in the index node.
+  struct Slot {
+    Slot(Kind kind, Key key) : kind(kind), key(std::move(key)) {}
+
+    const Kind kind;
+    const Key key;
+    absl::Mutex mu;
+    At at ABSL_GUARDED_BY(mu);
+    // kSpm.
+    std::shared_ptr<const ShortestPathMap> field ABSL_GUARDED_BY(mu);
+    // kDStarLite; `has_start` once a request has set the robot's position, so
+    // a background repair can run the search to the end.
+    std::unique_ptr<DStarLite> dstar ABSL_GUARDED_BY(mu);
+    bool has_start ABSL_GUARDED_BY(mu) = false;
+
+    size_t MemoryBytes() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+      if (field != nullptr) return field->MemoryBytes();
+      if (dstar != nullptr) return dstar->MemoryBytes();
+      return 0;
+    }
+    void Reset() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+      at = At();
+      field.reset();
+      dstar.reset();
+      has_start = false;
+    }
   };
   // What bringing a slot to a snapshot did.
   struct Advance {
@@ -204,7 +234,7 @@ class IncrementalCache {
   std::shared_ptr<Slot> PinLocked(Kind kind, const Key& key)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   // Releases a pin taken by PinLocked or Follow's listener, then evicts.
-  void Unpin(const Slot& slot);
+  void Unpin(const Slot& slot) ABSL_LOCKS_EXCLUDED(mu_);
   // The node still holding `slot` (nullptr after a drop or eviction).
   Node* NodeOfLocked(const Slot& slot) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void EvictLocked(Shard& shard) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
@@ -219,15 +249,21 @@ class IncrementalCache {
   // and counts it as `lookup` says.
   absl::StatusOr<Advance> AdvanceSlot(Slot& slot, const MapSnapshot& snapshot,
                                       std::shared_ptr<const Grid> grid,
-                                      const StopCondition& stop, bool is_request);
+                                      const StopCondition& stop, bool is_request)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(slot.mu) ABSL_LOCKS_EXCLUDED(mu_);
   // Copies the slot's state into its node (field, version, bytes), counts
-  // the lookup and the advance's repair, and evicts. Caller holds slot.mu.
-  void Publish(const Slot& slot, const Advance& advance, Lookup lookup);
+  // the lookup and the advance's repair, and evicts. Lock order: slot.mu,
+  // then mu_.
+  void Publish(const Slot& slot, const Advance& advance, Lookup lookup)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(slot.mu) ABSL_LOCKS_EXCLUDED(mu_);
 
   // Listener body: queues repairs of `name`'s entries, or drops them.
   void OnMapChanged(std::string_view name,
-                    const std::shared_ptr<const MapSnapshot>& snapshot);
-  void RepairInBackground(Slot& slot, const std::shared_ptr<const MapSnapshot>& snapshot);
+                    const std::shared_ptr<const MapSnapshot>& snapshot)
+      ABSL_LOCKS_EXCLUDED(mu_);
+  void RepairInBackground(Slot& slot,
+                          const std::shared_ptr<const MapSnapshot>& snapshot)
+      ABSL_LOCKS_EXCLUDED(mu_, slot.mu);
 
   InflationCache& inflation_;
   WorkerPool* pool_ = nullptr;

@@ -38,16 +38,19 @@ class InflationCache {
   // The inflation of `source` by `radius_cells` (> 0), computing it on a miss.
   // Errors from the inflate function are returned and not cached.
   absl::StatusOr<std::shared_ptr<const Grid>> Get(
-      const std::shared_ptr<const Grid>& source, double radius_cells);
+      const std::shared_ptr<const Grid>& source, double radius_cells)
+      ABSL_LOCKS_EXCLUDED(mu_);
 
-  Stats stats() const;
+  Stats stats() const ABSL_LOCKS_EXCLUDED(mu_);
 
  private:
   struct Entry {
     std::weak_ptr<const Grid> source;
     const Grid* source_address = nullptr;
     double radius_cells = 0.0;
-    // Set once by the computing thread; `done` guards the fields below.
+    // Read and written under the cache's mu_ (a nested struct cannot name it
+    // in ABSL_GUARDED_BY); the computing thread sets `done` with the two
+    // fields below, and waiters Await it.
     bool done = false;
     absl::Status status;
     std::shared_ptr<const Grid> inflated;
