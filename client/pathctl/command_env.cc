@@ -52,7 +52,6 @@ int CommandEnv::Usage(absl::string_view problem) {
 bool LooksLikeTlsPort(absl::string_view message) {
   return absl::StrContains(message, "Socket closed") ||
          absl::StrContains(message, "Connection reset by peer") ||
-         absl::StrContains(message, "failed to read") ||
          absl::StrContains(message, "End of TCP stream");
 }
 
