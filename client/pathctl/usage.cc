@@ -43,6 +43,20 @@ std::string SynopsisLines(const Command& command, absl::string_view first_lead,
   return text;
 }
 
+// A flag's help without the "plan, navigate: " prefix naming the commands
+// that read it: under one command's help that list is noise (and the
+// command table, not the prefix, decides who reads the flag).
+std::string WithoutCommandPrefix(absl::string_view help) {
+  const size_t colon = help.find(": ");
+  if (colon == absl::string_view::npos) return std::string(help);
+  for (char c : help.substr(0, colon)) {
+    if (!absl::ascii_islower(c) && c != ' ' && c != ',' && c != '/' && c != '-') {
+      return std::string(help);
+    }
+  }
+  return std::string(help.substr(colon + 2));
+}
+
 }  // namespace
 
 std::string ShortUsage(const Command& command) {
@@ -70,7 +84,7 @@ std::string CommandHelp(const Command& command) {
     const absl::CommandLineFlag* registered = absl::FindCommandLineFlag(flag);
     absl::StrAppendFormat(&text, "  %-20s %s\n",
                           absl::StrCat(flag.size() == 1 ? "-" : "--", flag),
-                          registered != nullptr ? registered->Help() : "");
+                          registered != nullptr ? WithoutCommandPrefix(registered->Help()) : "");
   }
   absl::StrAppend(&text,
                   "\nglobal flags: --server, --timeout, --output (--json), "
