@@ -27,8 +27,6 @@
 namespace pathd::pathctl {
 namespace {
 
-// --- batch -------------------------------------------------------------------
-
 // One answer of `pathctl batch` as a line: "ID found cost C length L
 // expansions N time T us", "ID no-path OUTCOME: reason" or "ID error CODE
 // OUTCOME: message".
@@ -118,7 +116,7 @@ int Batch(CommandEnv& env, Args args) {
   const absl::Time started = absl::Now();
   std::unique_ptr<grpc::ClientContext> context = client::MakeContext(env.global().timeout);
   // A load balancer routing by map sends the whole stream to the replica of
-  // the first item's map (see UsageText).
+  // the first item's map (see "pathctl --help").
   auto stream = env.client().PlanBatch(
       context.get(), items->empty() ? "" : items->front().request.map());
   std::thread writer([&stream, &items] {

@@ -19,7 +19,6 @@
 namespace pathd::pathctl {
 namespace {
 
-
 // Poses from positional "X Y" pairs, cells or (with --world) metres.
 absl::StatusOr<std::vector<v1::Position>> PosesFromArgs(Args args, bool world) {
   if (args.empty() || args.size() % 2 != 0) {

@@ -24,8 +24,6 @@ namespace {
 constexpr int32_t kMaxRenderWidth = 1024;
 constexpr int64_t kMaxRenderCells = int64_t{1} << 20;
 
-// --- maps ------------------------------------------------------------------
-
 int MapsCreate(CommandEnv& env, Args args) {
   const MapsOptions& options = env.options().maps;
   if (args.size() != 1) return env.Usage("maps create takes one NAME");
@@ -211,7 +209,6 @@ int MapsRect(CommandEnv& env, Args args) {
   change->set_cost(*cost);
   return SendUpdate(env, request);
 }
-
 
 constexpr absl::string_view kCreateFlags[] = {"from", "replace", "resolution"};
 constexpr absl::string_view kGetFlags[] = {"cells"};

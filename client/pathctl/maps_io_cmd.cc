@@ -82,7 +82,6 @@ int MapsImport(CommandEnv& env, Args args) {
   return kExitOk;
 }
 
-
 // `maps export NAME FILE`: .map or .yaml (+ .pgm), warning on stderr about
 // the cells the format cannot hold.
 int MapsExport(CommandEnv& env, Args args) {

@@ -24,7 +24,6 @@ std::string FormatProgress(const v1::PlanProgress& progress) {
       progress.elapsed_us() / 1e6);
 }
 
-
 // A PlanError as the status it stands for, its typed outcome appended to the
 // message.
 absl::Status FromPlanError(const v1::PlanError& error) {
