@@ -5,10 +5,13 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
+#include <random>
 #include <thread>
 #include <utility>
 
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/notification.h"
 #include "client/client.h"
@@ -29,6 +32,8 @@ struct WorkerTally {
   int64_t requests = 0;
   int64_t ok = 0;
   int64_t no_path = 0;
+  int64_t backoff_waits = 0;
+  absl::Duration backoff_time;
   Clock::time_point last_answer{};
 };
 
@@ -38,7 +43,39 @@ size_t CodeIndex(absl::StatusCode code) {
   return index < 17 ? index : static_cast<size_t>(absl::StatusCode::kUnknown);
 }
 
+// The retry hint trailer pathd adds to RESOURCE_EXHAUSTED (server/grpc_status.h
+// kRetryAfterMsKey; the client does not include server headers).
+constexpr char kRetryAfterMsKey[] = "retry-after-ms";
+
+std::optional<absl::Duration> RetryAfterFromTrailers(
+    const std::multimap<grpc::string_ref, grpc::string_ref>& trailers) {
+  const auto it = trailers.find(kRetryAfterMsKey);
+  if (it == trailers.end()) return std::nullopt;
+  int64_t ms = 0;
+  if (!absl::SimpleAtoi(absl::string_view(it->second.data(), it->second.size()), &ms) ||
+      ms < 0) {
+    return std::nullopt;
+  }
+  return absl::Milliseconds(ms);
+}
+
 }  // namespace
+
+absl::Duration BackoffDelay(const BackoffPolicy& policy, const CallResult& result,
+                            int failures, double uniform01) {
+  if (!policy.enabled) return absl::ZeroDuration();
+  const bool refused = result.code == absl::StatusCode::kResourceExhausted;
+  if (refused && result.retry_after.has_value()) {
+    return *result.retry_after * (1.0 + policy.hint_jitter * uniform01);
+  }
+  if (!refused && result.code != absl::StatusCode::kUnavailable) {
+    return absl::ZeroDuration();
+  }
+  absl::Duration step = policy.initial;
+  for (int i = 1; i < failures && step < policy.max; ++i) step *= policy.multiplier;
+  step = std::min(step, policy.max);
+  return step / 2 + step / 2 * uniform01;
+}
 
 absl::Duration NearestRankPercentile(const std::vector<absl::Duration>& sorted,
                                      double percent) {
@@ -110,6 +147,24 @@ absl::StatusOr<LoadReport> RunClosedLoop(
   for (int w = 0; w < options.concurrency; ++w) {
     workers.emplace_back([&, w] {
       WorkerTally& tally = tallies[static_cast<size_t>(w)];
+      std::mt19937_64 rng(static_cast<uint64_t>(w) * 0x9E3779B97F4A7C15ull + 1);
+      std::uniform_real_distribution<double> uniform01(0.0, 1.0);
+      int failures = 0;
+      // Waits after `r` as options.backoff says, never past the end of the
+      // measured phase; returns the time waited.
+      const auto back_off = [&](const CallResult& r) {
+        const bool counts = r.code == absl::StatusCode::kUnavailable ||
+                            r.code == absl::StatusCode::kResourceExhausted;
+        failures = counts ? failures + 1 : 0;
+        const absl::Duration delay =
+            BackoffDelay(options.backoff, r, failures, uniform01(rng));
+        if (delay <= absl::ZeroDuration()) return absl::ZeroDuration();
+        const Clock::time_point until =
+            std::min(Clock::now() + absl::ToChronoNanoseconds(delay), measure_end);
+        const Clock::time_point before = Clock::now();
+        if (until > before) std::this_thread::sleep_until(until);
+        return absl::FromChrono(Clock::now() - before);
+      };
       while (true) {
         const Clock::time_point now = Clock::now();
         if (now < measure_start) {
@@ -118,6 +173,7 @@ absl::StatusOr<LoadReport> RunClosedLoop(
           if (r.code != absl::StatusCode::kOk) {
             warmup_errors.fetch_add(1, std::memory_order_relaxed);
           }
+          back_off(r);
           continue;
         }
         if (now >= measure_end) break;
@@ -136,6 +192,10 @@ absl::StatusOr<LoadReport> RunClosedLoop(
         } else {
           ++tally.errors_by_code[CodeIndex(r.code)];
           measured_errors.fetch_add(1, std::memory_order_relaxed);
+        }
+        if (const absl::Duration waited = back_off(r); waited > absl::ZeroDuration()) {
+          ++tally.backoff_waits;
+          tally.backoff_time += waited;
         }
       }
       if (running.fetch_sub(1) == 1) finished.Notify();
@@ -166,6 +226,8 @@ absl::StatusOr<LoadReport> RunClosedLoop(
     report.requests += tally.requests;
     report.ok += tally.ok;
     report.no_path += tally.no_path;
+    report.backoff_waits += tally.backoff_waits;
+    report.backoff_time += tally.backoff_time;
     for (size_t c = 0; c < tally.errors_by_code.size(); ++c) {
       report.errors_by_code[c] += tally.errors_by_code[c];
     }
@@ -176,6 +238,8 @@ absl::StatusOr<LoadReport> RunClosedLoop(
   if (report.elapsed > absl::ZeroDuration()) {
     report.requests_per_second =
         static_cast<double>(report.requests) / absl::ToDoubleSeconds(report.elapsed);
+    report.goodput_per_second =
+        static_cast<double>(report.ok) / absl::ToDoubleSeconds(report.elapsed);
   }
   report.latency = SummarizeLatencies(std::move(latencies));
   report.warmup_requests = warmup_answered.load();
@@ -227,6 +291,10 @@ absl::StatusOr<LoadReport> RunPlanLoad(
         CallResult result;
         result.code = static_cast<absl::StatusCode>(status.error_code());
         result.found = status.ok() && response.found();
+        if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+          result.retry_after =
+              RetryAfterFromTrailers(context.GetServerTrailingMetadata());
+        }
         return result;
       },
       progress);

@@ -1,5 +1,6 @@
 // A closed-loop load generator: N workers each send their next request as
-// soon as the previous answer arrived, for a time or a request count, while
+// soon as the previous answer arrived (after a back-off when the server
+// refused or could not be reached), for a time or a request count, while
 // recording every latency. Drives pathd's Plan over a small pool of gRPC
 // channels (pathctl bench), or any other call, such as the in-process planner
 // the benchmark compares the server against.
@@ -9,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,7 +48,32 @@ LatencySummary SummarizeLatencies(std::vector<absl::Duration> samples);
 struct CallResult {
   absl::StatusCode code = absl::StatusCode::kOk;
   bool found = false;
+  // The server's hint on a refused call (the `retry-after-ms` trailer of a
+  // RESOURCE_EXHAUSTED answer): do not send again before this much time.
+  std::optional<absl::Duration> retry_after;
 };
+
+// How a worker waits after a refused or failed call, so an overloaded server
+// is not hammered by instant retries and a stopped one by ~100k calls/s.
+// RESOURCE_EXHAUSTED with a retry hint waits the hint (plus up to
+// `hint_jitter` of it, so workers do not return in step); RESOURCE_EXHAUSTED
+// without one and UNAVAILABLE wait an exponential back-off: the n-th
+// consecutive failure waits d/2 + uniform(0, d/2) with d = min(max, initial *
+// multiplier^(n-1)) ("equal jitter": never less than half the step, so the
+// attempt count stays bounded). Any other answer resets the back-off.
+struct BackoffPolicy {
+  bool enabled = true;
+  absl::Duration initial = absl::Milliseconds(10);
+  absl::Duration max = absl::Seconds(1);
+  double multiplier = 2.0;
+  double hint_jitter = 0.2;
+};
+
+// The wait after `result`, the `failures`-th consecutive back-off failure
+// (1 for the first), with `uniform01` a draw from [0, 1). Zero for an answer
+// that needs no wait (OK, NOT_FOUND, DEADLINE_EXCEEDED, ...).
+absl::Duration BackoffDelay(const BackoffPolicy& policy, const CallResult& result,
+                            int failures, double uniform01);
 
 struct LoadOptions {
   // Workers, each with one request in flight at a time. At least 1.
@@ -61,6 +88,8 @@ struct LoadOptions {
   // Requests before the measured phase that are sent but not counted
   // (connection set-up, page faults, caches). Also query indices from 0.
   absl::Duration warmup = absl::ZeroDuration();
+  // Waits after refused and failed calls (see BackoffPolicy).
+  BackoffPolicy backoff;
 };
 
 // A snapshot for the live progress line.
@@ -83,8 +112,16 @@ struct LoadReport {
   std::array<int64_t, 17> errors_by_code{};
   // From the start of the measured phase to its last answer.
   absl::Duration elapsed;
-  // requests / elapsed.
+  // requests / elapsed: attempts, whatever their answer.
   double requests_per_second = 0.0;
+  // ok / elapsed: the answers that did the work ("goodput"). Under overload
+  // this is what the server delivers; requests_per_second also counts the
+  // refusals.
+  double goodput_per_second = 0.0;
+  // Back-off waits in the measured phase, and their total time (summed over
+  // workers).
+  int64_t backoff_waits = 0;
+  absl::Duration backoff_time;
   // Of the OK answers only: a fast error would flatter the figures.
   LatencySummary latency;
   // Warm-up requests answered; in no other figure.
@@ -108,7 +145,8 @@ absl::StatusOr<LoadReport> RunClosedLoop(
 // subchannel pool, so they are separate TCP connections rather than one
 // shared by gRPC's global pool. Worker w uses channel w % channels.
 // Sends requests[query_index % requests.size()] with a deadline of `timeout`
-// each. INVALID_ARGUMENT when `requests` is empty or channels < 1.
+// each; a RESOURCE_EXHAUSTED answer's `retry-after-ms` trailer becomes
+// CallResult::retry_after. INVALID_ARGUMENT when `requests` is empty or channels < 1.
 absl::StatusOr<LoadReport> RunPlanLoad(
     const std::string& address, int channels, absl::Duration timeout,
     const std::vector<v1::PlanRequest>& requests, const LoadOptions& options,

@@ -1,6 +1,7 @@
-// pathctl: the command-line client of pathd. Defines the flags and hands the
-// parsed command to pathd::pathctl::Run (client/pathctl/pathctl.h), where the commands
-// live.
+// pathctl: the command-line client of pathd. Defines the flags, fills each
+// command's option struct (client/pathctl/options.h) from them and hands the
+// command to pathd::pathctl::Run (client/pathctl/command.h); the commands live
+// one per file in client/pathctl/<cmd>_cmd.cc.
 #include <unistd.h>
 
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/pathctl/pathctl.h"
@@ -117,8 +119,20 @@ ABSL_FLAG(std::optional<double>, free_thresh, std::nullopt,
           "maps import of a .png: free below this (default 0.196)");
 ABSL_FLAG(bool, negate, false, "maps import of a .png: dark is free");
 
+namespace {
+
+namespace pathctl = pathd::pathctl;
+
+// A usage error before any command is known: the problem and the synopsis.
+int UsageError(absl::string_view problem) {
+  std::cerr << "error: " << problem << "\n\n"
+            << pathctl::SynopsisText() << "run 'pathctl --help' for details\n";
+  return pathctl::kExitUsage;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  namespace pathctl = pathd::pathctl;
   // Debian's Abseil checks every absl::Mutex acquisition (gRPC's too) for
   // deadlock cycles; that costs bench a few per cent of each call's CPU.
   absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
@@ -126,15 +140,16 @@ int main(int argc, char** argv) {
 
   absl::StatusOr<pathctl::CommandLine> line =
       pathctl::SplitCommandLine(argc, argv);
-  if (!line.ok()) {
-    std::cerr << "error: " << line.status().message() << "\n\n"
-              << pathctl::SynopsisText()
-              << "run 'pathctl --help' for details\n";
-    return pathctl::kExitUsage;
+  if (!line.ok()) return UsageError(line.status().message());
+  if (line->version) {
+    std::cout << pathctl::VersionText();
+    return pathctl::kExitOk;
   }
   if (line->help) {
-    std::cout << pathctl::UsageText();
-    return pathctl::kExitOk;
+    // "pathctl plan --help" is "pathctl help plan".
+    std::vector<std::string> args = {"help"};
+    args.insert(args.end(), line->positional.begin(), line->positional.end());
+    return pathctl::Run(pathctl::Options(), args, std::cout, std::cerr);
   }
   // Flags first, then "--", so positional arguments that look like flags
   // (negative numbers) stay positional.
@@ -147,93 +162,102 @@ int main(int argc, char** argv) {
       static_cast<int>(normalized.size()), normalized.data());
 
   pathctl::Options options;
-  options.server = pathctl::ResolveServerAddress(
-      absl::GetFlag(FLAGS_server), std::getenv(pathctl::kServerEnvVar));
-  options.timeout = absl::GetFlag(FLAGS_timeout);
+  options.given_flags = line->names;
+
+  pathctl::GlobalOptions& global = options.global;
+  global.server = pathctl::ResolveServerAddress(absl::GetFlag(FLAGS_server),
+                                                std::getenv(pathctl::kServerEnvVar));
+  global.timeout = absl::GetFlag(FLAGS_timeout);
   absl::StatusOr<pathctl::OutputFormat> output = pathctl::ResolveOutputFormat(
       absl::GetFlag(FLAGS_output), absl::GetFlag(FLAGS_json));
-  if (!output.ok()) {
-    std::cerr << "error: " << output.status().message() << "\n\n"
-              << pathctl::SynopsisText()
-              << "run 'pathctl --help' for details\n";
-    return pathctl::kExitUsage;
-  }
-  options.output = *output;
-  options.json = *output == pathctl::OutputFormat::kJson;
-  options.progress_bars = pathctl::ProgressBarsWanted(
+  if (!output.ok()) return UsageError(output.status().message());
+  global.output = *output;
+  global.json = *output == pathctl::OutputFormat::kJson;
+  global.progress_bars = pathctl::ProgressBarsWanted(
       isatty(STDOUT_FILENO) != 0, isatty(STDERR_FILENO) != 0,
       absl::GetFlag(FLAGS_no_progress));
-  options.credentials.tls_ca = absl::GetFlag(FLAGS_tls_ca);
-  options.credentials.tls_cert = absl::GetFlag(FLAGS_tls_cert);
-  options.credentials.tls_key = absl::GetFlag(FLAGS_tls_key);
-  options.credentials.tls_server_name = absl::GetFlag(FLAGS_tls_server_name);
-  options.credentials.token = absl::GetFlag(FLAGS_token);
-  options.credentials.token_file = absl::GetFlag(FLAGS_token_file);
-  if (options.credentials.token.empty() && options.credentials.token_file.empty()) {
+  global.stderr_is_terminal = isatty(STDERR_FILENO) != 0;
+  global.credentials.tls_ca = absl::GetFlag(FLAGS_tls_ca);
+  global.credentials.tls_cert = absl::GetFlag(FLAGS_tls_cert);
+  global.credentials.tls_key = absl::GetFlag(FLAGS_tls_key);
+  global.credentials.tls_server_name = absl::GetFlag(FLAGS_tls_server_name);
+  global.credentials.token = absl::GetFlag(FLAGS_token);
+  global.credentials.token_file = absl::GetFlag(FLAGS_token_file);
+  if (global.credentials.token.empty() && global.credentials.token_file.empty()) {
     if (const char* token = std::getenv(pathctl::kTokenEnvVar)) {
-      options.credentials.token = token;
+      global.credentials.token = token;
     }
   }
-  options.from = absl::GetFlag(FLAGS_from);
-  options.replace = absl::GetFlag(FLAGS_replace);
-  options.resolution = absl::GetFlag(FLAGS_resolution);
-  options.cells = absl::GetFlag(FLAGS_cells);
-  options.expected_version = absl::GetFlag(FLAGS_expected_version);
-  options.from_version = absl::GetFlag(FLAGS_from_version);
-  options.count = absl::GetFlag(FLAGS_count);
-  options.planner = absl::GetFlag(FLAGS_planner);
-  options.connectivity = absl::GetFlag(FLAGS_connectivity);
-  options.cost_weight = absl::GetFlag(FLAGS_cost_weight);
-  options.world = absl::GetFlag(FLAGS_world);
-  options.unknown_is_free = absl::GetFlag(FLAGS_unknown_is_free);
-  options.max_expansions = absl::GetFlag(FLAGS_max_expansions);
-  options.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
-  options.robot_radius_m = absl::GetFlag(FLAGS_robot_radius);
-  options.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
-  options.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance);
-  options.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance_m);
-  options.via = absl::GetFlag(FLAGS_via);
-  options.allow_partial = absl::GetFlag(FLAGS_allow_partial);
-  options.expansions = absl::GetFlag(FLAGS_expansions);
-  options.path_file = absl::GetFlag(FLAGS_path_file);
-  options.simplify = absl::GetFlag(FLAGS_simplify);
-  options.lookahead = absl::GetFlag(FLAGS_lookahead);
-  options.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
-  options.pf_attractive = absl::GetFlag(FLAGS_pf_attractive);
-  options.pf_attractive_gain = absl::GetFlag(FLAGS_pf_attractive_gain);
-  options.pf_switch_distance = absl::GetFlag(FLAGS_pf_switch_distance);
-  options.pf_repulsive_gain = absl::GetFlag(FLAGS_pf_repulsive_gain);
-  options.pf_influence = absl::GetFlag(FLAGS_pf_influence);
-  options.pf_step = absl::GetFlag(FLAGS_pf_step);
-  options.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
-  options.script = absl::GetFlag(FLAGS_script);
-  options.window = absl::GetFlag(FLAGS_window);
-  options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
-  options.progress = absl::GetFlag(FLAGS_progress);
-  options.stderr_is_terminal = isatty(STDERR_FILENO) != 0;
-  options.concurrency = absl::GetFlag(FLAGS_concurrency);
-  options.channels = absl::GetFlag(FLAGS_channels);
-  options.duration = absl::GetFlag(FLAGS_duration);
-  options.warmup = absl::GetFlag(FLAGS_warmup);
-  options.requests = absl::GetFlag(FLAGS_requests);
-  options.movingai = absl::GetFlag(FLAGS_movingai);
-  options.seed = absl::GetFlag(FLAGS_seed);
-  options.plan = absl::GetFlag(FLAGS_plan);
+
+  pathctl::CostOptions& cost = options.cost;
+  cost.connectivity = absl::GetFlag(FLAGS_connectivity);
+  cost.cost_weight = absl::GetFlag(FLAGS_cost_weight);
+  cost.unknown_is_free = absl::GetFlag(FLAGS_unknown_is_free);
+  cost.robot_radius_m = absl::GetFlag(FLAGS_robot_radius);
+  cost.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
+
+  pathctl::MapsOptions& maps = options.maps;
+  maps.from = absl::GetFlag(FLAGS_from);
+  maps.replace = absl::GetFlag(FLAGS_replace);
+  maps.resolution = absl::GetFlag(FLAGS_resolution);
+  maps.cells = absl::GetFlag(FLAGS_cells);
+  maps.expected_version = absl::GetFlag(FLAGS_expected_version);
+  maps.from_version = absl::GetFlag(FLAGS_from_version);
+  maps.count = absl::GetFlag(FLAGS_count);
+  maps.occupied_thresh = absl::GetFlag(FLAGS_occupied_thresh);
+  maps.free_thresh = absl::GetFlag(FLAGS_free_thresh);
+  maps.negate = absl::GetFlag(FLAGS_negate);
+
+  pathctl::PlanFlags& plan = options.plan;
+  plan.world = absl::GetFlag(FLAGS_world);
+  plan.planner = absl::GetFlag(FLAGS_planner);
+  plan.max_expansions = absl::GetFlag(FLAGS_max_expansions);
+  plan.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
+  plan.simplify = absl::GetFlag(FLAGS_simplify);
+  plan.lookahead = absl::GetFlag(FLAGS_lookahead);
+  plan.via = absl::GetFlag(FLAGS_via);
+  plan.allow_partial = absl::GetFlag(FLAGS_allow_partial);
+  plan.expansions = absl::GetFlag(FLAGS_expansions);
+  plan.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance);
+  plan.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance_m);
+  plan.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
+  plan.pf_attractive = absl::GetFlag(FLAGS_pf_attractive);
+  plan.pf_attractive_gain = absl::GetFlag(FLAGS_pf_attractive_gain);
+  plan.pf_switch_distance = absl::GetFlag(FLAGS_pf_switch_distance);
+  plan.pf_repulsive_gain = absl::GetFlag(FLAGS_pf_repulsive_gain);
+  plan.pf_influence = absl::GetFlag(FLAGS_pf_influence);
+  plan.pf_step = absl::GetFlag(FLAGS_pf_step);
+  plan.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
+  plan.progress = absl::GetFlag(FLAGS_progress);
+
+  options.check.world = absl::GetFlag(FLAGS_world);
+  options.check.path_file = absl::GetFlag(FLAGS_path_file);
+  options.navigate.script = absl::GetFlag(FLAGS_script);
+  options.cost_to_go.world = absl::GetFlag(FLAGS_world);
+  options.cost_to_go.window = absl::GetFlag(FLAGS_window);
+  options.cost_to_go.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
+  options.metrics.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+
+  pathctl::BenchOptions& bench = options.bench;
+  bench.concurrency = absl::GetFlag(FLAGS_concurrency);
+  bench.channels = absl::GetFlag(FLAGS_channels);
+  bench.duration = absl::GetFlag(FLAGS_duration);
+  bench.warmup = absl::GetFlag(FLAGS_warmup);
+  bench.requests = absl::GetFlag(FLAGS_requests);
+  bench.movingai = absl::GetFlag(FLAGS_movingai);
+  bench.seed = absl::GetFlag(FLAGS_seed);
+
+  pathctl::RenderFlags& render = options.render;
+  render.plan = absl::GetFlag(FLAGS_plan);
   const std::string out = absl::GetFlag(FLAGS_out);
   const std::string o = absl::GetFlag(FLAGS_o);
   if (!out.empty() && !o.empty() && out != o) {
-    std::cerr << "error: give -o or --out, not both\n\n"
-              << pathctl::SynopsisText()
-              << "run 'pathctl --help' for details\n";
-    return pathctl::kExitUsage;
+    return UsageError("give -o or --out, not both");
   }
-  options.out = out.empty() ? o : out;
-  options.ascii = absl::GetFlag(FLAGS_ascii);
-  options.scale = absl::GetFlag(FLAGS_scale);
-  options.y_up = absl::GetFlag(FLAGS_y_up);
-  options.occupied_thresh = absl::GetFlag(FLAGS_occupied_thresh);
-  options.free_thresh = absl::GetFlag(FLAGS_free_thresh);
-  options.negate = absl::GetFlag(FLAGS_negate);
+  render.out = out.empty() ? o : out;
+  render.ascii = absl::GetFlag(FLAGS_ascii);
+  render.scale = absl::GetFlag(FLAGS_scale);
+  render.y_up = absl::GetFlag(FLAGS_y_up);
 
   return pathctl::Run(
       options,

@@ -14,6 +14,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "client/map_source.h"
+#include "client/pathctl/files.h"
 #include "client/pathctl/png_io.h"
 #include "core/status_macros.h"
 
@@ -27,16 +28,6 @@ std::string ShortestDouble(double value) {
   const std::to_chars_result result =
       std::to_chars(buffer, buffer + sizeof(buffer), value);
   return std::string(buffer, result.ptr);
-}
-
-absl::Status WriteFile(const std::string& path, const std::string& contents) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file)
-    return absl::PermissionDeniedError(absl::StrCat("cannot write ", path));
-  file.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-  file.flush();
-  if (!file) return absl::DataLossError(absl::StrCat("error writing ", path));
-  return absl::OkStatus();
 }
 
 bool HasExtension(const std::string& path,
@@ -178,15 +169,15 @@ absl::StatusOr<ExportLoss> ExportMapFile(const Grid& grid,
                                          const std::string& path) {
   ExportLoss loss;
   if (HasExtension(path, {".map"})) {
-    PATHD_RETURN_IF_ERROR(WriteFile(path, ToMovingAiText(grid, &loss)));
+    PATHD_RETURN_IF_ERROR(WriteTextFile(path, ToMovingAiText(grid, &loss)));
     return loss;
   }
   if (HasExtension(path, {".yaml", ".yml"})) {
     const std::string pgm_path = PgmPathFor(path);
     const RosMapFiles files = ToRosMapFiles(
         grid, std::filesystem::path(pgm_path).filename().string(), &loss);
-    PATHD_RETURN_IF_ERROR(WriteFile(pgm_path, files.pgm));
-    PATHD_RETURN_IF_ERROR(WriteFile(path, files.yaml));
+    PATHD_RETURN_IF_ERROR(WriteTextFile(pgm_path, files.pgm));
+    PATHD_RETURN_IF_ERROR(WriteTextFile(path, files.yaml));
     return loss;
   }
   return absl::InvalidArgumentError(

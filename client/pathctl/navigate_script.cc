@@ -10,7 +10,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
-#include "client/pathctl/pathctl.h"
+#include "client/pathctl/text.h"
 
 namespace pathd::pathctl {
 namespace {

@@ -16,7 +16,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
-#include "client/pathctl/pathctl.h"
+#include "client/pathctl/text.h"
 #include "google/protobuf/util/json_util.h"
 #include "grpcpp/client_context.h"
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "client/pathctl/files.h"
 
 namespace pathd::pathctl {
 namespace {
@@ -67,14 +68,7 @@ absl::StatusOr<std::string> EncodePng(const Image& image) {
 absl::Status WritePngFile(const Image& image, const std::string& path) {
   absl::StatusOr<std::string> bytes = EncodePng(image);
   if (!bytes.ok()) return bytes.status();
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) {
-    return absl::PermissionDeniedError(absl::StrCat("cannot write ", path));
-  }
-  file.write(bytes->data(), static_cast<std::streamsize>(bytes->size()));
-  file.flush();
-  if (!file) return absl::DataLossError(absl::StrCat("error writing ", path));
-  return absl::OkStatus();
+  return WriteTextFile(path, *bytes);
 }
 
 absl::StatusOr<Image> DecodePngRgba(std::string_view png_bytes,

@@ -9,7 +9,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "client/pathctl/pathctl.h"
+#include "client/pathctl/text.h"
 
 namespace pathd::pathctl {
 namespace {

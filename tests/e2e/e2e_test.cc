@@ -747,7 +747,7 @@ TEST_F(E2eTest, BlockingAPathCellChangesThePlan) {
 TEST_F(E2eTest, WallingOffTheGoalExitsThree) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
   const ProcessResult rect =
-      Ctl({"maps", "rect", "room", "9", "5", "0", "5", "lethal"});
+      Ctl({"maps", "rect", "room", "0", "5", "9", "5", "lethal"});
   ASSERT_EQ(rect.exit_code, 0) << rect;
   EXPECT_TRUE(absl::StrContains(rect.out, "(10 cells changed)")) << rect;
 
@@ -876,6 +876,12 @@ TEST_F(E2eTest, UsageErrorsExitTwo) {
       {{"cost-to-go", "room", "1", "1", "--window=0,0,0,4"},
        "--window width and height must be positive"},
       {{"cache-stats", "spm"}, "cache-stats takes no arguments"},
+      // A flag the command does not read is named, not ignored: plan used
+      // to write no picture for -o and say nothing.
+      {{"plan", "room", "0", "0", "1", "1", "-o", "x.png"},
+       "-o does not apply to plan; render reads it"},
+      {{"maps", "list", "--planner=astar"}, "--planner does not apply to maps list"},
+      {{"health", "--count=3"}, "--count does not apply to health"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(absl::StrJoin(c.args, " "));
@@ -886,6 +892,13 @@ TEST_F(E2eTest, UsageErrorsExitTwo) {
     EXPECT_TRUE(absl::StrContains(r.err, "usage:")) << r;
     EXPECT_EQ(r.out, "") << r;
   }
+  // A command's usage error shows that command's usage, not every command's.
+  const ProcessResult plan = Ctl({"plan", "room", "0", "0"});
+  EXPECT_TRUE(absl::StrContains(plan.err, "usage: pathctl [flags] plan NAME SX SY GX GY"))
+      << plan;
+  EXPECT_TRUE(absl::StrContains(plan.err, "run 'pathctl help plan' for details")) << plan;
+  EXPECT_FALSE(absl::StrContains(plan.err, "maps create")) << plan;
+  EXPECT_FALSE(fs::exists("x.png"));
 
   const ProcessResult help = RunPathctl({"--help"});
   EXPECT_EQ(help.exit_code, 0) << help;
@@ -1911,9 +1924,10 @@ TEST_F(E2eTest, ExitCodesTellScriptsWhatWentWrong) {
       {{"plan", "room", "0", "0", "9", "9", "--timeout=1ns"}, 6,
        "error: DEADLINE_EXCEEDED: "},
       {{"plan", "nosuch", "0", "0", "9", "9"}, 7, "error: NOT_FOUND: "},
+      // A missing folder is NOT_FOUND naming it, not PERMISSION_DENIED.
       {{"cost-to-go", "room", "1", "1", "--cost_to_go_file",
         (temp_dir_ / "no_such_dir" / "field.csv").string()},
-       8, "error: PERMISSION_DENIED: cannot write "},
+       7, "error: NOT_FOUND: cannot write "},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(absl::StrJoin(c.args, " "));
@@ -2250,6 +2264,9 @@ TEST_F(E2eTest, TlsAndTokensThroughPathctl) {
   r = RunPathctl({server, "--token_file=" + read_file.string(), "health"});
   EXPECT_EQ(r.exit_code, 5) << r;
   EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE")) << r;
+  // gRPC only says "Socket closed"; pathctl suggests what is missing.
+  EXPECT_TRUE(absl::StrContains(r.err, "\nhint: ")) << r;
+  EXPECT_TRUE(absl::StrContains(r.err, "give --tls_ca FILE")) << r;
   // Flag mistakes are usage errors.
   r = RunPathctl({server, tls, "--tls_cert=" + certs.client_cert, "health"});
   EXPECT_EQ(r.exit_code, 2) << r;
@@ -2269,6 +2286,72 @@ TEST_F(E2eTest, TlsAndTokensThroughPathctl) {
   for (const std::string& token : {read_token, write_token}) {
     EXPECT_FALSE(absl::StrContains(log.err, token)) << "a token is in pathd's log";
   }
+}
+
+// pathctl help CMD, CMD --help and --version: generated from the command
+// table, with the flags the command reads.
+TEST_F(E2eTest, HelpForOneCommandAndVersion) {
+  const ProcessResult help = RunPathctl({"help", "maps", "rect"});
+  EXPECT_EQ(help.exit_code, 0) << help;
+  EXPECT_TRUE(absl::StartsWith(
+      help.out, "usage: pathctl [flags] maps rect NAME X0 Y0 X1 Y1 COST"))
+      << help;
+  EXPECT_TRUE(absl::StrContains(help.out, "--expected_version")) << help;
+  EXPECT_FALSE(absl::StrContains(help.out, "--planner")) << help;
+  const ProcessResult same = RunPathctl({"maps", "rect", "--help"});
+  EXPECT_EQ(same.exit_code, 0) << same;
+  EXPECT_EQ(same.out, help.out);
+  const ProcessResult group = RunPathctl({"help", "maps"});
+  EXPECT_EQ(group.exit_code, 0) << group;
+  EXPECT_TRUE(absl::StrContains(group.out, "maps watch NAME")) << group;
+  const ProcessResult unknown = RunPathctl({"help", "frobnicate"});
+  EXPECT_EQ(unknown.exit_code, 2) << unknown;
+  EXPECT_TRUE(absl::StrContains(unknown.err, "unknown command 'frobnicate'")) << unknown;
+  const ProcessResult version = RunPathctl({"--version"});
+  EXPECT_EQ(version.exit_code, 0) << version;
+  EXPECT_TRUE(absl::StartsWith(version.out, "pathctl ")) << version;
+  EXPECT_TRUE(absl::StrContains(version.out, ".")) << version;
+}
+
+// Regression (a 100 KiB name failed with gRPC's metadata-size error): map
+// names are checked in pathctl by the server's rule and message before they
+// go into the routing header; the server never sees the call.
+TEST_F(E2eTest, MapNamesAreCheckedBeforeTheHeader) {
+  const std::string map = MapFile("room.map", OpenRoomMap());
+  const ProcessResult huge =
+      Ctl({"maps", "create", std::string(100 * 1024, 'a'), "--from", map});
+  EXPECT_EQ(huge.exit_code, 1) << huge.err.substr(0, 300);
+  EXPECT_EQ(huge.err,
+            "error: INVALID_ARGUMENT: map name is 102400 characters long; the "
+            "limit is 128\n");
+  const ProcessResult slash = Ctl({"plan", "a/b", "0", "0", "1", "1"});
+  EXPECT_EQ(slash.exit_code, 1) << slash;
+  EXPECT_TRUE(absl::StartsWith(
+      slash.err, "error: INVALID_ARGUMENT: map name 'a/b' has character 0x2f"))
+      << slash;
+  const ProcessResult batch =
+      Ctl({"batch", MapFile("bad.txt", "q1 .hidden 0 0 1 1\n")});
+  EXPECT_EQ(batch.exit_code, 2) << batch;
+  EXPECT_TRUE(absl::StrContains(batch.err, "must not start with '.'")) << batch;
+}
+
+// Regression: maps rect swapped inverted corners that the API refuses; now it
+// refuses them with the server's message and the map keeps its version.
+TEST_F(E2eTest, MapsRectRefusesInvertedCorners) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const ProcessResult r = Ctl({"maps", "rect", "room", "9", "5", "0", "5", "lethal"});
+  EXPECT_EQ(r.exit_code, 1) << r;
+  EXPECT_EQ(r.err, "error: INVALID_ARGUMENT: change 0: rect (9, 5)-(0, 5) has min > max\n");
+  const ProcessResult info = Ctl({"maps", "get", "room", "--output=csv"});
+  EXPECT_TRUE(absl::StrContains(info.out, ",1,100,0\n")) << info;  // version 1
+}
+
+// Regression: a missing export folder was reported as PERMISSION_DENIED.
+TEST_F(E2eTest, ExportToAMissingFolderIsNotFoundNamingIt) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const std::string folder = (temp_dir_ / "no" / "such" / "dir").string();
+  ExpectRpcError({"maps", "export", "room", folder + "/x.map"}, "NOT_FOUND",
+                 {"folder " + folder + " does not exist"});
 }
 
 }  // namespace

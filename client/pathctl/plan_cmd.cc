@@ -1,0 +1,311 @@
+// pathctl plan: one Plan call (or PlanStream with --progress) from SX SY
+// to GX GY, printed as text, JSON or a CSV of the path.
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/strip.h"
+#include "client/pathctl/command.h"
+#include "client/pathctl/cost_to_go_cmd.h"
+
+namespace pathd::pathctl {
+namespace {
+
+// The progress line of `plan --progress`: "expansions N  best f F  T s".
+std::string FormatProgress(const v1::PlanProgress& progress) {
+  return absl::StrFormat(
+      "progress: %d expansions, best f %s, %.3f s", progress.expansions(),
+      progress.has_best_f() ? absl::StrFormat("%.3f", progress.best_f()) : "-",
+      progress.elapsed_us() / 1e6);
+}
+
+// A PlanError as the status it stands for, its typed outcome appended to the
+// message.
+absl::Status FromPlanError(const v1::PlanError& error) {
+  std::string message = error.message();
+  if (error.outcome() != v1::PLAN_OUTCOME_UNSPECIFIED) {
+    absl::StrAppend(&message, " (outcome ", OutcomeName(error.outcome()), ")");
+  }
+  return absl::Status(static_cast<absl::StatusCode>(error.code()), message);
+}
+
+// Plan through PlanStream, showing its progress on stderr: one line rewritten
+// in place on a terminal, one line per event otherwise (logs, pipes).
+absl::StatusOr<v1::PlanResponse> PlanWithProgress(CommandEnv& env,
+                                                  const v1::PlanRequest& request) {
+  const bool terminal = env.global().stderr_is_terminal;
+  std::unique_ptr<grpc::ClientContext> context =
+      client::MakeContext(env.global().timeout);
+  std::unique_ptr<grpc::ClientReaderInterface<v1::PlanStreamEvent>> reader =
+      env.client().PlanStream(context.get(), request);
+  std::optional<v1::PlanResponse> result;
+  std::optional<v1::PlanError> error;
+  bool line_open = false;
+  v1::PlanStreamEvent event;
+  while (reader->Read(&event)) {
+    switch (event.kind_case()) {
+      case v1::PlanStreamEvent::kProgress:
+        if (terminal) {
+          // \r and erase-to-end-of-line: the line shrinks as well as grows.
+          env.err() << "\r" << FormatProgress(event.progress()) << "\033[K"
+                    << std::flush;
+          line_open = true;
+        } else {
+          env.err() << FormatProgress(event.progress()) << "\n" << std::flush;
+        }
+        break;
+      case v1::PlanStreamEvent::kResult:
+        result = std::move(*event.mutable_result());
+        break;
+      case v1::PlanStreamEvent::kError:
+        error = std::move(*event.mutable_error());
+        break;
+      case v1::PlanStreamEvent::KIND_NOT_SET:
+        break;
+    }
+  }
+  if (line_open) env.err() << "\n";
+  const grpc::Status status = reader->Finish();
+  if (error.has_value()) return FromPlanError(*error);
+  if (!status.ok()) return client::FromGrpcStatus(status);
+  if (!result.has_value()) {
+    return absl::InternalError("PlanStream ended without a final event");
+  }
+  return *std::move(result);
+}
+
+// One position from two arguments (`names` word the errors): a cell, or
+
+// A plan's path as CSV, one row per cell (vertex when any-angle) with its
+// world point; only the header when there is no path.
+Table PlanPathCsv(const v1::PlanResponse& response) {
+  Table table({"x", "y", "world_x", "world_y"});
+  const bool has_world = response.world_path_size() == response.path_size();
+  for (int i = 0; i < response.path_size(); ++i) {
+    const v1::Cell& cell = response.path(i);
+    table.AddRow({absl::StrCat(cell.x()), absl::StrCat(cell.y()),
+                  has_world ? FormatNumber(response.world_path(i).x()) : "",
+                  has_world ? FormatNumber(response.world_path(i).y()) : ""});
+  }
+  return table;
+}
+
+int Plan(CommandEnv& env, Args args) {
+  const PlanFlags& options = env.options().plan;
+  if (args.size() != 5) return env.Usage("plan takes NAME SX SY GX GY");
+  v1::PlanRequest request;
+  request.set_map(args[0]);
+  static constexpr const char* kNames[] = {"SX", "SY", "GX", "GY"};
+  if (options.world) {
+    absl::StatusOr<std::vector<double>> p =
+        ParseDoubles(args.subspan(1), kNames);
+    if (!p.ok()) return env.Usage(p.status().message());
+    request.mutable_start()->mutable_world()->set_x((*p)[0]);
+    request.mutable_start()->mutable_world()->set_y((*p)[1]);
+    request.mutable_goal()->mutable_world()->set_x((*p)[2]);
+    request.mutable_goal()->mutable_world()->set_y((*p)[3]);
+  } else {
+    absl::StatusOr<std::vector<int32_t>> p = ParseInts(args.subspan(1), kNames);
+    if (!p.ok()) {
+      return env.Usage(absl::StrCat(
+          p.status().message(), " (use --world for coordinates in metres)"));
+    }
+    request.mutable_start()->mutable_cell()->set_x((*p)[0]);
+    request.mutable_start()->mutable_cell()->set_y((*p)[1]);
+    request.mutable_goal()->mutable_cell()->set_x((*p)[2]);
+    request.mutable_goal()->mutable_cell()->set_y((*p)[3]);
+  }
+  if (!options.planner.empty()) {
+    absl::StatusOr<v1::Planner> planner = PlannerFromName(options.planner);
+    if (!planner.ok()) return env.Usage(planner.status().message());
+    request.set_planner(*planner);
+  }
+  v1::PlanOptions* plan_options = request.mutable_options();
+  if (absl::Status s = SetCostOptions(env.options().cost, plan_options); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  plan_options->set_max_expansions(options.max_expansions);
+  if (options.heuristic_weight.has_value()) {
+    plan_options->set_heuristic_weight(*options.heuristic_weight);
+  }
+  if (options.goal_tolerance_cells.has_value() &&
+      options.goal_tolerance_m.has_value()) {
+    return env.Usage(
+        "give --goal_tolerance (cells) or --goal_tolerance_m, not both");
+  }
+  if (options.goal_tolerance_cells.has_value()) {
+    plan_options->set_goal_tolerance_cells(*options.goal_tolerance_cells);
+  }
+  if (options.goal_tolerance_m.has_value()) {
+    plan_options->set_goal_tolerance_m(*options.goal_tolerance_m);
+  }
+  if (absl::Status s = AddViaPoints(options.via, options.world, &request); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  request.set_allow_partial(options.allow_partial);
+  plan_options->set_return_expansions(options.expansions);
+  plan_options->set_simplify(options.simplify);
+  plan_options->set_lookahead(options.lookahead);
+  plan_options->set_return_cost_to_go(!options.cost_to_go_file.empty());
+  v1::PotentialFieldOptions* pf = plan_options->mutable_potential_field();
+  if (options.pf_attractive == "quadratic") {
+    pf->set_attractive(v1::ATTRACTIVE_POTENTIAL_QUADRATIC);
+  } else if (options.pf_attractive == "conic") {
+    pf->set_attractive(v1::ATTRACTIVE_POTENTIAL_CONIC);
+  } else if (!options.pf_attractive.empty()) {
+    return env.Usage(absl::StrCat("--pf_attractive must be quadratic or conic, not '",
+                                  options.pf_attractive, "'"));
+  }
+  pf->set_attractive_gain(options.pf_attractive_gain);
+  pf->set_switch_distance(options.pf_switch_distance);
+  pf->set_repulsive_gain(options.pf_repulsive_gain);
+  pf->set_influence_distance(options.pf_influence);
+  pf->set_step_size(options.pf_step);
+  pf->set_max_steps(options.pf_max_steps);
+
+  absl::StatusOr<v1::PlanResponse> response =
+      options.progress ? PlanWithProgress(env, request) : env.client().Plan(request);
+  if (!response.ok()) return env.Fail(response.status());
+  const int code = response->found() ? kExitOk : kExitNoPath;
+  if (!options.cost_to_go_file.empty()) {
+    if (response->cost_to_go().empty()) {
+      env.err() << "warning: planner " << response->planner()
+                << " returned no cost-to-go field (only distance_transform and "
+                   "distance_transform_exact do); nothing written\n";
+    } else if (absl::Status s = WriteCostToGoCsv(options.cost_to_go_file,
+                                                 response->cost_to_go_width(),
+                                                 response->cost_to_go());
+               !s.ok()) {
+      return env.Fail(s);
+    }
+  }
+  if (env.json()) {
+    const int print_code = env.PrintJson(*response);
+    return print_code == kExitOk ? code : print_code;
+  }
+  if (env.csv()) {
+    env.PrintCsv(PlanPathCsv(*response));
+    return code;
+  }
+  std::ostream& out = env.out();
+  absl::string_view outcome = v1::PlanOutcome_Name(response->outcome());
+  absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
+  out << "found:       " << (response->found() ? "yes" : "no") << "\n"
+      << "outcome:     " << outcome << "\n";
+  if (!response->reason().empty())
+    out << "reason:      " << response->reason() << "\n";
+  out << absl::StrFormat(
+      "planner:     %s\n"
+      "map version: %d\n"
+      "start:       %s\n"
+      "goal:        %s",
+      response->planner(), response->map_version(),
+      FormatCell(response->start()), FormatCell(response->goal()));
+  if (response->goal_substituted()) {
+    out << " (substituted for blocked "
+        << FormatCell(response->requested_goal()) << ")";
+  }
+  out << "\n";
+  if (response->robot_radius_cells() > 0) {
+    out << absl::StrFormat("robot radius: %g cells\n", response->robot_radius_cells());
+  }
+  // A partial plan (--allow_partial) has a path without found.
+  const bool has_path = response->path_size() > 0;
+  if (has_path) {
+    out << absl::StrFormat("cost:        %.6f\nlength:      %.6f\n",
+                           response->cost(), response->length());
+  }
+  if (request.via_size() > 0) {
+    const int reached = response->reached_goal_index();
+    out << absl::StrFormat(
+        "via:         %d point%s; reached %s\n", request.via_size(),
+        request.via_size() == 1 ? "" : "s",
+        reached < 0 ? std::string("none")
+        : reached == request.via_size()
+            ? std::string("the goal")
+            : absl::StrFormat("via[%d] (goal index %d)", reached, reached));
+    if (response->leg_end_indices_size() > 0) {
+      out << "legs end at: path["
+          << absl::StrJoin(response->leg_end_indices(), "], path[") << "]\n";
+    }
+  }
+  out << absl::StrFormat("expansions:  %d\n", response->expansions());
+  if (options.expansions) {
+    out << absl::StrFormat("expanded:    %d cells returned%s\n",
+                           response->expanded_size(),
+                           response->expanded_truncated()
+                               ? " (truncated: the server's --max_returned_expansions)"
+                               : "");
+  }
+  // Only the caching planners fill these; elsewhere "no" would mislead.
+  if (request.planner() == v1::PLANNER_DSTAR_LITE ||
+      request.planner() == v1::PLANNER_SPM) {
+    out << "cache hit:   " << (response->cache_hit() ? "yes" : "no") << "\n"
+        << absl::StrFormat("repaired:    %d cells\n", response->repaired_cells());
+  }
+  if (response->episodes() > 0) {
+    out << absl::StrFormat("episodes:    %d\n", response->episodes());
+  }
+  if (response->outcome() == v1::PLAN_OUTCOME_LOCAL_MINIMUM) {
+    out << absl::StrFormat("stalled at:  (%.3f, %.3f)\n", response->stall_point().x(),
+                           response->stall_point().y());
+  }
+  if (!response->trajectory().empty()) {
+    out << "trajectory (" << response->trajectory().size() << " points)\n";
+  }
+  if (!response->cost_to_go().empty() && !options.cost_to_go_file.empty()) {
+    out << "cost-to-go:  " << response->cost_to_go().size() << " cells written to "
+        << options.cost_to_go_file << "\n";
+  }
+  out << absl::StrFormat("time:        %d us\n", response->planning_time_us());
+  if (has_path) {
+    out << "path (" << response->path_size()
+        << (response->any_angle() ? " vertices, any-angle" : " cells")
+        << "): " << FormatPath(response->path()) << "\n";
+    if (options.world) {
+      std::vector<std::string> points;
+      for (const v1::WorldPoint& p : response->world_path()) {
+        points.push_back(absl::StrFormat("(%g,%g)", p.x(), p.y()));
+      }
+      out << "world path (m): " << absl::StrJoin(points, " ") << "\n";
+    }
+  }
+  return code;
+}
+
+constexpr absl::string_view kPlanFlagNames[] = {
+    "world", "planner", "max_expansions", "heuristic_weight", "simplify", "lookahead",
+    "via", "allow_partial", "expansions", "goal_tolerance", "goal_tolerance_m",
+    "cost_to_go_file", "pf_attractive", "pf_attractive_gain", "pf_switch_distance",
+    "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "progress",
+    "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
+    "robot_radius_cells"};
+
+}  // namespace
+
+const Command kPlanCommand = {
+    .name = "plan",
+    .synopsis = "NAME SX SY GX GY [--planner P] [--connectivity 4|8]\n"
+                " [--cost_weight W] [--unknown_is_free]\n"
+                " [--max_expansions N] [--world] [--simplify]\n"
+                " [--robot_radius M | --robot_radius_cells C]\n"
+                " [--heuristic_weight W] [--lookahead N]\n"
+                " [--cost_to_go_file F] [--pf_* ...]\n"
+                " [--goal_tolerance C | --goal_tolerance_m M]\n"
+                " [--via X,Y[;X,Y...] [--allow_partial]] [--expansions]\n"
+                " [--progress]",
+    .help = "Plans a path on map NAME from cell (SX, SY) to (GX, GY) (world metres\n"
+            "with --world) and prints whether one was found, its cost, length,\n"
+            "expansions and cells. Exit code 3 when no path was found (the outcome\n"
+            "says why). --progress streams the search's progress to stderr.",
+    .flags = kPlanFlagNames,
+    .run = Plan,
+    .map_arg = MapArg::kExisting,
+};
+
+}  // namespace pathd::pathctl

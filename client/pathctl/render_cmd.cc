@@ -1,0 +1,174 @@
+// pathctl render: a map (and optionally a plan over it, with its expanded
+// cells) drawn as a PNG or as text (render.h does the drawing).
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/pathctl/command.h"
+#include "client/pathctl/png_io.h"
+#include "client/pathctl/render.h"
+#include "core/status_macros.h"
+
+namespace pathd::pathctl {
+namespace {
+
+// The Plan request of `render NAME SX SY GX GY`: the plan command's options
+// that change the path (planner, cost options, limits, via points), and
+// always the expanded cells when --expansions asks to draw them.
+absl::StatusOr<v1::PlanRequest> RenderPlanRequest(const PlanFlags& options,
+                                                  const CostOptions& cost,
+                                                  const std::string& map,
+                                                  Args coordinates) {
+  v1::PlanRequest request;
+  request.set_map(map);
+  static constexpr const char* kStart[] = {"SX", "SY"};
+  static constexpr const char* kGoal[] = {"GX", "GY"};
+  PATHD_ASSIGN_OR_RETURN(
+      *request.mutable_start(),
+      PositionFromPair(coordinates.subspan(0, 2), options.world, kStart));
+  PATHD_ASSIGN_OR_RETURN(
+      *request.mutable_goal(),
+      PositionFromPair(coordinates.subspan(2, 2), options.world, kGoal));
+  if (!options.planner.empty()) {
+    PATHD_ASSIGN_OR_RETURN(const v1::Planner planner,
+                           PlannerFromName(options.planner));
+    request.set_planner(planner);
+  }
+  v1::PlanOptions* plan_options = request.mutable_options();
+  PATHD_RETURN_IF_ERROR(SetCostOptions(cost, plan_options));
+  plan_options->set_max_expansions(options.max_expansions);
+  if (options.heuristic_weight.has_value()) {
+    plan_options->set_heuristic_weight(*options.heuristic_weight);
+  }
+  plan_options->set_simplify(options.simplify);
+  plan_options->set_lookahead(options.lookahead);
+  plan_options->set_return_expansions(options.expansions);
+  PATHD_RETURN_IF_ERROR(AddViaPoints(options.via, options.world, &request));
+  request.set_allow_partial(options.allow_partial);
+  return request;
+}
+
+Cell CoreCell(const v1::Cell& cell) { return Cell{cell.x(), cell.y()}; }
+
+// `render NAME [--plan SX SY GX GY] (-o FILE.png | --ascii)`: GetMap, an
+// optional Plan, then the picture.
+int Render(CommandEnv& env, Args args) {
+  const RenderFlags& options = env.options().render;
+  const PlanFlags& plan_flags = env.options().plan;
+  if (env.global().output != OutputFormat::kTable) {
+    return env.Unsupported(
+        "render", "it draws a picture; 'plan --output json' prints the path");
+  }
+  if (args.size() != 1 && args.size() != 5) {
+    return env.Usage("render takes NAME, or NAME --plan SX SY GX GY");
+  }
+  const bool plan = args.size() == 5;
+  if (options.plan && !plan)
+    return env.Usage("--plan needs SX SY GX GY after NAME");
+  if (plan_flags.expansions && !plan) {
+    return env.Usage(
+        "--expansions draws a plan's expanded cells; add --plan SX SY GX GY");
+  }
+  if (options.out.empty() && !options.ascii) {
+    return env.Usage("render needs -o FILE.png (a picture) or --ascii (text)");
+  }
+  if (!options.out.empty() &&
+      !absl::EndsWith(absl::AsciiStrToLower(options.out), ".png")) {
+    return env.Usage(absl::StrCat("-o ", options.out,
+                                  ": render writes PNG; name a .png file"));
+  }
+  if (options.scale < 0 || options.scale > kMaxScale) {
+    return env.Usage(
+        absl::StrFormat("--scale must be 1..%d pixels per cell, not %d",
+                        kMaxScale, options.scale));
+  }
+  std::optional<v1::PlanRequest> request;
+  if (plan) {
+    absl::StatusOr<v1::PlanRequest> built =
+        RenderPlanRequest(plan_flags, env.options().cost, args[0], args.subspan(1));
+    if (!built.ok()) return env.Usage(built.status().message());
+    request = *std::move(built);
+  }
+
+  absl::StatusOr<Grid> grid = FetchGrid(env, args[0]);
+  if (!grid.ok()) return env.Fail(grid.status());
+  PlanOverlay overlay;
+  int code = kExitOk;
+  std::string summary;
+  if (request.has_value()) {
+    absl::StatusOr<v1::PlanResponse> response = env.client().Plan(*request);
+    if (!response.ok()) return env.Fail(response.status());
+    for (const v1::Cell& c : response->path())
+      overlay.path.push_back(CoreCell(c));
+    for (const v1::Cell& c : response->expanded())
+      overlay.expanded.push_back(CoreCell(c));
+    overlay.start = CoreCell(response->start());
+    overlay.goal = CoreCell(response->goal());
+    code = response->found() ? kExitOk : kExitNoPath;
+    summary =
+        response->path_size() > 0
+            ? absl::StrFormat(
+                  "path (%s): %d %s, cost %.6f, length %.6f, %d expansions",
+                  response->planner(), response->path_size(),
+                  response->any_angle() ? "vertices" : "cells",
+                  response->cost(), response->length(), response->expansions())
+            : absl::StrFormat("no path (%s): %s: %s", response->planner(),
+                              OutcomeName(response->outcome()),
+                              response->reason());
+    if (plan_flags.expansions) {
+      absl::StrAppendFormat(
+          &summary, ", %d expanded cells drawn%s", response->expanded_size(),
+          response->expanded_truncated()
+              ? " (truncated: the server's --max_returned_expansions)"
+              : "");
+    }
+  }
+  pathctl::RenderOptions render_options;
+  render_options.scale = options.scale;
+  render_options.y_up = options.y_up;
+  if (options.ascii) {
+    absl::StatusOr<std::string> text =
+        RenderText(*grid, overlay, render_options);
+    if (!text.ok()) return env.Usage(text.status().message());
+    env.out() << *text;
+  }
+  if (!options.out.empty()) {
+    absl::StatusOr<Image> image = RenderImage(*grid, overlay, render_options);
+    if (!image.ok()) return env.Usage(image.status().message());
+    if (absl::Status s = WritePngFile(*image, options.out); !s.ok())
+      return env.Fail(s);
+    env.out() << absl::StrFormat("wrote %s (%dx%d pixels, %d per cell)\n",
+                                 options.out, image->width, image->height,
+                                 image->width / grid->width());
+  }
+  if (!summary.empty()) env.out() << summary << "\n";
+  return code;
+}
+
+constexpr absl::string_view kRenderFlags[] = {
+    "plan", "out", "o", "ascii", "scale", "y_up", "planner", "world", "via",
+    "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
+    "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
+    "robot_radius_cells"};
+
+}  // namespace
+
+const Command kRenderCommand = {
+    .name = "render",
+    .synopsis = "NAME [--plan SX SY GX GY [--planner P] [--expansions]\n"
+                " [plan and cost options]]\n"
+                " (-o FILE.png [--scale N] | --ascii) [--y_up]",
+    .help = "Draws map NAME as a PNG (-o) or as text (--ascii), and with --plan the\n"
+            "path from (SX, SY) to (GX, GY), its start and goal, and with\n"
+            "--expansions the cells the search expanded. Exit code 3 when the plan\n"
+            "found no path (the map is still drawn).",
+    .flags = kRenderFlags,
+    .run = Render,
+    .map_arg = MapArg::kExisting,
+};
+
+}  // namespace pathd::pathctl
