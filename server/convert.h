@@ -115,7 +115,7 @@ struct QueryLimits {
   int64_t max_expansions = 0;
   // --max_cost_to_go_cells for a whole field in a Plan response (8 bytes per
   // cell); nullopt: not checked.
-  std::optional<int64_t> max_cost_to_go_cells;
+  std::optional<int64_t> max_cost_to_go_cells = std::nullopt;
 };
 
 // A request decoded against the map it names.

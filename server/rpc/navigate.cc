@@ -457,14 +457,15 @@ class NavigationSession final : public NavigateReactor {
     if (!result.ok() && result.status().code() != absl::StatusCode::kInvalidArgument) {
       return result.status();
     }
-    PlanQuery query{.planner = "dstar_lite",
-                    .request = PlanRequest::Between(start_, goal_, cost_),
-                    .requested_goal = goal_,
-                    .robot_radius_cells = radius_cells_,
-                    .max_expansions = max_expansions_};
-    PlanAnswer answer{.goal = goal_,
-                      .source = PlanSource{grid_, snapshot_->version, plans_ > 0,
-                                           repaired_cells_}};
+    PlanQuery query;
+    query.planner = "dstar_lite";
+    query.request = PlanRequest::Between(start_, goal_, cost_);
+    query.requested_goal = goal_;
+    query.robot_radius_cells = radius_cells_;
+    query.max_expansions = max_expansions_;
+    PlanAnswer answer;
+    answer.goal = goal_;
+    answer.source = PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
     if (result.ok()) answer.result = *std::move(result);
     SetSingleLeg(&answer);
     BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
