@@ -162,12 +162,10 @@ grpc::ServerUnaryReactor* ServeCostToGo(const PlanDeps& deps,
   std::shared_ptr<CostToGoCall> call =
       StartUnaryCall<CostToGoCall>(context, request, response);
   const absl::Status prepared = PrepareCostToGo(deps, *call);
-  InflationCache& inflation = deps.inflation;
-  IncrementalCache& cache = deps.cache;
-  const int64_t max_message_bytes = deps.limits.max_message_bytes;
-  auto work = [&inflation, &cache, max_message_bytes](CostToGoCall& call,
-                                                       SearchScratch&) -> Verdict {
-    absl::Status status = AnswerCostToGo(call, inflation, cache, max_message_bytes);
+  auto work = [inflation = &deps.inflation, cache = &deps.cache,
+               max_message_bytes = deps.limits.max_message_bytes](
+                  CostToGoCall& call, SearchScratch&) -> Verdict {
+    absl::Status status = AnswerCostToGo(call, *inflation, *cache, max_message_bytes);
     return {status, status.ok() ? "OK" : "ERROR"};
   };
   auto job = std::make_unique<CallJob<CostToGoCall>>(

@@ -151,10 +151,10 @@ grpc::ServerUnaryReactor* ServeIsPathValid(const PlanDeps& deps,
   }
   // Inflating a map version for the first time is O(map), too much for a
   // gRPC thread.
-  InflationCache& inflation = deps.inflation;
-  auto work = [&inflation](PathCheckCall& call, SearchScratch&) -> Verdict {
+  auto work = [inflation = &deps.inflation](PathCheckCall& call,
+                                            SearchScratch&) -> Verdict {
     absl::StatusOr<std::shared_ptr<const Grid>> inflated =
-        inflation.Get(call.snapshot->grid, call.robot_radius_cells);
+        inflation->Get(call.snapshot->grid, call.robot_radius_cells);
     if (!inflated.ok()) return {inflated.status(), "ERROR"};
     CheckPathOn(**inflated, call);
     return {absl::OkStatus(), call.response->valid() ? "VALID" : "INVALID"};

@@ -185,13 +185,12 @@ void FinishPlanCall(PlanCall& call, const absl::Status& status,
 }
 
 std::unique_ptr<Job> MakePlanJob(const PlanDeps& deps, std::shared_ptr<PlanCall> call) {
-  InflationCache& inflation = deps.inflation;
-  IncrementalCache& cache = deps.cache;
-  const int64_t max_path_points = deps.limits.max_path_points;
-  const int64_t max_message_bytes = deps.limits.max_message_bytes;
-  auto work = [&inflation, &cache, max_path_points, max_message_bytes](
+  // The caches outlive every job (PlanDeps' rule); `deps` itself may not.
+  auto work = [inflation = &deps.inflation, cache = &deps.cache,
+               max_path_points = deps.limits.max_path_points,
+               max_message_bytes = deps.limits.max_message_bytes](
                   PlanCall& call, SearchScratch& scratch) -> Verdict {
-    return RunPlanAndAnswer(call, scratch, inflation, cache, max_path_points,
+    return RunPlanAndAnswer(call, scratch, *inflation, *cache, max_path_points,
                             max_message_bytes);
   };
   return std::make_unique<CallJob<PlanCall>>(
