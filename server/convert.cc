@@ -1,7 +1,6 @@
-// proto <-> core translation.
+// proto <-> core translation of planning requests and responses: positions,
+// options, the one DecodePlanQuery and the one PlanResponse builder.
 #include "server/convert.h"
-
-#include "proto/planner_names.h"
 
 #include <cmath>
 #include <optional>
@@ -9,6 +8,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/postprocess/plan_through.h"
 #include "core/search/endpoints.h"
 #include "core/status_macros.h"
 #include "proto/planner_names.h"
@@ -225,6 +225,104 @@ absl::Status PlanOptionsToRequest(const v1::PlanOptions& options,
   return absl::OkStatus();
 }
 
+const char* ExpansionLimitSource(const v1::PlanOptions& options,
+                                 int64_t server_limit) {
+  const bool server_binds =
+      server_limit > 0 &&
+      (options.max_expansions() == 0 || options.max_expansions() >= server_limit);
+  return server_binds ? "--max_expansions" : "options.max_expansions";
+}
+
+WireQuery WireQueryOf(const v1::PlanRequest& request) {
+  return WireQuery{.map = &request.map(),
+                   .planner = request.planner(),
+                   .start = &request.start(),
+                   .goal = &request.goal(),
+                   .via = &request.via(),
+                   .options = &request.options(),
+                   .allow_partial = request.allow_partial(),
+                   .search_options = true,
+                   .goal_tolerance = true,
+                   .expansion_budget = true};
+}
+
+WireQuery WireQueryOf(const v1::CostToGoRequest& request) {
+  return WireQuery{.map = &request.map(),
+                   .goal = &request.goal(),
+                   .options = &request.options(),
+                   .expansion_budget = true};
+}
+
+WireQuery WireQueryOf(const v1::IsPathValidRequest& request) {
+  return WireQuery{.map = &request.map(), .options = &request.options()};
+}
+
+WireQuery WireQueryOf(const v1::NavigateOpen& open) {
+  return WireQuery{.map = &open.map(),
+                   .start = &open.start(),
+                   .goal = &open.goal(),
+                   .options = &open.options(),
+                   .search_options = true,
+                   .expansion_budget = true};
+}
+
+absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
+                                             const MapStore& store,
+                                             const QueryLimits& limits) {
+  DecodedQuery decoded;
+  PlanQuery& query = decoded.query;
+  PlanRequest& request = query.request;
+  const v1::PlanOptions& options = *wire.options;
+  PATHD_ASSIGN_OR_RETURN(query.planner, PlannerName(wire.planner));
+  PATHD_ASSIGN_OR_RETURN(decoded.snapshot, store.Get(*wire.map));
+  const Grid& grid = *decoded.snapshot->grid;
+  if (wire.start != nullptr) {
+    PATHD_ASSIGN_OR_RETURN(request.start, CellFromPosition(*wire.start, grid, "start"));
+  }
+  if (wire.goal != nullptr) {
+    PATHD_ASSIGN_OR_RETURN(request.goal, CellFromPosition(*wire.goal, grid, "goal"));
+  }
+  query.requested_goal = request.goal;
+  if (wire.search_options) {
+    PATHD_RETURN_IF_ERROR(PlanOptionsToRequest(options, &request));
+    query.simplify = options.simplify();
+    decoded.return_expansions = options.return_expansions();
+  } else {
+    PATHD_ASSIGN_OR_RETURN(request.cost, CostParamsFromOptions(options));
+  }
+  PATHD_ASSIGN_OR_RETURN(query.robot_radius_cells, RobotRadiusCells(options, grid));
+  // A whole field is 8 bytes per cell in a Plan message.
+  if (limits.max_cost_to_go_cells.has_value() && request.want_cost_to_go &&
+      grid.size() > static_cast<size_t>(*limits.max_cost_to_go_cells)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.return_cost_to_go: the map has %d cells; whole cost-to-go "
+        "fields are returned for maps of up to %d cells (--max_cost_to_go_cells)",
+        grid.size(), *limits.max_cost_to_go_cells));
+  }
+  if (wire.expansion_budget) {
+    PATHD_ASSIGN_OR_RETURN(query.max_expansions,
+                           EffectiveMaxExpansions(options, limits.max_expansions));
+    decoded.expansion_limit_source =
+        ExpansionLimitSource(options, limits.max_expansions);
+  }
+  if (wire.goal_tolerance) {
+    PATHD_ASSIGN_OR_RETURN(query.goal_tolerance_cells, GoalToleranceCells(options, grid));
+  }
+  if (wire.via != nullptr && !wire.via->empty()) {
+    // Counted before anything is sized by the request.
+    PATHD_RETURN_IF_ERROR(CheckViaCount(static_cast<size_t>(wire.via->size())));
+    query.via.reserve(wire.via->size());
+    for (int i = 0; i < wire.via->size(); ++i) {
+      PATHD_ASSIGN_OR_RETURN(
+          const Cell cell,
+          CellFromPosition(wire.via->Get(i), grid, absl::StrFormat("via[%d]", i)));
+      query.via.push_back(cell);
+    }
+    query.allow_partial = wire.allow_partial;
+  }
+  return decoded;
+}
+
 v1::PlanOutcome ToProto(PlanOutcome outcome) {
   switch (outcome) {
     case PlanOutcome::kFound:
@@ -276,9 +374,13 @@ bool IsRejectionOutcome(v1::PlanOutcome outcome) {
          outcome <= v1::PLAN_OUTCOME_MAP_NOT_FOUND;
 }
 
-void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
-                      const Grid& grid, int64_t max_expansions,
-                      v1::PlanResponse* response) {
+namespace {
+
+// The result part of a response; `request` gives the start and the goal
+// planned to.
+void FillResult(const PlanResult& result, const PlanRequest& request,
+                const Grid& grid, int64_t max_expansions,
+                v1::PlanResponse* response) {
   response->set_found(result.found());
   response->set_outcome(ToProto(result.outcome));
   *response->mutable_start() = ToProto(request.start);
@@ -341,84 +443,62 @@ void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
   }
 }
 
-void FillMapInfo(const MapSnapshot& snapshot, v1::MapInfo* info) {
-  const Grid& grid = *snapshot.grid;
-  info->set_name(snapshot.name);
-  info->set_width(grid.width());
-  info->set_height(grid.height());
-  info->set_resolution(grid.resolution());
-  v1::Origin* origin = info->mutable_origin();
-  origin->set_x(grid.origin().x);
-  origin->set_y(grid.origin().y);
-  origin->set_yaw(grid.origin().yaw);
-  info->set_version(snapshot.version);
-  info->set_free_cells(grid.CountFree());
-  info->set_blocked_cells(grid.CountBlocked());
+}  // namespace
+
+void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
+                      const Grid& grid, int64_t max_expansions,
+                      v1::PlanResponse* response) {
+  FillResult(result, request, grid, max_expansions, response);
 }
 
-absl::StatusOr<std::vector<MapChange>> MapChangesFromProto(
-    const google::protobuf::RepeatedPtrField<v1::CellChange>& changes) {
-  std::vector<MapChange> out;
-  out.reserve(static_cast<size_t>(changes.size()));
-  for (int i = 0; i < changes.size(); ++i) {
-    const v1::CellChange& c = changes.Get(i);
-    switch (c.target_case()) {
-      case v1::CellChange::kCell:
-        out.push_back(MapChange::ForCell(c.cell().x(), c.cell().y(), c.cost()));
-        break;
-      case v1::CellChange::kRect:
-        out.push_back(MapChange::ForRect(c.rect().x_min(), c.rect().y_min(),
-                                         c.rect().x_max(), c.rect().y_max(),
-                                         c.cost()));
-        break;
-      case v1::CellChange::TARGET_NOT_SET:
-        return absl::InvalidArgumentError(
-            absl::StrFormat("change %d: neither cell nor rect is set", i));
-    }
+void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
+                       std::string_view expansion_limit_source,
+                       v1::PlanResponse* response) {
+  const PlanResult& result = answer.result;
+  const Grid& grid = *answer.source.grid;
+  PlanRequest planned = PlanRequest::Between(query.request.start, answer.goal);
+  FillResult(result, planned, grid, query.max_expansions, response);
+  if (answer.cost_to_go_field != nullptr && query.request.want_cost_to_go) {
+    // Widened float -> double once, into the message (the wire type).
+    const absl::Span<const float> field = answer.cost_to_go_field->field();
+    response->set_cost_to_go_width(grid.width());
+    response->mutable_cost_to_go()->Reserve(static_cast<int>(field.size()));
+    response->mutable_cost_to_go()->Add(field.begin(), field.end());
   }
-  return out;
-}
-
-absl::StatusOr<double> ResolutionFromProto(double resolution) {
-  if (resolution == 0.0) return 1.0;
-  if (!std::isfinite(resolution) || resolution < 0.0) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "resolution %s must be finite and > 0", Num(resolution)));
+  if (result.outcome == PlanOutcome::kExpansionLimit &&
+      !expansion_limit_source.empty()) {
+    response->set_reason(
+        absl::StrFormat("%s (%s)", response->reason(), expansion_limit_source));
   }
-  return resolution;
-}
-
-absl::StatusOr<GridOrigin> OriginFromProto(const v1::Origin& origin) {
-  const std::pair<const char*, double> parts[] = {
-      {"origin.x", origin.x()}, {"origin.y", origin.y()}, {"origin.yaw", origin.yaw()}};
-  for (const auto& [field, value] : parts) {
-    if (!std::isfinite(value)) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s %s must be finite", field, Num(value)));
-    }
+  response->set_robot_radius_cells(query.robot_radius_cells);
+  response->set_map_version(answer.source.map_version);
+  response->set_planner(std::string(query.planner));
+  response->set_cache_hit(answer.source.cache_hit);
+  response->set_repaired_cells(answer.source.repaired_cells);
+  *response->mutable_requested_goal() = ToProto(query.requested_goal);
+  response->set_goal_substituted(!(answer.goal == query.requested_goal));
+  response->set_reached_goal_index(answer.reached_goal_index);
+  response->mutable_leg_end_indices()->Add(answer.leg_end_indices.begin(),
+                                           answer.leg_end_indices.end());
+  if (answer.failed_leg >= 0) {
+    const auto n = static_cast<int32_t>(query.via.size());
+    const Cell to = answer.failed_leg == n ? answer.goal : query.via[answer.failed_leg];
+    const Cell from =
+        answer.failed_leg == 0 ? query.request.start : query.via[answer.failed_leg - 1];
+    // FillResult's "no path" names the whole plan's ends.
+    const std::string why =
+        result.outcome == PlanOutcome::kNoPath
+            ? absl::StrFormat("no path from %s to %s", CellToString(from),
+                              CellToString(to))
+            : response->reason();
+    response->set_reason(absl::StrFormat("%s: %s", LegName(answer.failed_leg, n), why));
   }
-  return GridOrigin{origin.x(), origin.y(), origin.yaw()};
-}
-
-absl::StatusOr<Grid> GridFromRawCells(const v1::RawCells& raw, const MapStore& store) {
-  if (raw.width() <= 0 || raw.height() <= 0) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "raw: width %d and height %d must be positive", raw.width(), raw.height()));
+  if (const ExpansionRecorder* recorder = query.request.expansion_recorder) {
+    auto* expanded = response->mutable_expanded();
+    expanded->Reserve(static_cast<int>(recorder->cells().size()));
+    for (const Cell& c : recorder->cells()) *expanded->Add() = ToProto(c);
+    response->set_expanded_truncated(recorder->truncated());
   }
-  if (absl::Status s = store.CheckSize(raw.width(), raw.height()); !s.ok()) return s;
-  const int64_t expected = int64_t{raw.width()} * int64_t{raw.height()};
-  if (static_cast<int64_t>(raw.cells().size()) != expected) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "raw: width %d x height %d needs %d cells, got %d", raw.width(),
-        raw.height(), expected, raw.cells().size()));
-  }
-  std::vector<uint8_t> cells(raw.cells().begin(), raw.cells().end());
-  absl::StatusOr<Grid> grid = Grid::FromCells(raw.width(), raw.height(), std::move(cells));
-  if (!grid.ok()) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("raw: %s", grid.status().message()));
-  }
-  return grid;
 }
 
 }  // namespace pathd::server

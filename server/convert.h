@@ -5,13 +5,16 @@
 #define PATHD_SERVER_CONVERT_H_
 
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/search/endpoints.h"
 #include "core/map/grid.h"
+#include "core/planning/plan_query.h"
+#include "core/search/endpoints.h"
 #include "core/search/planner.h"
 #include "pathd/v1/common.pb.h"
 #include "pathd/v1/map_service.pb.h"
@@ -72,8 +75,88 @@ absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
 // INVALID_ARGUMENT "unknown planner 17" for a value the enum does not define.
 absl::StatusOr<std::string_view> PlannerName(int planner);
 
-// Fills a response from a core result: path cells and their world centres,
-// cost, length, expansions, time, outcome, and a reason when nothing was found.
+// Names where an expansion cap came from, for the messages that report it:
+// "--max_expansions" when the server's limit binds, else
+// "options.max_expansions".
+const char* ExpansionLimitSource(const v1::PlanOptions& options,
+                                 int64_t server_limit);
+
+// The parts of a request message a plan query is decoded from, and which
+// parts of its PlanOptions the RPC reads. WireQueryOf makes one per request
+// type; a null pointer is a part the message does not have.
+struct WireQuery {
+  const std::string* map = nullptr;
+  // v1::Planner; UNSPECIFIED means A*.
+  int planner = 0;
+  const v1::Position* start = nullptr;
+  const v1::Position* goal = nullptr;
+  const google::protobuf::RepeatedPtrField<v1::Position>* via = nullptr;
+  const v1::PlanOptions* options = nullptr;
+  bool allow_partial = false;
+  // Every search option (PlanOptionsToRequest, simplify, return_expansions)
+  // rather than the cost parameters only (CostParamsFromOptions).
+  bool search_options = false;
+  bool goal_tolerance = false;
+  bool expansion_budget = false;
+};
+// Plan, PlanStream, PlanBatch items: everything.
+WireQuery WireQueryOf(const v1::PlanRequest& request);
+// CostToGo: the goal, cost parameters, radius and expansion budget.
+WireQuery WireQueryOf(const v1::CostToGoRequest& request);
+// IsPathValid: cost parameters and radius (the poses are checked, not
+// planned between: is_path_valid.cc decodes them).
+WireQuery WireQueryOf(const v1::IsPathValidRequest& request);
+// Navigate's open message: endpoints, search options, radius, budget.
+WireQuery WireQueryOf(const v1::NavigateOpen& open);
+
+// The server's limits that decoding applies.
+struct QueryLimits {
+  // --max_expansions; 0 = none.
+  int64_t max_expansions = 0;
+  // --max_cost_to_go_cells for a whole field in a Plan response (8 bytes per
+  // cell); nullopt: not checked.
+  std::optional<int64_t> max_cost_to_go_cells = std::nullopt;
+};
+
+// A request decoded against the map it names.
+struct DecodedQuery {
+  std::shared_ptr<const MapSnapshot> snapshot;
+  PlanQuery query;
+  // Which setting query.max_expansions came from (ExpansionLimitSource).
+  const char* expansion_limit_source = "";
+  // options.return_expansions (search_options only).
+  bool return_expansions = false;
+};
+
+// The one decoding of a planning request (Plan, PlanStream, PlanBatch,
+// CostToGo, IsPathValid, Navigate). In this order, each error
+// INVALID_ARGUMENT naming the field unless said otherwise: the planner
+// ("unknown planner 17"), the map (NOT_FOUND from the store), start and goal
+// (CellFromPosition), the options (PlanOptionsToRequest or
+// CostParamsFromOptions), the robot radius, a whole cost-to-go field over
+// limits.max_cost_to_go_cells, the expansion budget, the goal tolerance, the
+// number of via points and each via point. Decoding checks fields, not the
+// map: endpoint rules are the façade's (CheckPlanQuery).
+absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
+                                             const MapStore& store,
+                                             const QueryLimits& limits);
+
+// The one place a PlanResponse is filled (Plan, PlanStream, PlanBatch items,
+// Navigate): outcome and reason, start and the goal planned to, the path's
+// cells and world centres, cost, length, expansions, time, episodes,
+// trajectory, the cost-to-go field (copied once from a shared float field,
+// or from result.cost_to_go), legs (a failed leg's reason names the leg),
+// expanded cells from query.request.expansion_recorder, and where the plan
+// came from (map version, planner, radius, cache hit, repaired cells,
+// requested goal). `expansion_limit_source` (empty: none) is appended to an
+// expansion-limit reason.
+void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
+                       std::string_view expansion_limit_source,
+                       v1::PlanResponse* response);
+
+// The result part of BuildPlanResponse for callers without a query (the
+// request fuzzer): path cells and their world centres, cost, length,
+// expansions, time, outcome, and a reason when nothing was found.
 // `max_expansions` is the budget that applied, for the reason text.
 void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
                       const Grid& grid, int64_t max_expansions,
@@ -92,6 +175,8 @@ v1::PlanOutcome OutcomeOfStatus(const absl::Status& status);
 // True for the outcomes that say why a request was rejected
 // (START_OUTSIDE_MAP .. MAP_NOT_FOUND).
 bool IsRejectionOutcome(v1::PlanOutcome outcome);
+
+// ---- maps (convert_map.cc) ----
 
 // Metadata of one map version.
 void FillMapInfo(const MapSnapshot& snapshot, v1::MapInfo* info);

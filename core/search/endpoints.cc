@@ -1,11 +1,12 @@
-// Endpoint and option validation, endpoint faults as status payloads, and the
-// nearest traversable cell.
+// Endpoint and option validation, endpoint faults as status payloads, the
+// nearest traversable cell, goal tolerance and robot-radius endpoint checks.
 #include "core/search/endpoints.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <utility>
 
 #include "absl/status/status.h"
 #include "absl/strings/cord.h"
@@ -18,26 +19,28 @@ namespace {
 // Payload key of EndpointFault; the value is the enumerator's number.
 constexpr char kEndpointFaultUrl[] = "type.pathd.dev/pathd.EndpointFault";
 
+}  // namespace
+
 absl::Status ValidateEndpoint(const Grid& grid, Cell c, std::string_view what,
                               const CostParams& cost) {
+  absl::Status fault_status;
+  bool outside = false;
   if (!grid.InBounds(c)) {
-    return WithEndpointFault(
-        absl::InvalidArgumentError(
-            absl::StrFormat("%s %s is outside the %d x %d map", what,
-                            CellToString(c), grid.width(), grid.height())),
-        *EndpointFaultFor(what, /*outside=*/true));
+    outside = true;
+    fault_status = absl::InvalidArgumentError(
+        absl::StrFormat("%s %s is outside the %d x %d map", what, CellToString(c),
+                        grid.width(), grid.height()));
+  } else if (const uint8_t v = grid.cost(c); !Traversable(v, cost.unknown_is_free)) {
+    fault_status = absl::InvalidArgumentError(absl::StrFormat(
+        "%s %s is on a blocked cell (cost %d)", what, CellToString(c), v));
+  } else {
+    return absl::OkStatus();
   }
-  const uint8_t v = grid.cost(c);
-  if (!Traversable(v, cost.unknown_is_free)) {
-    return WithEndpointFault(
-        absl::InvalidArgumentError(absl::StrFormat(
-            "%s %s is on a blocked cell (cost %d)", what, CellToString(c), v)),
-        *EndpointFaultFor(what, /*outside=*/false));
+  if (const std::optional<EndpointFault> fault = EndpointFaultFor(what, outside)) {
+    return WithEndpointFault(std::move(fault_status), *fault);
   }
-  return absl::OkStatus();
+  return fault_status;
 }
-
-}  // namespace
 
 absl::Status WithEndpointFault(absl::Status status, EndpointFault fault) {
   status.SetPayload(kEndpointFaultUrl,
@@ -189,6 +192,47 @@ std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
     }
   }
   return best;
+}
+
+absl::StatusOr<Cell> GoalWithinTolerance(const Grid& grid, Cell requested,
+                                         double tolerance_cells,
+                                         const CostParams& cost,
+                                         double radius_cells) {
+  if (tolerance_cells <= 0.0 || !grid.InBounds(requested) ||
+      Traversable(grid.cost(requested), cost.unknown_is_free)) {
+    return requested;
+  }
+  if (std::optional<Cell> nearest =
+          NearestTraversableCell(grid, requested, tolerance_cells, cost)) {
+    return *nearest;
+  }
+  return WithEndpointFault(
+      absl::InvalidArgumentError(absl::StrFormat(
+          "goal %s is on a blocked cell (cost %d) and no cell within the goal "
+          "tolerance of %g cells is free%s",
+          CellToString(requested), grid.cost(requested), tolerance_cells,
+          radius_cells > 0.0
+              ? absl::StrFormat(" for the robot radius (%g cells)", radius_cells)
+              : std::string())),
+      EndpointFault::kGoalBlocked);
+}
+
+absl::Status CheckRadiusEndpoints(
+    const Grid& stored, const Grid& inflated, double radius_cells,
+    std::initializer_list<std::pair<Cell, std::string_view>> endpoints) {
+  for (const auto& [cell, what] : endpoints) {
+    if (inflated.InBounds(cell) && inflated.cost(cell) == kInscribedCost &&
+        stored.cost(cell) != kInscribedCost) {
+      absl::Status inscribed = absl::InvalidArgumentError(absl::StrFormat(
+          "%s %s is within the robot radius (%g cells) of an obstacle", what,
+          CellToString(cell), radius_cells));
+      if (const auto fault = EndpointFaultFor(what, /*outside=*/false)) {
+        return WithEndpointFault(std::move(inscribed), *fault);
+      }
+      return inscribed;
+    }
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace pathd

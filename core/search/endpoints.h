@@ -1,12 +1,17 @@
 // Validation of a query's endpoints and options before any search, the typed
-// fault attached to an endpoint error, and the nearest cell a robot may occupy.
+// fault attached to an endpoint error, the nearest cell a robot may occupy,
+// and the two endpoint rules of a query with a goal tolerance or a robot
+// radius (used by the planning façade, core/planning/plan_query.h).
 #ifndef PATHD_CORE_SEARCH_ENDPOINTS_H_
 #define PATHD_CORE_SEARCH_ENDPOINTS_H_
 
+#include <initializer_list>
 #include <optional>
 #include <string_view>
+#include <utility>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/search/plan_types.h"
@@ -31,6 +36,13 @@ std::optional<EndpointFault> EndpointFaultOf(const absl::Status& status);
 // The fault of endpoint `what` ("start" or "goal"; nullopt for any other
 // name) being outside the map or blocked.
 std::optional<EndpointFault> EndpointFaultFor(std::string_view what, bool outside);
+
+// INVALID_ARGUMENT naming `what` when `cell` is off the grid ("goal (9, 0) is
+// outside the 4 x 2 map") or on a cell that is not traversable under `cost`
+// ("... is on a blocked cell (cost 254)"), with its EndpointFault when `what`
+// is "start" or "goal".
+absl::Status ValidateEndpoint(const Grid& grid, Cell cell, std::string_view what,
+                              const CostParams& cost);
 
 // INVALID_ARGUMENT naming "start" or "goal" when one is off the grid or on a
 // cell that is not traversable under request.cost, or naming the field when
@@ -57,6 +69,25 @@ absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
 std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
                                            double max_distance,
                                            const CostParams& cost);
+
+// The goal to plan to: `requested` when the tolerance is 0, the cell is off
+// the grid (ValidateEndpoints reports it) or the robot centre may occupy it;
+// otherwise the nearest cell within the tolerance that it may occupy
+// (NearestTraversableCell), or INVALID_ARGUMENT naming the tolerance (and the
+// radius, when radius_cells > 0) with EndpointFault::kGoalBlocked when there
+// is none. `grid` is the planning grid: inflated when radius_cells > 0.
+absl::StatusOr<Cell> GoalWithinTolerance(const Grid& grid, Cell requested,
+                                         double tolerance_cells,
+                                         const CostParams& cost,
+                                         double radius_cells);
+
+// INVALID_ARGUMENT "<what> (x, y) is within the robot radius (r cells) of an
+// obstacle" for the first of `endpoints` that the inflation made inscribed
+// (traversable on `stored`, kInscribedCost on `inflated`), with the
+// EndpointFault of "start"/"goal". Endpoints off the grid are not checked.
+absl::Status CheckRadiusEndpoints(
+    const Grid& stored, const Grid& inflated, double radius_cells,
+    std::initializer_list<std::pair<Cell, std::string_view>> endpoints);
 
 }  // namespace pathd
 

@@ -23,6 +23,7 @@
 #include "core/search/endpoints.h"
 #include "core/incremental/incremental_search.h"
 #include "core/map/inflation.h"
+#include "core/planning/plan_query.h"
 #include "core/search/planner.h"
 #include "core/status_macros.h"
 #include "server/convert.h"
@@ -330,23 +331,24 @@ class NavigationSession final : public NavigateReactor {
   }
 
   absl::Status Open(const v1::NavigateOpen& open) ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    PATHD_ASSIGN_OR_RETURN(snapshot_, owner_.store_.Get(open.map()));
+    PATHD_ASSIGN_OR_RETURN(
+        DecodedQuery decoded,
+        DecodePlanQuery(WireQueryOf(open), owner_.store_,
+                        QueryLimits{.max_expansions = owner_.options_.max_expansions}));
+    snapshot_ = std::move(decoded.snapshot);
     const Grid& stored = *snapshot_->grid;
-    PATHD_ASSIGN_OR_RETURN(start_, CellFromPosition(open.start(), stored, "start"));
-    PATHD_ASSIGN_OR_RETURN(goal_, CellFromPosition(open.goal(), stored, "goal"));
-    PlanRequest request = PlanRequest::Between(start_, goal_);
-    PATHD_RETURN_IF_ERROR(PlanOptionsToRequest(open.options(), &request));
-    cost_ = request.cost;
-    PATHD_ASSIGN_OR_RETURN(radius_cells_, RobotRadiusCells(open.options(), stored));
-    PATHD_ASSIGN_OR_RETURN(max_expansions_,
-                           EffectiveMaxExpansions(open.options(),
-                                                  owner_.options_.max_expansions));
-    PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, request));
+    // The session's search is its own D* Lite; the façade's rules still apply
+    // (a stateful search: one goal, no via points).
+    PATHD_RETURN_IF_ERROR(CheckPlanQuery(stored, /*stateful=*/true, &decoded.query));
+    start_ = decoded.query.request.start;
+    goal_ = decoded.query.request.goal;
+    cost_ = decoded.query.request.cost;
+    radius_cells_ = decoded.query.robot_radius_cells;
+    max_expansions_ = decoded.query.max_expansions;
     PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
-    if (radius_cells_ > 0.0 && grid_->cost(goal_) == kInscribedCost) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "goal %s is within the robot radius (%g cells) of an obstacle",
-          CellToString(goal_), radius_cells_));
+    if (radius_cells_ > 0.0) {
+      PATHD_RETURN_IF_ERROR(
+          CheckRadiusEndpoints(stored, *grid_, radius_cells_, {{goal_, "goal"}}));
     }
     PATHD_ASSIGN_OR_RETURN(search_, DStarLite::Create(grid_, goal_, cost_));
     PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
@@ -451,26 +453,26 @@ class NavigationSession final : public NavigateReactor {
   absl::Status PlanInto(v1::PlanResponse* plan, bool* changed)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
     const StopCondition stop(absl::InfiniteFuture(), &cancelled_, max_expansions_);
-    const PlanRequest request = PlanRequest::Between(start_, goal_, cost_);
     absl::StatusOr<PlanResult> result = search_->Plan(stop);
     if (!result.ok() && result.status().code() != absl::StatusCode::kInvalidArgument) {
       return result.status();
     }
-    if (result.ok()) {
-      FillPlanResponse(*result, request, *grid_, max_expansions_, plan);
-    } else {
-      PlanResult none;
-      FillPlanResponse(none, request, *grid_, max_expansions_, plan);
-      plan->set_reason(std::string(result.status().message()));
-    }
-    plan->set_map_version(snapshot_->version);
-    plan->set_planner("dstar_lite");
-    plan->set_robot_radius_cells(radius_cells_);
-    plan->set_cache_hit(plans_ > 0);
-    plan->set_repaired_cells(repaired_cells_);
+    PlanQuery query;
+    query.planner = "dstar_lite";
+    query.request = PlanRequest::Between(start_, goal_, cost_);
+    query.requested_goal = goal_;
+    query.robot_radius_cells = radius_cells_;
+    query.max_expansions = max_expansions_;
+    PlanAnswer answer;
+    answer.goal = goal_;
+    answer.source = PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
+    if (result.ok()) answer.result = *std::move(result);
+    SetSingleLeg(&answer);
+    BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
+    if (!result.ok()) plan->set_reason(std::string(result.status().message()));
     repaired_cells_ = 0;
     ++plans_;
-    std::vector<Cell> path = result.ok() ? std::move(result->path) : std::vector<Cell>{};
+    std::vector<Cell> path = std::move(answer.result.path);
     if (changed != nullptr) *changed = path != last_path_;
     last_path_ = std::move(path);
     bytes_.store(static_cast<int64_t>(search_->MemoryBytes() + overlay_.size() * 16),

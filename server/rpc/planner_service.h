@@ -1,6 +1,9 @@
-// pathd.v1.PlannerService: validates a plan request on the gRPC thread, then
-// runs the planner on the worker pool against the map snapshot current when
-// the request arrived, and answers from the worker.
+// pathd.v1.PlannerService: the CallbackService whose handlers check the
+// caller's token and hand each RPC to its own file under server/rpc/
+// (plan_call, plan_stream, plan_batch, cost_to_go, is_path_valid, navigate).
+// A plan is validated on the gRPC thread, then run on the worker pool against
+// the map snapshot current when the request arrived, and answered from the
+// worker.
 #ifndef PATHD_SERVER_RPC_PLANNER_SERVICE_H_
 #define PATHD_SERVER_RPC_PLANNER_SERVICE_H_
 
@@ -17,6 +20,8 @@
 #include "server/worker_pool.h"
 
 namespace pathd::server {
+
+struct PlanDeps;
 
 // Trailing metadata key of a rejected Plan or PlanStream call: the typed
 // reason, as a v1::PlanOutcome name (e.g. "PLAN_OUTCOME_START_OCCUPIED").
@@ -98,6 +103,9 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
       grpc::CallbackServerContext* context) override;
 
  private:
+  // What the RPC files need from the service.
+  PlanDeps Deps() const;
+
   const MapStore& store_;
   WorkerPool& pool_;
   InflationCache& inflation_;

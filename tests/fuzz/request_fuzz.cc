@@ -31,6 +31,7 @@
 #include "core/map/inflation.h"
 #include "core/map_io/map_io.h"
 #include "core/postprocess/path_simplify.h"
+#include "core/planning/plan_query.h"
 #include "core/postprocess/plan_through.h"
 #include "core/search/planner.h"
 #include "core/search/search_scratch.h"
@@ -143,91 +144,60 @@ void CheckPlanResult(const Grid& grid, const PlanRequest& request,
                    "a world point per cell");
 }
 
-// PrepareEndpointsAndPlanner, PrepareViaAndExpansions and PlanJob::PlanOn of
-// planner_service.cc, with the incremental planners run from scratch instead
-// of through the cache.
+// What a Plan runs (server/rpc/plan_call.cc): DecodePlanQuery, the façade's
+// CheckPlanQuery and RunPlanQuery, and the response builder, with the
+// incremental planners run from scratch from the registry instead of through
+// the server's cache.
 void Plan(const MapStore& store, const v1::PlanRequest& request) {
-  absl::StatusOr<std::string_view> name = PlannerName(request.planner());
-  if (!name.ok()) return;
-  absl::StatusOr<std::shared_ptr<const MapSnapshot>> snapshot = store.Get(request.map());
-  if (!snapshot.ok()) return;
-  const Grid& stored = *(*snapshot)->grid;
-  PlanRequest core;
-  absl::StatusOr<Cell> start = CellFromPosition(request.start(), stored, "start");
-  if (!start.ok()) return;
-  absl::StatusOr<Cell> goal = CellFromPosition(request.goal(), stored, "goal");
-  if (!goal.ok()) return;
-  core.start = *start;
-  core.goal = *goal;
-  if (!PlanOptionsToRequest(request.options(), &core).ok()) return;
-  absl::StatusOr<double> radius = RobotRadiusCells(request.options(), stored);
-  if (!radius.ok()) return;
-  absl::StatusOr<int64_t> max_expansions =
-      EffectiveMaxExpansions(request.options(), kMaxExpansions);
-  if (!max_expansions.ok()) return;
-  PATHD_FUZZ_CHECK(*max_expansions >= 1 && *max_expansions <= kMaxExpansions,
+  absl::StatusOr<DecodedQuery> decoded =
+      DecodePlanQuery(WireQueryOf(request), store,
+                      QueryLimits{.max_expansions = kMaxExpansions,
+                                  .max_cost_to_go_cells = kMaxMapCells});
+  if (!decoded.ok()) return;
+  PlanQuery& query = decoded->query;
+  PATHD_FUZZ_CHECK(query.max_expansions >= 1 && query.max_expansions <= kMaxExpansions,
                    "budget capped by the server's");
-  absl::StatusOr<double> tolerance = GoalToleranceCells(request.options(), stored);
-  if (!tolerance.ok()) return;
-  PATHD_FUZZ_CHECK(*tolerance >= 0 && *tolerance <= kMaxGoalToleranceCells,
+  PATHD_FUZZ_CHECK(query.goal_tolerance_cells >= 0 &&
+                       query.goal_tolerance_cells <= kMaxGoalToleranceCells,
                    "tolerance");
-  if (*tolerance > 0 && stored.InBounds(core.goal) &&
-      !Traversable(stored.cost(core.goal), core.cost.unknown_is_free)) {
-    const std::optional<Cell> nearest =
-        NearestTraversableCell(stored, core.goal, *tolerance, core.cost);
-    if (!nearest.has_value()) return;
-    PATHD_FUZZ_CHECK(stored.InBounds(*nearest) &&
-                         Traversable(stored.cost(*nearest), core.cost.unknown_is_free),
-                     "substitute goal is traversable");
-    core.goal = *nearest;
-  }
-  if (!ValidateEndpoints(stored, core).ok()) return;
-  const Planner* planner = PlannerRegistry::Default().Get(*name);
+  const Grid& stored = *decoded->snapshot->grid;
+  // The server answers these two from its cache, which refuses via points.
+  const bool stateful = request.planner() == v1::PLANNER_SPM ||
+                        request.planner() == v1::PLANNER_DSTAR_LITE;
+  if (!CheckPlanQuery(stored, stateful, &query).ok()) return;
+  PATHD_FUZZ_CHECK(query.request.goal == query.requested_goal ||
+                       (stored.InBounds(query.request.goal) &&
+                        Traversable(stored.cost(query.request.goal),
+                                    query.request.cost.unknown_is_free)),
+                   "substitute goal is traversable");
+  const Planner* planner = PlannerRegistry::Default().Get(query.planner);
   PATHD_FUZZ_CHECK(planner != nullptr, "every wire planner is registered");
   std::optional<ExpansionRecorder> recorder;
-  if (request.options().return_expansions()) {
+  if (decoded->return_expansions) {
     recorder.emplace(kMaxRecordedExpansions);
-    core.expansion_recorder = &*recorder;
+    query.request.expansion_recorder = &*recorder;
   }
-  std::vector<Cell> via;
-  for (int i = 0; i < request.via_size(); ++i) {
-    absl::StatusOr<Cell> cell = CellFromPosition(request.via(i), stored, "via");
-    if (!cell.ok()) return;
-    via.push_back(*cell);
-  }
-  if (!via.empty() && (core.want_cost_to_go || !ValidateVia(stored, via, core.cost).ok())) {
-    return;
-  }
-
-  // The planners see the inflated map when there is a robot radius.
-  std::shared_ptr<const Grid> grid = (*snapshot)->grid;
-  if (*radius > 0) {
-    absl::StatusOr<Grid> inflated = InflateObstacles(stored, *radius);
-    PATHD_FUZZ_CHECK(inflated.ok(), "inflating a stored map");
-    grid = std::make_shared<const Grid>(*std::move(inflated));
-  }
-  const StopCondition stop(absl::InfiniteFuture(), nullptr, *max_expansions);
+  PlanEngine engine;
+  engine.planner = planner;  // the façade inflates for a robot radius itself
+  const StopCondition stop(absl::InfiniteFuture(), nullptr, query.max_expansions);
   SearchScratch scratch;
-  if (!via.empty()) {
-    absl::StatusOr<ThroughResult> through =
-        PlanThrough(*planner, *grid, core, via, stop, scratch,
-                    ThroughOptions{.allow_partial = request.allow_partial(),
-                                   .simplify = request.options().simplify()});
-    if (!through.ok()) return;
-    // A partial plan's path ends at the last reached via point.
-    if (through->plan.found()) CheckPlanResult(*grid, core, through->plan, *max_expansions);
-    return;
-  }
-  absl::StatusOr<PlanResult> result = planner->Plan(*grid, core, stop, scratch);
-  if (!result.ok()) return;
-  if (request.options().simplify() && result->found()) {
-    SimplifyPath(*grid, core.cost, &*result);
-  }
+  absl::StatusOr<PlanAnswer> answer = RunPlanQuery(
+      query, PlanSnapshot{decoded->snapshot->grid, decoded->snapshot->version},
+      engine, stop, scratch);
+  if (!answer.ok()) return;
   if (recorder.has_value()) {
     PATHD_FUZZ_CHECK(recorder->cells().size() <= kMaxRecordedExpansions,
                      "recorder cap");
   }
-  CheckPlanResult(*grid, core, *result, *max_expansions);
+  // A partial plan's path ends at the last reached via point.
+  if (!query.via.empty() && !answer->result.found()) return;
+  PlanRequest planned = query.request;
+  planned.goal = answer->goal;
+  CheckPlanResult(*answer->source.grid, planned, answer->result, query.max_expansions);
+  v1::PlanResponse response;
+  BuildPlanResponse(query, *answer, decoded->expansion_limit_source, &response);
+  PATHD_FUZZ_CHECK(response.path_size() == static_cast<int>(answer->result.path.size()),
+                   "the built response carries the path");
 }
 
 // MapServiceImpl::DoUpdateMap, checked against the changes applied one cell

@@ -1,0 +1,161 @@
+// The planning façade: the query's rules on the stored map, then inflation,
+// the radius rules and the search on the planning grid.
+#include "core/planning/plan_query.h"
+
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "core/map/cost_model.h"
+#include "core/map/inflation.h"
+#include "core/postprocess/path_simplify.h"
+#include "core/postprocess/plan_through.h"
+#include "core/search/endpoints.h"
+#include "core/status_macros.h"
+
+namespace pathd {
+namespace {
+
+// The planning grid: the stored one, or its inflation by the query's radius.
+absl::StatusOr<std::shared_ptr<const Grid>> PlanningGrid(const PlanQuery& query,
+                                                         const PlanSnapshot& snapshot,
+                                                         const PlanEngine& engine) {
+  if (query.robot_radius_cells <= 0.0) return snapshot.grid;
+  if (engine.inflate) return engine.inflate(snapshot.grid, query.robot_radius_cells);
+  PATHD_ASSIGN_OR_RETURN(Grid inflated,
+                         InflateObstacles(*snapshot.grid, query.robot_radius_cells));
+  return std::make_shared<const Grid>(std::move(inflated));
+}
+
+// The goal on the inflated map. Inflation only blocks cells, so the stored
+// map's choice, when still free, is also the nearest free cell of the
+// inflated map (NearestTraversableCell orders by distance, then y, then x):
+// the tolerance search runs again only when the radius made it inscribed.
+absl::StatusOr<Cell> GoalOnInflated(const PlanQuery& query, const Grid& inflated) {
+  const Cell chosen = query.request.goal;
+  if (inflated.InBounds(chosen) &&
+      Traversable(inflated.cost(chosen), query.request.cost.unknown_is_free)) {
+    return chosen;
+  }
+  return GoalWithinTolerance(inflated, query.requested_goal,
+                             query.goal_tolerance_cells, query.request.cost,
+                             query.robot_radius_cells);
+}
+
+// INVALID_ARGUMENT for the first endpoint (start, goal, via[i]) the radius
+// made inscribed.
+absl::Status CheckInscribed(const PlanQuery& query, Cell goal, const Grid& stored,
+                            const Grid& inflated) {
+  const double radius = query.robot_radius_cells;
+  PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(
+      stored, inflated, radius, {{query.request.start, "start"}, {goal, "goal"}}));
+  for (size_t i = 0; i < query.via.size(); ++i) {
+    const std::string what = absl::StrFormat("via[%d]", i);
+    PATHD_RETURN_IF_ERROR(
+        CheckRadiusEndpoints(stored, inflated, radius, {{query.via[i], what}}));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+void SetSingleLeg(PlanAnswer* answer) {
+  answer->leg_end_indices.clear();
+  answer->reached_goal_index = answer->result.found() ? 0 : -1;
+  if (answer->result.found()) {
+    answer->leg_end_indices.push_back(
+        static_cast<int32_t>(answer->result.path.size()) - 1);
+  }
+}
+
+absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query) {
+  PlanRequest& request = query->request;
+  // Substituted before anything keys on the goal, so every planner (and a
+  // stateful search's cache entry) sees the cell actually planned to.
+  PATHD_ASSIGN_OR_RETURN(
+      request.goal, GoalWithinTolerance(stored, query->requested_goal,
+                                        query->goal_tolerance_cells, request.cost,
+                                        /*radius_cells=*/0.0));
+  PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, request));
+  if (query->via.empty()) return absl::OkStatus();
+  if (stateful) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "via: planner %s keeps cached state for one goal and may answer on a "
+        "newer map version, so it cannot plan through via points; use a "
+        "planner such as astar or dijkstra",
+        query->planner));
+  }
+  if (request.want_cost_to_go) {
+    return absl::InvalidArgumentError(
+        "options.return_cost_to_go: a cost-to-go field belongs to one goal, "
+        "and a plan through via points has several");
+  }
+  return ValidateVia(stored, query->via, request.cost);
+}
+
+absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
+                                        const PlanSnapshot& snapshot,
+                                        const PlanEngine& engine,
+                                        const StopCondition& stop,
+                                        SearchScratch& scratch) {
+  if ((engine.planner == nullptr) == (engine.stateful == nullptr)) {
+    return absl::InternalError("a plan engine needs exactly one of planner, stateful");
+  }
+  PlanAnswer answer;
+  answer.goal = query.request.goal;
+  answer.source = PlanSource{snapshot.grid, snapshot.version};
+  if (query.robot_radius_cells > 0.0) {
+    PATHD_ASSIGN_OR_RETURN(answer.source.grid, PlanningGrid(query, snapshot, engine));
+    PATHD_ASSIGN_OR_RETURN(answer.goal, GoalOnInflated(query, *answer.source.grid));
+    PATHD_RETURN_IF_ERROR(
+        CheckInscribed(query, answer.goal, *snapshot.grid, *answer.source.grid));
+  }
+  // The query as searched: with the goal the radius may have moved.
+  const PlanQuery* settled = &query;
+  PlanQuery moved;
+  if (!(answer.goal == query.request.goal)) {
+    moved = query;
+    moved.request.goal = answer.goal;
+    settled = &moved;
+  }
+  const Grid& grid = *answer.source.grid;
+  if (!settled->via.empty()) {
+    // One grid for every leg: the snapshot (or its inflation) taken once.
+    // CheckPlanQuery refused via points for a stateful engine.
+    PATHD_ASSIGN_OR_RETURN(
+        ThroughResult through,
+        PlanThrough(*engine.planner, grid, settled->request, settled->via, stop,
+                    scratch,
+                    ThroughOptions{.allow_partial = settled->allow_partial,
+                                   .simplify = settled->simplify}));
+    answer.result = std::move(through.plan);
+    answer.reached_goal_index = through.reached_goal_index;
+    answer.leg_end_indices = std::move(through.leg_end_indices);
+    answer.failed_leg = through.failed_leg;
+    return answer;
+  }
+  if (engine.stateful != nullptr) {
+    PATHD_RETURN_IF_ERROR(engine.stateful->Plan(*settled, stop, &answer));
+  } else {
+    PATHD_ASSIGN_OR_RETURN(answer.result,
+                           engine.planner->Plan(grid, settled->request, stop, scratch));
+  }
+  if (settled->simplify && answer.result.found()) {
+    // The grid the stateful search answered on, which may be newer.
+    SimplifyPath(*answer.source.grid, settled->request.cost, &answer.result);
+  }
+  SetSingleLeg(&answer);
+  return answer;
+}
+
+absl::StatusOr<PlanAnswer> PlanOnce(PlanQuery query, const PlanSnapshot& snapshot,
+                                    const PlanEngine& engine,
+                                    const StopCondition& stop,
+                                    SearchScratch& scratch) {
+  PATHD_RETURN_IF_ERROR(
+      CheckPlanQuery(*snapshot.grid, engine.stateful != nullptr, &query));
+  return RunPlanQuery(query, snapshot, engine, stop, scratch);
+}
+
+}  // namespace pathd

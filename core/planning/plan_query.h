@@ -1,0 +1,155 @@
+// The planning façade: the one core entry point from a decoded query (start,
+// goal, goal tolerance, robot radius, via points, planner and options) and a
+// map snapshot to a plan. It holds the rules of a query that are not a
+// search: goal tolerance, endpoint validation, robot-radius endpoint checks,
+// via-point legs and simplification. gRPC handlers, Navigate sessions and
+// batch items all call it; none re-implements a rule.
+#ifndef PATHD_CORE_PLANNING_PLAN_QUERY_H_
+#define PATHD_CORE_PLANNING_PLAN_QUERY_H_
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/incremental/incremental_search.h"
+#include "core/map/grid.h"
+#include "core/search/plan_types.h"
+#include "core/search/planner.h"
+#include "core/search/search_scratch.h"
+#include "core/search/stop_condition.h"
+
+namespace pathd {
+
+// One decoded planning query, in cells. A value type; the expansion recorder
+// (request.expansion_recorder) is the caller's and must outlive the query.
+struct PlanQuery {
+  // Registry name of the planner, for messages.
+  std::string_view planner = "astar";
+  // Start, goal, cost parameters and search options. request.goal starts as
+  // the goal the client asked for; CheckPlanQuery replaces it by the goal to
+  // plan to when the goal tolerance substitutes one.
+  PlanRequest request;
+  // The goal as the client gave it.
+  Cell requested_goal;
+  // Ordered intermediate goals (core/postprocess/plan_through.h); empty: a
+  // plain plan.
+  std::vector<Cell> via;
+  // Via plans: return the legs before a failed one instead of no path.
+  bool allow_partial = false;
+  // 0: a blocked goal is an error; otherwise the nearest cell within this
+  // distance (cells) that the robot centre may occupy is planned to.
+  double goal_tolerance_cells = 0.0;
+  // 0: plan on the map as stored; otherwise on the map with obstacles
+  // inflated by this radius (cells).
+  double robot_radius_cells = 0.0;
+  // Simplify the path (each leg's, for via plans).
+  bool simplify = false;
+  // Expansion budget of the whole query (every leg); 0 = none. The caller
+  // puts it into the StopCondition it passes.
+  int64_t max_expansions = 0;
+};
+
+// The map a query plans on: a snapshot's grid (as stored) and its version.
+struct PlanSnapshot {
+  std::shared_ptr<const Grid> grid;
+  uint64_t version = 0;
+};
+
+// What a query planned on and where its answer came from.
+struct PlanSource {
+  // The planning grid: the snapshot's, inflated for a robot radius, or a
+  // newer version a stateful search had already reached.
+  std::shared_ptr<const Grid> grid;
+  uint64_t map_version = 0;
+  // A stateful search answered from state it kept (possibly repaired).
+  bool cache_hit = false;
+  int64_t repaired_cells = 0;
+};
+
+// A query's answer. A search that ended without a path is an answer too
+// (result.outcome says why); errors are statuses.
+struct PlanAnswer {
+  PlanResult result;
+  // The goal planned to (query.request.goal after the tolerance).
+  Cell goal;
+  PlanSource source;
+  // Index into (via..., goal) of the last goal result.path reaches; -1 when
+  // not even the first was reached. A plain plan is a plan with one leg.
+  int32_t reached_goal_index = -1;
+  // For each reached goal, the index in result.path where its leg ends.
+  std::vector<int32_t> leg_end_indices;
+  // The leg that ended without a path (leg i ends at goal i), -1 when none.
+  int32_t failed_leg = -1;
+  // When want_cost_to_go was answered from a shared field (a stateful
+  // shortest path map) rather than result.cost_to_go: that field, row-major
+  // over source.grid, handed out as is (neither copied nor widened here).
+  std::shared_ptr<const ShortestPathMap> cost_to_go_field;
+};
+
+// Fills the leg fields of a plan without via points: a plan with one leg
+// (reached_goal_index 0 and one leg end when found, -1 and none when not).
+void SetSingleLeg(PlanAnswer* answer);
+
+// A search that keeps state between queries for one goal (the server's
+// cached shortest path maps and D* Lite searches). It may answer on a newer
+// map version than the query's snapshot, so it cannot plan through via
+// points.
+class StatefulSearch {
+ public:
+  virtual ~StatefulSearch() = default;
+  // Plans query.request (goal settled, endpoints checked) for a robot of
+  // query.robot_radius_cells. Sets answer->result and, when it planned on
+  // something else than answer->source says (a newer version), the source;
+  // sets answer->cost_to_go_field for want_cost_to_go.
+  virtual absl::Status Plan(const PlanQuery& query, const StopCondition& stop,
+                            PlanAnswer* answer) = 0;
+};
+
+// How a query is searched once it is settled: exactly one of `planner` (a
+// registry planner, run on the planning grid) or `stateful`.
+struct PlanEngine {
+  const Planner* planner = nullptr;
+  StatefulSearch* stateful = nullptr;
+  // The snapshot's grid inflated by a radius: a cache's copy, or null to
+  // compute it (InflateObstacles).
+  std::function<absl::StatusOr<std::shared_ptr<const Grid>>(
+      const std::shared_ptr<const Grid>& stored, double radius_cells)>
+      inflate;
+};
+
+// The rules a query must pass on the stored map before it is worth queueing,
+// in this order: the goal tolerance (substitutes query->request.goal, or
+// INVALID_ARGUMENT kGoalBlocked naming the tolerance), ValidateEndpoints
+// (once per query), then via points: refused for a stateful engine (naming
+// the planner) and with want_cost_to_go, ValidateVia. Cheap: O(tolerance^2 +
+// via points); never inflates.
+absl::Status CheckPlanQuery(const Grid& stored, bool stateful,
+                            PlanQuery* query);
+
+// Plans a query that passed CheckPlanQuery on `snapshot`: inflates for a
+// robot radius (engine.inflate), re-chooses the goal on the inflated map only
+// when the radius made the stored map's choice inscribed, checks that no
+// endpoint became inscribed (INVALID_ARGUMENT "... within the robot radius
+// ..."), then plans through the via points (PlanThrough, one grid for every
+// leg) or once, and simplifies. A stop is an answer (result.outcome), not an
+// error.
+absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
+                                        const PlanSnapshot& snapshot,
+                                        const PlanEngine& engine,
+                                        const StopCondition& stop,
+                                        SearchScratch& scratch);
+
+// CheckPlanQuery then RunPlanQuery, for callers that plan where they check
+// (a robot linking core directly, tests).
+absl::StatusOr<PlanAnswer> PlanOnce(PlanQuery query, const PlanSnapshot& snapshot,
+                                    const PlanEngine& engine,
+                                    const StopCondition& stop,
+                                    SearchScratch& scratch);
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_PLANNING_PLAN_QUERY_H_

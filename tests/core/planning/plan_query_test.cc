@@ -1,0 +1,353 @@
+// The planning façade (core/planning/plan_query.h): goal tolerance, robot
+// radius, via points and simplification against Dijkstra's costs and a
+// brute-force nearest cell; the order of its checks; and a stateful engine.
+#include "core/planning/plan_query.h"
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "core/map/inflation.h"
+#include "core/search/endpoints.h"
+#include "core/search/registry.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/testing/test_grids.h"
+
+namespace pathd {
+namespace {
+
+using ::testing::HasSubstr;
+
+const Planner& Get(std::string_view name) {
+  const Planner* planner = PlannerRegistry::Default().Get(name);
+  EXPECT_NE(planner, nullptr) << name;
+  return *planner;
+}
+
+PlanSnapshot Snapshot(Grid grid, uint64_t version = 7) {
+  return PlanSnapshot{std::make_shared<const Grid>(std::move(grid)), version};
+}
+
+PlanQuery Query(Cell start, Cell goal) {
+  PlanQuery query;
+  query.planner = "astar";
+  query.request = PlanRequest::Between(start, goal);
+  query.requested_goal = goal;
+  return query;
+}
+
+PlanEngine Engine(std::string_view planner = "astar") {
+  PlanEngine engine;
+  engine.planner = &Get(planner);
+  return engine;
+}
+
+// Dijkstra's cost from start to goal on `grid`, nullopt when unreachable.
+std::optional<double> DijkstraCost(const Grid& grid, Cell start, Cell goal) {
+  SearchScratch scratch;
+  absl::StatusOr<PlanResult> result = Get("dijkstra").Plan(
+      grid, PlanRequest::Between(start, goal), StopCondition::None(), scratch);
+  if (!result.ok() || !result->found()) return std::nullopt;
+  return result->cost;
+}
+
+absl::StatusOr<PlanAnswer> Plan(const PlanQuery& query, const PlanSnapshot& snapshot,
+                                const PlanEngine& engine) {
+  SearchScratch scratch;
+  return PlanOnce(query, snapshot, engine, StopCondition::None(), scratch);
+}
+
+// The nearest traversable cell to `target` within `tolerance` by (squared
+// distance, y, x), by brute force over the whole grid.
+std::optional<Cell> BruteNearest(const Grid& grid, Cell target, double tolerance) {
+  std::optional<Cell> best;
+  int64_t best_d2 = 0;
+  for (int32_t y = 0; y < grid.height(); ++y) {
+    for (int32_t x = 0; x < grid.width(); ++x) {
+      if (!Traversable(grid.cost(x, y), false)) continue;
+      const int64_t dx = x - target.x;
+      const int64_t dy = y - target.y;
+      const int64_t d2 = dx * dx + dy * dy;
+      if (static_cast<double>(d2) > tolerance * tolerance) continue;
+      if (!best.has_value() || d2 < best_d2) {
+        best = Cell{x, y};
+        best_d2 = d2;
+      }
+    }
+  }
+  return best;
+}
+
+TEST(PlanQueryTest, PlainPlanCostsWhatDijkstraSaysAndIsOneLeg) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      "......",
+      ".####.",
+      ".#..#.",
+      ".####.",
+      "......",
+  }));
+  absl::StatusOr<PlanAnswer> answer = Plan(Query({0, 0}, {3, 2}), snapshot, Engine());
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  // (3,2) is enclosed: no path is an answer, not an error.
+  EXPECT_FALSE(answer->result.found());
+  EXPECT_EQ(answer->reached_goal_index, -1);
+  EXPECT_TRUE(answer->leg_end_indices.empty());
+
+  answer = Plan(Query({0, 0}, {5, 4}), snapshot, Engine());
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  ASSERT_TRUE(answer->result.found());
+  EXPECT_DOUBLE_EQ(answer->result.cost, *DijkstraCost(*snapshot.grid, {0, 0}, {5, 4}));
+  EXPECT_EQ(answer->reached_goal_index, 0);
+  EXPECT_EQ(answer->leg_end_indices,
+            std::vector<int32_t>{static_cast<int32_t>(answer->result.path.size()) - 1});
+  EXPECT_EQ(answer->source.grid, snapshot.grid);
+  EXPECT_EQ(answer->source.map_version, 7u);
+}
+
+TEST(PlanQueryTest, GoalToleranceSubstitutesTheNearestFreeCell) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      "........",
+      "...###..",
+      "...###..",
+      "...###..",
+      "........",
+  }));
+  PlanQuery query = Query({0, 4}, {4, 2});
+  query.goal_tolerance_cells = 2.0;
+  absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine());
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  // (4,0), (2,2), (6,2) and (4,4) are all 2 away; (4,0) wins on y.
+  EXPECT_EQ(answer->goal, (Cell{4, 0}));
+  EXPECT_EQ(answer->result.path.back(), (Cell{4, 0}));
+  EXPECT_DOUBLE_EQ(answer->result.cost, *DijkstraCost(*snapshot.grid, {0, 4}, {4, 0}));
+
+  query.goal_tolerance_cells = 0.5;
+  answer = Plan(query, snapshot, Engine());
+  ASSERT_FALSE(answer.ok());
+  EXPECT_EQ(answer.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(answer.status().message(), HasSubstr("goal tolerance of 0.5 cells"));
+  EXPECT_EQ(EndpointFaultOf(answer.status()), EndpointFault::kGoalBlocked);
+}
+
+TEST(PlanQueryTest, ChecksRunInTheDocumentedOrder) {
+  const Grid grid = MakeGrid({
+      "#...",
+      "...#",
+  });
+  // Tolerance first: the goal's error wins over the blocked start.
+  PlanQuery query = Query({0, 0}, {3, 1});
+  query.goal_tolerance_cells = 0.5;
+  absl::Status s = CheckPlanQuery(grid, /*stateful=*/false, &query);
+  EXPECT_EQ(EndpointFaultOf(s), EndpointFault::kGoalBlocked) << s;
+  // Then ValidateEndpoints: the start before the goal.
+  query = Query({0, 0}, {3, 1});
+  s = CheckPlanQuery(grid, false, &query);
+  EXPECT_EQ(EndpointFaultOf(s), EndpointFault::kStartBlocked) << s;
+  // Then via points: a stateful engine refuses them before they are checked.
+  query = Query({1, 0}, {2, 1});
+  query.planner = "spm";
+  query.via = {Cell{9, 9}};
+  s = CheckPlanQuery(grid, /*stateful=*/true, &query);
+  EXPECT_THAT(s.message(), HasSubstr("via: planner spm keeps cached state"));
+  query.request.want_cost_to_go = true;
+  s = CheckPlanQuery(grid, false, &query);
+  EXPECT_THAT(s.message(), HasSubstr("options.return_cost_to_go"));
+  query.request.want_cost_to_go = false;
+  s = CheckPlanQuery(grid, false, &query);
+  EXPECT_THAT(s.message(), HasSubstr("via[0] (9, 9) is outside the 4 x 2 map"));
+}
+
+TEST(PlanQueryTest, RobotRadiusRejectsAnInscribedGoalOrMovesItWithATolerance) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      "........",
+      "........",
+      "....#...",
+      "........",
+      "........",
+  }));
+  // (4,1) is free but within radius 1.5 of (4,2); the nearest clear cell is
+  // (4,0) at distance 1.
+  PlanQuery query = Query({0, 4}, {4, 1});
+  query.robot_radius_cells = 1.5;
+  absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine());
+  ASSERT_FALSE(answer.ok());
+  EXPECT_THAT(answer.status().message(),
+              HasSubstr("goal (4, 1) is within the robot radius (1.5 cells)"));
+  EXPECT_EQ(EndpointFaultOf(answer.status()), EndpointFault::kGoalBlocked);
+
+  query.goal_tolerance_cells = 1.0;
+  answer = Plan(query, snapshot, Engine());
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  EXPECT_EQ(answer->goal, (Cell{4, 0}));
+  const Grid inflated = InflateObstacles(*snapshot.grid, 1.5).value();
+  EXPECT_DOUBLE_EQ(answer->result.cost, *DijkstraCost(inflated, {0, 4}, {4, 0}));
+  EXPECT_NE(answer->source.grid, snapshot.grid);  // planned on the inflation
+
+  // A start the radius made inscribed.
+  query = Query({3, 2}, {0, 0});
+  query.robot_radius_cells = 1.5;
+  answer = Plan(query, snapshot, Engine());
+  ASSERT_FALSE(answer.ok());
+  EXPECT_EQ(EndpointFaultOf(answer.status()), EndpointFault::kStartBlocked);
+}
+
+// The façade searches the inflated map again only when the radius made the
+// stored map's choice inscribed; the answer must equal choosing afresh on
+// the inflated map from the requested goal (the rule it replaces).
+TEST(PlanQueryTest, ToleranceOnceUnderARadiusMatchesChoosingAfreshOnRandomMaps) {
+  std::mt19937 rng(20261201);
+  int substituted = 0, moved_by_radius = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int32_t w = 6 + static_cast<int32_t>(rng() % 10);
+    const int32_t h = 6 + static_cast<int32_t>(rng() % 10);
+    Grid grid = Grid::Create(w, h).value();
+    for (int32_t y = 0; y < h; ++y) {
+      for (int32_t x = 0; x < w; ++x) {
+        if (rng() % 100 < 15) grid.set_cost(x, y, kLethalCost);
+      }
+    }
+    const Cell start{0, 0};
+    grid.set_cost(start, kFreeCost);
+    const Cell goal{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+    const double tolerance = 0.5 + (rng() % 40) / 10.0;
+    const double radius = 0.5 + (rng() % 15) / 10.0;
+    const Grid inflated = InflateObstacles(grid, radius).value();
+    const std::optional<Cell> want = BruteNearest(inflated, goal, tolerance);
+
+    PlanQuery query = Query(start, goal);
+    query.goal_tolerance_cells = tolerance;
+    query.robot_radius_cells = radius;
+    const PlanSnapshot snapshot = Snapshot(grid);
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("dijkstra"));
+    if (!answer.ok()) {
+      // Either no cell near the goal is clear, or the start is inscribed.
+      const bool start_inscribed = inflated.cost(start) == kInscribedCost;
+      EXPECT_TRUE(!want.has_value() || start_inscribed)
+          << trial << ": " << answer.status();
+      continue;
+    }
+    ASSERT_TRUE(want.has_value()) << trial;
+    EXPECT_EQ(answer->goal, *want) << trial;
+    substituted += !(answer->goal == goal);
+    const std::optional<Cell> on_stored = BruteNearest(grid, goal, tolerance);
+    moved_by_radius += on_stored.has_value() && !(*on_stored == *want);
+    const std::optional<double> cost = DijkstraCost(inflated, start, *want);
+    ASSERT_EQ(answer->result.found(), cost.has_value()) << trial;
+    if (cost.has_value()) {
+      EXPECT_DOUBLE_EQ(answer->result.cost, *cost) << trial;
+    }
+  }
+  // The cases the rule is about were met.
+  EXPECT_GT(substituted, 20);
+  EXPECT_GT(moved_by_radius, 5);
+}
+
+TEST(PlanQueryTest, ViaPointsPlanLegByLegAtDijkstrasCost) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      ".......",
+      ".#####.",
+      ".......",
+      "##.####",
+      ".......",
+  }));
+  PlanQuery query = Query({0, 0}, {6, 4});
+  query.via = {Cell{6, 0}, Cell{0, 2}};
+  absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("dijkstra"));
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  ASSERT_TRUE(answer->result.found());
+  const Grid& grid = *snapshot.grid;
+  const double legs = *DijkstraCost(grid, {0, 0}, {6, 0}) +
+                      *DijkstraCost(grid, {6, 0}, {0, 2}) +
+                      *DijkstraCost(grid, {0, 2}, {6, 4});
+  EXPECT_NEAR(answer->result.cost, legs, 1e-9);
+  EXPECT_EQ(answer->reached_goal_index, 2);
+  ASSERT_EQ(answer->leg_end_indices.size(), 3u);
+  EXPECT_EQ(answer->result.path[answer->leg_end_indices[0]], (Cell{6, 0}));
+  EXPECT_EQ(answer->result.path[answer->leg_end_indices[1]], (Cell{0, 2}));
+  EXPECT_EQ(answer->result.path.back(), (Cell{6, 4}));
+
+  // A via point the radius made inscribed is named.
+  const PlanSnapshot post = Snapshot(MakeGrid({
+      "........",
+      "........",
+      "....#...",
+      "........",
+      "........",
+  }));
+  query = Query({0, 0}, {7, 4});
+  query.via = {Cell{7, 0}, Cell{4, 3}};
+  query.robot_radius_cells = 1.0;
+  answer = Plan(query, post, Engine());
+  ASSERT_FALSE(answer.ok());
+  EXPECT_THAT(answer.status().message(),
+              HasSubstr("via[1] (4, 3) is within the robot radius (1 cells)"));
+}
+
+TEST(PlanQueryTest, SimplifyNeverCostsMoreThanThePlan) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      "..........",
+      "..........",
+      "....##....",
+      "..........",
+      "..........",
+  }));
+  PlanQuery query = Query({0, 0}, {9, 4});
+  absl::StatusOr<PlanAnswer> plain = Plan(query, snapshot, Engine());
+  query.simplify = true;
+  absl::StatusOr<PlanAnswer> simple = Plan(query, snapshot, Engine());
+  ASSERT_TRUE(plain.ok() && simple.ok());
+  EXPECT_TRUE(simple->result.any_angle);
+  EXPECT_LE(simple->result.cost, plain->result.cost + 1e-9);
+  EXPECT_LT(simple->result.path.size(), plain->result.path.size());
+}
+
+// Answers with the settled query and says what it saw.
+class RecordingSearch final : public StatefulSearch {
+ public:
+  absl::Status Plan(const PlanQuery& query, const StopCondition&,
+                    PlanAnswer* answer) override {
+    seen_goal = query.request.goal;
+    seen_radius = query.robot_radius_cells;
+    answer->result.outcome = PlanOutcome::kFound;
+    answer->result.path = {query.request.start, query.request.goal};
+    answer->source.map_version = 9;  // a newer version than the query's
+    answer->source.cache_hit = true;
+    return absl::OkStatus();
+  }
+  Cell seen_goal;
+  double seen_radius = 0.0;
+};
+
+TEST(PlanQueryTest, StatefulEngineGetsTheSettledGoalAndReportsItsSource) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      "....",
+      "...#",
+  }));
+  RecordingSearch search;
+  PlanQuery query = Query({0, 0}, {3, 1});
+  query.goal_tolerance_cells = 1.0;
+  PlanEngine engine;
+  engine.stateful = &search;
+  absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, engine);
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  EXPECT_EQ(search.seen_goal, (Cell{3, 0}));
+  EXPECT_EQ(answer->goal, (Cell{3, 0}));
+  EXPECT_EQ(answer->source.map_version, 9u);
+  EXPECT_TRUE(answer->source.cache_hit);
+  EXPECT_EQ(answer->reached_goal_index, 0);
+
+  // Exactly one engine.
+  EXPECT_EQ(Plan(Query({0, 0}, {1, 0}), snapshot, PlanEngine{}).status().code(),
+            absl::StatusCode::kInternal);
+}
+
+}  // namespace
+}  // namespace pathd
