@@ -27,6 +27,7 @@
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/incremental/incremental_search.h"
+#include "core/search/grid_view.h"
 #include "core/search/planner.h"
 
 namespace pathd::internal {
@@ -34,8 +35,9 @@ namespace pathd::internal {
 inline constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
 
 // Move rules beyond CostParams. The defaults are DESIGN.md's cost model; only
-// the test that replays the lecture notes' D* Lite example (seed 000: diagonal
-// 1.4, diagonals past obstacle corners allowed, h = 0) changes them.
+// the test that replays the "D* Lite – Example" of Faigl's lecture "Path
+// Planning" (B4M36UIR Lecture 03: diagonal 1.4, diagonals past obstacle
+// corners allowed, h = 0) changes them.
 struct MoveRules {
   double diagonal_length = kSqrt2;
   // Diagonal moves need only their two end cells traversable.
@@ -44,9 +46,10 @@ struct MoveRules {
   bool heuristic = true;
 };
 
-// The cost model of one grid flattened into tables: whether a cost value is
-// traversable and what a straight or diagonal move into a cell of that value
-// costs. Move costs are looked up, never recomputed, so the same edge always
+// The cost model of one grid flattened into tables (from the grid view's
+// CostTable): whether a cost value is traversable and what a straight or
+// diagonal move into a cell of that value costs, with GridView's MoveRule
+// unless corner cutting is configured. Move costs are looked up, never recomputed, so the same edge always
 // yields bit-identical sums, which the exact rhs comparisons rely on.
 class MoveModel {
  public:
@@ -56,10 +59,11 @@ class MoveModel {
         height_(grid.height()),
         eight_(cost.connectivity == Connectivity::kEight),
         corner_cutting_(rules.corner_cutting) {
+    const CostTable table(cost);
     for (int c = 0; c < 256; ++c) {
       const auto v = static_cast<uint8_t>(c);
-      passable_[c] = Traversable(v, cost.unknown_is_free);
-      const double factor = CellFactor(v, cost.cost_weight);
+      passable_[c] = table.Passable(v);
+      const double factor = table.Factor(v);
       step_[0][c] = factor;
       step_[1][c] = rules.diagonal_length * factor;
     }
@@ -101,16 +105,16 @@ class MoveModel {
     if (open_u) visit(i - w, false);
     if (!eight_) return;
     const bool cut = corner_cutting_;
-    if (right && down && (cut || (open_r && open_d)) && Passable(i + w + 1)) {
+    if (right && down && (cut || MoveRule::DiagonalAllowed(open_r, open_d)) && Passable(i + w + 1)) {
       visit(i + w + 1, true);
     }
-    if (right && up && (cut || (open_r && open_u)) && Passable(i - w + 1)) {
+    if (right && up && (cut || MoveRule::DiagonalAllowed(open_r, open_u)) && Passable(i - w + 1)) {
       visit(i - w + 1, true);
     }
-    if (left && down && (cut || (open_l && open_d)) && Passable(i + w - 1)) {
+    if (left && down && (cut || MoveRule::DiagonalAllowed(open_l, open_d)) && Passable(i + w - 1)) {
       visit(i + w - 1, true);
     }
-    if (left && up && (cut || (open_l && open_u)) && Passable(i - w - 1)) {
+    if (left && up && (cut || MoveRule::DiagonalAllowed(open_l, open_u)) && Passable(i - w - 1)) {
       visit(i - w - 1, true);
     }
   }
@@ -121,7 +125,7 @@ class MoveModel {
     if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) return false;
     if (!PassableXY(x, y) || !PassableXY(nx, ny)) return false;
     if (dx == 0 || dy == 0 || corner_cutting_) return true;
-    return PassableXY(nx, y) && PassableXY(x, ny);
+    return MoveRule::DiagonalAllowed(PassableXY(nx, y), PassableXY(x, ny));
   }
 
  private:
@@ -513,7 +517,7 @@ class IncrementalSearch {
   // test and the unoptimized D* Lite's (the optimized one stops while the
   // start is still overconsistent, g > rhs). Settling the target costs one
   // expansion and makes its g the path cost, which the extraction checks, and
-  // the notes' example prints exactly these states.
+  // the lecture's example prints exactly these states.
   // Every cell on an optimal path has k1 equal to the target's in exact
   // arithmetic (g + h is constant along it for a consistent h) and a smaller
   // k2, so it is expanded first; but the two k1 sums round differently, and a
@@ -632,12 +636,12 @@ class IncrementalSearch {
 // core/incremental/incremental_search.h keeps private.
 class IncrementalAccess {
  public:
-  // A D* Lite with non-default move rules (the seed example).
+  // A D* Lite with non-default move rules (the lecture's D* Lite example).
   static absl::StatusOr<std::unique_ptr<DStarLite>> CreateDStarLite(
       std::shared_ptr<const Grid> grid, Cell goal, CostParams cost,
       const MoveRules& rules);
   // Plan()'s search without the path extraction, which measures paths under
-  // DESIGN.md's cost model and so rejects the seed example's corner cuts.
+  // DESIGN.md's cost model and so rejects the lecture example's corner cuts.
   static PlanOutcome ComputeShortestPath(DStarLite& dstar, const StopCondition& stop);
   // Overwrites one field value, to provoke the extraction guard.
   static void CorruptField(ShortestPathMap& map, Cell c, float value);

@@ -85,7 +85,8 @@ bool Near(double a, double b, double rel) {
 }
 
 // ---------------------------------------------------------------------------
-// The D* Lite example of the lecture notes (seed 000, "D* Lite – Example"):
+// The "D* Lite – Example" of Faigl's lecture "Path Planning" (B4M36UIR,
+// Lecture 03):
 // a 5 x 4 grid labelled "row,col" with row 0 at the bottom, goal 0,0, start
 // 2,4, obstacles 1,1, 1,2 and 0,2; 8-connected, straight moves cost 1 and
 // diagonal ones 1.4, moves only to and from obstacles are infinite (slide 6
