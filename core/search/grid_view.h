@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/base/attributes.h"
 #include "core/search/path_measure.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
@@ -190,9 +191,12 @@ struct RecordingListener {
 
 // Calls body(listener) with a RecordingListener over `cell_of` when the
 // query has a recorder, else with a NullListener: the pointer is tested once
-// per query, and the search body is compiled once for each case.
+// per query, and the search body is compiled once for each case. Always
+// inlined, so the search loop stays in the caller's frame with the caller's
+// GridView: the compiler then keeps the view's fields in registers across the
+// loop's calls, as it cannot for an object whose address left the function.
 template <typename CellOf, typename Body>
-decltype(auto) WithExpansionListener(ExpansionRecorder* recorder,
+ABSL_ATTRIBUTE_ALWAYS_INLINE inline decltype(auto) WithExpansionListener(ExpansionRecorder* recorder,
                                      const CellOf& cell_of, Body&& body) {
   if (recorder == nullptr) return body(NullListener{});
   return body(RecordingListener<CellOf>{*recorder, cell_of});
