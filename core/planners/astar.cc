@@ -24,24 +24,27 @@ class BestFirstPlanner final : public GridPlanner {
       : GridPlanner(name, traits), order_(order) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const GridDistanceHeuristic h{request.goal, request.cost.connectivity};
     switch (order_) {
       case Order::kAStar:
-        return internal::GridBestFirstSearch(grid, request, stop, scratch,
-                                             internal::AStarPriority<GridDistanceHeuristic>{h});
+        return internal::GridBestFirstSearch(
+            grid, request, stop, scratch,
+            internal::AStarPriority<GridDistanceHeuristic>{h});
       case Order::kDijkstra:
-        return internal::GridBestFirstSearch(grid, request, stop, scratch,
-                                             internal::AStarPriority<ZeroHeuristic>{});
+        return internal::GridBestFirstSearch(
+            grid, request, stop, scratch,
+            internal::AStarPriority<ZeroHeuristic>{});
       case Order::kWeighted:
         return internal::GridBestFirstSearch(
             grid, request, stop, scratch,
-            internal::WeightedPriority<GridDistanceHeuristic>{h, request.heuristic_weight});
+            internal::WeightedPriority<GridDistanceHeuristic>{
+                h, request.heuristic_weight});
       case Order::kGreedy:
-        return internal::GridBestFirstSearch(grid, request, stop, scratch,
-                                             internal::GreedyPriority<GridDistanceHeuristic>{h});
+        return internal::GridBestFirstSearch(
+            grid, request, stop, scratch,
+            internal::GreedyPriority<GridDistanceHeuristic>{h});
     }
     return absl::InternalError("unknown best-first order");
   }
@@ -56,30 +59,34 @@ std::unique_ptr<Planner> MakeAStarPlanner() {
   return std::make_unique<BestFirstPlanner>(
       "astar", Order::kAStar,
       PlannerTraits{.optimal = true,
-                    .description = "A* with the octile (8-connected) or Manhattan "
-                                   "(4-connected) heuristic; optimal"});
+                    .description =
+                        "A* with the octile (8-connected) or Manhattan "
+                        "(4-connected) heuristic; optimal"});
 }
 std::unique_ptr<Planner> MakeDijkstraPlanner() {
   return std::make_unique<BestFirstPlanner>(
       "dijkstra", Order::kDijkstra,
       PlannerTraits{.optimal = true,
-                    .description = "Dijkstra's uniform-cost search; optimal, the "
-                                   "reference every other planner is checked "
-                                   "against"});
+                    .description =
+                        "Dijkstra's uniform-cost search; optimal, the "
+                        "reference every other planner is checked "
+                        "against"});
 }
 std::unique_ptr<Planner> MakeWeightedAStarPlanner() {
   return std::make_unique<BestFirstPlanner>(
       "weighted_astar", Order::kWeighted,
       PlannerTraits{.bounded = true,
-                    .description = "weighted A* (f = g + w * h, w = "
-                                   "heuristic_weight); cost at most w times the "
-                                   "optimum, fewer expansions"});
+                    .description =
+                        "weighted A* (f = g + w * h, w = "
+                        "heuristic_weight); cost at most w times the "
+                        "optimum, fewer expansions"});
 }
 std::unique_ptr<Planner> MakeGreedyPlanner() {
   return std::make_unique<BestFirstPlanner>(
       "greedy", Order::kGreedy,
-      PlannerTraits{.description = "greedy best-first search on the heuristic "
-                                   "alone (f = h); complete, fast, not optimal"});
+      PlannerTraits{.description =
+                        "greedy best-first search on the heuristic "
+                        "alone (f = h); complete, fast, not optimal"});
 }
 
 }  // namespace pathd

@@ -24,7 +24,8 @@ PlanOutcome BreadthFirst(const GridView& view, uint32_t start, uint32_t goal,
   // A vector used as a FIFO: every cell enters at most once, so it never
   // holds more than the map and needs no wrap-around.
   for (size_t head = 0; head < queue.size();) {
-    if (const PlanOutcome why = stop.Check(expansions); why != PlanOutcome::kFound) {
+    if (const PlanOutcome why = stop.Check(expansions);
+        why != PlanOutcome::kFound) {
       return why;
     }
     const uint32_t current = queue[head++];
@@ -32,12 +33,13 @@ PlanOutcome BreadthFirst(const GridView& view, uint32_t start, uint32_t goal,
     listener.OnExpand(current);
     if (current == goal) return PlanOutcome::kFound;
     const Cell at = view.CellOf(current);
-    view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t, int32_t, double) {
-      if (scratch.Seen(next)) return;
-      SearchScratch::Node& node = scratch.At(next);
-      node.parent = current;
-      queue.push_back(next);
-    });
+    view.ForEachNeighbor(at.x, at.y,
+                         [&](uint32_t next, int32_t, int32_t, double) {
+                           if (scratch.Seen(next)) return;
+                           SearchScratch::Node& node = scratch.At(next);
+                           node.parent = current;
+                           queue.push_back(next);
+                         });
   }
   return PlanOutcome::kNoPath;
 }
@@ -52,9 +54,8 @@ class BfsPlanner final : public GridPlanner {
                                                  "except for blocking"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());
     const uint32_t start = view.Index(request.start.x, request.start.y);
@@ -62,13 +63,13 @@ class BfsPlanner final : public GridPlanner {
     PlanResult result;
     result.outcome = internal::WithExpansionListener(
         request.expansion_recorder, view, [&](auto listener) {
-          return BreadthFirst(view, start, goal, stop, scratch, result.expansions,
-                              listener);
+          return BreadthFirst(view, start, goal, stop, scratch,
+                              result.expansions, listener);
         });
     if (result.found()) {
-      internal::SetMeasuredPath(grid, request.cost,
-                                internal::TracePath(view, scratch, goal, grid.size()),
-                                &result);
+      internal::SetMeasuredPath(
+          grid, request.cost,
+          internal::TracePath(view, scratch, goal, grid.size()), &result);
     }
     return result;
   }
@@ -76,6 +77,8 @@ class BfsPlanner final : public GridPlanner {
 
 }  // namespace
 
-std::unique_ptr<Planner> MakeBfsPlanner() { return std::make_unique<BfsPlanner>(); }
+std::unique_ptr<Planner> MakeBfsPlanner() {
+  return std::make_unique<BfsPlanner>();
+}
 
 }  // namespace pathd

@@ -31,8 +31,8 @@ constexpr uint32_t kNoCell = SearchScratch::kNoParent;
 
 // The raster passes of Algorithm 1 over a copy of the grid padded with a
 // blocked border, so every cell's eight neighbours can be read without bounds
-// checks (the lecture's Algorithm 1 assumes such a border and skip the outer ring; the padding
-// keeps the outer ring plannable). Cost-to-go of blocked cells stays +inf, so
+// checks (the lecture's Algorithm 1 assumes such a border and skips the outer
+// ring; the padding keeps the outer ring plannable). Cost-to-go of blocked cells stays +inf, so
 // a move into one is never the minimum; only the corner-cutting rule needs
 // the side cells' passability.
 class RasterSweep {
@@ -223,11 +223,10 @@ class DistanceTransformPlanner final : public GridPlanner {
                             "the map's winding"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& /*scratch*/) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     return FinishFromField(
-        grid, request, RasterDistanceTransform(grid, request.goal, request.cost, stop));
+        q.grid, q.request,
+        RasterDistanceTransform(q.grid, q.request.goal, q.request.cost, q.stop));
   }
 };
 
@@ -244,9 +243,8 @@ class DistanceTransformExactPlanner final : public GridPlanner {
                             "path down the field; optimal"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     return FinishFromField(grid, request,
                            DijkstraCostToGo(grid, request.goal, request.cost, stop,
                                             scratch, request.expansion_recorder));

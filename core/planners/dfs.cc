@@ -34,7 +34,8 @@ PlanOutcome DepthFirst(const GridView& view, uint32_t start, uint32_t goal,
   };
   Child children[8];
   while (!stack.empty()) {
-    if (const PlanOutcome why = stop.Check(expansions); why != PlanOutcome::kFound) {
+    if (const PlanOutcome why = stop.Check(expansions);
+        why != PlanOutcome::kFound) {
       return why;
     }
     const uint32_t current = stack.back();
@@ -45,18 +46,20 @@ PlanOutcome DepthFirst(const GridView& view, uint32_t start, uint32_t goal,
     const Cell at = view.CellOf(current);
     const double g = scratch.Raw(current).g;
     int count = 0;
-    view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t nx, int32_t ny,
-                                         double move_length) {
-      if (scratch.Seen(next)) return;
-      SearchScratch::Node& node = scratch.At(next);
-      node.parent = current;
-      node.g = g + move_length * view.Factor(next);
-      // Insertion sort, descending h: at most eight entries.
-      const double hn = h(nx, ny);
-      int i = count++;
-      for (; i > 0 && children[i - 1].h < hn; --i) children[i] = children[i - 1];
-      children[i] = Child{next, hn};
-    });
+    view.ForEachNeighbor(
+        at.x, at.y,
+        [&](uint32_t next, int32_t nx, int32_t ny, double move_length) {
+          if (scratch.Seen(next)) return;
+          SearchScratch::Node& node = scratch.At(next);
+          node.parent = current;
+          node.g = g + move_length * view.Factor(next);
+          // Insertion sort, descending h: at most eight entries.
+          const double hn = h(nx, ny);
+          int i = count++;
+          for (; i > 0 && children[i - 1].h < hn; --i)
+            children[i] = children[i - 1];
+          children[i] = Child{next, hn};
+        });
     for (int i = 0; i < count; ++i) stack.push_back(children[i].index);
   }
   return PlanOutcome::kNoPath;
@@ -65,25 +68,25 @@ PlanOutcome DepthFirst(const GridView& view, uint32_t start, uint32_t goal,
 class DfsPlanner final : public GridPlanner {
  public:
   DfsPlanner()
-      : GridPlanner("dfs",
-                    PlannerTraits{.description = "depth-first search, "
-                                                 "nearest-to-goal neighbour "
-                                                 "first; complete, not optimal"}) {}
+      : GridPlanner("dfs", PlannerTraits{.description =
+                                             "depth-first search, "
+                                             "nearest-to-goal neighbour "
+                                             "first; complete, not optimal"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());
     const uint32_t start = view.Index(request.start.x, request.start.y);
     const uint32_t goal = view.Index(request.goal.x, request.goal.y);
-    const internal::GridDistanceHeuristic h{request.goal, request.cost.connectivity};
+    const internal::GridDistanceHeuristic h{request.goal,
+                                            request.cost.connectivity};
     PlanResult result;
     result.outcome = internal::WithExpansionListener(
         request.expansion_recorder, view, [&](auto listener) {
-          return DepthFirst(view, start, goal, h, stop, scratch, result.expansions,
-                            listener);
+          return DepthFirst(view, start, goal, h, stop, scratch,
+                            result.expansions, listener);
         });
     if (result.found()) {
       result.path = internal::TracePath(view, scratch, goal, grid.size());
@@ -96,6 +99,8 @@ class DfsPlanner final : public GridPlanner {
 
 }  // namespace
 
-std::unique_ptr<Planner> MakeDfsPlanner() { return std::make_unique<DfsPlanner>(); }
+std::unique_ptr<Planner> MakeDfsPlanner() {
+  return std::make_unique<DfsPlanner>();
+}
 
 }  // namespace pathd

@@ -24,44 +24,43 @@ std::shared_ptr<const Grid> Borrow(const Grid& grid) {
 class LpaStarPlanner final : public GridPlanner {
  public:
   LpaStarPlanner()
-      : GridPlanner("lpa_star",
-                    PlannerTraits{
-                        .optimal = true,
-                        .incremental = true,
-                        .description = "Lifelong Planning A* (Koenig, Likhachev & "
-                                       "Furcy 2004); optimal; repairs after map "
-                                       "changes in sessions"}) {}
+      : GridPlanner(
+            "lpa_star",
+            PlannerTraits{.optimal = true,
+                          .incremental = true,
+                          .description =
+                              "Lifelong Planning A* (Koenig, Likhachev & "
+                              "Furcy 2004); optimal; repairs after map "
+                              "changes in sessions"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch&) const override {
-    PATHD_ASSIGN_OR_RETURN(
-        std::unique_ptr<LpaStar> lpa,
-        LpaStar::Create(Borrow(grid), request.start, request.goal, request.cost));
-    return lpa->Plan(stop);
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    PATHD_ASSIGN_OR_RETURN(std::unique_ptr<LpaStar> lpa,
+                           LpaStar::Create(Borrow(q.grid), q.request.start,
+                                           q.request.goal, q.request.cost));
+    return lpa->Plan(q.stop);
   }
 };
 
 class DStarLitePlanner final : public GridPlanner {
  public:
   DStarLitePlanner()
-      : GridPlanner("dstar_lite",
-                    PlannerTraits{
-                        .optimal = true,
-                        .incremental = true,
-                        .description = "D* Lite (Koenig & Likhachev 2002), backward "
-                                       "from the goal; optimal; repairs as the "
-                                       "robot moves and the map changes"}) {}
+      : GridPlanner(
+            "dstar_lite",
+            PlannerTraits{.optimal = true,
+                          .incremental = true,
+                          .description =
+                              "D* Lite (Koenig & Likhachev 2002), backward "
+                              "from the goal; optimal; repairs as the "
+                              "robot moves and the map changes"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch&) const override {
-    PATHD_ASSIGN_OR_RETURN(std::unique_ptr<DStarLite> dstar,
-                           DStarLite::Create(Borrow(grid), request.goal, request.cost));
-    PATHD_RETURN_IF_ERROR(dstar->SetStart(request.start));
-    return dstar->Plan(stop);
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    PATHD_ASSIGN_OR_RETURN(
+        std::unique_ptr<DStarLite> dstar,
+        DStarLite::Create(Borrow(q.grid), q.request.goal, q.request.cost));
+    PATHD_RETURN_IF_ERROR(dstar->SetStart(q.request.start));
+    return dstar->Plan(q.stop);
   }
 };
 
@@ -69,20 +68,19 @@ class ShortestPathMapPlanner final : public GridPlanner {
  public:
   ShortestPathMapPlanner()
       : GridPlanner("spm",
-                    PlannerTraits{
-                        .optimal = true,
-                        .incremental = true,
-                        .cost_to_go = true,
-                        .description = "shortest path map: the goal's full "
-                                       "cost-to-go field (4-byte floats), "
-                                       "descended from the start; optimal"}) {}
+                    PlannerTraits{.optimal = true,
+                                  .incremental = true,
+                                  .cost_to_go = true,
+                                  .description =
+                                      "shortest path map: the goal's full "
+                                      "cost-to-go field (4-byte floats), "
+                                      "descended from the start; optimal"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch&) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     absl::StatusOr<std::unique_ptr<ShortestPathMap>> map =
-        ShortestPathMap::Build(Borrow(grid), request.goal, request.cost, stop);
+        ShortestPathMap::Build(Borrow(q.grid), q.request.goal, q.request.cost,
+                               q.stop);
     if (!map.ok()) {
       // Build reports a stop as a status; a planner reports it as an outcome.
       PlanResult stopped;
@@ -96,16 +94,17 @@ class ShortestPathMapPlanner final : public GridPlanner {
         case absl::StatusCode::kResourceExhausted:
           // The build stops exactly at the budget.
           stopped.outcome = PlanOutcome::kExpansionLimit;
-          stopped.expansions = stop.max_expansions();
+          stopped.expansions = q.stop.max_expansions();
           break;
         default:
           return map.status();
       }
       return stopped;
     }
-    PATHD_ASSIGN_OR_RETURN(PlanResult result, (*map)->PathFrom(request.start));
+    PATHD_ASSIGN_OR_RETURN(PlanResult result,
+                           (*map)->PathFrom(q.request.start));
     result.expansions += (*map)->last_stats().expansions;
-    if (request.want_cost_to_go) {
+    if (q.request.want_cost_to_go) {
       // What the descent's path from each cell costs, in double: the field
       // itself holds floats.
       PATHD_ASSIGN_OR_RETURN(result.cost_to_go,
@@ -117,7 +116,9 @@ class ShortestPathMapPlanner final : public GridPlanner {
 
 }  // namespace
 
-std::unique_ptr<Planner> MakeLpaStarPlanner() { return std::make_unique<LpaStarPlanner>(); }
+std::unique_ptr<Planner> MakeLpaStarPlanner() {
+  return std::make_unique<LpaStarPlanner>();
+}
 std::unique_ptr<Planner> MakeDStarLitePlanner() {
   return std::make_unique<DStarLitePlanner>();
 }

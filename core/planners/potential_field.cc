@@ -273,9 +273,8 @@ class PotentialFieldPlanner final : public GridPlanner {
                             "stop in a local minimum"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& query) const override {
+    const auto& [grid, request, stop, scratch] = query;
     const PotentialFieldParams& params = request.potential;
     const internal::GridView view(grid, request.cost);
     const ObstacleDistance obstacles(grid, request.cost,

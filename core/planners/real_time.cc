@@ -305,10 +305,8 @@ class RealTimePlanner final : public GridPlanner {
       : GridPlanner(name, traits), learning_(learning) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
-    return RealTimeSearch(grid, request, stop, scratch, learning_).Run();
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    return RealTimeSearch(q.grid, q.request, q.stop, q.scratch, learning_).Run();
   }
 
  private:

@@ -185,10 +185,9 @@ PlanResult AnyAngleSearch(const Grid& grid, const PlanRequest& request,
   result.any_angle = true;
   result.outcome = internal::WithExpansionListener(
       request.expansion_recorder, expansion, [&](auto listener) {
-        return internal::BestFirstSearch(scratch, open, goal, stop, result.expansions,
-                                         priority, expansion,
-                                         ThetaParentUpdate<kLazy>(view, scratch, h),
-                                         listener);
+        return internal::BestFirstSearch(
+            scratch, open, goal, stop, result.expansions, priority, expansion,
+            ThetaParentUpdate<kLazy>(view, scratch, h), listener);
       });
   if (result.found()) {
     result.path = internal::TracePath(view, scratch, goal, grid.size());
@@ -209,18 +208,17 @@ class ThetaStarPlanner final : public GridPlanner {
             PlannerTraits{
                 .any_angle = true,
                 .description =
-                    kLazy ? "Lazy Theta*: Theta* that checks line of sight only "
-                            "when it expands a cell; any-angle, never costlier "
-                            "than the grid optimum"
-                          : "Theta*: A* whose successors link to their parent's "
-                            "parent when in line of sight; any-angle, never "
-                            "costlier than the grid optimum"}) {}
+                    kLazy
+                        ? "Lazy Theta*: Theta* that checks line of sight only "
+                          "when it expands a cell; any-angle, never costlier "
+                          "than the grid optimum"
+                        : "Theta*: A* whose successors link to their parent's "
+                          "parent when in line of sight; any-angle, never "
+                          "costlier than the grid optimum"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
-    return AnyAngleSearch<kLazy>(grid, request, stop, scratch);
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    return AnyAngleSearch<kLazy>(q.grid, q.request, q.stop, q.scratch);
   }
 };
 

@@ -1,8 +1,8 @@
 // The wave-front planner of the lecture "Path Planning in Discrete Sampled
-// Space" (its "Wave-Front Planner"; NF1 of Barraquand, Langlois & Latombe 1992): label the goal 2, give
-// every unlabelled free neighbour of a cell labelled L the label L + 1 until
-// the start is labelled, then walk from the start to a neighbour labelled one
-// less until the goal. The labels count moves, so the path has the fewest
+// Space" (its "Wave-Front Planner"; NF1 of Barraquand, Langlois & Latombe
+// 1992): label the goal 2, give every unlabelled free neighbour of a cell
+// labelled L the label L + 1 until the start is labelled, then walk from the
+// start to a neighbour labelled one less until the goal. The labels count moves, so the path has the fewest
 // moves; cell costs only decide what is blocked.
 #include "core/planners/wavefront.h"
 
@@ -94,14 +94,13 @@ class WavefrontPlanner final : public GridPlanner {
                         .description =
                             "wave-front planner (NF1; Barraquand, Langlois & "
                             "Latombe 1992): labels flooded from the goal until "
-                            "the start is "
-                            "labelled, path down the labels; fewest moves, "
-                            "ignores cell costs except for blocking"}) {}
+                            "the start is labelled, path down the labels; "
+                            "fewest moves, ignores cell costs except for "
+                            "blocking"}) {}
 
  protected:
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());
     const uint32_t start = view.Index(request.start.x, request.start.y);

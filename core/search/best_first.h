@@ -52,7 +52,9 @@ struct WeightedPriority {
 template <typename H>
 struct GreedyPriority {
   H h;
-  double operator()(double, uint32_t, int32_t x, int32_t y) const { return h(x, y); }
+  double operator()(double, uint32_t, int32_t x, int32_t y) const {
+    return h(x, y);
+  }
 };
 
 // ---- Expansion policies: node ids and successors. ----
@@ -70,10 +72,11 @@ class GridExpansion {
   template <typename Visit>
   void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
     const Cell at = view_.CellOf(id);
-    view_.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t nx, int32_t ny,
-                                          double move_length) {
-      visit(next, nx, ny, g + move_length * view_.Factor(next));
-    });
+    view_.ForEachNeighbor(
+        at.x, at.y,
+        [&](uint32_t next, int32_t nx, int32_t ny, double move_length) {
+          visit(next, nx, ny, g + move_length * view_.Factor(next));
+        });
   }
 
  private:
@@ -92,10 +95,11 @@ class ReverseGridExpansion {
   void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
     const double factor = view_.Factor(id);
     const Cell at = view_.CellOf(id);
-    view_.ForEachNeighbor(at.x, at.y, [&](uint32_t prev, int32_t px, int32_t py,
-                                          double move_length) {
-      visit(prev, px, py, g + move_length * factor);
-    });
+    view_.ForEachNeighbor(
+        at.x, at.y,
+        [&](uint32_t prev, int32_t px, int32_t py, double move_length) {
+          visit(prev, px, py, g + move_length * factor);
+        });
   }
 
  private:
@@ -152,11 +156,13 @@ void PushRoot(SearchScratch& scratch, OpenList& open, uint32_t id, Cell cell,
 template <typename Priority, typename Expansion,
           typename ParentUpdate = PlainParentUpdate,
           typename Listener = NullListener, typename Halt = NeverHalt>
-PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open, uint32_t goal,
-                            const StopCondition& stop, int64_t& expansions,
-                            const Priority& priority, const Expansion& expansion,
+PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open,
+                            uint32_t goal, const StopCondition& stop,
+                            int64_t& expansions, const Priority& priority,
+                            const Expansion& expansion,
                             ParentUpdate&& update = ParentUpdate(),
-                            Listener&& listener = Listener(), Halt&& halt = Halt()) {
+                            Listener&& listener = Listener(),
+                            Halt&& halt = Halt()) {
   // A local count: the caller's may live where every store in the loop could
   // alias it.
   int64_t expanded = expansions;
@@ -185,7 +191,8 @@ PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open, uint32_t goa
         [&](uint32_t next, int32_t nx, int32_t ny, double next_g) {
           SearchScratch::Node& node = scratch.At(next);
           if (node.open_pos == SearchScratch::kClosed) return;
-          const Offer offer = update.OfferTo(best.index, next, nx, ny, next_g, node);
+          const Offer offer =
+              update.OfferTo(best.index, next, nx, ny, next_g, node);
           if (offer.g >= node.g) return;
           node.g = offer.g;
           node.parent = offer.parent;
@@ -204,7 +211,8 @@ PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open, uint32_t goa
 // 2^32 - 1 cells.
 template <typename Priority>
 PlanResult GridBestFirstSearch(const Grid& grid, const PlanRequest& request,
-                               const StopCondition& stop, SearchScratch& scratch,
+                               const StopCondition& stop,
+                               SearchScratch& scratch,
                                const Priority& priority) {
   const GridView view(grid, request.cost);
   const GridExpansion expansion(view);
@@ -215,8 +223,9 @@ PlanResult GridBestFirstSearch(const Grid& grid, const PlanRequest& request,
   PlanResult result;
   result.outcome = WithExpansionListener(
       request.expansion_recorder, expansion, [&](auto listener) {
-        return BestFirstSearch(scratch, open, goal, stop, result.expansions, priority,
-                               expansion, PlainParentUpdate(), listener);
+        return BestFirstSearch(scratch, open, goal, stop, result.expansions,
+                               priority, expansion, PlainParentUpdate(),
+                               listener);
       });
   if (result.found()) {
     result.path = TracePath(view, scratch, goal, grid.size());

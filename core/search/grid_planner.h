@@ -16,6 +16,15 @@
 
 namespace pathd {
 
+// One query as GridPlanner::Search() receives it: Plan()'s arguments, none
+// owned.
+struct GridQuery {
+  const Grid& grid;
+  const PlanRequest& request;
+  const StopCondition& stop;
+  SearchScratch& scratch;
+};
+
 // A Planner over a Grid. Stateless like every Planner: thread-safe as long as
 // each thread passes its own SearchScratch.
 class GridPlanner : public Planner {
@@ -30,7 +39,8 @@ class GridPlanner : public Planner {
                                   SearchScratch& scratch) const final {
     PATHD_RETURN_IF_ERROR(Validate(grid, request));
     const absl::Time started = absl::Now();
-    absl::StatusOr<PlanResult> result = Search(grid, request, stop, scratch);
+    absl::StatusOr<PlanResult> result =
+        Search(GridQuery{grid, request, stop, scratch});
     if (result.ok()) result->planning_time = absl::Now() - started;
     return result;
   }
@@ -42,15 +52,13 @@ class GridPlanner : public Planner {
 
   // The planner's search. Precondition: Validate() passed. A search that ends
   // without a path is an OK result with outcome != kFound.
-  virtual absl::StatusOr<PlanResult> Search(const Grid& grid,
-                                            const PlanRequest& request,
-                                            const StopCondition& stop,
-                                            SearchScratch& scratch) const = 0;
+  virtual absl::StatusOr<PlanResult> Search(const GridQuery& query) const = 0;
 
   // The check Plan() runs first: ValidateRequest against the traits. A
   // planner overrides it only to defer part of the check into Search() (JPS
   // reads every cell anyway and checks uniform cost there).
-  virtual absl::Status Validate(const Grid& grid, const PlanRequest& request) const {
+  virtual absl::Status Validate(const Grid& grid,
+                                const PlanRequest& request) const {
     return ValidateRequest(grid, request, name_, traits_);
   }
 

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "absl/base/attributes.h"
-#include "core/search/path_measure.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
+#include "core/search/path_measure.h"
 #include "core/search/planner.h"
 #include "core/search/search_scratch.h"
 
@@ -55,7 +55,8 @@ struct MoveRule {
   // Judges the step a -> b, both cells already known to be traversable;
   // `open(x, y)` says whether a cell is on the grid and traversable.
   template <typename Open>
-  static MoveFault Check(Cell a, Cell b, Connectivity connectivity, Open&& open) {
+  static MoveFault Check(Cell a, Cell b, Connectivity connectivity,
+                         Open&& open) {
     // int64: cells given by clients may be anywhere in int32.
     const int64_t dx = int64_t{b.x} - a.x;
     const int64_t dy = int64_t{b.y} - a.y;
@@ -66,8 +67,9 @@ struct MoveRule {
     if (connectivity != Connectivity::kEight) {
       return MoveFault::kDiagonalOnFourConnected;
     }
-    return DiagonalAllowed(open(b.x, a.y), open(a.x, b.y)) ? MoveFault::kNone
-                                                           : MoveFault::kCornerCut;
+    return DiagonalAllowed(open(b.x, a.y), open(a.x, b.y))
+               ? MoveFault::kNone
+               : MoveFault::kCornerCut;
   }
 };
 
@@ -89,7 +91,9 @@ class GridView {
            table_.Passable(cells_[Index(x, y)]);
   }
   // Passable(x, y) for the cell at an index known to be on the grid.
-  bool PassableAt(uint32_t index) const { return table_.Passable(cells_[index]); }
+  bool PassableAt(uint32_t index) const {
+    return table_.Passable(cells_[index]);
+  }
   uint32_t Index(int32_t x, int32_t y) const {
     return static_cast<uint32_t>(y) * static_cast<uint32_t>(width_) +
            static_cast<uint32_t>(x);
@@ -119,7 +123,8 @@ class GridView {
     static constexpr int kSideX[4] = {0, 0, 1, 1};
     static constexpr int kSideY[4] = {2, 3, 2, 3};
     for (int d = 0; d < 4; ++d) {
-      if (!MoveRule::DiagonalAllowed(open[kSideX[d]], open[kSideY[d]])) continue;
+      if (!MoveRule::DiagonalAllowed(open[kSideX[d]], open[kSideY[d]]))
+        continue;
       const int32_t nx = x + kMoves[4 + d].dx;
       const int32_t ny = y + kMoves[4 + d].dy;
       if (Passable(nx, ny)) visit(Index(nx, ny), nx, ny, kSqrt2);
@@ -136,8 +141,9 @@ class GridView {
 
 // Follows parent links from `goal` back to the root and returns root..goal.
 // The walk is bounded by the number of cells, so corrupt links cannot hang it.
-inline std::vector<Cell> TracePath(const GridView& view, const SearchScratch& scratch,
-                                   uint32_t goal, size_t cells) {
+inline std::vector<Cell> TracePath(const GridView& view,
+                                   const SearchScratch& scratch, uint32_t goal,
+                                   size_t cells) {
   std::vector<Cell> path;
   uint32_t at = goal;
   while (at != SearchScratch::kNoParent && path.size() <= cells) {
@@ -163,7 +169,8 @@ inline void SetMeasuredPath(const Grid& grid, const CostParams& cost,
 inline double PathLength(const std::vector<Cell>& path) {
   double length = 0.0;
   for (size_t i = 1; i < path.size(); ++i) {
-    const bool diagonal = path[i].x != path[i - 1].x && path[i].y != path[i - 1].y;
+    const bool diagonal =
+        path[i].x != path[i - 1].x && path[i].y != path[i - 1].y;
     length += diagonal ? kSqrt2 : 1.0;
   }
   return length;
@@ -196,8 +203,8 @@ struct RecordingListener {
 // GridView: the compiler then keeps the view's fields in registers across the
 // loop's calls, as it cannot for an object whose address left the function.
 template <typename CellOf, typename Body>
-ABSL_ATTRIBUTE_ALWAYS_INLINE inline decltype(auto) WithExpansionListener(ExpansionRecorder* recorder,
-                                     const CellOf& cell_of, Body&& body) {
+ABSL_ATTRIBUTE_ALWAYS_INLINE inline decltype(auto) WithExpansionListener(
+    ExpansionRecorder* recorder, const CellOf& cell_of, Body&& body) {
   if (recorder == nullptr) return body(NullListener{});
   return body(RecordingListener<CellOf>{*recorder, cell_of});
 }

@@ -20,7 +20,8 @@ namespace pathd::internal {
 // Not thread-safe: one per search, over that search's scratch.
 class OpenList {
  public:
-  explicit OpenList(SearchScratch& scratch) : scratch_(scratch), heap_(scratch.open()) {}
+  explicit OpenList(SearchScratch& scratch)
+      : scratch_(scratch), heap_(scratch.open()) {}
 
   bool empty() const { return heap_.empty(); }
   size_t size() const { return heap_.size(); }

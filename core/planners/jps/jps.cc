@@ -456,9 +456,8 @@ class JpsPlanner final : public GridPlanner {
 
   // result.expansions counts jump points taken from the open list (the start
   // and goal included), not the cells the scans pass over.
-  absl::StatusOr<PlanResult> Search(const Grid& grid, const PlanRequest& request,
-                                    const StopCondition& stop,
-                                    SearchScratch& scratch) const override {
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const uint8_t start_cost = grid.cost(request.start);
     const PackRule rule{
         .unknown_is_free = request.cost.unknown_is_free,
