@@ -1,6 +1,6 @@
 // The one incremental search behind LpaStar, DStarLite and ShortestPathMap
-// (core/incremental/incremental_search.h): LPA* (Koenig, Likhachev & Furcy 2004) in the optimized
-// form of D* Lite (Koenig & Likhachev 2002, Figure 4): the km key modifier,
+// (core/incremental/incremental_search.h): LPA* (Koenig, Likhachev & Furcy
+// 2004) in the optimized form of D* Lite (Koenig & Likhachev 2002, Figure 4): the km key modifier,
 // rhs updated from the one changed edge instead of rescanning every neighbour
 // where that is enough, and lazy keys (an entry is re-keyed when it reaches the
 // top of the heap, stale entries are dropped there). Internal to core.
@@ -27,117 +27,13 @@
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/incremental/incremental_search.h"
+#include "core/incremental/move_model.h"
+#include "core/search/grid_view.h"
 #include "core/search/planner.h"
 
 namespace pathd::internal {
 
 inline constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
-
-// Move rules beyond CostParams. The defaults are DESIGN.md's cost model; only
-// the test that replays the lecture notes' D* Lite example (seed 000: diagonal
-// 1.4, diagonals past obstacle corners allowed, h = 0) changes them.
-struct MoveRules {
-  double diagonal_length = kSqrt2;
-  // Diagonal moves need only their two end cells traversable.
-  bool corner_cutting = false;
-  // Octile/Manhattan focusing heuristic; false means h = 0.
-  bool heuristic = true;
-};
-
-// The cost model of one grid flattened into tables: whether a cost value is
-// traversable and what a straight or diagonal move into a cell of that value
-// costs. Move costs are looked up, never recomputed, so the same edge always
-// yields bit-identical sums, which the exact rhs comparisons rely on.
-class MoveModel {
- public:
-  MoveModel(const Grid& grid, const CostParams& cost, const MoveRules& rules)
-      : cells_(grid.cells().data()),
-        width_(grid.width()),
-        height_(grid.height()),
-        eight_(cost.connectivity == Connectivity::kEight),
-        corner_cutting_(rules.corner_cutting) {
-    for (int c = 0; c < 256; ++c) {
-      const auto v = static_cast<uint8_t>(c);
-      passable_[c] = Traversable(v, cost.unknown_is_free);
-      const double factor = CellFactor(v, cost.cost_weight);
-      step_[0][c] = factor;
-      step_[1][c] = rules.diagonal_length * factor;
-    }
-  }
-
-  int32_t width() const { return width_; }
-  int32_t height() const { return height_; }
-  bool eight() const { return eight_; }
-  bool Passable(uint32_t i) const { return passable_[cells_[i]]; }
-  // Cost of a straight (diagonal = false) or diagonal move into cell `into`.
-  double MoveCost(uint32_t into, bool diagonal) const {
-    return step_[diagonal][cells_[into]];
-  }
-  uint32_t Index(Cell c) const {
-    return static_cast<uint32_t>(c.y) * static_cast<uint32_t>(width_) +
-           static_cast<uint32_t>(c.x);
-  }
-  Cell CellOf(uint32_t i) const {
-    return Cell{static_cast<int32_t>(i % static_cast<uint32_t>(width_)),
-                static_cast<int32_t>(i / static_cast<uint32_t>(width_))};
-  }
-
-  // Calls visit(j, diagonal) for every legal move between cell i and a
-  // neighbour j (legal moves are symmetric). None when i is not traversable.
-  template <typename Visit>
-  void ForEachMove(uint32_t i, Visit&& visit) const {
-    if (!Passable(i)) return;
-    const Cell c = CellOf(i);
-    const auto w = static_cast<uint32_t>(width_);
-    const bool right = c.x + 1 < width_, left = c.x > 0;
-    const bool down = c.y + 1 < height_, up = c.y > 0;
-    const bool open_r = right && Passable(i + 1);
-    const bool open_l = left && Passable(i - 1);
-    const bool open_d = down && Passable(i + w);
-    const bool open_u = up && Passable(i - w);
-    if (open_r) visit(i + 1, false);
-    if (open_l) visit(i - 1, false);
-    if (open_d) visit(i + w, false);
-    if (open_u) visit(i - w, false);
-    if (!eight_) return;
-    const bool cut = corner_cutting_;
-    if (right && down && (cut || (open_r && open_d)) && Passable(i + w + 1)) {
-      visit(i + w + 1, true);
-    }
-    if (right && up && (cut || (open_r && open_u)) && Passable(i - w + 1)) {
-      visit(i - w + 1, true);
-    }
-    if (left && down && (cut || (open_l && open_d)) && Passable(i + w - 1)) {
-      visit(i + w - 1, true);
-    }
-    if (left && up && (cut || (open_l && open_u)) && Passable(i - w - 1)) {
-      visit(i - w - 1, true);
-    }
-  }
-
-  // Whether the move from cell (x, y) by (dx, dy) (one of kMoves) is legal.
-  bool Legal(int32_t x, int32_t y, int32_t dx, int32_t dy) const {
-    const int32_t nx = x + dx, ny = y + dy;
-    if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) return false;
-    if (!PassableXY(x, y) || !PassableXY(nx, ny)) return false;
-    if (dx == 0 || dy == 0 || corner_cutting_) return true;
-    return PassableXY(nx, y) && PassableXY(x, ny);
-  }
-
- private:
-  bool PassableXY(int32_t x, int32_t y) const {
-    return passable_[cells_[static_cast<size_t>(y) * static_cast<size_t>(width_) +
-                            static_cast<size_t>(x)]];
-  }
-
-  const uint8_t* cells_;
-  int32_t width_;
-  int32_t height_;
-  bool eight_;
-  bool corner_cutting_;
-  std::array<bool, 256> passable_{};
-  std::array<std::array<double, 256>, 2> step_{};
-};
 
 // Open-list key of the focused searches (LPA*, D* Lite):
 // [min(g, rhs) + h + km; min(g, rhs)], compared lexicographically.
@@ -513,7 +409,7 @@ class IncrementalSearch {
   // test and the unoptimized D* Lite's (the optimized one stops while the
   // start is still overconsistent, g > rhs). Settling the target costs one
   // expansion and makes its g the path cost, which the extraction checks, and
-  // the notes' example prints exactly these states.
+  // the lecture's example prints exactly these states.
   // Every cell on an optimal path has k1 equal to the target's in exact
   // arithmetic (g + h is constant along it for a consistent h) and a smaller
   // k2, so it is expanded first; but the two k1 sums round differently, and a
@@ -632,12 +528,12 @@ class IncrementalSearch {
 // core/incremental/incremental_search.h keeps private.
 class IncrementalAccess {
  public:
-  // A D* Lite with non-default move rules (the seed example).
+  // A D* Lite with non-default move rules (the lecture's D* Lite example).
   static absl::StatusOr<std::unique_ptr<DStarLite>> CreateDStarLite(
       std::shared_ptr<const Grid> grid, Cell goal, CostParams cost,
       const MoveRules& rules);
   // Plan()'s search without the path extraction, which measures paths under
-  // DESIGN.md's cost model and so rejects the seed example's corner cuts.
+  // DESIGN.md's cost model and so rejects the lecture example's corner cuts.
   static PlanOutcome ComputeShortestPath(DStarLite& dstar, const StopCondition& stop);
   // Overwrites one field value, to provoke the extraction guard.
   static void CorruptField(ShortestPathMap& map, Cell c, float value);

@@ -2,8 +2,8 @@
 // D* Lite (fixed goal, moving start) and the shortest path map (the full
 // goal-rooted cost-to-go field). All three repair themselves after a map
 // change given the new grid and the list of cells whose cost changed, instead
-// of searching from scratch (Koenig, Likhachev & Furcy 2004; Koenig &
-// Likhachev 2002; seeds 000/001).
+// of searching from scratch (Koenig, Likhachev & Furcy 2004, "Lifelong
+// Planning A*"; Koenig & Likhachev 2002, "D* Lite").
 //
 // Cost model as everywhere (core/map/cost_model.h): entering a cell costs
 // move_length * CellFactor; diagonals need both side cells traversable. Costs

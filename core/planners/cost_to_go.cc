@@ -1,9 +1,10 @@
-// Cost-to-go planners: the distance transform of seed 000 ("Distance Transform
-// based Path Planning", after Jarvis 2004) computed by raster passes as in the
-// notes' Algorithm 1, and the same field by an exact Dijkstra sweep from the
-// goal. Both descend the field from the start; they differ only in how the
-// field is computed.
-#include "core/search/endpoints.h"
+// Cost-to-go planners: the distance transform (Jarvis 2004, "Distance
+// Transform Based Visibility Measures for Covert Path Planning in Known but
+// Dynamic Environments") computed by raster passes as in Algorithm 1 of
+// Faigl's lecture "Path Planning" (B4M36UIR, Lecture 03, "Distance Transform
+// based Path Planning"), and the same field by an exact Dijkstra sweep from
+// the goal on the best-first loop of core/search/best_first.h. Both descend
+// the field from the start; they differ only in how the field is computed.
 #include "core/planners/cost_to_go.h"
 
 #include <algorithm>
@@ -13,15 +14,15 @@
 #include <memory>
 #include <vector>
 
-#include "absl/time/clock.h"
-#include "core/search/best_first.h"
 #include "core/planners/planners.h"
+#include "core/search/best_first.h"
+#include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
-#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
 
+using internal::CostTable;
 using internal::GridView;
 using internal::SetMeasuredPath;
 
@@ -30,8 +31,8 @@ constexpr uint32_t kNoCell = SearchScratch::kNoParent;
 
 // The raster passes of Algorithm 1 over a copy of the grid padded with a
 // blocked border, so every cell's eight neighbours can be read without bounds
-// checks (the notes assume such a border and skip the outer ring; the padding
-// keeps the outer ring plannable). Cost-to-go of blocked cells stays +inf, so
+// checks (the lecture's Algorithm 1 assumes such a border and skips the outer
+// ring; the padding keeps the outer ring plannable). Cost-to-go of blocked cells stays +inf, so
 // a move into one is never the minimum; only the corner-cutting rule needs
 // the side cells' passability.
 class RasterSweep {
@@ -43,6 +44,7 @@ class RasterSweep {
         stride_(static_cast<size_t>(grid.width()) + 2),
         cells_(stride_ * (static_cast<size_t>(grid.height()) + 2), kLethalCost),
         ctg_(cells_.size(), kInf),
+        table_(cost),
         changed_at_(static_cast<size_t>(grid.height()) + 2, -1),
         forward_at_(changed_at_.size(), -1),
         backward_at_(changed_at_.size(), -1),
@@ -51,15 +53,11 @@ class RasterSweep {
       std::memcpy(&cells_[Padded(0, y)], &grid.cells()[grid.Index(0, y)],
                   static_cast<size_t>(width_));
     }
-    for (int c = 0; c < 256; ++c) {
-      passable_[c] = Traversable(static_cast<uint8_t>(c), cost.unknown_is_free);
-      factor_[c] = CellFactor(static_cast<uint8_t>(c), cost.cost_weight);
-    }
     ctg_[Padded(goal.x, goal.y)] = 0.0;
     changed_at_[static_cast<size_t>(goal.y) + 1] = 0;
   }
 
-  // Runs passes until one changes nothing. The notes test for change after
+  // Runs passes until one changes nothing. Algorithm 1 tests for change after
   // each forward + backward pair; stopping at the first pass (from the second
   // on) that changes nothing is equivalent and saves up to a pass: the pass
   // before it, in the other direction, left every cell no worse than the
@@ -143,19 +141,19 @@ class RasterSweep {
       bool row_changed = false;
       for (int32_t j = 0; j < width_; ++j) {
         const int32_t x = kStep < 0 ? j : width_ - 1 - j;
-        if (!passable_[c[x]]) {
+        if (!table_.Passable(c[x])) {
           side = kInf;
           continue;
         }
-        double best = std::min(d[x], side + factor_[c[x + kStep]]);
-        if (passable_[cv[x]]) {
-          best = std::min(best, dv[x] + factor_[cv[x]]);
+        double best = std::min(d[x], side + table_.Factor(c[x + kStep]));
+        if (table_.Passable(cv[x])) {
+          best = std::min(best, dv[x] + table_.Factor(cv[x]));
           if constexpr (kEight) {
-            if (passable_[c[x - 1]]) {
-              best = std::min(best, dv[x - 1] + kSqrt2 * factor_[cv[x - 1]]);
+            if (table_.Passable(c[x - 1])) {
+              best = std::min(best, dv[x - 1] + kSqrt2 * table_.Factor(cv[x - 1]));
             }
-            if (passable_[c[x + 1]]) {
-              best = std::min(best, dv[x + 1] + kSqrt2 * factor_[cv[x + 1]]);
+            if (table_.Passable(c[x + 1])) {
+              best = std::min(best, dv[x + 1] + kSqrt2 * table_.Factor(cv[x + 1]));
             }
           }
         }
@@ -177,8 +175,7 @@ class RasterSweep {
   size_t stride_;
   std::vector<uint8_t> cells_;
   std::vector<double> ctg_;
-  std::array<bool, 256> passable_{};
-  std::array<double, 256> factor_{};
+  const CostTable table_;
   // Per padded row: the stamp of the sweep that last changed it (-1: never,
   // 0: the goal's row at the start) and of its last forward and backward
   // sweep. Stamps count row sweeps.
@@ -194,7 +191,7 @@ class RasterSweep {
 // The tail both planners share: descend the field from the start, measure the
 // path, hand the field out when asked for.
 PlanResult FinishFromField(const Grid& grid, const PlanRequest& request,
-                           CostToGoField field, absl::Time started) {
+                           CostToGoField field) {
   PlanResult result;
   result.outcome = field.outcome;
   result.expansions = field.expansions;
@@ -208,57 +205,49 @@ PlanResult FinishFromField(const Grid& grid, const PlanRequest& request,
     }
     if (request.want_cost_to_go) result.cost_to_go = std::move(field.values);
   }
-  result.planning_time = absl::Now() - started;
   return result;
 }
 
-class DistanceTransformPlanner final : public Planner {
+class DistanceTransformPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "distance_transform"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .optimal = true,
-        .cost_to_go = true,
-        .description =
-            "distance transform (seed 000, Jarvis): the goal's "
-            "cost-to-go field by forward/backward raster passes until "
-            "nothing changes, path down the field; optimal, whole map "
-            "per query, passes grow with the map's winding"};
-    return kTraits;
-  }
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& /*scratch*/) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const absl::Time started = absl::Now();
+  DistanceTransformPlanner()
+      : GridPlanner("distance_transform",
+                    PlannerTraits{
+                        .optimal = true,
+                        .cost_to_go = true,
+                        .description =
+                            "distance transform (Jarvis 2004): the goal's "
+                            "cost-to-go field by forward/backward raster passes "
+                            "until nothing changes, path down the field; "
+                            "optimal, whole map per query, passes grow with "
+                            "the map's winding"}) {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     return FinishFromField(
-        grid, request, RasterDistanceTransform(grid, request.goal, request.cost, stop),
-        started);
+        q.grid, q.request,
+        RasterDistanceTransform(q.grid, q.request.goal, q.request.cost, q.stop));
   }
 };
 
-class DistanceTransformExactPlanner final : public Planner {
+class DistanceTransformExactPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "distance_transform_exact"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .optimal = true,
-        .cost_to_go = true,
-        .description =
-            "the distance transform's cost-to-go field by a Dijkstra "
-            "sweep from the goal over the whole map, path down the "
-            "field; optimal"};
-    return kTraits;
-  }
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const absl::Time started = absl::Now();
-    return FinishFromField(
-        grid, request, DijkstraCostToGo(grid, request.goal, request.cost, stop, scratch,
-                                         request.expansion_recorder),
-        started);
+  DistanceTransformExactPlanner()
+      : GridPlanner("distance_transform_exact",
+                    PlannerTraits{
+                        .optimal = true,
+                        .cost_to_go = true,
+                        .description =
+                            "the distance transform's cost-to-go field by a "
+                            "Dijkstra sweep from the goal over the whole map, "
+                            "path down the field; optimal"}) {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
+    return FinishFromField(grid, request,
+                           DijkstraCostToGo(grid, request.goal, request.cost, stop,
+                                            scratch, request.expansion_recorder));
   }
 };
 
@@ -275,37 +264,20 @@ CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& co
                                const StopCondition& stop, SearchScratch& scratch,
                                ExpansionRecorder* recorder) {
   const GridView view(grid, cost);
+  const internal::ReverseGridExpansion expansion(view);
+  const internal::AStarPriority<internal::ZeroHeuristic> priority{};
   scratch.BeginSearch(grid.size());
   internal::OpenList open(scratch);
-  const uint32_t root = view.Index(goal.x, goal.y);
-  scratch.At(root).g = 0.0;
-  open.Push(root, 0.0, 0.0);
-
+  internal::PushRoot(scratch, open, expansion.Id(goal), goal, priority);
   CostToGoField field;
-  while (!open.empty()) {
-    if (const PlanOutcome why = stop.Check(field.expansions, open.Top().f);
-        why != PlanOutcome::kFound) {
-      field.outcome = why;
-      break;
-    }
-    const SearchScratch::OpenEntry settled = open.Pop();
-    ++field.expansions;
-    if (recorder != nullptr) recorder->Record(view.CellOf(settled.index));
-    // Legal moves are symmetric, so the neighbours of `settled` are exactly
-    // the cells with a move into it; that move costs its length times the
-    // factor of `settled`, the cell entered.
-    const double factor = view.Factor(settled.index);
-    const Cell at = view.CellOf(settled.index);
-    view.ForEachNeighbor(at.x, at.y,
-                         [&](uint32_t from, int32_t, int32_t, double move_length) {
-                           SearchScratch::Node& node = scratch.At(from);
-                           if (node.open_pos == SearchScratch::kClosed) return;
-                           const double g = settled.g + move_length * factor;
-                           if (g >= node.g) return;
-                           node.g = g;
-                           open.Push(from, g, g);
-                         });
-  }
+  const PlanOutcome outcome = internal::WithExpansionListener(
+      recorder, expansion, [&](auto listener) {
+        return internal::BestFirstSearch(scratch, open, internal::kNoNode, stop,
+                                         field.expansions, priority, expansion,
+                                         internal::PlainParentUpdate(), listener);
+      });
+  // Without a goal the search ends when OPEN empties: the field is complete.
+  field.outcome = outcome == PlanOutcome::kNoPath ? PlanOutcome::kFound : outcome;
   if (field.outcome == PlanOutcome::kFound) {
     field.values.assign(grid.size(), kInf);
     for (size_t i = 0; i < grid.size(); ++i) {

@@ -1,6 +1,6 @@
 // Goal-rooted cost-to-go fields (the "shortest path map" of DESIGN.md) and the
-// descent that turns one into a path: the raster distance transform of seed
-// 000 (Jarvis 2004) and an exact Dijkstra sweep from the goal. The planners
+// descent that turns one into a path: the raster distance transform (Jarvis
+// 2004) and an exact Dijkstra sweep from the goal. The planners
 // "distance_transform" and "distance_transform_exact" are built on these.
 #ifndef PATHD_CORE_PLANNERS_COST_TO_GO_H_
 #define PATHD_CORE_PLANNERS_COST_TO_GO_H_
@@ -34,7 +34,8 @@ struct CostToGoField {
   int32_t passes = 0;
 };
 
-// Seed 000's "Distance Transform for Path Planning" (Algorithm 1): 0 at the
+// "Distance Transform for Path Planning" (Algorithm 1 of Faigl's lecture "Path
+// Planning", B4M36UIR Lecture 03, after Jarvis 2004): 0 at the
 // goal and infinity elsewhere, then alternating forward raster passes
 // (top-left to bottom-right, each cell taking the best of its already visited
 // neighbours W, N, NW, NE) and backward passes (bottom-right to top-left: E,

@@ -5,95 +5,102 @@
 #include <cstdint>
 #include <memory>
 
-#include "absl/time/clock.h"
-#include "core/search/endpoints.h"
 #include "core/planners/planners.h"
+#include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
-#include "core/status_macros.h"
+#include "core/search/heuristics.h"
 
 namespace pathd {
 namespace {
 
-class DfsPlanner final : public Planner {
- public:
-  std::string_view name() const override { return "dfs"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .description = "depth-first search, nearest-to-goal neighbour first; "
-                       "complete, not optimal"};
-    return kTraits;
+using internal::GridView;
+
+// Depth-first search from `start` until `goal` is popped; each expanded cell
+// goes to `listener`. The caller has called scratch.BeginSearch().
+template <typename Listener>
+PlanOutcome DepthFirst(const GridView& view, uint32_t start, uint32_t goal,
+                       const internal::GridDistanceHeuristic& h,
+                       const StopCondition& stop, SearchScratch& scratch,
+                       int64_t& expansions, Listener listener) {
+  std::vector<uint32_t>& stack = scratch.fifo();
+  scratch.At(start).g = 0.0;
+  stack.push_back(start);
+  // The unvisited neighbours of one cell, pushed farthest from the goal
+  // first so the nearest is popped next: still depth-first, but on open
+  // ground it runs straight at the goal instead of sweeping the map.
+  struct Child {
+    uint32_t index;
+    double h;
+  };
+  Child children[8];
+  while (!stack.empty()) {
+    if (const PlanOutcome why = stop.Check(expansions);
+        why != PlanOutcome::kFound) {
+      return why;
+    }
+    const uint32_t current = stack.back();
+    stack.pop_back();
+    ++expansions;
+    listener.OnExpand(current);
+    if (current == goal) return PlanOutcome::kFound;
+    const Cell at = view.CellOf(current);
+    const double g = scratch.Raw(current).g;
+    int count = 0;
+    view.ForEachNeighbor(
+        at.x, at.y,
+        [&](uint32_t next, int32_t nx, int32_t ny, double move_length) {
+          if (scratch.Seen(next)) return;
+          SearchScratch::Node& node = scratch.At(next);
+          node.parent = current;
+          node.g = g + move_length * view.Factor(next);
+          // Insertion sort, descending h: at most eight entries.
+          const double hn = h(nx, ny);
+          int i = count++;
+          for (; i > 0 && children[i - 1].h < hn; --i)
+            children[i] = children[i - 1];
+          children[i] = Child{next, hn};
+        });
+    for (int i = 0; i < count; ++i) stack.push_back(children[i].index);
   }
+  return PlanOutcome::kNoPath;
+}
 
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const absl::Time started = absl::Now();
-    const internal::GridView view(grid, request.cost);
+class DfsPlanner final : public GridPlanner {
+ public:
+  DfsPlanner()
+      : GridPlanner("dfs", PlannerTraits{.description =
+                                             "depth-first search, "
+                                             "nearest-to-goal neighbour "
+                                             "first; complete, not optimal"}) {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
+    const GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());
-    std::vector<uint32_t>& stack = scratch.fifo();
-
     const uint32_t start = view.Index(request.start.x, request.start.y);
     const uint32_t goal = view.Index(request.goal.x, request.goal.y);
-    scratch.At(start).g = 0.0;
-    stack.push_back(start);
-
+    const internal::GridDistanceHeuristic h{request.goal,
+                                            request.cost.connectivity};
     PlanResult result;
-    result.outcome = PlanOutcome::kNoPath;
-    int64_t expansions = 0;
-    // The unvisited neighbours of one cell, pushed farthest from the goal
-    // first so the nearest is popped next: still depth-first, but on open
-    // ground it runs straight at the goal instead of sweeping the map.
-    struct Child {
-      uint32_t index;
-      double h;
-    };
-    Child children[8];
-    while (!stack.empty()) {
-      if (const PlanOutcome why = stop.Check(expansions); why != PlanOutcome::kFound) {
-        result.outcome = why;
-        break;
-      }
-      const uint32_t current = stack.back();
-      stack.pop_back();
-      ++expansions;
-      internal::RecordExpansion(request, view, current);
-      if (current == goal) {
-        result.outcome = PlanOutcome::kFound;
-        break;
-      }
-      const Cell at = view.CellOf(current);
-      const double g = scratch.Raw(current).g;
-      int count = 0;
-      view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t nx, int32_t ny,
-                                           double move_length) {
-        if (scratch.Seen(next)) return;
-        SearchScratch::Node& node = scratch.At(next);
-        node.parent = current;
-        node.g = g + move_length * view.Factor(next);
-        // Insertion sort, descending h: at most eight entries.
-        const double h =
-            GridDistance(Cell{nx, ny}, request.goal, request.cost.connectivity);
-        int i = count++;
-        for (; i > 0 && children[i - 1].h < h; --i) children[i] = children[i - 1];
-        children[i] = Child{next, h};
-      });
-      for (int i = 0; i < count; ++i) stack.push_back(children[i].index);
-    }
-
-    result.expansions = expansions;
+    result.outcome = internal::WithExpansionListener(
+        request.expansion_recorder, view, [&](auto listener) {
+          return DepthFirst(view, start, goal, h, stop, scratch,
+                            result.expansions, listener);
+        });
     if (result.found()) {
       result.path = internal::TracePath(view, scratch, goal, grid.size());
       result.cost = scratch.Raw(goal).g;
       result.length = internal::PathLength(result.path);
     }
-    result.planning_time = absl::Now() - started;
     return result;
   }
 };
 
 }  // namespace
 
-std::unique_ptr<Planner> MakeDfsPlanner() { return std::make_unique<DfsPlanner>(); }
+std::unique_ptr<Planner> MakeDfsPlanner() {
+  return std::make_unique<DfsPlanner>();
+}
 
 }  // namespace pathd

@@ -6,11 +6,10 @@
 #include <memory>
 
 #include "absl/status/status.h"
-#include "absl/time/clock.h"
-#include "core/search/endpoints.h"
-#include "core/incremental/incremental_search.h"
 #include "core/incremental/engine.h"
+#include "core/incremental/incremental_search.h"
 #include "core/planners/planners.h"
+#include "core/search/grid_planner.h"
 #include "core/status_macros.h"
 
 namespace pathd {
@@ -22,69 +21,66 @@ std::shared_ptr<const Grid> Borrow(const Grid& grid) {
   return std::shared_ptr<const Grid>(std::shared_ptr<const Grid>(), &grid);
 }
 
-class LpaStarPlanner final : public Planner {
+class LpaStarPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "lpa_star"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .optimal = true,
-        .incremental = true,
-        .description = "Lifelong Planning A* (Koenig, Likhachev & Furcy 2004); "
-                       "optimal; repairs after map changes in sessions"};
-    return kTraits;
+  LpaStarPlanner()
+      : GridPlanner(
+            "lpa_star",
+            PlannerTraits{.optimal = true,
+                          .incremental = true,
+                          .description =
+                              "Lifelong Planning A* (Koenig, Likhachev & "
+                              "Furcy 2004); optimal; repairs after map "
+                              "changes in sessions"}) {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    PATHD_ASSIGN_OR_RETURN(std::unique_ptr<LpaStar> lpa,
+                           LpaStar::Create(Borrow(q.grid), q.request.start,
+                                           q.request.goal, q.request.cost));
+    return lpa->Plan(q.stop);
   }
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch&) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+};
+
+class DStarLitePlanner final : public GridPlanner {
+ public:
+  DStarLitePlanner()
+      : GridPlanner(
+            "dstar_lite",
+            PlannerTraits{.optimal = true,
+                          .incremental = true,
+                          .description =
+                              "D* Lite (Koenig & Likhachev 2002), backward "
+                              "from the goal; optimal; repairs as the "
+                              "robot moves and the map changes"}) {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     PATHD_ASSIGN_OR_RETURN(
-        std::unique_ptr<LpaStar> lpa,
-        LpaStar::Create(Borrow(grid), request.start, request.goal, request.cost));
-    return lpa->Plan(stop);
+        std::unique_ptr<DStarLite> dstar,
+        DStarLite::Create(Borrow(q.grid), q.request.goal, q.request.cost));
+    PATHD_RETURN_IF_ERROR(dstar->SetStart(q.request.start));
+    return dstar->Plan(q.stop);
   }
 };
 
-class DStarLitePlanner final : public Planner {
+class ShortestPathMapPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "dstar_lite"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .optimal = true,
-        .incremental = true,
-        .description = "D* Lite (Koenig & Likhachev 2002), backward from the goal; "
-                       "optimal; repairs as the robot moves and the map changes"};
-    return kTraits;
-  }
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch&) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    PATHD_ASSIGN_OR_RETURN(std::unique_ptr<DStarLite> dstar,
-                           DStarLite::Create(Borrow(grid), request.goal, request.cost));
-    PATHD_RETURN_IF_ERROR(dstar->SetStart(request.start));
-    return dstar->Plan(stop);
-  }
-};
+  ShortestPathMapPlanner()
+      : GridPlanner("spm",
+                    PlannerTraits{.optimal = true,
+                                  .incremental = true,
+                                  .cost_to_go = true,
+                                  .description =
+                                      "shortest path map: the goal's full "
+                                      "cost-to-go field (4-byte floats), "
+                                      "descended from the start; optimal"}) {}
 
-class ShortestPathMapPlanner final : public Planner {
- public:
-  std::string_view name() const override { return "spm"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .optimal = true,
-        .incremental = true,
-        .cost_to_go = true,
-        .description = "shortest path map: the goal's full cost-to-go field (4-byte "
-                       "floats), descended from the start; optimal"};
-    return kTraits;
-  }
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch&) const override {
-    const absl::Time started = absl::Now();
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     absl::StatusOr<std::unique_ptr<ShortestPathMap>> map =
-        ShortestPathMap::Build(Borrow(grid), request.goal, request.cost, stop);
+        ShortestPathMap::Build(Borrow(q.grid), q.request.goal, q.request.cost,
+                               q.stop);
     if (!map.ok()) {
       // Build reports a stop as a status; a planner reports it as an outcome.
       PlanResult stopped;
@@ -98,30 +94,31 @@ class ShortestPathMapPlanner final : public Planner {
         case absl::StatusCode::kResourceExhausted:
           // The build stops exactly at the budget.
           stopped.outcome = PlanOutcome::kExpansionLimit;
-          stopped.expansions = stop.max_expansions();
+          stopped.expansions = q.stop.max_expansions();
           break;
         default:
           return map.status();
       }
-      stopped.planning_time = absl::Now() - started;
       return stopped;
     }
-    PATHD_ASSIGN_OR_RETURN(PlanResult result, (*map)->PathFrom(request.start));
+    PATHD_ASSIGN_OR_RETURN(PlanResult result,
+                           (*map)->PathFrom(q.request.start));
     result.expansions += (*map)->last_stats().expansions;
-    if (request.want_cost_to_go) {
+    if (q.request.want_cost_to_go) {
       // What the descent's path from each cell costs, in double: the field
       // itself holds floats.
       PATHD_ASSIGN_OR_RETURN(result.cost_to_go,
                              internal::IncrementalAccess::PathCosts(**map));
     }
-    result.planning_time = absl::Now() - started;
     return result;
   }
 };
 
 }  // namespace
 
-std::unique_ptr<Planner> MakeLpaStarPlanner() { return std::make_unique<LpaStarPlanner>(); }
+std::unique_ptr<Planner> MakeLpaStarPlanner() {
+  return std::make_unique<LpaStarPlanner>();
+}
 std::unique_ptr<Planner> MakeDStarLitePlanner() {
   return std::make_unique<DStarLitePlanner>();
 }

@@ -18,9 +18,9 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
-#include "absl/time/clock.h"
 #include "core/search/path_measure.h"
 #include "core/search/endpoints.h"
+#include "core/search/grid_planner.h"
 #include "core/map/euclidean_distance.h"
 #include "core/search/line_of_sight.h"
 #include "core/planners/planners.h"
@@ -261,24 +261,20 @@ std::vector<Cell> CellChain(const Grid& grid,
   return path;
 }
 
-class PotentialFieldPlanner final : public Planner {
+class PotentialFieldPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "potential_field"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .complete = false,
-        .description =
-            "artificial potential field: gradient descent on goal "
-            "attraction plus obstacle repulsion; heuristic, may stop "
-            "in a local minimum"};
-    return kTraits;
-  }
+  PotentialFieldPlanner()
+      : GridPlanner("potential_field",
+                    PlannerTraits{
+                        .complete = false,
+                        .description =
+                            "artificial potential field: gradient descent on goal "
+                            "attraction plus obstacle repulsion; heuristic, may "
+                            "stop in a local minimum"}) {}
 
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const absl::Time started = absl::Now();
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& query) const override {
+    const auto& [grid, request, stop, scratch] = query;
     const PotentialFieldParams& params = request.potential;
     const internal::GridView view(grid, request.cost);
     const ObstacleDistance obstacles(grid, request.cost,
@@ -408,7 +404,6 @@ class PotentialFieldPlanner final : public Planner {
       result.cost = measure.cost;
       result.length = measure.length;
     }
-    result.planning_time = absl::Now() - started;
     return result;
   }
 };

@@ -1,7 +1,9 @@
 // Theta* (Nash, Daniel, Koenig & Felner, AAAI 2007; Daniel, Nash, Koenig &
 // Felner, JAIR 39, 2010) and Lazy Theta* (Nash, Koenig & Tovey, AAAI 2010):
-// any-angle search as a parent-update policy on the A* loop and open list of
-// best_first.h. A successor may link straight to its parent's parent when the
+// any-angle search as a parent-update policy (ThetaParentUpdate below) on the
+// best-first loop and open list of core/search/best_first.h, with the
+// Euclidean heuristic; Lazy Theta*'s line-of-sight check is the policy's
+// on-pop hook. A successor may link straight to its parent's parent when the
 // segment between them passes LineOfSight, so paths follow segments at any
 // angle between the vertex cells; segment costs are SegmentCost.
 //
@@ -27,23 +29,21 @@
 // 4-connectivity: the grid neighbours (path 1) are the four straight moves;
 // shortcuts (path 2) use the same LineOfSight rule, so segments may still run
 // diagonally, and the bound above is the Manhattan optimum.
-#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
 
-#include "absl/time/clock.h"
-#include "core/search/path_measure.h"
-#include "core/search/endpoints.h"
-#include "core/search/line_of_sight.h"
-#include "core/search/best_first.h"
 #include "core/planners/planners.h"
+#include "core/search/best_first.h"
+#include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
-#include "core/status_macros.h"
+#include "core/search/heuristics.h"
+#include "core/search/line_of_sight.h"
 
 namespace pathd {
 namespace {
 
+using internal::EuclideanHeuristic;
 using internal::GridView;
 using internal::OpenList;
 
@@ -74,119 +74,14 @@ double ProbeSegment(const GridView& view, Cell a, Cell b) {
   return clear ? SegmentLength(a, b) * factor : -1.0;
 }
 
-// Straight-line distance to the goal: admissible and consistent because every
-// segment costs at least its length (cell factors are >= 1).
-struct EuclideanHeuristic {
-  Cell goal;
-  double operator()(Cell c) const {
-    const double dx = static_cast<double>(c.x) - goal.x;
-    const double dy = static_cast<double>(c.y) - goal.y;
-    return std::sqrt(dx * dx + dy * dy);
-  }
-};
-
-// One Theta* (kLazy: Lazy Theta*) query over the caller's SearchScratch.
-// Single use; not thread-safe.
+// Theta*'s parent update (kLazy: Lazy Theta*'s) over the caller's
+// SearchScratch. Single use; not thread-safe.
 template <bool kLazy>
-class AnyAngleSearch {
+class ThetaParentUpdate {
  public:
-  AnyAngleSearch(const Grid& grid, const PlanRequest& request,
-                 SearchScratch& scratch)
-      : grid_(grid),
-        recorder_(request.expansion_recorder),
-        view_(grid, request.cost),
-        scratch_(scratch),
-        open_(scratch),
-        h_{request.goal},
-        start_(view_.Index(request.start.x, request.start.y)),
-        goal_(view_.Index(request.goal.x, request.goal.y)) {}
-
-  PlanResult Run(const StopCondition& stop) {
-    PlanResult result;
-    result.any_angle = true;
-    result.outcome = PlanOutcome::kNoPath;
-    scratch_.BeginSearch(grid_.size());
-    scratch_.At(start_).g = 0.0;
-    open_.Push(start_, h_(view_.CellOf(start_)), 0.0);
-    int64_t expansions = 0;
-    while (!open_.empty()) {
-      if (const PlanOutcome why = stop.Check(expansions, open_.Top().f);
-          why != PlanOutcome::kFound) {
-        result.outcome = why;
-        break;
-      }
-      const uint32_t index = open_.Pop().index;
-      if constexpr (kLazy) {
-        if (!SetVertex(index)) continue;
-      }
-      ++expansions;
-      if (recorder_ != nullptr) recorder_->Record(view_.CellOf(index));
-      if (index == goal_) {
-        result.outcome = PlanOutcome::kFound;
-        break;
-      }
-      Expand(index);
-    }
-    result.expansions = expansions;
-    if (result.found()) {
-      result.path = internal::TracePath(view_, scratch_, goal_, grid_.size());
-      result.cost = scratch_.Raw(goal_).g;
-      for (size_t i = 1; i < result.path.size(); ++i) {
-        result.length += SegmentLength(result.path[i - 1], result.path[i]);
-      }
-    }
-    return result;
-  }
-
- private:
-  // Offers every unexpanded neighbour n of the expanded cell s the better of
-  // path 1 (s, then the move to n) and path 2 (s's parent, then a straight
-  // segment to n); ties go to path 2, which saves a vertex.
-  void Expand(uint32_t index) {
-    const SearchScratch::Node& node = scratch_.Raw(index);
-    const double g = node.g;
-    const uint32_t parent = node.parent;
-    const Cell parent_cell =
-        parent == SearchScratch::kNoParent ? Cell{} : view_.CellOf(parent);
-    const double parent_g =
-        parent == SearchScratch::kNoParent ? 0.0 : scratch_.Raw(parent).g;
-    const Cell at = view_.CellOf(index);
-    view_.ForEachNeighbor(
-        at.x, at.y,
-        [&](uint32_t next, int32_t nx, int32_t ny, double move_length) {
-          SearchScratch::Node& succ = scratch_.At(next);
-          if (succ.open_pos == SearchScratch::kClosed) return;
-          const double factor = view_.Factor(next);
-          double best_g = g + move_length * factor;
-          uint32_t best_parent = index;
-          if (parent != SearchScratch::kNoParent) {
-            const Cell n{nx, ny};
-            // The segment enters n, so it costs at least its length times n's
-            // factor: a lower bound that is exact on uniform maps.
-            const double bound =
-                parent_g + SegmentLength(parent_cell, n) * factor;
-            if constexpr (kLazy) {
-              // Assume line of sight; SetVertex checks it on expansion.
-              if (bound <= best_g) {
-                best_g = bound;
-                best_parent = parent;
-              }
-            } else if (bound <= best_g && bound < succ.g) {
-              // Only walk the segment when it could win.
-              const double segment = ProbeSegment(view_, parent_cell, n);
-              if (segment >= 0.0 && parent_g + segment <= best_g) {
-                best_g = parent_g + segment;
-                best_parent = parent;
-              }
-            }
-          }
-          if (best_g < succ.g) {
-            succ.g = best_g;
-            succ.parent = best_parent;
-            open_.Push(next, best_g + h_(Cell{nx, ny}), best_g);
-          }
-        });
-  }
+  ThetaParentUpdate(const GridView& view, SearchScratch& scratch,
+                    EuclideanHeuristic h)
+      : view_(view), scratch_(scratch), h_(h) {}
 
   // Lazy Theta*'s SetVertex for a cell just taken off the open list: checks
   // the assumed segment from its parent and, when it is blocked or dearer than
@@ -194,7 +89,9 @@ class AnyAngleSearch {
   // cell that generated it is one, so there always is a way in). Returns
   // false when the corrected f is no longer the smallest: the cell is then
   // back in the open list, to be expanded in its turn.
-  bool SetVertex(uint32_t index) {
+  bool OnPop(SearchScratch::OpenEntry& entry, OpenList& open) {
+    if constexpr (!kLazy) return true;
+    const uint32_t index = entry.index;
     SearchScratch::Node& node = scratch_.Raw(index);
     if (node.parent == SearchScratch::kNoParent) return true;  // the start
     const Cell at = view_.CellOf(index);
@@ -219,53 +116,109 @@ class AnyAngleSearch {
         });
     node.g = g;
     node.parent = parent;
-    const double f = g + h_(at);
-    if (!open_.empty() && f > open_.Top().f) {
-      open_.Push(index, f, g);
+    entry.g = g;
+    const double f = g + h_(at.x, at.y);
+    if (!open.empty() && f > open.Top().f) {
+      open.Push(index, f, g);
       return false;
     }
     return true;
   }
 
-  const Grid& grid_;
-  ExpansionRecorder* const recorder_;
-  const GridView view_;
+  // Caches the expanded cell's parent for the successors' path 2.
+  void Prepare(uint32_t index) {
+    parent_ = scratch_.Raw(index).parent;
+    if (parent_ != SearchScratch::kNoParent) {
+      parent_cell_ = view_.CellOf(parent_);
+      parent_g_ = scratch_.Raw(parent_).g;
+    }
+  }
+
+  // Offers the unexpanded neighbour n of the expanded cell s the better of
+  // path 1 (s, then the move to n: `next_g`) and path 2 (s's parent, then a
+  // straight segment to n); ties go to path 2, which saves a vertex.
+  internal::Offer OfferTo(uint32_t index, uint32_t next, int32_t nx, int32_t ny,
+                          double next_g, const SearchScratch::Node& succ) {
+    internal::Offer best{next_g, index};
+    if (parent_ == SearchScratch::kNoParent) return best;
+    const Cell n{nx, ny};
+    // The segment enters n, so it costs at least its length times n's
+    // factor: a lower bound that is exact on uniform maps.
+    const double bound =
+        parent_g_ + SegmentLength(parent_cell_, n) * view_.Factor(next);
+    if constexpr (kLazy) {
+      // Assume line of sight; OnPop checks it on expansion.
+      if (bound <= best.g) best = internal::Offer{bound, parent_};
+    } else if (bound <= best.g && bound < succ.g) {
+      // Only walk the segment when it could win.
+      const double segment = ProbeSegment(view_, parent_cell_, n);
+      if (segment >= 0.0 && parent_g_ + segment <= best.g) {
+        best = internal::Offer{parent_g_ + segment, parent_};
+      }
+    }
+    return best;
+  }
+
+ private:
+  const GridView& view_;
   SearchScratch& scratch_;
-  OpenList open_;
   const EuclideanHeuristic h_;
-  const uint32_t start_;
-  const uint32_t goal_;
+  uint32_t parent_ = SearchScratch::kNoParent;
+  Cell parent_cell_;
+  double parent_g_ = 0.0;
 };
 
+// Theta* (kLazy: Lazy Theta*) from request.start to request.goal.
 template <bool kLazy>
-class ThetaStarPlanner final : public Planner {
- public:
-  std::string_view name() const override {
-    return kLazy ? "lazy_theta_star" : "theta_star";
+PlanResult AnyAngleSearch(const Grid& grid, const PlanRequest& request,
+                          const StopCondition& stop, SearchScratch& scratch) {
+  const GridView view(grid, request.cost);
+  const internal::GridExpansion expansion(view);
+  const EuclideanHeuristic h{request.goal};
+  const internal::AStarPriority<EuclideanHeuristic> priority{h};
+  scratch.BeginSearch(grid.size());
+  OpenList open(scratch);
+  const uint32_t goal = expansion.Id(request.goal);
+  internal::PushRoot(scratch, open, expansion.Id(request.start), request.start,
+                     priority);
+  PlanResult result;
+  result.any_angle = true;
+  result.outcome = internal::WithExpansionListener(
+      request.expansion_recorder, expansion, [&](auto listener) {
+        return internal::BestFirstSearch(
+            scratch, open, goal, stop, result.expansions, priority, expansion,
+            ThetaParentUpdate<kLazy>(view, scratch, h), listener);
+      });
+  if (result.found()) {
+    result.path = internal::TracePath(view, scratch, goal, grid.size());
+    result.cost = scratch.Raw(goal).g;
+    for (size_t i = 1; i < result.path.size(); ++i) {
+      result.length += SegmentLength(result.path[i - 1], result.path[i]);
+    }
   }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .any_angle = true,
-        .description =
-            kLazy
-                ? "Lazy Theta*: Theta* that checks line of sight only when it "
-                  "expands a cell; any-angle, never costlier than the grid "
-                  "optimum"
-                : "Theta*: A* whose successors link to their parent's parent "
-                  "when in line of sight; any-angle, never costlier than the "
-                  "grid optimum"};
-    return kTraits;
-  }
+  return result;
+}
 
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const absl::Time started = absl::Now();
-    AnyAngleSearch<kLazy> search(grid, request, scratch);
-    PlanResult result = search.Run(stop);
-    result.planning_time = absl::Now() - started;
-    return result;
+template <bool kLazy>
+class ThetaStarPlanner final : public GridPlanner {
+ public:
+  ThetaStarPlanner()
+      : GridPlanner(
+            kLazy ? "lazy_theta_star" : "theta_star",
+            PlannerTraits{
+                .any_angle = true,
+                .description =
+                    kLazy
+                        ? "Lazy Theta*: Theta* that checks line of sight only "
+                          "when it expands a cell; any-angle, never costlier "
+                          "than the grid optimum"
+                        : "Theta*: A* whose successors link to their parent's "
+                          "parent when in line of sight; any-angle, never "
+                          "costlier than the grid optimum"}) {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    return AnyAngleSearch<kLazy>(q.grid, q.request, q.stop, q.scratch);
   }
 };
 

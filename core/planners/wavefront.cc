@@ -1,20 +1,18 @@
-// The wave-front planner of seed 004 ("Path Planning in Discrete Sampled
-// Space"; NF1 of Barraquand, Langlois & Latombe 1992): label the goal 2, give
-// every unlabelled free neighbour of a cell labelled L the label L + 1 until
-// the start is labelled, then walk from the start to a neighbour labelled one
-// less until the goal. The labels count moves, so the path has the fewest
+// The wave-front planner of the lecture "Path Planning in Discrete Sampled
+// Space" (its "Wave-Front Planner"; NF1 of Barraquand, Langlois & Latombe
+// 1992): label the goal 2, give every unlabelled free neighbour of a cell
+// labelled L the label L + 1 until the start is labelled, then walk from the
+// start to a neighbour labelled one less until the goal. The labels count moves, so the path has the fewest
 // moves; cell costs only decide what is blocked.
-#include "core/search/endpoints.h"
 #include "core/planners/wavefront.h"
 
 #include <memory>
 #include <vector>
 
-#include "absl/time/clock.h"
 #include "core/planners/planners.h"
+#include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
 #include "core/search/search_scratch.h"
-#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -32,12 +30,12 @@ struct FloodEnd {
 // Floods from `goal`, storing each reached cell's label minus kWavefrontGoal
 // (its move count) in its scratch record's g. The FIFO hands out cells in
 // label order, so when the next cell to expand carries the start's label the
-// layer that labelled the start is complete: the notes' loop ends exactly
+// layer that labelled the start is complete: the lecture's loop ends exactly
 // there. `start` == kNoCell floods every reachable cell. The caller has called
-// scratch.BeginSearch(). Expanded cells go to `recorder` unless it is null.
+// scratch.BeginSearch(). Each expanded cell goes to `listener`.
+template <typename Listener>
 FloodEnd Flood(const GridView& view, uint32_t goal, uint32_t start,
-               const StopCondition& stop, SearchScratch& scratch,
-               ExpansionRecorder* recorder) {
+               const StopCondition& stop, SearchScratch& scratch, Listener listener) {
   std::vector<uint32_t>& queue = scratch.fifo();
   scratch.At(goal).g = 0.0;
   queue.push_back(goal);
@@ -52,8 +50,8 @@ FloodEnd Flood(const GridView& view, uint32_t goal, uint32_t start,
       return {why, expansions};
     }
     ++expansions;
+    listener.OnExpand(current);
     const Cell at = view.CellOf(current);
-    if (recorder != nullptr) recorder->Record(at);
     view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t, int32_t, double) {
       if (scratch.Seen(next)) return;
       scratch.At(next).g = moves + 1.0;
@@ -64,7 +62,7 @@ FloodEnd Flood(const GridView& view, uint32_t goal, uint32_t start,
   return {reached ? PlanOutcome::kFound : PlanOutcome::kNoPath, expansions};
 }
 
-// Walks from the labelled `start` down the labels to the goal. The notes allow
+// Walks from the labelled `start` down the labels to the goal. The lecture allows
 // "any connected cell with label L - 1"; this takes the first in the cost
 // model's move order (+x, -x, +y, -y, then the diagonals (+1,+1), (+1,-1),
 // (-1,+1), (-1,-1)). Such a neighbour always exists: the cell that labelled a
@@ -87,30 +85,30 @@ std::vector<Cell> Descend(const GridView& view, const SearchScratch& scratch,
   return path;
 }
 
-class WavefrontPlanner final : public Planner {
+class WavefrontPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "wavefront"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .fewest_moves = true,
-        .description =
-            "wave-front planner (seed 004): labels flooded from the "
-            "goal until the start is labelled, path down the labels; "
-            "fewest moves, ignores cell costs except for blocking"};
-    return kTraits;
-  }
+  WavefrontPlanner()
+      : GridPlanner("wavefront",
+                    PlannerTraits{
+                        .fewest_moves = true,
+                        .description =
+                            "wave-front planner (NF1; Barraquand, Langlois & "
+                            "Latombe 1992): labels flooded from the goal until "
+                            "the start is labelled, path down the labels; "
+                            "fewest moves, ignores cell costs except for "
+                            "blocking"}) {}
 
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& scratch) const override {
-    PATHD_RETURN_IF_ERROR(ValidateRequest(grid, request, name(), traits()));
-    const absl::Time started = absl::Now();
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());
     const uint32_t start = view.Index(request.start.x, request.start.y);
-    const FloodEnd end =
-        Flood(view, view.Index(request.goal.x, request.goal.y), start, stop, scratch,
-              request.expansion_recorder);
+    const FloodEnd end = internal::WithExpansionListener(
+        request.expansion_recorder, view, [&](auto listener) {
+          return Flood(view, view.Index(request.goal.x, request.goal.y), start, stop,
+                       scratch, listener);
+        });
 
     PlanResult result;
     result.outcome = end.outcome;
@@ -118,7 +116,6 @@ class WavefrontPlanner final : public Planner {
     if (result.found()) {
       SetMeasuredPath(grid, request.cost, Descend(view, scratch, start), &result);
     }
-    result.planning_time = absl::Now() - started;
     return result;
   }
 };
@@ -133,7 +130,7 @@ WavefrontLabelling WavefrontLabels(const Grid& grid, Cell goal, const CostParams
   const FloodEnd end =
       Flood(view, view.Index(goal.x, goal.y),
             start.has_value() ? view.Index(start->x, start->y) : kNoCell, stop, scratch,
-            /*recorder=*/nullptr);
+            internal::NullListener());
 
   WavefrontLabelling labelling;
   labelling.outcome = end.outcome;

@@ -1,7 +1,8 @@
-// The wave-front planner's label grid (seed 004, "Wave-Front Planner"):
-// obstacles 1, the goal 2, and every other reached cell one more than the
-// neighbour the wave came from. Exposed so tests and visualisations can
-// compare labels with the lecture notes; the planner itself is "wavefront".
+// The wave-front planner's label grid (the "Wave-Front Planner" of the lecture
+// "Path Planning in Discrete Sampled Space"): obstacles 1, the goal 2, and
+// every other reached cell one more than the neighbour the wave came from.
+// Exposed so tests and visualisations can compare labels with the lecture's
+// worked example; the planner itself is "wavefront".
 #ifndef PATHD_CORE_PLANNERS_WAVEFRONT_H_
 #define PATHD_CORE_PLANNERS_WAVEFRONT_H_
 
@@ -33,9 +34,9 @@ struct WavefrontLabelling {
   int64_t expansions = 0;
 };
 
-// Floods labels from `goal` under cost.connectivity (4: exactly the notes'
+// Floods labels from `goal` under cost.connectivity (4: exactly the lecture's
 // moves; 8: the diagonal moves too, without corner cutting). With a start the
-// flood stops like the notes' loop "while start cell is unlabelled": after the
+// flood stops like the lecture's loop "while start cell is unlabelled": after the
 // layer that labels the start, so every cell labelled at most the start's
 // label is labelled and none beyond; without one it labels every reachable
 // cell. Cell costs only decide what is blocked. Precondition: the goal (and

@@ -22,7 +22,7 @@ constexpr double kRelativeSlack = 1e-12;
 std::vector<Cell> SimplifyOnce(const Grid& grid, const CostParams& cost,
                                const std::vector<Cell>& path,
                                const std::vector<double>& prefix) {
-  // Ray shooting as in the seed, but with LineOfSight's supercover instead of
+  // Ray shooting as in the lecture, but with LineOfSight's supercover instead of
   // a plain Bresenham line: Bresenham picks one cell per column (or row), so
   // where the segment crosses from one row to the next inside a column it
   // never looks at the second cell and can clip the corner of an obstacle

@@ -1,6 +1,7 @@
 // Path simplification as post-processing for any planner's result: keeps
-// only the "turn" cells of a ray-shooting pass over the path (seed 000, "Path
-// Simplification"), joined by straight segments that pass LineOfSight.
+// only the "turn" cells of a ray-shooting pass over the path ("Path
+// Simplification" in Faigl's lecture "Path Planning", B4M36UIR Lecture 03),
+// joined by straight segments that pass LineOfSight.
 #ifndef PATHD_CORE_POSTPROCESS_PATH_SIMPLIFY_H_
 #define PATHD_CORE_POSTPROCESS_PATH_SIMPLIFY_H_
 

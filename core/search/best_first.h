@@ -1,179 +1,237 @@
-// The one best-first search loop behind A*, Dijkstra, weighted A* and greedy
-// best-first: a binary-heap open list with decrease-key over the per-thread
-// SearchScratch, parameterised by a priority policy (the open-list key of a
-// node from its g and cell) and an expansion listener that compiles away when
-// unused (after warthog's unidirectional_search<H, E, Q, L>).
+// The one best-first search loop of the grid planners, parameterised by
+// policies after warthog's unidirectional_search<H, E, Q, L>: a priority (the
+// open-list key), an expansion policy (node ids and successors: grid cells,
+// reversed grid moves, JPS jump points), a parent-update policy (plain, or
+// Theta*'s any-angle parents with Lazy Theta*'s on-pop check), a listener (one
+// call per expansion, compiled away when unused) and a halt predicate (the
+// real-time look-ahead's budget). A*, Dijkstra, weighted A*, greedy, Theta*,
+// Lazy Theta*, JPS, the RTAA*/LRTA* look-ahead and the backward cost-to-go
+// sweep all run on it.
 #ifndef PATHD_CORE_SEARCH_BEST_FIRST_H_
 #define PATHD_CORE_SEARCH_BEST_FIRST_H_
 
 #include <cstdint>
-#include <limits>
-#include <type_traits>
 #include <utility>
-#include <vector>
 
-#include "absl/time/clock.h"
-#include "core/search/endpoints.h"
-#include "core/search/planner.h"
 #include "core/search/grid_view.h"
+#include "core/search/heuristics.h"
+#include "core/search/open_list.h"
+#include "core/search/planner.h"
 #include "core/search/search_scratch.h"
 
 namespace pathd::internal {
 
-// Binary min-heap on (f, -g) stored in scratch.open(); each node's position is
-// kept in its SearchScratch record for O(log n) decrease-key. Ties on f go to
-// the larger g (the deeper node), which makes A* reach the goal with fewer
-// expansions on open ground.
-class OpenList {
- public:
-  explicit OpenList(SearchScratch& scratch) : scratch_(scratch), heap_(scratch.open()) {}
+// A goal id that no node has: the search runs until OPEN empties or halts.
+inline constexpr uint32_t kNoNode = SearchScratch::kNoParent;
 
-  bool empty() const { return heap_.empty(); }
-  size_t size() const { return heap_.size(); }
+// ---- Priorities: f(g, node) for the open list. ----
+// Each is called as priority(g, id, x, y) for node `id` at cell (x, y).
 
-  // Inserts `index` or changes its key if it is already open. A lower g
-  // usually lowers f, but not under every priority (greedy's f = h keeps f and
-  // loses the larger-g tie-break), so the entry may have to move either way.
-  void Push(uint32_t index, double f, double g) {
-    SearchScratch::Node& node = scratch_.Raw(index);
-    if (node.open_pos >= 0) {
-      SearchScratch::OpenEntry& entry = heap_[node.open_pos];
-      const SearchScratch::OpenEntry updated{f, g, index};
-      const bool better = Before(updated, entry);
-      entry = updated;
-      if (better) {
-        SiftUp(node.open_pos);
-      } else {
-        SiftDown(node.open_pos);
-      }
-      return;
-    }
-    heap_.push_back({f, g, index});
-    SiftUp(static_cast<int32_t>(heap_.size() - 1));
+// f = g + h: A* (optimal for a consistent h), Dijkstra with ZeroHeuristic.
+template <typename H>
+struct AStarPriority {
+  H h;
+  double operator()(double g, uint32_t, int32_t x, int32_t y) const {
+    return g + h(x, y);
   }
-
-  // Removes and returns the best entry; the node is marked closed.
-  SearchScratch::OpenEntry Pop() {
-    SearchScratch::OpenEntry top = heap_.front();
-    scratch_.Raw(top.index).open_pos = SearchScratch::kClosed;
-    const SearchScratch::OpenEntry last = heap_.back();
-    heap_.pop_back();
-    if (!heap_.empty()) {
-      heap_[0] = last;
-      scratch_.Raw(last.index).open_pos = 0;
-      SiftDown(0);
-    }
-    return top;
-  }
-
-  const SearchScratch::OpenEntry& Top() const { return heap_.front(); }
-
- private:
-  static bool Before(const SearchScratch::OpenEntry& a,
-                     const SearchScratch::OpenEntry& b) {
-    return a.f < b.f || (a.f == b.f && a.g > b.g);
-  }
-
-  void SiftUp(int32_t pos) {
-    const SearchScratch::OpenEntry moving = heap_[pos];
-    while (pos > 0) {
-      const int32_t parent = (pos - 1) / 2;
-      if (!Before(moving, heap_[parent])) break;
-      heap_[pos] = heap_[parent];
-      scratch_.Raw(heap_[pos].index).open_pos = pos;
-      pos = parent;
-    }
-    heap_[pos] = moving;
-    scratch_.Raw(moving.index).open_pos = pos;
-  }
-
-  void SiftDown(int32_t pos) {
-    const SearchScratch::OpenEntry moving = heap_[pos];
-    const int32_t n = static_cast<int32_t>(heap_.size());
-    while (true) {
-      int32_t child = 2 * pos + 1;
-      if (child >= n) break;
-      if (child + 1 < n && Before(heap_[child + 1], heap_[child])) ++child;
-      if (!Before(heap_[child], moving)) break;
-      heap_[pos] = heap_[child];
-      scratch_.Raw(heap_[pos].index).open_pos = pos;
-      pos = child;
-    }
-    heap_[pos] = moving;
-    scratch_.Raw(moving.index).open_pos = pos;
-  }
-
-  SearchScratch& scratch_;
-  std::vector<SearchScratch::OpenEntry>& heap_;
 };
 
-// Runs best-first search from request.start to request.goal, expanding nodes
-// in increasing order of `priority(g, x, y)` (ties to the larger g). Closed
-// nodes are never reopened, so the path is optimal only for a priority
-// g + h(x, y) with h consistent, and within w times the optimum for
-// g + w * h(x, y) (Likhachev, Gordon & Thrun 2003). Precondition:
-// ValidateEndpoints passed and the grid has fewer than 2^32 - 1 cells.
-template <typename Priority, typename Listener = NullListener>
-PlanResult BestFirstSearch(const Grid& grid, const PlanRequest& request,
-                           const StopCondition& stop, SearchScratch& scratch,
-                           Priority&& priority, Listener&& listener = Listener()) {
-  if constexpr (std::is_same_v<std::decay_t<Listener>, NullListener>) {
-    // Decided once per search, so the loop that records nothing tests
-    // nothing per expansion.
-    if (request.expansion_recorder != nullptr) {
-      return BestFirstSearch(grid, request, stop, scratch, priority,
-                             RecordingListener{*request.expansion_recorder,
-                                               grid.width()});
-    }
+// f = g + w * h: w > 1 trades path cost (at most w times the optimum,
+// Likhachev, Gordon & Thrun 2003) for fewer expansions.
+template <typename H>
+struct WeightedPriority {
+  H h;
+  double w;
+  double operator()(double g, uint32_t, int32_t x, int32_t y) const {
+    return g + w * h(x, y);
   }
-  const absl::Time started = absl::Now();
-  const GridView view(grid, request.cost);
-  scratch.BeginSearch(grid.size());
-  OpenList open(scratch);
+};
 
-  const uint32_t start = view.Index(request.start.x, request.start.y);
-  const uint32_t goal = view.Index(request.goal.x, request.goal.y);
-  SearchScratch::Node& root = scratch.At(start);
-  root.g = 0.0;
-  open.Push(start, priority(0.0, request.start.x, request.start.y), 0.0);
+// f = h: expands whatever looks closest to the goal, whatever it cost to
+// reach. Ties on h still go to the larger g, the search's current direction.
+template <typename H>
+struct GreedyPriority {
+  H h;
+  double operator()(double, uint32_t, int32_t x, int32_t y) const {
+    return h(x, y);
+  }
+};
 
-  PlanResult result;
-  result.outcome = PlanOutcome::kNoPath;
-  int64_t expansions = 0;
+// ---- Expansion policies: node ids and successors. ----
+// Id(cell) numbers a cell's node, CellOf(id) inverts it, and
+// ForEachSuccessor(id, g, visit) calls visit(next_id, nx, ny, next_g) for every
+// successor with the g it would get through `id` (reached at cost g).
+
+// Grid cells (row-major indices) and the moves GridView allows; a move costs
+// its length times the factor of the cell it enters.
+class GridExpansion {
+ public:
+  explicit GridExpansion(const GridView& view) : view_(view) {}
+  uint32_t Id(Cell c) const { return view_.Index(c.x, c.y); }
+  Cell CellOf(uint32_t id) const { return view_.CellOf(id); }
+  template <typename Visit>
+  void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
+    const Cell at = view_.CellOf(id);
+    view_.ForEachNeighbor(
+        at.x, at.y,
+        [&](uint32_t next, int32_t nx, int32_t ny, double move_length) {
+          visit(next, nx, ny, g + move_length * view_.Factor(next));
+        });
+  }
+
+ private:
+  const GridView& view_;
+};
+
+// Grid cells with moves reversed, for searches rooted at the goal: legal moves
+// are symmetric, so the predecessors of a cell are its neighbours, and each
+// pays the factor of the cell it enters, the expanded one.
+class ReverseGridExpansion {
+ public:
+  explicit ReverseGridExpansion(const GridView& view) : view_(view) {}
+  uint32_t Id(Cell c) const { return view_.Index(c.x, c.y); }
+  Cell CellOf(uint32_t id) const { return view_.CellOf(id); }
+  template <typename Visit>
+  void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
+    const double factor = view_.Factor(id);
+    const Cell at = view_.CellOf(id);
+    view_.ForEachNeighbor(
+        at.x, at.y,
+        [&](uint32_t prev, int32_t px, int32_t py, double move_length) {
+          visit(prev, px, py, g + move_length * factor);
+        });
+  }
+
+ private:
+  const GridView& view_;
+};
+
+// ---- Parent-update policies. ----
+// OnPop(entry, open) runs on each node taken off OPEN before it counts as
+// expanded: it may correct entry.g (and the node's record) or put the node
+// back into `open` and return false to skip it. Prepare(id) runs once per
+// expansion before the successors; Offer(...) returns the g and parent a
+// successor is offered (the loop keeps it only when it beats the node's g).
+
+struct Offer {
+  double g;
+  uint32_t parent;
+};
+
+// The expanded node is every successor's parent (A* and friends, JPS).
+struct PlainParentUpdate {
+  bool OnPop(SearchScratch::OpenEntry&, OpenList&) { return true; }
+  void Prepare(uint32_t) {}
+  Offer OfferTo(uint32_t id, uint32_t, int32_t, int32_t, double next_g,
+                const SearchScratch::Node&) {
+    return Offer{next_g, id};
+  }
+};
+
+// ---- Halt predicates. ----
+// halt(open, expansions) is asked before every pop (OPEN not empty) and ends
+// the search with kFound when true.
+
+struct NeverHalt {
+  bool operator()(const OpenList&, int64_t) const { return false; }
+};
+
+// Seeds the search with its root node at g = 0. The caller has called
+// scratch.BeginSearch().
+template <typename Priority>
+void PushRoot(SearchScratch& scratch, OpenList& open, uint32_t id, Cell cell,
+              const Priority& priority) {
+  scratch.At(id).g = 0.0;
+  open.Push(id, priority(0.0, id, cell.x, cell.y), 0.0);
+}
+
+// Runs best-first search on the seeded `open` until the node `goal` is taken
+// off it (kFound; kNoNode: never), OPEN empties (kNoPath), `halt` holds
+// (kFound) or `stop` fires (its outcome). Nodes are expanded in increasing
+// priority (ties to the larger g) and never reopened, so with the plain
+// parent update the path is optimal only for a priority g + h with h
+// consistent. `expansions` is read as the count so far (stop is polled on the
+// running total) and advanced by the nodes expanded here. Precondition: the
+// expansion policy's ids index the records of `scratch`.
+template <typename Priority, typename Expansion,
+          typename ParentUpdate = PlainParentUpdate,
+          typename Listener = NullListener, typename Halt = NeverHalt>
+PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open,
+                            uint32_t goal, const StopCondition& stop,
+                            int64_t& expansions, const Priority& priority,
+                            const Expansion& expansion,
+                            ParentUpdate&& update = ParentUpdate(),
+                            Listener&& listener = Listener(),
+                            Halt&& halt = Halt()) {
+  // A local count: the caller's may live where every store in the loop could
+  // alias it.
+  int64_t expanded = expansions;
+  PlanOutcome outcome = PlanOutcome::kNoPath;
   while (!open.empty()) {
-    if (const PlanOutcome why = stop.Check(expansions, open.Top().f);
-        why != PlanOutcome::kFound) {
-      result.outcome = why;
+    if (halt(open, expanded)) {
+      outcome = PlanOutcome::kFound;
       break;
     }
-    const SearchScratch::OpenEntry best = open.Pop();
-    ++expansions;
+    if (const PlanOutcome why = stop.Check(expanded, open.Top().f);
+        why != PlanOutcome::kFound) {
+      outcome = why;
+      break;
+    }
+    SearchScratch::OpenEntry best = open.Pop();
+    if (!update.OnPop(best, open)) continue;
+    ++expanded;
     listener.OnExpand(best.index);
     if (best.index == goal) {
-      result.outcome = PlanOutcome::kFound;
+      outcome = PlanOutcome::kFound;
       break;
     }
-    const Cell at = view.CellOf(best.index);
-    const double g = best.g;
-    view.ForEachNeighbor(at.x, at.y, [&](uint32_t next, int32_t nx, int32_t ny,
-                                         double move_length) {
-      SearchScratch::Node& node = scratch.At(next);
-      if (node.open_pos == SearchScratch::kClosed) return;
-      const double next_g = g + move_length * view.Factor(next);
-      if (next_g >= node.g) return;
-      node.g = next_g;
-      node.parent = best.index;
-      open.Push(next, priority(next_g, nx, ny), next_g);
-    });
+    update.Prepare(best.index);
+    expansion.ForEachSuccessor(
+        best.index, best.g,
+        [&](uint32_t next, int32_t nx, int32_t ny, double next_g) {
+          SearchScratch::Node& node = scratch.At(next);
+          if (node.open_pos == SearchScratch::kClosed) return;
+          const Offer offer =
+              update.OfferTo(best.index, next, nx, ny, next_g, node);
+          if (offer.g >= node.g) return;
+          node.g = offer.g;
+          node.parent = offer.parent;
+          open.Push(next, priority(offer.g, next, nx, ny), offer.g);
+        });
   }
+  expansions = expanded;
+  return outcome;
+}
 
-  result.expansions = expansions;
-  if (result.outcome == PlanOutcome::kFound) {
+// Best-first search over grid cells from request.start to request.goal with
+// the plain parent update: A*, Dijkstra, weighted A* and greedy, which differ
+// only in `priority`. Records expansions when the request asks. Sets the
+// result's outcome, expansions, path, cost and length (not planning_time).
+// Precondition: ValidateEndpoints passed and the grid has fewer than
+// 2^32 - 1 cells.
+template <typename Priority>
+PlanResult GridBestFirstSearch(const Grid& grid, const PlanRequest& request,
+                               const StopCondition& stop,
+                               SearchScratch& scratch,
+                               const Priority& priority) {
+  const GridView view(grid, request.cost);
+  const GridExpansion expansion(view);
+  scratch.BeginSearch(grid.size());
+  OpenList open(scratch);
+  const uint32_t goal = expansion.Id(request.goal);
+  PushRoot(scratch, open, expansion.Id(request.start), request.start, priority);
+  PlanResult result;
+  result.outcome = WithExpansionListener(
+      request.expansion_recorder, expansion, [&](auto listener) {
+        return BestFirstSearch(scratch, open, goal, stop, result.expansions,
+                               priority, expansion, PlainParentUpdate(),
+                               listener);
+      });
+  if (result.found()) {
     result.path = TracePath(view, scratch, goal, grid.size());
     result.cost = scratch.Raw(goal).g;
     result.length = PathLength(result.path);
   }
-  result.planning_time = absl::Now() - started;
   return result;
 }
 

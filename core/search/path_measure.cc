@@ -2,9 +2,9 @@
 #include "core/search/path_measure.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <vector>
 
+#include "core/search/grid_view.h"
 #include "core/search/line_of_sight.h"
 
 namespace pathd {
@@ -51,22 +51,11 @@ std::string_view MoveFaultName(MoveFault fault) {
 }
 
 MoveFault CheckMove(const Grid& grid, Cell a, Cell b, const CostParams& cost) {
-  // int64: cells given by clients may be anywhere in int32.
-  const int64_t dx = int64_t{b.x} - a.x;
-  const int64_t dy = int64_t{b.y} - a.y;
-  if (std::abs(dx) > 1 || std::abs(dy) > 1 || (dx == 0 && dy == 0)) {
-    return MoveFault::kNotAdjacent;
-  }
-  if (dx == 0 || dy == 0) return MoveFault::kNone;
-  if (cost.connectivity != Connectivity::kEight) {
-    return MoveFault::kDiagonalOnFourConnected;
-  }
-  auto open = [&](int32_t x, int32_t y) {
-    return grid.InBounds(x, y) &&
-           Traversable(grid.cost(x, y), cost.unknown_is_free);
-  };
-  if (!open(b.x, a.y) || !open(a.x, b.y)) return MoveFault::kCornerCut;
-  return MoveFault::kNone;
+  return internal::MoveRule::Check(
+      a, b, cost.connectivity, [&](int32_t x, int32_t y) {
+        return grid.InBounds(x, y) &&
+               Traversable(grid.cost(x, y), cost.unknown_is_free);
+      });
 }
 
 PathMeasure MeasurePath(const Grid& grid, const std::vector<Cell>& path,

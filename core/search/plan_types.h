@@ -24,7 +24,8 @@ enum class AttractiveShape {
   kConic,
 };
 
-// Parameters of the artificial potential field planner (seeds 001/003/004).
+// Parameters of the artificial potential field planner (Khatib 1986; Choset
+// et al., "Principles of Robot Motion", ch. 4).
 // Distances are in cells.
 struct PotentialFieldParams {
   AttractiveShape attractive = AttractiveShape::kQuadratic;

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "absl/flags/flag.h"
@@ -31,6 +32,10 @@ ABSL_FLAG(std::string, maps, "",
 ABSL_FLAG(std::string, planners, "astar,dijkstra,bfs",
           "comma-separated planner names");
 ABSL_FLAG(int, limit, 1000, "use at most the first N scenarios of each map (0 = all)");
+ABSL_FLAG(int, sample, 0,
+          "use N scenarios spread evenly over each map's whole scenario file "
+          "(scenario floor((i + 1/2) * size / N) for i < N), instead of --limit's "
+          "first N, which are the shortest; 0 = off");
 ABSL_FLAG(int, repeat, 1, "run each query this many times (reports the per-query mean)");
 ABSL_FLAG(double, heuristic_weight, 1.5, "weighted_astar's w");
 ABSL_FLAG(int, lookahead, 64, "rtaa_star / lrta_star expansions per episode");
@@ -108,7 +113,7 @@ Figures Run(const pathd::Planner& planner, const pathd::Grid& grid,
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "pathd_bench [--movingai_dir DIR] [--maps a.map,b.map] [--planners astar,...] "
-      "[--limit N] [--heuristic_weight W] [--lookahead N] [--max_expansions N]\n"
+      "[--limit N | --sample N] [--heuristic_weight W] [--lookahead N] [--max_expansions N]\n"
       "Prints per map and planner: queries, paths found, mean/p95 us per query, "
       "expansions per query and per second, mean length / optimal length, and "
       "the speed-up over A* (astar/x: A*'s mean time over this planner's).");
@@ -130,8 +135,9 @@ int main(int argc, char** argv) {
   const int repeat = std::max(1, absl::GetFlag(FLAGS_repeat));
 
   std::printf("pathd_bench: %u hardware threads, single-threaded queries, limit %d, "
-              "repeat %d\n",
-              std::thread::hardware_concurrency(), limit, repeat);
+              "sample %d, repeat %d\n",
+              std::thread::hardware_concurrency(), limit, absl::GetFlag(FLAGS_sample),
+              repeat);
   std::printf("%-28s %-24s %7s %6s %10s %10s %12s %10s %8s %9s\n", "map", "planner",
               "queries", "found", "mean_us", "p95_us", "expansions", "exp_per_s",
               "len/opt", "astar/x");
@@ -149,7 +155,17 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::vector<pathd::Scenario> scenarios = file->scenarios;
-    if (limit > 0 && static_cast<int>(scenarios.size()) > limit) scenarios.resize(limit);
+    const int sample = absl::GetFlag(FLAGS_sample);
+    if (sample > 0 && static_cast<int>(scenarios.size()) > sample) {
+      std::vector<pathd::Scenario> picked;
+      const double stride = static_cast<double>(scenarios.size()) / sample;
+      for (int i = 0; i < sample; ++i) {
+        picked.push_back(scenarios[static_cast<size_t>(i * stride + stride / 2)]);
+      }
+      scenarios = std::move(picked);
+    } else if (limit > 0 && static_cast<int>(scenarios.size()) > limit) {
+      scenarios.resize(limit);
+    }
     double astar_mean = 0;
     for (const std::string& planner_name : planners) {
       const pathd::Planner* planner = pathd::PlannerRegistry::Default().Get(planner_name);

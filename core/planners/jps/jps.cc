@@ -23,6 +23,10 @@
 // They live in the SearchScratch between queries; each query re-packs the
 // grid to check they still match it (a Grid may be edited in place) and
 // derives the rest again only if something changed.
+//
+// The search is the best-first loop of core/search/best_first.h with
+// JpsExpansion as its expansion policy (node ids are jump-point ids, the
+// successors the jump points the scans find) and the octile heuristic.
 #include <algorithm>
 #include <bit>
 #include <cstdint>
@@ -30,13 +34,13 @@
 #include <memory>
 #include <vector>
 
-#include "absl/time/clock.h"
-#include "core/search/path_measure.h"
-#include "core/search/endpoints.h"
-#include "core/search/best_first.h"
 #include "core/planners/jps/bit_grid.h"
 #include "core/planners/planners.h"
-#include "core/status_macros.h"
+#include "core/search/best_first.h"
+#include "core/search/endpoints.h"
+#include "core/search/grid_planner.h"
+#include "core/search/heuristics.h"
+#include "core/search/path_measure.h"
 
 namespace pathd {
 namespace {
@@ -289,87 +293,41 @@ struct JpsScratch final : public SearchScratch::Extension {
   }
 };
 
-// One JPS query. Searches with unit cell factor (the map's single factor
-// scales every path alike); the caller scales the reported cost. Node records
-// in the SearchScratch are indexed by JumpPointTable ids, not cells.
-class JpsSearch {
+// The expansion policy of one JPS query: node ids are JumpPointTable ids (so
+// the SearchScratch records are indexed by them, not by cells), successors are
+// the jump points (and the goal) the scans from a node find, pruned by the
+// direction its parent reached it in. Searches with unit cell factor (the
+// map's single factor scales every path alike); the caller scales the
+// reported cost. Single use; not thread-safe.
+class JpsExpansion {
  public:
-  // Expanded jump points go to `recorder` unless it is null.
-  JpsSearch(const JpsMap& map, JumpPointTable& points, int32_t width,
-            SearchScratch& scratch, Cell goal, ExpansionRecorder* recorder)
+  JpsExpansion(const JpsMap& map, JumpPointTable& points, int32_t width,
+               const SearchScratch& scratch, Cell goal)
       : map_(map),
         rows_(map.rows()),
         points_(points),
         width_(width),
         scratch_(scratch),
-        open_(scratch),
-        goal_(goal),
-        recorder_(recorder) {}
+        goal_(goal) {}
 
-  // Searches from `start`; returns kFound, kNoPath or the stop condition's
-  // outcome. `expansions` counts the jump points taken from the open list.
-  // On kFound, goal_id() names the goal's record.
-  PlanOutcome Run(Cell start, const StopCondition& stop, int64_t& expansions) {
-    const uint32_t start_id =
-        points_.Id(Index(start.x, start.y), start.x, start.y);
-    goal_id_ = points_.Id(Index(goal_.x, goal_.y), goal_.x, goal_.y);
-    scratch_.At(start_id).g = 0.0;
-    open_.Push(start_id, H(start.x, start.y), 0.0);
-    while (!open_.empty()) {
-      if (const PlanOutcome why = stop.Check(expansions, open_.Top().f);
-          why != PlanOutcome::kFound) {
-        return why;
-      }
-      const SearchScratch::OpenEntry best = open_.Pop();
-      ++expansions;
-      if (recorder_ != nullptr) {
-        const JumpPoint& p = points_.point(best.index);
-        recorder_->Record(Cell{p.x, p.y});
-      }
-      if (best.index == goal_id_) return PlanOutcome::kFound;
-      Expand(best.index, best.g);
-    }
-    return PlanOutcome::kNoPath;
+  uint32_t Id(Cell c) const { return points_.Id(Index(c.x, c.y), c.x, c.y); }
+  Cell CellOf(uint32_t id) const {
+    const JumpPoint& p = points_.point(id);
+    return Cell{p.x, p.y};
   }
 
-  uint32_t goal_id() const { return goal_id_; }
-
- private:
-  uint32_t Index(int32_t x, int32_t y) const {
-    return static_cast<uint32_t>(y) * static_cast<uint32_t>(width_) +
-           static_cast<uint32_t>(x);
-  }
-  bool Free(int32_t x, int32_t y) const {
-    return BitLines::Get(rows_.Line(y), x);
-  }
-
-  // Octile distance: consistent for unit straight and sqrt(2) diagonal moves.
-  double H(int32_t x, int32_t y) const {
-    const int32_t dx = std::abs(x - goal_.x);
-    const int32_t dy = std::abs(y - goal_.y);
-    return dx > dy ? dx + (kSqrt2 - 1.0) * dy : dy + (kSqrt2 - 1.0) * dx;
-  }
-
-  void Relax(int32_t x, int32_t y, double g, uint32_t parent) {
-    const uint32_t id = points_.Id(Index(x, y), x, y);
-    SearchScratch::Node& node = scratch_.At(id);
-    if (node.open_pos == SearchScratch::kClosed || g >= node.g) return;
-    node.g = g;
-    node.parent = parent;
-    open_.Push(id, g + H(x, y), g);
-  }
-
-  // Generates the successors of jump point `id`, pruned by the direction its
-  // parent reached it in.
-  void Expand(uint32_t id, double g) {
+  // Calls visit(id, x, y, g) for each successor of jump point `id` (reached
+  // at cost g).
+  template <typename Visit>
+  void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
     const auto [x, y] = points_.point(id);
     const uint32_t parent = scratch_.Raw(id).parent;
     if (parent == SearchScratch::kNoParent) {
       for (int d = -1; d <= 1; d += 2) {
-        Straight(x, y, d, 0, g, id);
-        Straight(x, y, 0, d, g, id);
-        Diagonal(x, y, d, -1, g, id);
-        Diagonal(x, y, d, 1, g, id);
+        Straight(x, y, d, 0, g, visit);
+        Straight(x, y, 0, d, g, visit);
+        Diagonal(x, y, d, -1, g, visit);
+        Diagonal(x, y, d, 1, g, visit);
       }
       return;
     }
@@ -380,40 +338,55 @@ class JpsSearch {
     const int32_t oy = y - from.y;
     if (std::abs(ox) > std::abs(oy)) {
       const int dx = Sign(ox);
-      Straight(x, y, dx, 0, g, id);
+      Straight(x, y, dx, 0, g, visit);
       for (int s = -1; s <= 1; s += 2) {
         if (Free(x, y + s) && !Free(x - dx, y + s)) {
-          Straight(x, y, 0, s, g, id);
-          Diagonal(x, y, dx, s, g, id);
+          Straight(x, y, 0, s, g, visit);
+          Diagonal(x, y, dx, s, g, visit);
         }
       }
     } else {
       // Only the goal is ever reached by a purely diagonal path, and it is
       // never expanded, so |oy| > |ox| here.
       const int dy = Sign(oy);
-      Straight(x, y, 0, dy, g, id);
+      Straight(x, y, 0, dy, g, visit);
       for (int s = -1; s <= 1; s += 2) {
         if (Free(x + s, y) && !Free(x + s, y - dy)) {
-          Straight(x, y, s, 0, g, id);
-          Diagonal(x, y, s, dy, g, id);
+          Straight(x, y, s, 0, g, visit);
+          Diagonal(x, y, s, dy, g, visit);
         }
       }
     }
   }
 
-  // Scans from (x, y) in the straight direction (dx, dy) and relaxes the goal
-  // or the jump point found; (x, y) is reached at cost g from `parent`.
+ private:
+  uint32_t Index(int32_t x, int32_t y) const {
+    return static_cast<uint32_t>(y) * static_cast<uint32_t>(width_) +
+           static_cast<uint32_t>(x);
+  }
+  bool Free(int32_t x, int32_t y) const {
+    return BitLines::Get(rows_.Line(y), x);
+  }
+
+  template <typename Visit>
+  void Relax(int32_t x, int32_t y, double g, Visit& visit) const {
+    visit(points_.Id(Index(x, y), x, y), x, y, g);
+  }
+
+  // Scans from (x, y) in the straight direction (dx, dy) and offers the goal
+  // or the jump point found; (x, y) is reached at cost g.
+  template <typename Visit>
   void Straight(int32_t x, int32_t y, int dx, int dy, double g,
-                uint32_t parent) {
+                Visit& visit) const {
     if (dx != 0) {
       const uint64_t* open = map_.rows().Line(y);
       const ScanStop stop = dx > 0 ? ScanForward(map_.east().Line(y), open, x)
                                    : ScanBackward(map_.west().Line(y), open, x);
       if (goal_.y == y && (goal_.x - x) * dx > 0 &&
           (stop.pos - goal_.x) * dx >= 0) {
-        Relax(goal_.x, y, g + std::abs(goal_.x - x), parent);
+        Relax(goal_.x, y, g + std::abs(goal_.x - x), visit);
       } else if (stop.jump) {
-        Relax(stop.pos, y, g + std::abs(stop.pos - x), parent);
+        Relax(stop.pos, y, g + std::abs(stop.pos - x), visit);
       }
     } else {
       const uint64_t* open = map_.cols().Line(x);
@@ -422,29 +395,30 @@ class JpsSearch {
                                 : ScanBackward(map_.north().Line(x), open, y);
       if (goal_.x == x && (goal_.y - y) * dy > 0 &&
           (stop.pos - goal_.y) * dy >= 0) {
-        Relax(x, goal_.y, g + std::abs(goal_.y - y), parent);
+        Relax(x, goal_.y, g + std::abs(goal_.y - y), visit);
       } else if (stop.jump) {
-        Relax(x, stop.pos, g + std::abs(stop.pos - y), parent);
+        Relax(x, stop.pos, g + std::abs(stop.pos - y), visit);
       }
     }
   }
 
   // Steps diagonally from (x, y) while the move is legal, scanning straight
-  // along both axes at every step; jump points found that way get `parent`
-  // (the expanded node) as their parent.
+  // along both axes at every step; jump points found that way get the
+  // expanded node as their parent.
+  template <typename Visit>
   void Diagonal(int32_t x, int32_t y, int dx, int dy, double g,
-                uint32_t parent) {
+                Visit& visit) const {
     for (int32_t k = 1;; ++k) {
       if (!Free(x + dx, y) || !Free(x, y + dy) || !Free(x + dx, y + dy)) return;
       x += dx;
       y += dy;
       const double gk = g + k * kSqrt2;
       if (x == goal_.x && y == goal_.y) {
-        Relax(x, y, gk, parent);
+        Relax(x, y, gk, visit);
         return;
       }
-      Straight(x, y, dx, 0, gk, parent);
-      Straight(x, y, 0, dy, gk, parent);
+      Straight(x, y, dx, 0, gk, visit);
+      Straight(x, y, 0, dy, gk, visit);
     }
   }
 
@@ -452,41 +426,38 @@ class JpsSearch {
   const BitLines& rows_;
   JumpPointTable& points_;
   const int32_t width_;
-  SearchScratch& scratch_;
-  internal::OpenList open_;
+  const SearchScratch& scratch_;
   const Cell goal_;
-  ExpansionRecorder* const recorder_;
-  uint32_t goal_id_ = 0;
 };
 
-class JpsPlanner final : public Planner {
+class JpsPlanner final : public GridPlanner {
  public:
-  std::string_view name() const override { return "jps"; }
-  const PlannerTraits& traits() const override {
-    static const PlannerTraits kTraits{
-        .optimal = true,
-        .needs_uniform_cost = true,
-        .needs_eight_connected = true,
-        .description =
-            "Jump Point Search with block-based scans; optimal, for "
-            "8-connected maps whose traversable cells all cost the "
-            "same; expansions count jump points"};
-    return kTraits;
+  JpsPlanner()
+      : GridPlanner("jps",
+                    PlannerTraits{
+                        .optimal = true,
+                        .needs_uniform_cost = true,
+                        .needs_eight_connected = true,
+                        .description =
+                            "Jump Point Search with block-based scans; optimal, "
+                            "for 8-connected maps whose traversable cells all "
+                            "cost the same; expansions count jump points"}) {}
+
+ protected:
+  // The uniform-cost precondition needs every cell read, and so does the
+  // map update: Search() checks the precondition in the same pass, and the
+  // full ValidateRequest runs only to word the error when it fails.
+  absl::Status Validate(const Grid& grid,
+                        const PlanRequest& request) const override {
+    PlannerTraits endpoint_traits = traits();
+    endpoint_traits.needs_uniform_cost = false;
+    return ValidateRequest(grid, request, name(), endpoint_traits);
   }
 
   // result.expansions counts jump points taken from the open list (the start
   // and goal included), not the cells the scans pass over.
-  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
-                                  const StopCondition& stop,
-                                  SearchScratch& scratch) const override {
-    // The uniform-cost precondition needs every cell read, and so does the
-    // map update: it checks the precondition in the same pass, and the full
-    // ValidateRequest runs only to word the error when it fails.
-    PlannerTraits endpoint_traits = traits();
-    endpoint_traits.needs_uniform_cost = false;
-    PATHD_RETURN_IF_ERROR(
-        ValidateRequest(grid, request, name(), endpoint_traits));
-    const absl::Time started = absl::Now();
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const auto& [grid, request, stop, scratch] = q;
     const uint8_t start_cost = grid.cost(request.start);
     const PackRule rule{
         .unknown_is_free = request.cost.unknown_is_free,
@@ -500,16 +471,26 @@ class JpsPlanner final : public Planner {
     scratch.BeginSearch(grid.size());
     state.points.Clear();
 
-    JpsSearch search(state.map, state.points, grid.width(), scratch,
-                     request.goal, request.expansion_recorder);
+    const JpsExpansion expansion(state.map, state.points, grid.width(), scratch,
+                                 request.goal);
+    const internal::AStarPriority<internal::OctileHeuristic> priority{
+        {request.goal}};
+    internal::OpenList open(scratch);
+    const uint32_t start = expansion.Id(request.start);
+    const uint32_t goal = expansion.Id(request.goal);
+    internal::PushRoot(scratch, open, start, request.start, priority);
     PlanResult result;
-    result.outcome = search.Run(request.start, stop, result.expansions);
+    result.outcome = internal::WithExpansionListener(
+        request.expansion_recorder, expansion, [&](auto listener) {
+          return internal::BestFirstSearch(scratch, open, goal, stop,
+                                           result.expansions, priority, expansion,
+                                           internal::PlainParentUpdate(), listener);
+        });
     if (result.found()) {
       // Every traversable cell has the factor of the start cell.
       const double factor = CellFactor(start_cost, request.cost.cost_weight);
-      FillPath(state.points, scratch, search.goal_id(), factor, result);
+      FillPath(state.points, scratch, goal, factor, result);
     }
-    result.planning_time = absl::Now() - started;
     return result;
   }
 

@@ -1,4 +1,5 @@
-// The wave-front planner against seed 004's worked example (the 16 x 16 map
+// The wave-front planner against the worked example of the lecture "Path
+// Planning in Discrete Sampled Space" ("Wave-Front Planner"; the 16 x 16 map
 // bundled as maps/wavefront16.map) and against a reference breadth-first
 // search on random grids, 4- and 8-connected.
 #include "core/search/registry.h"
@@ -22,14 +23,14 @@ namespace pathd {
 namespace {
 
 constexpr int kSide = 16;
-constexpr Cell kSeedStart{0, 15};  // "*" / "start", bottom left
-constexpr Cell kSeedGoal{15, 0};   // labelled 2, top right
+constexpr Cell kExampleStart{0, 15};  // "*" / "start", bottom left
+constexpr Cell kExampleGoal{15, 0};   // labelled 2, top right
 constexpr int kNotPrinted = -1;
 
-// The final label table of the notes (the slide after "to generate a path
+// The final label table of the lecture (the slide after "to generate a path
 // starting from the start point", repeated under "Goal Potential"),
-// transcribed by hand. It is not parsed from the seed file at run time: the
-// extracted text puts the "goal"/"start" caption into the last row and prints
+// transcribed by hand. It is not parsed from the lecture's text at run time:
+// the extracted text puts the "goal"/"start" caption into the last row and prints
 // 15 values for its 16 cells, so a parser would need special cases for
 // exactly this table. The last row's values fit columns 0..13 and 15 (the
 // final 37 sits under 36); column 14's label is missing.
@@ -84,7 +85,7 @@ const Erratum* FindErratum(Cell c) {
   return nullptr;
 }
 
-Grid SeedMap() {
+Grid ExampleMap() {
   absl::StatusOr<Grid> grid = ReadMovingAiMapFile("maps/wavefront16.map");
   EXPECT_TRUE(grid.ok()) << grid.status();
   return grid.ok() ? *std::move(grid) : Grid();
@@ -96,8 +97,8 @@ CostParams FourConnected() {
   return cost;
 }
 
-TEST(WavefrontSeedExample, BundledMapHasTheNotesObstacles) {
-  const Grid grid = SeedMap();
+TEST(WavefrontLectureExample, BundledMapHasTheNotesObstacles) {
+  const Grid grid = ExampleMap();
   ASSERT_EQ(grid.width(), kSide);
   ASSERT_EQ(grid.height(), kSide);
   for (int y = 0; y < kSide; ++y) {
@@ -108,11 +109,11 @@ TEST(WavefrontSeedExample, BundledMapHasTheNotesObstacles) {
   }
 }
 
-TEST(WavefrontSeedExample, LabelsMatchTheNotesFinalTable) {
-  const Grid grid = SeedMap();
+TEST(WavefrontLectureExample, LabelsMatchTheNotesFinalTable) {
+  const Grid grid = ExampleMap();
   ASSERT_EQ(grid.size(), static_cast<size_t>(kSide * kSide));
   const WavefrontLabelling w =
-      WavefrontLabels(grid, kSeedGoal, FourConnected(), kSeedStart);
+      WavefrontLabels(grid, kExampleGoal, FourConnected(), kExampleStart);
   EXPECT_EQ(w.outcome, PlanOutcome::kFound);
   for (int y = 0; y < kSide; ++y) {
     for (int x = 0; x < kSide; ++x) {
@@ -133,7 +134,7 @@ TEST(WavefrontSeedExample, LabelsMatchTheNotesFinalTable) {
 // two cells where the error enters: (2, 14), and (2, 15) below it, whose
 // printed 49 sits beside a 47. Every other erratum is consistent with its
 // (wrong) neighbours.
-TEST(WavefrontSeedExample, PrintedTableBreaksItsRuleOnlyWhereTheErrataStart) {
+TEST(WavefrontLectureExample, PrintedTableBreaksItsRuleOnlyWhereTheErrataStart) {
   std::vector<std::pair<int, int>> broken;
   for (int y = 0; y < kSide; ++y) {
     for (int x = 0; x < kSide; ++x) {
@@ -151,20 +152,20 @@ TEST(WavefrontSeedExample, PrintedTableBreaksItsRuleOnlyWhereTheErrataStart) {
   EXPECT_EQ(broken, (std::vector<std::pair<int, int>>{{2, 14}, {2, 15}}));
 }
 
-TEST(WavefrontSeedExample, PathDescendsTheLabelsFromStartToGoal) {
-  const Grid grid = SeedMap();
+TEST(WavefrontLectureExample, PathDescendsTheLabelsFromStartToGoal) {
+  const Grid grid = ExampleMap();
   const Planner* planner = PlannerRegistry::Default().Get("wavefront");
   ASSERT_NE(planner, nullptr);
   SearchScratch scratch;
   const CostParams cost = FourConnected();
-  auto r = planner->Plan(grid, PlanRequest::Between(kSeedStart, kSeedGoal, cost),
+  auto r = planner->Plan(grid, PlanRequest::Between(kExampleStart, kExampleGoal, cost),
                          StopCondition::None(), scratch);
   ASSERT_TRUE(r.ok()) << r.status();
   ASSERT_TRUE(r->found());
-  const WavefrontLabelling w = WavefrontLabels(grid, kSeedGoal, cost, kSeedStart);
+  const WavefrontLabelling w = WavefrontLabels(grid, kExampleGoal, cost, kExampleStart);
   ASSERT_EQ(r->path.size(), 49u);  // start label 50, goal 2
-  EXPECT_EQ(r->path.front(), kSeedStart);
-  EXPECT_EQ(r->path.back(), kSeedGoal);
+  EXPECT_EQ(r->path.front(), kExampleStart);
+  EXPECT_EQ(r->path.back(), kExampleGoal);
   for (size_t i = 0; i < r->path.size(); ++i) {
     EXPECT_EQ(w.labels[grid.Index(r->path[i])], 50 - static_cast<int>(i)) << "step " << i;
   }
@@ -177,14 +178,14 @@ TEST(WavefrontSeedExample, PathDescendsTheLabelsFromStartToGoal) {
   EXPECT_DOUBLE_EQ(r->length, 48.0);
 }
 
-TEST(WavefrontSeedExample, EightConnectedFloodCountsDiagonalMoves) {
-  const Grid grid = SeedMap();
+TEST(WavefrontLectureExample, EightConnectedFloodCountsDiagonalMoves) {
+  const Grid grid = ExampleMap();
   const CostParams eight;
-  const WavefrontLabelling w = WavefrontLabels(grid, kSeedGoal, eight, kSeedStart);
+  const WavefrontLabelling w = WavefrontLabels(grid, kExampleGoal, eight, kExampleStart);
   ASSERT_EQ(w.outcome, PlanOutcome::kFound);
   EXPECT_EQ(w.labels[grid.Index(14, 1)], 3);  // one diagonal move from the goal
-  const int start_moves = MoveCounts(grid, kSeedGoal, eight)[grid.Index(kSeedStart)];
-  EXPECT_EQ(w.labels[grid.Index(kSeedStart)], kWavefrontGoal + start_moves);
+  const int start_moves = MoveCounts(grid, kExampleGoal, eight)[grid.Index(kExampleStart)];
+  EXPECT_EQ(w.labels[grid.Index(kExampleStart)], kWavefrontGoal + start_moves);
   EXPECT_LT(start_moves, 48);  // the 4-connected count
 }
 
@@ -265,9 +266,9 @@ TEST(Wavefront, RandomGridsMatchAReferenceBreadthFirstSearch) {
 }
 
 TEST(Wavefront, ExpansionBudgetStopsTheFlood) {
-  const Grid grid = SeedMap();
+  const Grid grid = ExampleMap();
   const WavefrontLabelling w =
-      WavefrontLabels(grid, kSeedGoal, FourConnected(), kSeedStart,
+      WavefrontLabels(grid, kExampleGoal, FourConnected(), kExampleStart,
                       StopCondition(absl::InfiniteFuture(), nullptr, 20));
   EXPECT_EQ(w.outcome, PlanOutcome::kExpansionLimit);
   EXPECT_EQ(w.expansions, 20);
