@@ -29,6 +29,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 
 namespace pathd::server {
 namespace {
@@ -151,9 +152,8 @@ constexpr auto kAnswerWait = std::chrono::seconds(30);
 class NavigationTest : public ::testing::Test {
  protected:
   void StartServer(ServerOptions options = {}) {
-    options.address = "127.0.0.1:0";
     options.threads = 2;
-    server_ = std::make_unique<PathdServer>(options);
+    server_ = std::make_unique<testing::InProcessServer>(options);
     // Every version of every map, so answers can be checked against the
     // version they name.
     server_->store().AddListener(
@@ -163,10 +163,8 @@ class NavigationTest : public ::testing::Test {
           versions_[{std::string(name), snapshot->version}] = snapshot->grid;
         });
     ASSERT_TRUE(server_->Start().ok());
-    auto channel = grpc::CreateChannel(server_->listen_address(),
-                                       grpc::InsecureChannelCredentials());
-    planner_ = v1::PlannerService::NewStub(channel);
-    maps_ = v1::MapService::NewStub(channel);
+    planner_ = &server_->planner();
+    maps_ = &server_->maps();
   }
 
   void TearDown() override {
@@ -226,9 +224,9 @@ class NavigationTest : public ::testing::Test {
     EXPECT_NEAR(measured.cost, plan.cost(), 1e-9 * (1.0 + plan.cost()));
   }
 
-  std::unique_ptr<PathdServer> server_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
+  std::unique_ptr<testing::InProcessServer> server_;
+  v1::PlannerService::Stub* planner_ = nullptr;
+  v1::MapService::Stub* maps_ = nullptr;
   absl::Mutex versions_mu_;
   std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>> versions_
       ABSL_GUARDED_BY(versions_mu_);
