@@ -23,6 +23,7 @@
 #include "gtest/gtest.h"
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 
 namespace pathd::server {
 namespace {
@@ -262,9 +263,8 @@ class Watch {
 class WatchMapTest : public ::testing::Test {
  protected:
   void StartServer(ServerOptions options = {}) {
-    options.address = "127.0.0.1:0";
     options.threads = 2;
-    server_ = std::make_unique<PathdServer>(options);
+    server_ = std::make_unique<testing::InProcessServer>(options);
     // Every version of every map, to check each event against the two
     // versions it lies between.
     server_->store().AddListener(
@@ -274,12 +274,10 @@ class WatchMapTest : public ::testing::Test {
           absl::MutexLock lock(&versions_mu_);
           versions_[{std::string(name), snapshot->version}] = snapshot->grid;
         });
-    ASSERT_TRUE(server_->Start().ok());
     grpc::ChannelArguments args;
     args.SetMaxReceiveMessageSize(-1);
-    auto channel = grpc::CreateCustomChannel(
-        server_->listen_address(), grpc::InsecureChannelCredentials(), args);
-    maps_ = v1::MapService::NewStub(channel);
+    ASSERT_TRUE(server_->Start(args).ok());
+    maps_ = &server_->maps();
   }
 
   void TearDown() override {
@@ -377,8 +375,8 @@ class WatchMapTest : public ::testing::Test {
     }
   }
 
-  std::unique_ptr<PathdServer> server_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
+  std::unique_ptr<testing::InProcessServer> server_;
+  v1::MapService::Stub* maps_ = nullptr;
   absl::Mutex versions_mu_;
   std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>>
       versions_ ABSL_GUARDED_BY(versions_mu_);
