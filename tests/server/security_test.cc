@@ -29,6 +29,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/auth.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 #include "tests/testing/test_certs.h"
 
 namespace pathd::server {
@@ -127,12 +128,12 @@ class SecurityTest : public ::testing::Test {
     server_.reset();  // shuts down
   }
 
-  // Starts a server with `options` (address, threads and grace filled in).
+  // Starts a server with `options` (address, threads and grace filled in);
+  // the tests connect with Client(), not the fixture's plaintext stubs.
   absl::Status StartServer(ServerOptions options) {
-    options.address = "127.0.0.1:0";
     options.threads = 2;
     options.shutdown_grace = absl::Seconds(2);
-    server_ = std::make_unique<PathdServer>(std::move(options));
+    server_ = std::make_unique<testing::InProcessServer>(std::move(options));
     return server_->Start();
   }
 
@@ -199,7 +200,7 @@ class SecurityTest : public ::testing::Test {
 
   static fs::path* dir_;
   static testing::TestCerts* certs_;
-  std::unique_ptr<PathdServer> server_;
+  std::unique_ptr<testing::InProcessServer> server_;
 };
 
 fs::path* SecurityTest::dir_ = nullptr;
