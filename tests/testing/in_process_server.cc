@@ -91,6 +91,27 @@ grpc::Status InProcessServer::CreateMapFromRows(const std::string& name,
                       replace);
 }
 
+void InProcessServer::KeepMapVersions() {
+  server_->store().AddListener(
+      [this](std::string_view name,
+             const std::shared_ptr<const server::MapSnapshot>& snapshot) {
+        if (snapshot != nullptr) KeepMapVersion(name, snapshot);
+      });
+}
+
+void InProcessServer::KeepMapVersion(
+    std::string_view name, const std::shared_ptr<const server::MapSnapshot>& snapshot) {
+  absl::MutexLock lock(&versions_mu_);
+  versions_[{std::string(name), snapshot->version}] = snapshot->grid;
+}
+
+std::shared_ptr<const Grid> InProcessServer::MapVersion(const std::string& name,
+                                                        uint64_t version) const {
+  absl::MutexLock lock(&versions_mu_);
+  const auto it = versions_.find({name, version});
+  return it == versions_.end() ? nullptr : it->second;
+}
+
 absl::StatusOr<LoopbackServer> ServeOnLoopback(grpc::Service* service) {
   grpc::ServerBuilder builder;
   int port = 0;

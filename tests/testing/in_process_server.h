@@ -6,15 +6,22 @@
 #ifndef PATHD_TESTS_TESTING_IN_PROCESS_SERVER_H_
 #define PATHD_TESTS_TESTING_IN_PROCESS_SERVER_H_
 
+#include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include <grpcpp/grpcpp.h>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "core/map/grid.h"
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
@@ -79,7 +86,23 @@ class InProcessServer {
                                  const std::vector<std::string>& rows,
                                  double resolution = 0.0, bool replace = false);
 
+  // From now on keeps every version of every map the store publishes (an
+  // update, a replacing create), so a test can check an answer against the
+  // version it names. Call before Start.
+  void KeepMapVersions();
+  // Keeps `snapshot` as `name`'s version (e.g. one made by store().Create,
+  // which publishes nothing).
+  void KeepMapVersion(std::string_view name,
+                      const std::shared_ptr<const server::MapSnapshot>& snapshot);
+  // A kept version; null when not kept.
+  std::shared_ptr<const Grid> MapVersion(const std::string& name,
+                                         uint64_t version) const;
+
  private:
+  // Declared before the server, whose store's listener writes them.
+  mutable absl::Mutex versions_mu_;
+  std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>> versions_
+      ABSL_GUARDED_BY(versions_mu_);
   std::unique_ptr<server::PathdServer> server_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::MapService::Stub> maps_;
