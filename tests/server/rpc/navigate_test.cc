@@ -156,12 +156,7 @@ class NavigationTest : public ::testing::Test {
     server_ = std::make_unique<testing::InProcessServer>(options);
     // Every version of every map, so answers can be checked against the
     // version they name.
-    server_->store().AddListener(
-        [this](std::string_view name, const std::shared_ptr<const MapSnapshot>& snapshot) {
-          if (snapshot == nullptr) return;
-          absl::MutexLock lock(&versions_mu_);
-          versions_[{std::string(name), snapshot->version}] = snapshot->grid;
-        });
+    server_->KeepMapVersions();
     ASSERT_TRUE(server_->Start().ok());
     planner_ = &server_->planner();
     maps_ = &server_->maps();
@@ -174,14 +169,11 @@ class NavigationTest : public ::testing::Test {
   void AddMap(const std::string& name, Grid grid) {
     auto created = server_->store().Create(name, std::move(grid), false);
     ASSERT_TRUE(created.ok()) << created.status();
-    absl::MutexLock lock(&versions_mu_);
-    versions_[{name, (*created)->version}] = (*created)->grid;
+    server_->KeepMapVersion(name, *created);
   }
 
   std::shared_ptr<const Grid> Version(const std::string& name, uint64_t version) {
-    absl::MutexLock lock(&versions_mu_);
-    auto it = versions_.find({name, version});
-    return it == versions_.end() ? nullptr : it->second;
+    return server_->MapVersion(name, version);
   }
 
   // Another client blocks or frees cells through UpdateMap.
@@ -227,9 +219,6 @@ class NavigationTest : public ::testing::Test {
   std::unique_ptr<testing::InProcessServer> server_;
   v1::PlannerService::Stub* planner_ = nullptr;
   v1::MapService::Stub* maps_ = nullptr;
-  absl::Mutex versions_mu_;
-  std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>> versions_
-      ABSL_GUARDED_BY(versions_mu_);
 };
 
 Grid OpenGrid(int width, int height) { return *Grid::Create(width, height); }
