@@ -267,13 +267,7 @@ class WatchMapTest : public ::testing::Test {
     server_ = std::make_unique<testing::InProcessServer>(options);
     // Every version of every map, to check each event against the two
     // versions it lies between.
-    server_->store().AddListener(
-        [this](std::string_view name,
-               const std::shared_ptr<const MapSnapshot>& snapshot) {
-          if (snapshot == nullptr) return;
-          absl::MutexLock lock(&versions_mu_);
-          versions_[{std::string(name), snapshot->version}] = snapshot->grid;
-        });
+    server_->KeepMapVersions();
     grpc::ChannelArguments args;
     args.SetMaxReceiveMessageSize(-1);
     ASSERT_TRUE(server_->Start(args).ok());
@@ -293,8 +287,7 @@ class WatchMapTest : public ::testing::Test {
     }
     auto created = server_->store().Create(name, std::move(grid), false);
     ASSERT_TRUE(created.ok()) << created.status();
-    absl::MutexLock lock(&versions_mu_);
-    versions_[{name, 1}] = (*created)->grid;
+    server_->KeepMapVersion(name, *created);
   }
 
   // A Watch's call reaches the server asynchronously; a test that changes
@@ -309,9 +302,7 @@ class WatchMapTest : public ::testing::Test {
 
   std::shared_ptr<const Grid> StoredVersion(const std::string& name,
                                             uint64_t version) {
-    absl::MutexLock lock(&versions_mu_);
-    auto it = versions_.find({name, version});
-    return it == versions_.end() ? nullptr : it->second;
+    return server_->MapVersion(name, version);
   }
 
   grpc::Status Update(const v1::UpdateMapRequest& request,
@@ -377,9 +368,6 @@ class WatchMapTest : public ::testing::Test {
 
   std::unique_ptr<testing::InProcessServer> server_;
   v1::MapService::Stub* maps_ = nullptr;
-  absl::Mutex versions_mu_;
-  std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>>
-      versions_ ABSL_GUARDED_BY(versions_mu_);
 };
 
 TEST_F(WatchMapTest, MirrorsEveryVersionWhileTwoClientsUpdate) {
