@@ -18,6 +18,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -30,12 +31,7 @@ constexpr int64_t kMaxReturned = 200;
 
 using testing::Context;
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
+using testing::CellPos;
 
 // A wall with a gap, and a walled-in pocket around (13, 2).
 const std::vector<std::string> kRows = {
