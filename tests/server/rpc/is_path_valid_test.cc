@@ -18,6 +18,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -28,19 +29,8 @@ using ::testing::IsEmpty;
 
 using testing::Context;
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
-
-v1::Position WorldPos(double x, double y) {
-  v1::Position p;
-  p.mutable_world()->set_x(x);
-  p.mutable_world()->set_y(y);
-  return p;
-}
+using testing::CellPos;
+using testing::WorldPos;
 
 class PathCheckTest : public ::testing::Test {
  protected:
@@ -107,11 +97,7 @@ class PathCheckTest : public ::testing::Test {
 
   static v1::PlanRequest PlanBetween(const std::string& map, int sx, int sy, int gx,
                                      int gy) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    *request.mutable_start() = CellPos(sx, sy);
-    *request.mutable_goal() = CellPos(gx, gy);
-    return request;
+    return testing::PlanBetween(map, sx, sy, gx, gy, v1::PLANNER_UNSPECIFIED);
   }
 
   static testing::InProcessServer* server_;
