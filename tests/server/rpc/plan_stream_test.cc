@@ -24,6 +24,7 @@
 #include "server/rpc/planner_service.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -35,22 +36,8 @@ constexpr absl::Duration kProgressInterval = absl::Milliseconds(5);
 // million expansions), small enough to keep the suite at a few seconds.
 constexpr int kBigSide = 1024;
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
-
-v1::PlanRequest PlanBetween(const std::string& map, int sx, int sy, int gx, int gy,
-                            v1::Planner planner = v1::PLANNER_ASTAR) {
-  v1::PlanRequest request;
-  request.set_map(map);
-  *request.mutable_start() = CellPos(sx, sy);
-  *request.mutable_goal() = CellPos(gx, gy);
-  request.set_planner(planner);
-  return request;
-}
+using testing::CellPos;
+using testing::PlanBetween;
 
 std::unique_ptr<grpc::ClientContext> Context() {
   return testing::Context(absl::Seconds(120));
