@@ -27,6 +27,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -126,13 +127,7 @@ class ServiceTest : public ::testing::Test {
 
   static v1::PlanRequest CellRequest(const std::string& map, int sx, int sy, int gx,
                                      int gy) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    request.mutable_start()->mutable_cell()->set_x(sx);
-    request.mutable_start()->mutable_cell()->set_y(sy);
-    request.mutable_goal()->mutable_cell()->set_x(gx);
-    request.mutable_goal()->mutable_cell()->set_y(gy);
-    return request;
+    return testing::PlanBetween(map, sx, sy, gx, gy, v1::PLANNER_UNSPECIFIED);
   }
 
   static testing::InProcessServer* server_;
