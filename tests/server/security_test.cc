@@ -30,6 +30,7 @@
 #include "server/auth.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 #include "tests/testing/test_certs.h"
 
 namespace pathd::server {
@@ -179,13 +180,7 @@ class SecurityTest : public ::testing::Test {
   }
 
   static v1::PlanRequest PlanAcross(const std::string& map) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    request.mutable_start()->mutable_cell()->set_x(0);
-    request.mutable_start()->mutable_cell()->set_y(0);
-    request.mutable_goal()->mutable_cell()->set_x(4);
-    request.mutable_goal()->mutable_cell()->set_y(3);
-    return request;
+    return testing::PlanBetween(map, 0, 0, 4, 3, v1::PLANNER_UNSPECIFIED);
   }
 
   static v1::UpdateMapRequest BlockCell(const std::string& map, int x, int y) {
