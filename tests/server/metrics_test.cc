@@ -22,6 +22,7 @@
 #include "server/metrics.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -93,13 +94,7 @@ class MetricsTest : public ::testing::Test {
   }
 
   grpc::Status Plan(const std::string& map, v1::Planner planner) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    request.mutable_start()->mutable_cell()->set_x(0);
-    request.mutable_start()->mutable_cell()->set_y(0);
-    request.mutable_goal()->mutable_cell()->set_x(7);
-    request.mutable_goal()->mutable_cell()->set_y(5);
-    request.set_planner(planner);
+    const v1::PlanRequest request = testing::PlanBetween(map, 0, 0, 7, 5, planner);
     v1::PlanResponse response;
     grpc::ClientContext context;
     Prepare(context);
