@@ -39,6 +39,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/process.h"
 #include "tests/testing/call_context.h"
+#include "tests/testing/requests.h"
 
 namespace pathd {
 namespace {
@@ -90,19 +91,8 @@ std::unique_ptr<e2e::PathdProcess> StartPathd(const fs::path& log_file,
       .binary = PATHD_BIN, .flags = all, .log_file = log_file, .bound = kBound});
 }
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
-
-v1::Position WorldPos(double x, double y) {
-  v1::Position p;
-  p.mutable_world()->set_x(x);
-  p.mutable_world()->set_y(y);
-  return p;
-}
+using testing::CellPos;
+using testing::WorldPos;
 
 // A plan on "room" from (1, 1) to (14, 14) that succeeds; cases break one
 // thing in it.
