@@ -38,6 +38,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/requests.h"
 
 namespace pathd {
 namespace {
@@ -228,13 +229,7 @@ v1::CreateMapRequest OpenRoom(const std::string& name) {
 }
 
 v1::PlanRequest PlanAcross(const std::string& map) {
-  v1::PlanRequest request;
-  request.set_map(map);
-  request.mutable_start()->mutable_cell()->set_x(0);
-  request.mutable_start()->mutable_cell()->set_y(0);
-  request.mutable_goal()->mutable_cell()->set_x(7);
-  request.mutable_goal()->mutable_cell()->set_y(7);
-  return request;
+  return testing::PlanBetween(map, 0, 0, 7, 7, v1::PLANNER_UNSPECIFIED);
 }
 
 class ScaleOutTest : public ::testing::Test {
