@@ -35,6 +35,8 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/temp_dir.h"
+#include "tests/testing/requests.h"
 
 namespace pathd {
 namespace {
@@ -52,21 +54,11 @@ std::chrono::system_clock::time_point In(std::chrono::milliseconds ms) {
   return std::chrono::system_clock::now() + ms;
 }
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
+using testing::CellPos;
 
 v1::PlanRequest PlanRequest(const std::string& map, int sx, int sy, int gx, int gy,
                             v1::Planner planner = v1::PLANNER_ASTAR) {
-  v1::PlanRequest request;
-  request.set_map(map);
-  request.set_planner(planner);
-  *request.mutable_start() = CellPos(sx, sy);
-  *request.mutable_goal() = CellPos(gx, gy);
-  return request;
+  return testing::PlanBetween(map, sx, sy, gx, gy, planner);
 }
 
 // An async Plan whose answer and duration the test collects later.
@@ -107,15 +99,11 @@ struct AsyncPlan {
 class AdmissionTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char dir_template[] = "/tmp/pathd_admission_XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
-    temp_dir_ = dir_template;
+    ASSERT_FALSE(temp_dir_.empty()) << scratch_.error();
   }
   void TearDown() override {
     // A daemon a test did not stop must still exit cleanly on SIGTERM.
     if (daemon_ != nullptr) StopDaemon(0);
-    std::error_code ignored;
-    fs::remove_all(temp_dir_, ignored);
   }
 
   // pathd with its request log (--log_level=debug) in a file the test reads.
@@ -178,7 +166,9 @@ class AdmissionTest : public ::testing::Test {
     EXPECT_TRUE(small->found());
   }
 
-  fs::path temp_dir_;
+  // Removed with the fixture, after TearDown has stopped the daemon.
+  testing::TempDir scratch_{"pathd_admission"};
+  fs::path temp_dir_ = scratch_.path();
   std::unique_ptr<e2e::PathdProcess> daemon_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<client::PathdClient> client_;
