@@ -38,6 +38,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/temp_dir.h"
 #include "tests/testing/call_context.h"
 #include "tests/testing/requests.h"
 
@@ -145,9 +146,7 @@ grpc::ByteBuffer WithNonUtf8(const google::protobuf::Message& message) {
 class BadInputTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char dir_template[] = "/tmp/pathd_bad_input_XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
-    temp_ = dir_template;
+    ASSERT_FALSE(temp_.empty()) << scratch_.error();
     ASSERT_NO_FATAL_FAILURE(WriteMapDir());
   }
   void TearDown() override {
@@ -157,8 +156,6 @@ class BadInputTest : public ::testing::Test {
     generic_.reset();
     channel_.reset();
     daemon_.reset();
-    std::error_code ignored;
-    fs::remove_all(temp_, ignored);
   }
 
   fs::path map_dir() const { return temp_ / "maps"; }
@@ -500,7 +497,9 @@ class BadInputTest : public ::testing::Test {
     // Part of the start-up log line skipping it.
     std::string complaint;
   };
-  fs::path temp_;
+  // Removed with the fixture, after TearDown has stopped the daemon.
+  testing::TempDir scratch_{"pathd_bad_input"};
+  fs::path temp_ = scratch_.path();
   std::vector<File> bad_files_;
   std::unique_ptr<e2e::PathdProcess> daemon_;
   std::shared_ptr<grpc::Channel> channel_;
