@@ -44,6 +44,7 @@
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/temp_dir.h"
 #include "tests/testing/test_certs.h"
 
 namespace pathd {
@@ -249,9 +250,7 @@ absl::StatusCode StatusCodeNamed(const std::string& name) {
 class E2eTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char dir_template[] = "/tmp/pathd_e2e_XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
-    temp_dir_ = dir_template;
+    ASSERT_FALSE(temp_dir_.empty()) << scratch_.error();
     // map_dir stays empty: the daemon preloads whatever it finds there, and
     // the tests want to create every map themselves.
     map_dir_ = temp_dir_ / "map_dir";
@@ -264,8 +263,6 @@ class E2eTest : public ::testing::Test {
       const int exit_code = StopDaemon();
       EXPECT_EQ(exit_code, 0) << "pathd did not exit cleanly on SIGTERM";
     }
-    std::error_code ignored;
-    fs::remove_all(temp_dir_, ignored);
   }
 
   // Starts pathd on a free port with this test's map_dir and `extra_flags`;
@@ -363,7 +360,9 @@ class E2eTest : public ::testing::Test {
     }
   }
 
-  fs::path temp_dir_;
+  // Removed with the fixture, after TearDown has stopped the daemon.
+  testing::TempDir scratch_{"pathd_e2e"};
+  fs::path temp_dir_ = scratch_.path();
   fs::path map_dir_;
   std::unique_ptr<e2e::PathdProcess> daemon_;
   std::string address_;
