@@ -18,6 +18,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/shared_server_test.h"
 #include "tests/testing/requests.h"
 
 namespace pathd::server {
@@ -43,21 +44,15 @@ const std::vector<std::string> kRows = {
     "..........#.........",
 };
 
-class PlanViaTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
+class PlanViaTest : public testing::SharedServerTest<PlanViaTest> {
+ public:
+  static ServerOptions SuiteOptions() {
     ServerOptions options = testing::TestServerOptions();
     options.max_returned_expansions = kMaxReturned;
-    server_ = new testing::InProcessServer(options);
-    const absl::Status started = server_->Start();
-    ASSERT_TRUE(started.ok()) << started;
+    return options;
   }
 
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-
+ protected:
   void SetUp() override { CreateMap("rooms", kRows); }
 
   // '.' free, '#' lethal.
@@ -82,11 +77,7 @@ class PlanViaTest : public ::testing::Test {
   grpc::Status Plan(const v1::PlanRequest& request, v1::PlanResponse* response) {
     return server_->planner().Plan(Context().get(), request, response);
   }
-
-  static testing::InProcessServer* server_;
 };
-
-testing::InProcessServer* PlanViaTest::server_ = nullptr;
 
 bool SameCell(const v1::Cell& a, const v1::Position& b) {
   return a.x() == b.cell().x() && a.y() == b.cell().y();
