@@ -18,6 +18,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/shared_server_test.h"
 #include "tests/testing/requests.h"
 
 namespace pathd::server {
@@ -32,22 +33,16 @@ using testing::Context;
 using testing::CellPos;
 using testing::WorldPos;
 
-class PathCheckTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
+class PathCheckTest : public testing::SharedServerTest<PathCheckTest> {
+ public:
+  static ServerOptions SuiteOptions() {
     ServerOptions options = testing::TestServerOptions();
     // Also sets the receive limit, which the over-long path must get past.
     options.max_map_cells = 1 << 24;
-    server_ = new testing::InProcessServer(options);
-    const absl::Status started = server_->Start();
-    ASSERT_TRUE(started.ok()) << started;
+    return options;
   }
 
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-
+ protected:
   void SetUp() override {
     maps_ = &server_->maps();
     planner_ = &server_->planner();
@@ -100,12 +95,9 @@ class PathCheckTest : public ::testing::Test {
     return testing::PlanBetween(map, sx, sy, gx, gy, v1::PLANNER_UNSPECIFIED);
   }
 
-  static testing::InProcessServer* server_;
   v1::MapService::Stub* maps_ = nullptr;
   v1::PlannerService::Stub* planner_ = nullptr;
 };
-
-testing::InProcessServer* PathCheckTest::server_ = nullptr;
 
 // --- IsPathValid -------------------------------------------------------------
 
