@@ -27,6 +27,8 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
 #include "tests/testing/in_process_server.h"
+#include "tests/testing/shared_server_test.h"
+#include "tests/testing/temp_dir.h"
 #include "tests/testing/requests.h"
 
 namespace pathd::server {
@@ -63,12 +65,20 @@ constexpr char kRosYaml[] =
     "free_thresh: 0.196\n";
 constexpr char kRosPgm[] = "P2\n3 2\n255\n255 0 255\n255 255 255\n";
 
-class ServiceTest : public ::testing::Test {
+class ServiceTest : public testing::SharedServerTest<ServiceTest> {
+ public:
+  static ServerOptions SuiteOptions() {
+    ServerOptions options = testing::TestServerOptions();
+    options.max_map_cells = 1 << 16;
+    options.map_dir = (*root_ / "maps").string();
+    return options;
+  }
+
  protected:
   static void SetUpTestSuite() {
-    char tmpl[] = "/tmp/pathd_service_test_XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    root_ = new fs::path(tmpl);
+    scratch_ = new testing::TempDir("pathd_service_test");
+    ASSERT_FALSE(scratch_->path().empty()) << scratch_->error();
+    root_ = &scratch_->path();
     const fs::path dir = *root_ / "maps";
     fs::create_directories(dir / "sub");
     WriteFile(dir / "small.map", kSmallMovingAi);
@@ -84,22 +94,15 @@ class ServiceTest : public ::testing::Test {
     WriteFile(dir / "sneaky.yaml",
               "image: ../secret.pgm\nresolution: 1.0\norigin: [0, 0, 0]\n");
 
-    ServerOptions options = testing::TestServerOptions();
-    options.max_map_cells = 1 << 16;
-    options.map_dir = dir.string();
-    server_ = new testing::InProcessServer(options);
-    const absl::Status started = server_->Start();
-    ASSERT_TRUE(started.ok()) << started;
+    SharedServerTest::SetUpTestSuite();
     ASSERT_GT(server_->port(), 0);
     channel_ = &server_->channel();
   }
 
   static void TearDownTestSuite() {
-    delete server_;  // shuts down
-    server_ = nullptr;
-    std::error_code ec;
-    fs::remove_all(*root_, ec);
-    delete root_;
+    SharedServerTest::TearDownTestSuite();  // shuts down
+    delete scratch_;
+    scratch_ = nullptr;
   }
 
   void SetUp() override {
@@ -130,16 +133,16 @@ class ServiceTest : public ::testing::Test {
     return testing::PlanBetween(map, sx, sy, gx, gy, v1::PLANNER_UNSPECIFIED);
   }
 
-  static testing::InProcessServer* server_;
   static const std::shared_ptr<grpc::Channel>* channel_;
-  static fs::path* root_;
+  static testing::TempDir* scratch_;
+  static const fs::path* root_;
   v1::MapService::Stub* maps_ = nullptr;
   v1::PlannerService::Stub* planner_ = nullptr;
 };
 
-testing::InProcessServer* ServiceTest::server_ = nullptr;
+testing::TempDir* ServiceTest::scratch_ = nullptr;
 const std::shared_ptr<grpc::Channel>* ServiceTest::channel_ = nullptr;
-fs::path* ServiceTest::root_ = nullptr;
+const fs::path* ServiceTest::root_ = nullptr;
 
 TEST_F(ServiceTest, HealthServiceReportsServing) {
   // grpc.health.v1.Health/Check with an empty request (service ""); the reply
