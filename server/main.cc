@@ -26,6 +26,7 @@
 #include "absl/time/time.h"
 #include "absl/types/span.h"
 #include "server/config_file.h"
+#include "server/listening_line.h"
 #include "server/server.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
@@ -387,7 +388,8 @@ int main(int argc, char** argv) {
     spdlog::error("cannot start: {}", status.ToString());
     return 1;
   }
-  std::printf("pathd listening on %s\n", server.listen_address().c_str());
+  std::printf("%s%s\n", pathd::server::kListeningPrefix,
+              server.listen_address().c_str());
   std::fflush(stdout);
 
   int signal_number = 0;

@@ -9,10 +9,7 @@
 // other load on the machine disturbs far less than the wall clock. Figures,
 // not assertions: the README records them with the command that produced
 // them.
-#include <signal.h>
-#include <spawn.h>
 #include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -35,7 +32,6 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "absl/strings/strip.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/client.h"
@@ -47,8 +43,7 @@
 #include "core/search/planner.h"
 #include "server/convert.h"
 #include "tests/bench/movingai_maps.h"
-
-extern char** environ;
+#include "tests/testing/pathd_process.h"
 
 ABSL_FLAG(std::string, pathd, PATHD_BIN, "the pathd binary to start");
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
@@ -73,84 +68,25 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr char kListeningPrefix[] = "pathd listening on ";
-
-// The daemon under test: started with posix_spawn, stopped with SIGTERM.
-class Daemon {
- public:
-  ~Daemon() {
-    if (pid_ <= 0) return;
-    kill(pid_, SIGTERM);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    if (stdout_ != nullptr) fclose(stdout_);
+// CPU seconds (user + system) process `pid` (the daemon) has used so far,
+// from /proc/PID/stat (clock-tick resolution); 0 when unreadable.
+double ProcessCpuSeconds(pid_t pid) {
+  std::ifstream stat(absl::StrCat("/proc/", pid, "/stat"));
+  std::string text((std::istreambuf_iterator<char>(stat)),
+                   std::istreambuf_iterator<char>());
+  // Fields after the parenthesised command name; utime and stime are the
+  // 14th and 15th of the whole line.
+  const size_t paren = text.rfind(')');
+  if (paren == std::string::npos) return 0;
+  std::vector<std::string> fields =
+      absl::StrSplit(text.substr(paren + 2), ' ', absl::SkipEmpty());
+  double utime = 0, stime = 0;
+  if (fields.size() < 13 || !absl::SimpleAtod(fields[11], &utime) ||
+      !absl::SimpleAtod(fields[12], &stime)) {
+    return 0;
   }
-
-  // Spawns `binary` on a free loopback port with `threads` workers and waits
-  // for its "pathd listening on" line.
-  absl::Status Start(const std::string& binary, int threads) {
-    int fds[2];
-    if (pipe(fds) != 0) return absl::InternalError("pipe failed");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
-    posix_spawn_file_actions_addclose(&actions, fds[0]);
-    posix_spawn_file_actions_addclose(&actions, fds[1]);
-    std::vector<std::string> args = {binary, "--address=127.0.0.1:0",
-                                     absl::StrCat("--threads=", threads),
-                                     "--log_level=warn"};
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int error =
-        posix_spawn(&pid_, binary.c_str(), &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    close(fds[1]);
-    if (error != 0) {
-      close(fds[0]);
-      pid_ = -1;
-      return absl::NotFoundError(absl::StrCat("cannot start ", binary));
-    }
-    stdout_ = fdopen(fds[0], "r");
-    char line[256];
-    if (fgets(line, sizeof line, stdout_) == nullptr) {
-      return absl::UnavailableError(absl::StrCat(binary, " exited before listening"));
-    }
-    absl::string_view text = absl::StripAsciiWhitespace(line);
-    if (!absl::ConsumePrefix(&text, kListeningPrefix)) {
-      return absl::InternalError(absl::StrCat("unexpected first line: ", line));
-    }
-    address_ = std::string(text);
-    return absl::OkStatus();
-  }
-
-  const std::string& address() const { return address_; }
-
-  // CPU seconds (user + system) the daemon has used so far, from
-  // /proc/PID/stat (clock-tick resolution); 0 when unreadable.
-  double CpuSeconds() const {
-    std::ifstream stat(absl::StrCat("/proc/", pid_, "/stat"));
-    std::string text((std::istreambuf_iterator<char>(stat)),
-                     std::istreambuf_iterator<char>());
-    // Fields after the parenthesised command name; utime and stime are the
-    // 14th and 15th of the whole line.
-    const size_t paren = text.rfind(')');
-    if (paren == std::string::npos) return 0;
-    std::vector<std::string> fields =
-        absl::StrSplit(text.substr(paren + 2), ' ', absl::SkipEmpty());
-    double utime = 0, stime = 0;
-    if (fields.size() < 13 || !absl::SimpleAtod(fields[11], &utime) ||
-        !absl::SimpleAtod(fields[12], &stime)) {
-      return 0;
-    }
-    return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-  }
-
- private:
-  pid_t pid_ = -1;
-  FILE* stdout_ = nullptr;
-  std::string address_;
-};
+  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
 
 // CPU seconds (user + system) this process has used so far.
 double OwnCpuSeconds() {
@@ -179,7 +115,7 @@ void KeepLeast(double value, double* best) {
   if (*best == 0 || value < *best) *best = value;
 }
 
-absl::StatusOr<MapFigures> MeasureMap(const Daemon& daemon, const fs::path& map_path,
+absl::StatusOr<MapFigures> MeasureMap(const pathd::testing::PathdProcess& daemon, const fs::path& map_path,
                                       const std::string& name,
                                       const pathd::Grid& grid) {
   const int threads = absl::GetFlag(FLAGS_threads);
@@ -270,13 +206,14 @@ absl::StatusOr<MapFigures> MeasureMap(const Daemon& daemon, const fs::path& map_
       figures.in_process = *local;
     }
     cpu = OwnCpuSeconds();
-    const double server_cpu = daemon.CpuSeconds();
+    const double server_cpu = ProcessCpuSeconds(daemon.pid());
     absl::StatusOr<pathd::client::LoadReport> grpc = pathd::client::RunPlanLoad(
         daemon.address(), absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_timeout),
         wire, remote);
     if (!grpc.ok()) return grpc.status();
     const int64_t sent = grpc->requests + grpc->warmup_requests;
-    KeepLeast(per_query(daemon.CpuSeconds() - server_cpu, sent), &figures.server_cpu_us);
+    KeepLeast(per_query(ProcessCpuSeconds(daemon.pid()) - server_cpu, sent),
+              &figures.server_cpu_us);
     KeepLeast(per_query(OwnCpuSeconds() - cpu, sent), &figures.client_cpu_us);
     if (grpc->requests_per_second > figures.grpc.requests_per_second) {
       figures.grpc = *grpc;
@@ -314,9 +251,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--threads, --passes and --rounds must be at least 1\n");
     return 2;
   }
-  Daemon daemon;
-  if (absl::Status s = daemon.Start(absl::GetFlag(FLAGS_pathd), threads); !s.ok()) {
-    std::fprintf(stderr, "%s\n", std::string(s.message()).c_str());
+  // The daemon under test, its log (warnings only) on our stderr.
+  pathd::testing::PathdProcess daemon(pathd::testing::PathdProcessOptions{
+      .binary = absl::GetFlag(FLAGS_pathd),
+      .flags = {absl::StrCat("--threads=", threads), "--log_level=warn"}});
+  if (!daemon.listening()) {
+    std::fprintf(stderr, "%s\n", daemon.status().ToString().c_str());
     return 1;
   }
   const int concurrency = absl::GetFlag(FLAGS_concurrency) > 0
@@ -370,6 +310,10 @@ int main(int argc, char** argv) {
         fraction(f->in_process_cpu_us, f->server_cpu_us + f->client_cpu_us),
         static_cast<long long>(f->grpc.errors() + f->in_process.errors()));
     std::fflush(stdout);
+  }
+  if (const int code = daemon.Stop(); code != 0) {
+    std::fprintf(stderr, "pathd exited with %d on SIGTERM\n", code);
+    ++failures;
   }
   return failures == 0 ? 0 : 1;
 }

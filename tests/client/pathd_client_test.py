@@ -8,12 +8,10 @@ PATHD_BIN to the daemon; by hand:
         tests/client/pathd_client_test.py
 """
 
-import ctypes
 import heapq
 import math
 import os
 import pathlib
-import signal
 import socket
 import subprocess
 import sys
@@ -33,6 +31,8 @@ from pathd.v1 import planner_service_pb2
 from pathd.v1 import planner_service_pb2_grpc
 
 SOURCE_DIR = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(SOURCE_DIR / "tests" / "testing"))
+from pathd_process import PathdProcess  # pylint: disable=wrong-import-position
 EXAMPLE = SOURCE_DIR / "client" / "python" / "examples" / "robot_loop.py"
 
 # 14 x 8: a wall at column 6 with openings at rows 0 and 7.
@@ -46,12 +46,6 @@ ROWS = [
     "......@.......",
     "..............",
 ]
-
-
-def _die_with_parent() -> None:
-    # The kernel kills pathd if this test dies, so no daemon outlives it.
-    PR_SET_PDEATHSIG = 1
-    ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
 def blocked_cells(rows: list[str]) -> set[Cell]:
@@ -112,15 +106,8 @@ class RealServerTest(unittest.TestCase, PathChecks):
     def setUpClass(cls):
         pathd = os.environ.get("PATHD_BIN", str(SOURCE_DIR / "build" / "server" / "pathd"))
         cls.map_dir = tempfile.TemporaryDirectory()
-        cls.daemon = subprocess.Popen(
-            [pathd, "--address=127.0.0.1:0", f"--map_dir={cls.map_dir.name}"],
-            stdout=subprocess.PIPE, text=True, preexec_fn=_die_with_parent)
-        line = cls.daemon.stdout.readline().strip()
-        prefix = "pathd listening on "
-        if not line.startswith(prefix):
-            cls.daemon.kill()
-            raise RuntimeError(f"pathd did not start: first stdout line '{line}'")
-        cls.address = line[len(prefix):]
+        cls.daemon = PathdProcess(pathd, [f"--map_dir={cls.map_dir.name}"])
+        cls.address = cls.daemon.address
         cls.client = PathdClient(cls.address, timeout=10.0)
         # Another program changing the map: its own channel.
         cls.operator = PathdClient(cls.address, timeout=10.0)
@@ -129,9 +116,7 @@ class RealServerTest(unittest.TestCase, PathChecks):
     def tearDownClass(cls):
         cls.client.close()
         cls.operator.close()
-        cls.daemon.terminate()
-        cls.daemon.wait(timeout=30)
-        cls.daemon.stdout.close()
+        cls.daemon.stop()
         cls.map_dir.cleanup()
 
     def make_map(self, name: str):

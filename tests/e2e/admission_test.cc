@@ -35,6 +35,8 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/temp_dir.h"
+#include "tests/testing/requests.h"
 
 namespace pathd {
 namespace {
@@ -47,115 +49,16 @@ using ::testing::HasSubstr;
 // Hang guards only (see e2e_test.cc): a broken daemon fails instead of
 // hanging the test.
 constexpr auto kBound = std::chrono::seconds(120);
-constexpr char kListeningPrefix[] = "pathd listening on ";
 
 std::chrono::system_clock::time_point In(std::chrono::milliseconds ms) {
   return std::chrono::system_clock::now() + ms;
 }
 
-// One pathd process: stdout is read for the listening line, stderr (the log)
-// goes to a file the test reads whenever it likes, so a chatty log can never
-// block the daemon on a full pipe.
-class Daemon {
- public:
-  Daemon(const fs::path& log_file, const std::vector<std::string>& flags)
-      : log_file_(log_file) {
-    int out[2];
-    e2e::MakePipe(out);
-    const int log_fd = open(log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC,
-                            0644);
-    EXPECT_GE(log_fd, 0) << strerror(errno);
-    std::vector<std::string> argv = {PATHD_BIN, "--address=127.0.0.1:0",
-                                     "--log_level=debug"};
-    argv.insert(argv.end(), flags.begin(), flags.end());
-    pid_ = e2e::Spawn(argv, {}, out[1], log_fd, true);
-    close(out[1]);
-    close(log_fd);
-    stdout_ = fdopen(out[0], "r");
-    char line[256] = {};
-    if (fgets(line, sizeof(line), stdout_) == nullptr) {
-      ADD_FAILURE() << "pathd printed no listening line\n" << Log();
-      return;
-    }
-    absl::string_view text = absl::StripTrailingAsciiWhitespace(line);
-    EXPECT_TRUE(absl::ConsumePrefix(&text, kListeningPrefix)) << line;
-    address_ = std::string(text);
-  }
-  Daemon(const Daemon&) = delete;
-  Daemon& operator=(const Daemon&) = delete;
-  ~Daemon() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      e2e::WaitForExit(pid_);
-    }
-    if (stdout_ != nullptr) fclose(stdout_);
-  }
-
-  const std::string& address() const { return address_; }
-  void Signal(int signal_number) { kill(pid_, signal_number); }
-
-  // Waits for the exit (after a Signal) and returns its code, -1 for a signal.
-  int WaitForExit() {
-    int status = 0;
-    const Clock::time_point bound = Clock::now() + kBound;
-    pid_t waited = 0;
-    while ((waited = waitpid(pid_, &status, WNOHANG)) == 0 && Clock::now() < bound) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (waited == 0) {
-      ADD_FAILURE() << "pathd did not exit; killing it";
-      kill(pid_, SIGKILL);
-      waitpid(pid_, &status, 0);
-    }
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
-  std::string Log() const {
-    std::ifstream in(log_file_);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-  }
-
-  // The first request-log line containing every one of `parts`, waiting for
-  // it (the daemon writes it when the call answers); "" past the bound.
-  std::string WaitForLogLine(const std::vector<std::string>& parts) const {
-    const Clock::time_point bound = Clock::now() + kBound;
-    while (Clock::now() < bound) {
-      std::istringstream lines(Log());
-      for (std::string line; std::getline(lines, line);) {
-        bool all = true;
-        for (const std::string& part : parts) all = all && absl::StrContains(line, part);
-        if (all) return line;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return "";
-  }
-
- private:
-  fs::path log_file_;
-  pid_t pid_ = -1;
-  FILE* stdout_ = nullptr;
-  std::string address_;
-};
-
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
+using testing::CellPos;
 
 v1::PlanRequest PlanRequest(const std::string& map, int sx, int sy, int gx, int gy,
                             v1::Planner planner = v1::PLANNER_ASTAR) {
-  v1::PlanRequest request;
-  request.set_map(map);
-  request.set_planner(planner);
-  *request.mutable_start() = CellPos(sx, sy);
-  *request.mutable_goal() = CellPos(gx, gy);
-  return request;
+  return testing::PlanBetween(map, sx, sy, gx, gy, planner);
 }
 
 // An async Plan whose answer and duration the test collects later.
@@ -196,20 +99,20 @@ struct AsyncPlan {
 class AdmissionTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char dir_template[] = "/tmp/pathd_admission_XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
-    temp_dir_ = dir_template;
+    ASSERT_FALSE(temp_dir_.empty()) << scratch_.error();
   }
   void TearDown() override {
     // A daemon a test did not stop must still exit cleanly on SIGTERM.
     if (daemon_ != nullptr) StopDaemon(0);
-    std::error_code ignored;
-    fs::remove_all(temp_dir_, ignored);
   }
 
+  // pathd with its request log (--log_level=debug) in a file the test reads.
   void StartDaemon(const std::vector<std::string>& flags) {
-    daemon_ = std::make_unique<Daemon>(temp_dir_ / "pathd.log", flags);
-    ASSERT_FALSE(daemon_->address().empty());
+    std::vector<std::string> all = {"--log_level=debug"};
+    all.insert(all.end(), flags.begin(), flags.end());
+    daemon_ = std::make_unique<e2e::PathdProcess>(e2e::PathdProcessOptions{
+        .binary = PATHD_BIN, .flags = all, .log_file = temp_dir_ / "pathd.log"});
+    ASSERT_TRUE(daemon_->listening()) << daemon_->status();
     channel_ = client::MakeChannel(daemon_->address());
     client_ = std::make_unique<client::PathdClient>(channel_, absl::Seconds(60));
     planner_ = v1::PlannerService::NewStub(channel_);
@@ -263,8 +166,10 @@ class AdmissionTest : public ::testing::Test {
     EXPECT_TRUE(small->found());
   }
 
-  fs::path temp_dir_;
-  std::unique_ptr<Daemon> daemon_;
+  // Removed with the fixture, after TearDown has stopped the daemon.
+  testing::TempDir scratch_{"pathd_admission"};
+  fs::path temp_dir_ = scratch_.path();
+  std::unique_ptr<e2e::PathdProcess> daemon_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<client::PathdClient> client_;
   std::unique_ptr<v1::PlannerService::Stub> planner_;
@@ -425,7 +330,7 @@ TEST_F(AdmissionTest, SigtermWithALongGraceLetsTheInFlightPlanFinish) {
     // server in the instant Shutdown began is cancelled by gRPC itself
     // (CANCELLED, seen about once in five runs). Either way it is refused.
     EXPECT_THAT(refused.status().code(),
-                testing::AnyOf(absl::StatusCode::kUnavailable, absl::StatusCode::kCancelled))
+                ::testing::AnyOf(absl::StatusCode::kUnavailable, absl::StatusCode::kCancelled))
         << refused.status();
   }
   const grpc::Status status = call->Get();

@@ -38,6 +38,9 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/temp_dir.h"
+#include "tests/testing/call_context.h"
+#include "tests/testing/requests.h"
 
 namespace pathd {
 namespace {
@@ -50,8 +53,7 @@ using grpc::StatusCode;
 using ::testing::HasSubstr;
 
 // Hang guards only: a broken daemon fails the test instead of hanging it.
-constexpr auto kBound = std::chrono::seconds(60);
-constexpr char kListeningPrefix[] = "pathd listening on ";
+constexpr auto kBound = absl::Seconds(60);
 
 // Limits the daemon runs with, small so that crossing them is cheap.
 constexpr int64_t kMaxMessageBytes = 1536 * 1024;
@@ -80,87 +82,18 @@ std::string MovingAiMap(int width, int height) {
   return text;
 }
 
-// A pathd process with its log in a file; stdout gives the listening line.
-class Daemon {
- public:
-  Daemon(const fs::path& log_file, const std::vector<std::string>& flags)
-      : log_file_(log_file) {
-    int out[2];
-    e2e::MakePipe(out);
-    const int log_fd =
-        open(log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    EXPECT_GE(log_fd, 0) << strerror(errno);
-    std::vector<std::string> argv = {PATHD_BIN, "--address=127.0.0.1:0",
-                                     "--log_level=debug"};
-    argv.insert(argv.end(), flags.begin(), flags.end());
-    pid_ = e2e::Spawn(argv, {}, out[1], log_fd, true);
-    close(out[1]);
-    close(log_fd);
-    stdout_ = fdopen(out[0], "r");
-    char line[256] = {};
-    if (fgets(line, sizeof(line), stdout_) == nullptr) return;
-    absl::string_view text = absl::StripTrailingAsciiWhitespace(line);
-    if (absl::ConsumePrefix(&text, kListeningPrefix))
-      address_ = std::string(text);
-  }
-  Daemon(const Daemon&) = delete;
-  Daemon& operator=(const Daemon&) = delete;
-  ~Daemon() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      e2e::WaitForExit(pid_);
-    }
-    if (stdout_ != nullptr) fclose(stdout_);
-  }
-
-  // Empty when the daemon exited before listening.
-  const std::string& address() const { return address_; }
-  std::string Log() const { return ReadFile(log_file_); }
-
-  // True while the process has not exited.
-  bool Alive() const {
-    return pid_ > 0 && waitpid(pid_, nullptr, WNOHANG) == 0;
-  }
-
-  // Exit code of a daemon that stops by itself (-1 for a signal or when it
-  // is still running after kBound, in which case it is killed).
-  int WaitForExit() {
-    int status = 0;
-    const Clock::time_point bound = Clock::now() + kBound;
-    pid_t waited = 0;
-    while ((waited = waitpid(pid_, &status, WNOHANG)) == 0 &&
-           Clock::now() < bound) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (waited == 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, &status, 0);
-      status = -1;
-    }
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
- private:
-  fs::path log_file_;
-  pid_t pid_ = -1;
-  FILE* stdout_ = nullptr;
-  std::string address_;
-};
-
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
+// pathd with its request log (--log_level=debug) in `log_file` and `flags`;
+// address() is empty when the daemon exited before listening.
+std::unique_ptr<e2e::PathdProcess> StartPathd(const fs::path& log_file,
+                                              const std::vector<std::string>& flags) {
+  std::vector<std::string> all = {"--log_level=debug"};
+  all.insert(all.end(), flags.begin(), flags.end());
+  return std::make_unique<e2e::PathdProcess>(e2e::PathdProcessOptions{
+      .binary = PATHD_BIN, .flags = all, .log_file = log_file, .bound = kBound});
 }
 
-v1::Position WorldPos(double x, double y) {
-  v1::Position p;
-  p.mutable_world()->set_x(x);
-  p.mutable_world()->set_y(y);
-  return p;
-}
+using testing::CellPos;
+using testing::WorldPos;
 
 // A plan on "room" from (1, 1) to (14, 14) that succeeds; cases break one
 // thing in it.
@@ -213,9 +146,7 @@ grpc::ByteBuffer WithNonUtf8(const google::protobuf::Message& message) {
 class BadInputTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char dir_template[] = "/tmp/pathd_bad_input_XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
-    temp_ = dir_template;
+    ASSERT_FALSE(temp_.empty()) << scratch_.error();
     ASSERT_NO_FATAL_FAILURE(WriteMapDir());
   }
   void TearDown() override {
@@ -225,8 +156,6 @@ class BadInputTest : public ::testing::Test {
     generic_.reset();
     channel_.reset();
     daemon_.reset();
-    std::error_code ignored;
-    fs::remove_all(temp_, ignored);
   }
 
   fs::path map_dir() const { return temp_ / "maps"; }
@@ -327,7 +256,7 @@ class BadInputTest : public ::testing::Test {
   }
 
   void StartDaemon() {
-    daemon_ = std::make_unique<Daemon>(
+    daemon_ = StartPathd(
         temp_ / "pathd.log",
         std::vector<std::string>{
             "--map_dir=" + map_dir().string(),
@@ -336,7 +265,7 @@ class BadInputTest : public ::testing::Test {
             absl::StrCat("--max_path_points=", kMaxPathPoints),
             absl::StrCat("--max_cost_to_go_cells=", kMaxCostToGoCells),
             "--threads=2"});
-    ASSERT_FALSE(daemon_->address().empty()) << daemon_->Log();
+    ASSERT_TRUE(daemon_->listening()) << daemon_->status();
     grpc::ChannelArguments args;
     // The client accepts anything, so every size refusal seen is the server's.
     args.SetMaxReceiveMessageSize(-1);
@@ -349,11 +278,7 @@ class BadInputTest : public ::testing::Test {
     generic_ = std::make_unique<grpc::GenericStub>(channel_);
   }
 
-  std::unique_ptr<grpc::ClientContext> Context() {
-    auto context = std::make_unique<grpc::ClientContext>();
-    context->set_deadline(std::chrono::system_clock::now() + kBound);
-    return context;
-  }
+  std::unique_ptr<grpc::ClientContext> Context() { return testing::Context(kBound); }
 
   // ---- one helper per RPC, answering the call's status ----
 
@@ -572,9 +497,11 @@ class BadInputTest : public ::testing::Test {
     // Part of the start-up log line skipping it.
     std::string complaint;
   };
-  fs::path temp_;
+  // Removed with the fixture, after TearDown has stopped the daemon.
+  testing::TempDir scratch_{"pathd_bad_input"};
+  fs::path temp_ = scratch_.path();
   std::vector<File> bad_files_;
-  std::unique_ptr<Daemon> daemon_;
+  std::unique_ptr<e2e::PathdProcess> daemon_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::MapService::Stub> map_;
   std::unique_ptr<v1::PlannerService::Stub> planner_;
@@ -1434,7 +1361,7 @@ TEST_F(BadInputTest, EveryRpcAnswersBadInputAndKeepsServing) {
   v1::GetMapResponse room;
   ASSERT_TRUE(map_->GetMap(Context().get(), get, &room).ok());
   EXPECT_EQ(room.info().version(), 1u);
-  EXPECT_TRUE(daemon_->Alive());
+  EXPECT_TRUE(daemon_->Running());
 
   // The request log quotes bad names escaped and cut short: one line each,
   // none holding the 1 MiB name.
@@ -1461,10 +1388,11 @@ TEST_F(BadInputTest, BadMapDirFlagStopsStartUp) {
       {(temp_ / "missing").string(), "does not exist"},
   };
   for (const auto& [dir, message] : dirs) {
-    Daemon daemon(temp_ / "refused.log", {"--map_dir=" + dir});
-    EXPECT_TRUE(daemon.address().empty());
-    EXPECT_NE(daemon.WaitForExit(), 0);
-    EXPECT_THAT(daemon.Log(), HasSubstr(message)) << dir;
+    const std::unique_ptr<e2e::PathdProcess> daemon =
+        StartPathd(temp_ / "refused.log", {"--map_dir=" + dir});
+    EXPECT_TRUE(daemon->address().empty());
+    EXPECT_NE(daemon->WaitForExit(), 0);
+    EXPECT_THAT(daemon->Log(), HasSubstr(message)) << dir;
   }
   std::printf("bad_input_test: %zu bad --map_dir flags refused\n", dirs.size());
 }

@@ -26,6 +26,10 @@ import tempfile
 import threading
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                "..", "testing"))
+from pathd_process import PathdProcess  # pylint: disable=wrong-import-position
+
 SIZE = 32
 MAPS = 4
 RECT = 4
@@ -57,30 +61,21 @@ def expected_cells(map_index, n):
 
 
 class Daemon:
+    """pathd on --data_dir, through the tests' launcher; its log appended to
+    log_path across restarts."""
+
     def __init__(self, pathd, data_dir, log_path):
-        self.log = open(log_path, "ab")
-        self.proc = subprocess.Popen(
-            [pathd, "--address=127.0.0.1:0", "--data_dir=" + data_dir,
-             "--snapshot_log_bytes=4096", "--snapshot_interval=0",
-             "--threads=2", "--log_level=warn"],
-            stdout=subprocess.PIPE, stderr=self.log)
-        line = self.proc.stdout.readline().decode()
-        if not line.startswith("pathd listening on "):
-            self.proc.wait()
-            raise RuntimeError("pathd did not start (exit %s); see %s" %
-                               (self.proc.returncode, log_path))
-        self.address = line.split()[-1]
+        self.process = PathdProcess(
+            pathd, ["--data_dir=" + data_dir, "--snapshot_log_bytes=4096",
+                    "--snapshot_interval=0", "--threads=2", "--log_level=warn"],
+            log_path=log_path)
+        self.address = self.process.address
 
     def kill(self):
-        self.proc.send_signal(signal.SIGKILL)
-        self.proc.wait()
-        self.log.close()
+        self.process.kill()
 
     def stop(self):
-        self.proc.send_signal(signal.SIGTERM)
-        code = self.proc.wait()
-        self.log.close()
-        return code
+        return self.process.stop()
 
 
 def pathctl(binary, address, *args):

@@ -44,6 +44,7 @@
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/temp_dir.h"
 #include "tests/testing/test_certs.h"
 
 namespace pathd {
@@ -56,11 +57,9 @@ using Clock = std::chrono::steady_clock;
 
 // Hang guards, not timing assertions: generous enough for a loaded CI
 // machine, there only so a broken binary fails the test instead of hanging it.
-constexpr auto kStartupBound = std::chrono::seconds(60);
-constexpr auto kShutdownBound = std::chrono::seconds(60);
 constexpr auto kCommandBound = std::chrono::seconds(120);
 
-constexpr char kListeningPrefix[] = "pathd listening on ";
+using e2e::kListeningPrefix;
 const double kSqrt2 = std::sqrt(2.0);
 
 // A 10x10 open room in Moving AI format.
@@ -251,9 +250,7 @@ absl::StatusCode StatusCodeNamed(const std::string& name) {
 class E2eTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char dir_template[] = "/tmp/pathd_e2e_XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr) << strerror(errno);
-    temp_dir_ = dir_template;
+    ASSERT_FALSE(temp_dir_.empty()) << scratch_.error();
     // map_dir stays empty: the daemon preloads whatever it finds there, and
     // the tests want to create every map themselves.
     map_dir_ = temp_dir_ / "map_dir";
@@ -262,85 +259,48 @@ class E2eTest : public ::testing::Test {
   }
 
   void TearDown() override {
-    if (daemon_pid_ > 0) {
+    if (daemon_ != nullptr) {
       const int exit_code = StopDaemon();
       EXPECT_EQ(exit_code, 0) << "pathd did not exit cleanly on SIGTERM";
     }
-    std::error_code ignored;
-    fs::remove_all(temp_dir_, ignored);
   }
 
-  // Starts pathd on a free port with this test's map_dir and `extra_flags`.
+  // Starts pathd on a free port with this test's map_dir and `extra_flags`;
+  // its log goes to the test's stderr.
   void StartDaemon(const std::vector<std::string>& extra_flags = {}) {
-    int out_pipe[2];
-    MakePipe(out_pipe);
-    std::vector<std::string> argv = {PATHD_BIN, "--address=127.0.0.1:0",
-                                     absl::StrCat("--map_dir=", map_dir_.string())};
-    argv.insert(argv.end(), extra_flags.begin(), extra_flags.end());
-    // stderr is inherited so the daemon's log shows up in the test output.
-    daemon_pid_ = Spawn(argv, {}, out_pipe[1], -1, true);
-    close(out_pipe[1]);
-    ASSERT_GT(daemon_pid_, 0) << "fork failed: " << strerror(errno);
-    daemon_stdout_ = out_pipe[0];
-
-    std::string line;
-    const Clock::time_point bound = Clock::now() + kStartupBound;
-    while (line.empty() || line.back() != '\n') {
-      ASSERT_LT(Clock::now(), bound)
-          << "pathd printed no listening line; got '" << line << "'";
-      pollfd p = {daemon_stdout_, POLLIN, 0};
-      if (poll(&p, 1, 1000) <= 0) continue;
-      char c;
-      const ssize_t n = read(daemon_stdout_, &c, 1);
-      if (n < 0 && errno == EINTR) continue;
-      ASSERT_EQ(n, 1) << "pathd closed stdout before listening; got '" << line
-                      << "'";
-      line.push_back(c);
-    }
-    line.pop_back();
-    absl::string_view address = line;
-    ASSERT_TRUE(absl::ConsumePrefix(&address, kListeningPrefix))
-        << "unexpected first stdout line: '" << line << "'";
-    address_ = std::string(address);
-    // Keep draining stdout so the daemon can never block on a full pipe; the
-    // contract is that nothing more arrives, checked in StopDaemon.
-    drain_ = std::thread([this] {
-      char buffer[4096];
-      while (true) {
-        const ssize_t n = read(daemon_stdout_, buffer, sizeof(buffer));
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;
-        std::lock_guard<std::mutex> lock(extra_stdout_mu_);
-        extra_stdout_.append(buffer, static_cast<size_t>(n));
-      }
-    });
+    std::vector<std::string> flags = {absl::StrCat("--map_dir=", map_dir_.string())};
+    flags.insert(flags.end(), extra_flags.begin(), extra_flags.end());
+    daemon_ = std::make_unique<e2e::PathdProcess>(
+        e2e::PathdProcessOptions{.binary = PATHD_BIN, .flags = flags});
+    ASSERT_TRUE(daemon_->listening()) << daemon_->status();
+    address_ = daemon_->address();
   }
 
   // Sends SIGTERM and returns the daemon's exit code (-1: killed by a signal).
   int StopDaemon() {
-    kill(daemon_pid_, SIGTERM);
-    int status = 0;
-    pid_t waited = 0;
-    const Clock::time_point bound = Clock::now() + kShutdownBound;
-    while ((waited = waitpid(daemon_pid_, &status, WNOHANG)) == 0 &&
-           Clock::now() < bound) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    if (waited == 0) {
-      ADD_FAILURE() << "pathd ignored SIGTERM; killing it";
-      kill(daemon_pid_, SIGKILL);
-      waitpid(daemon_pid_, &status, 0);
-    }
-    daemon_pid_ = -1;
-    if (drain_.joinable()) drain_.join();
-    close(daemon_stdout_);
-    daemon_stdout_ = -1;
-    {
-      std::lock_guard<std::mutex> lock(extra_stdout_mu_);
-      EXPECT_EQ(extra_stdout_, "")
-          << "pathd must print only the listening line on stdout";
-    }
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const int exit_code = daemon_->Stop();
+    EXPECT_EQ(daemon_->StdoutAfterListening(), "")
+        << "pathd must print only the listening line on stdout";
+    daemon_.reset();
+    return exit_code;
+  }
+
+  // A pathd of the test's own besides the fixture's, with `flags` and its
+  // log in the temp folder; fails the test unless it listens.
+  std::unique_ptr<e2e::PathdProcess> StartOwnPathd(const std::vector<std::string>& flags) {
+    auto pathd = std::make_unique<e2e::PathdProcess>(e2e::PathdProcessOptions{
+        .binary = PATHD_BIN, .flags = flags, .log_file = temp_dir_ / "own_pathd.log"});
+    EXPECT_TRUE(pathd->listening()) << pathd->status();
+    return pathd;
+  }
+
+  // SIGTERM to `pathd`: its exit code, later stdout and log (as err).
+  static ProcessResult StopOwnPathd(e2e::PathdProcess& pathd) {
+    ProcessResult result;
+    result.exit_code = pathd.Stop();
+    result.out = pathd.StdoutAfterListening();
+    result.err = pathd.Log();
+    return result;
   }
 
   // Runs pathctl against this test's daemon.
@@ -400,14 +360,12 @@ class E2eTest : public ::testing::Test {
     }
   }
 
-  fs::path temp_dir_;
+  // Removed with the fixture, after TearDown has stopped the daemon.
+  testing::TempDir scratch_{"pathd_e2e"};
+  fs::path temp_dir_ = scratch_.path();
   fs::path map_dir_;
-  pid_t daemon_pid_ = -1;
-  int daemon_stdout_ = -1;
+  std::unique_ptr<e2e::PathdProcess> daemon_;
   std::string address_;
-  std::thread drain_;
-  std::mutex extra_stdout_mu_;
-  std::string extra_stdout_;
 };
 
 TEST_F(E2eTest, HealthReportsServing) {
@@ -1292,12 +1250,10 @@ TEST_F(E2eTest, ConfigFileSetsFlagsAndTheCommandLineOverridesIt) {
 TEST_F(E2eTest, StartupLineShowsTheEffectiveConfiguration) {
   const std::string config =
       MapFile("pathd.yaml", "max_sessions: 7\nshutdown_grace: 2s\n");
-  PathctlProcess pathd({"--address=127.0.0.1:0",
-                        absl::StrCat("--config=", config), "--shutdown_grace=1s"},
-                       {}, PATHD_BIN);
-  ASSERT_TRUE(pathd.WaitForLine(kListeningPrefix)) << pathd.out();
-  pathd.Signal(SIGTERM);
-  const ProcessResult r = pathd.Finish();
+  const std::unique_ptr<e2e::PathdProcess> pathd =
+      StartOwnPathd({absl::StrCat("--config=", config), "--shutdown_grace=1s"});
+  ASSERT_TRUE(pathd->listening());
+  const ProcessResult r = StopOwnPathd(*pathd);
   EXPECT_EQ(r.exit_code, 0) << r;
   const size_t at = r.err.find("pathd starting: ");
   ASSERT_NE(at, std::string::npos) << r;
@@ -1438,19 +1394,16 @@ TEST_F(E2eTest, GoalToleranceSubstitutesTheNearestFreeCell) {
 
 TEST_F(E2eTest, MetricsCountRequestsAndPathctlPrintsThem) {
   // A daemon of its own, to read its metrics port from its log.
-  PathctlProcess pathd({"--address=127.0.0.1:0", "--metrics_address=127.0.0.1:0",
-                        "--threads=2", "--log_level=debug"},
-                       {}, PATHD_BIN);
-  ASSERT_TRUE(pathd.WaitForLine(kListeningPrefix)) << pathd.out();
+  const std::unique_ptr<e2e::PathdProcess> pathd = StartOwnPathd(
+      {"--metrics_address=127.0.0.1:0", "--threads=2", "--log_level=debug"});
+  ASSERT_TRUE(pathd->listening());
   constexpr char kMetricsLine[] = "serving Prometheus metrics on http://";
-  ASSERT_TRUE(pathd.WaitForStderrLine(kMetricsLine)) << pathd.err();
-  const size_t at = pathd.err().find(kMetricsLine) + strlen(kMetricsLine);
+  const std::string metrics_line = pathd->WaitForLogLine({kMetricsLine});
+  ASSERT_NE(metrics_line, "") << pathd->Log();
+  const size_t at = metrics_line.find(kMetricsLine) + strlen(kMetricsLine);
   const std::string metrics_address =
-      pathd.err().substr(at, pathd.err().find("/metrics", at) - at);
-  const std::string server =
-      absl::StrCat("--server=", pathd.out().substr(strlen(kListeningPrefix),
-                                                   pathd.out().find('\n') -
-                                                       strlen(kListeningPrefix)));
+      metrics_line.substr(at, metrics_line.find("/metrics", at) - at);
+  const std::string server = absl::StrCat("--server=", pathd->address());
   const std::string metrics_flag = absl::StrCat("--metrics_address=", metrics_address);
 
   ASSERT_EQ(RunPathctl({server, "maps", "create", "room", "--from",
@@ -1487,8 +1440,7 @@ TEST_F(E2eTest, MetricsCountRequestsAndPathctlPrintsThem) {
         << "missing " << line << "\n" << all;
   }
 
-  pathd.Signal(SIGTERM);
-  const ProcessResult daemon = pathd.Finish();
+  const ProcessResult daemon = StopOwnPathd(*pathd);
   EXPECT_EQ(daemon.exit_code, 0) << daemon;
   // The debug request log has one line per request, with its planner.
   EXPECT_TRUE(absl::StrContains(
@@ -2224,15 +2176,11 @@ TEST_F(E2eTest, TlsAndTokensThroughPathctl) {
   WriteFile(read_file, read_token + "\n");
   WriteFile(write_file, write_token + "\n");
 
-  PathctlProcess daemon({"--address=127.0.0.1:0", "--tls_cert=" + certs.server_cert,
-                         "--tls_key=" + certs.server_key,
-                         "--auth_tokens=" + tokens.string(), "--log_level=trace"},
-                        {}, PATHD_BIN);
-  ASSERT_TRUE(daemon.WaitForLine(kListeningPrefix)) << daemon.err();
-  std::string address = daemon.out().substr(daemon.out().find(kListeningPrefix) +
-                                            strlen(kListeningPrefix));
-  address = std::string(absl::StripTrailingAsciiWhitespace(address));
-  const std::string server = "--server=" + address;
+  const std::unique_ptr<e2e::PathdProcess> daemon = StartOwnPathd(
+      {"--tls_cert=" + certs.server_cert, "--tls_key=" + certs.server_key,
+       "--auth_tokens=" + tokens.string(), "--log_level=trace"});
+  ASSERT_TRUE(daemon->listening());
+  const std::string server = "--server=" + daemon->address();
   const std::string tls = "--tls_ca=" + certs.ca;
 
   const std::string map = MapFile("room.map", OpenRoomMap());
@@ -2276,8 +2224,7 @@ TEST_F(E2eTest, TlsAndTokensThroughPathctl) {
   EXPECT_EQ(r.exit_code, 7) << r;
   EXPECT_TRUE(absl::StrContains(r.err, "--token_file: cannot open")) << r;
 
-  daemon.Signal(SIGTERM);
-  const ProcessResult log = daemon.Finish();
+  const ProcessResult log = StopOwnPathd(*daemon);
   EXPECT_EQ(log.exit_code, 0) << log;
   EXPECT_TRUE(absl::StrContains(log.err, "transport: TLS; authentication: bearer tokens"))
       << log.err;

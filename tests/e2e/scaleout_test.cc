@@ -38,6 +38,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/requests.h"
 
 namespace pathd {
 namespace {
@@ -107,49 +108,26 @@ int RunToExit(const std::vector<std::string>& argv, const fs::path& dir,
   return code;
 }
 
-// One pathd replica on a free loopback port, named by --replica_name.
+// One pathd replica on a free loopback port, named by --replica_name, its
+// log in `dir`.
 class Replica {
  public:
-  Replica(const std::string& name, const fs::path& dir) : name_(name) {
-    int out[2];
-    e2e::MakePipe(out);
-    const fs::path log = dir / (name + ".log");
-    const int log_fd =
-        open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    pid_ = e2e::Spawn({PATHD_BIN, "--address=127.0.0.1:0",
-                       "--replica_name=" + name},
-                      {}, out[1], log_fd, true);
-    close(out[1]);
-    close(log_fd);
-    FILE* stdout_file = fdopen(out[0], "r");
-    char line[256] = {};
-    if (fgets(line, sizeof(line), stdout_file) != nullptr) {
-      absl::string_view text = absl::StripTrailingAsciiWhitespace(line);
-      if (absl::ConsumePrefix(&text, "pathd listening on ")) {
-        address_ = std::string(text);
-      }
-    }
-    fclose(stdout_file);
-    EXPECT_FALSE(address_.empty()) << name << " did not start:\n" << ReadFile(log);
+  Replica(const std::string& name, const fs::path& dir)
+      : name_(name),
+        pathd_(e2e::PathdProcessOptions{.binary = PATHD_BIN,
+                                        .flags = {"--replica_name=" + name},
+                                        .log_file = dir / (name + ".log")}) {
+    EXPECT_TRUE(pathd_.listening()) << name << " did not start: " << pathd_.status();
   }
-  Replica(const Replica&) = delete;
-  Replica& operator=(const Replica&) = delete;
-  ~Replica() { Kill(); }
 
-  void Kill() {
-    if (pid_ <= 0) return;
-    kill(pid_, SIGKILL);
-    e2e::WaitForExit(pid_);
-    pid_ = -1;
-  }
+  void Kill() { pathd_.Kill(); }
 
   const std::string& name() const { return name_; }
-  const std::string& address() const { return address_; }
+  const std::string& address() const { return pathd_.address(); }
 
  private:
   std::string name_;
-  std::string address_;
-  pid_t pid_ = -1;
+  e2e::PathdProcess pathd_;
 };
 
 // nginx with the configuration rendered from the project's template, run as
@@ -251,13 +229,7 @@ v1::CreateMapRequest OpenRoom(const std::string& name) {
 }
 
 v1::PlanRequest PlanAcross(const std::string& map) {
-  v1::PlanRequest request;
-  request.set_map(map);
-  request.mutable_start()->mutable_cell()->set_x(0);
-  request.mutable_start()->mutable_cell()->set_y(0);
-  request.mutable_goal()->mutable_cell()->set_x(7);
-  request.mutable_goal()->mutable_cell()->set_y(7);
-  return request;
+  return testing::PlanBetween(map, 0, 0, 7, 7, v1::PLANNER_UNSPECIFIED);
 }
 
 class ScaleOutTest : public ::testing::Test {

@@ -47,6 +47,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/map_store.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 
 namespace pathd::server {
 namespace {
@@ -212,9 +213,8 @@ class ConcurrencyTest : public ::testing::Test {
  protected:
   void SetUp() override {
     ServerOptions options;
-    options.address = "127.0.0.1:0";
     options.threads = 4;
-    server_ = std::make_unique<PathdServer>(options);
+    server_ = std::make_unique<testing::InProcessServer>(options);
     ASSERT_TRUE(server_->Start().ok());
     maps_.push_back(MakeMap("hall", 48, 32, 1));
     maps_.push_back(MakeMap("yard", 40, 40, 2));
@@ -224,10 +224,8 @@ class ConcurrencyTest : public ::testing::Test {
       ASSERT_TRUE(created.ok()) << created.status();
       ASSERT_EQ((*created)->version, 1u);
     }
-    auto channel = grpc::CreateChannel(server_->listen_address(),
-                                       grpc::InsecureChannelCredentials());
-    planner_ = v1::PlannerService::NewStub(channel);
-    map_stub_ = v1::MapService::NewStub(channel);
+    planner_ = &server_->planner();
+    map_stub_ = &server_->maps();
     activity_ = std::make_unique<std::atomic<const char*>[]>(Roles().size());
   }
 
@@ -733,9 +731,9 @@ class ConcurrencyTest : public ::testing::Test {
     return {};
   }
 
-  std::unique_ptr<PathdServer> server_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
-  std::unique_ptr<v1::MapService::Stub> map_stub_;
+  std::unique_ptr<testing::InProcessServer> server_;
+  v1::PlannerService::Stub* planner_ = nullptr;
+  v1::MapService::Stub* map_stub_ = nullptr;
   std::vector<SharedMap> maps_;
 
   std::atomic<bool> stop_{false};

@@ -21,6 +21,8 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/metrics.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -73,48 +75,26 @@ std::map<std::string, double> ParseSamples(const std::string& text) {
 class MetricsTest : public ::testing::Test {
  protected:
   void StartServer(absl::Duration slow_threshold = absl::Seconds(1)) {
-    ServerOptions options;
-    options.address = "127.0.0.1:0";
+    ServerOptions options = testing::TestServerOptions();
     options.metrics_address = "127.0.0.1:0";
-    options.threads = 2;
-    options.queue_depth = 64;
-    options.shutdown_grace = absl::Seconds(2);
     options.slow_request_threshold = slow_threshold;
-    server_ = std::make_unique<PathdServer>(options);
+    server_ = std::make_unique<testing::InProcessServer>(options);
     const absl::Status started = server_->Start();
     ASSERT_TRUE(started.ok()) << started;
     ASSERT_GT(server_->metrics_port(), 0);
-    auto channel = grpc::CreateChannel(server_->listen_address(),
-                                       grpc::InsecureChannelCredentials());
-    maps_ = v1::MapService::NewStub(channel);
-    planner_ = v1::PlannerService::NewStub(channel);
+    maps_ = &server_->maps();
+    planner_ = &server_->planner();
   }
 
-  static void Prepare(grpc::ClientContext& context) {
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  }
+  static void Prepare(grpc::ClientContext& context) { testing::SetDeadline(context); }
 
   // An all-free w x h map.
   grpc::Status CreateFree(const std::string& name, int w, int h) {
-    v1::CreateMapRequest request;
-    request.set_name(name);
-    request.mutable_raw()->set_width(w);
-    request.mutable_raw()->set_height(h);
-    request.mutable_raw()->set_cells(std::string(static_cast<size_t>(w * h), '\0'));
-    v1::CreateMapResponse response;
-    grpc::ClientContext context;
-    Prepare(context);
-    return maps_->CreateMap(&context, request, &response);
+    return server_->CreateFreeMap(name, w, h);
   }
 
   grpc::Status Plan(const std::string& map, v1::Planner planner) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    request.mutable_start()->mutable_cell()->set_x(0);
-    request.mutable_start()->mutable_cell()->set_y(0);
-    request.mutable_goal()->mutable_cell()->set_x(7);
-    request.mutable_goal()->mutable_cell()->set_y(5);
-    request.set_planner(planner);
+    const v1::PlanRequest request = testing::PlanBetween(map, 0, 0, 7, 5, planner);
     v1::PlanResponse response;
     grpc::ClientContext context;
     Prepare(context);
@@ -125,9 +105,9 @@ class MetricsTest : public ::testing::Test {
     return ParseSamples(Scrape(server_->metrics_port()));
   }
 
-  std::unique_ptr<PathdServer> server_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
+  std::unique_ptr<testing::InProcessServer> server_;
+  v1::MapService::Stub* maps_ = nullptr;
+  v1::PlannerService::Stub* planner_ = nullptr;
 };
 
 TEST_F(MetricsTest, CountsRequestsByRpcAndCodeAndReadsServerState) {

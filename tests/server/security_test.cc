@@ -29,6 +29,8 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/auth.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 #include "tests/testing/test_certs.h"
 
 namespace pathd::server {
@@ -127,12 +129,12 @@ class SecurityTest : public ::testing::Test {
     server_.reset();  // shuts down
   }
 
-  // Starts a server with `options` (address, threads and grace filled in).
+  // Starts a server with `options` (address, threads and grace filled in);
+  // the tests connect with Client(), not the fixture's plaintext stubs.
   absl::Status StartServer(ServerOptions options) {
-    options.address = "127.0.0.1:0";
     options.threads = 2;
     options.shutdown_grace = absl::Seconds(2);
-    server_ = std::make_unique<PathdServer>(std::move(options));
+    server_ = std::make_unique<testing::InProcessServer>(std::move(options));
     return server_->Start();
   }
 
@@ -178,13 +180,7 @@ class SecurityTest : public ::testing::Test {
   }
 
   static v1::PlanRequest PlanAcross(const std::string& map) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    request.mutable_start()->mutable_cell()->set_x(0);
-    request.mutable_start()->mutable_cell()->set_y(0);
-    request.mutable_goal()->mutable_cell()->set_x(4);
-    request.mutable_goal()->mutable_cell()->set_y(3);
-    return request;
+    return testing::PlanBetween(map, 0, 0, 4, 3, v1::PLANNER_UNSPECIFIED);
   }
 
   static v1::UpdateMapRequest BlockCell(const std::string& map, int x, int y) {
@@ -199,7 +195,7 @@ class SecurityTest : public ::testing::Test {
 
   static fs::path* dir_;
   static testing::TestCerts* certs_;
-  std::unique_ptr<PathdServer> server_;
+  std::unique_ptr<testing::InProcessServer> server_;
 };
 
 fs::path* SecurityTest::dir_ = nullptr;

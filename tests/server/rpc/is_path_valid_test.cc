@@ -17,6 +17,9 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
+#include "tests/testing/shared_server_test.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -25,93 +28,38 @@ using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
 
-// '.' free, '#' lethal, '5' cost 50, '?' unknown.
-std::string CellsFromRows(const std::vector<std::string>& rows) {
-  std::string cells;
-  for (const std::string& row : rows) {
-    for (const char c : row) {
-      switch (c) {
-        case '#':
-          cells.push_back(static_cast<char>(254));
-          break;
-        case '5':
-          cells.push_back(static_cast<char>(50));
-          break;
-        case '?':
-          cells.push_back(static_cast<char>(255));
-          break;
-        default:
-          cells.push_back('\0');
-      }
-    }
-  }
-  return cells;
-}
+using testing::Context;
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
+using testing::CellPos;
+using testing::WorldPos;
 
-v1::Position WorldPos(double x, double y) {
-  v1::Position p;
-  p.mutable_world()->set_x(x);
-  p.mutable_world()->set_y(y);
-  return p;
-}
-
-class PathCheckTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    ServerOptions options;
-    options.address = "127.0.0.1:0";
-    options.threads = 2;
-    options.queue_depth = 64;
+class PathCheckTest : public testing::SharedServerTest<PathCheckTest> {
+ public:
+  static ServerOptions SuiteOptions() {
+    ServerOptions options = testing::TestServerOptions();
     // Also sets the receive limit, which the over-long path must get past.
     options.max_map_cells = 1 << 24;
-    options.shutdown_grace = absl::Seconds(2);
-    server_ = new PathdServer(options);
-    const absl::Status started = server_->Start();
-    ASSERT_TRUE(started.ok()) << started;
-    channel_ = new std::shared_ptr<grpc::Channel>(grpc::CreateChannel(
-        server_->listen_address(), grpc::InsecureChannelCredentials()));
+    return options;
   }
 
-  static void TearDownTestSuite() {
-    delete channel_;
-    delete server_;
-  }
-
+ protected:
   void SetUp() override {
-    maps_ = v1::MapService::NewStub(*channel_);
-    planner_ = v1::PlannerService::NewStub(*channel_);
+    maps_ = &server_->maps();
+    planner_ = &server_->planner();
   }
 
-  static std::unique_ptr<grpc::ClientContext> Context() {
-    auto context = std::make_unique<grpc::ClientContext>();
-    context->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-    return context;
-  }
-
+  // '.' free, '#' lethal, '5' cost 50, '?' unknown.
   void CreateMap(const std::string& name, const std::vector<std::string>& rows,
                  double resolution = 0.0) {
-    CreateRawMap(name, static_cast<int>(rows[0].size()), static_cast<int>(rows.size()),
-                 CellsFromRows(rows), resolution);
+    const grpc::Status s =
+        server_->CreateMapFromRows(name, rows, resolution, /*replace=*/true);
+    ASSERT_TRUE(s.ok()) << s.error_message();
   }
 
   void CreateRawMap(const std::string& name, int width, int height,
                     const std::string& cells, double resolution = 0.0) {
-    v1::CreateMapRequest request;
-    request.set_name(name);
-    request.mutable_raw()->set_width(width);
-    request.mutable_raw()->set_height(height);
-    request.mutable_raw()->set_cells(cells);
-    request.set_resolution(resolution);
-    request.set_replace(true);
-    v1::CreateMapResponse response;
-    const grpc::Status s = maps_->CreateMap(Context().get(), request, &response);
+    const grpc::Status s =
+        server_->CreateRawMap(name, width, height, cells, resolution, /*replace=*/true);
     ASSERT_TRUE(s.ok()) << s.error_message();
   }
 
@@ -144,21 +92,12 @@ class PathCheckTest : public ::testing::Test {
 
   static v1::PlanRequest PlanBetween(const std::string& map, int sx, int sy, int gx,
                                      int gy) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    *request.mutable_start() = CellPos(sx, sy);
-    *request.mutable_goal() = CellPos(gx, gy);
-    return request;
+    return testing::PlanBetween(map, sx, sy, gx, gy, v1::PLANNER_UNSPECIFIED);
   }
 
-  static PathdServer* server_;
-  static std::shared_ptr<grpc::Channel>* channel_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
+  v1::MapService::Stub* maps_ = nullptr;
+  v1::PlannerService::Stub* planner_ = nullptr;
 };
-
-PathdServer* PathCheckTest::server_ = nullptr;
-std::shared_ptr<grpc::Channel>* PathCheckTest::channel_ = nullptr;
 
 // --- IsPathValid -------------------------------------------------------------
 

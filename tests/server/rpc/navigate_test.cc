@@ -29,6 +29,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 
 namespace pathd::server {
 namespace {
@@ -151,22 +152,14 @@ constexpr auto kAnswerWait = std::chrono::seconds(30);
 class NavigationTest : public ::testing::Test {
  protected:
   void StartServer(ServerOptions options = {}) {
-    options.address = "127.0.0.1:0";
     options.threads = 2;
-    server_ = std::make_unique<PathdServer>(options);
+    server_ = std::make_unique<testing::InProcessServer>(options);
     // Every version of every map, so answers can be checked against the
     // version they name.
-    server_->store().AddListener(
-        [this](std::string_view name, const std::shared_ptr<const MapSnapshot>& snapshot) {
-          if (snapshot == nullptr) return;
-          absl::MutexLock lock(&versions_mu_);
-          versions_[{std::string(name), snapshot->version}] = snapshot->grid;
-        });
+    server_->KeepMapVersions();
     ASSERT_TRUE(server_->Start().ok());
-    auto channel = grpc::CreateChannel(server_->listen_address(),
-                                       grpc::InsecureChannelCredentials());
-    planner_ = v1::PlannerService::NewStub(channel);
-    maps_ = v1::MapService::NewStub(channel);
+    planner_ = &server_->planner();
+    maps_ = &server_->maps();
   }
 
   void TearDown() override {
@@ -176,14 +169,11 @@ class NavigationTest : public ::testing::Test {
   void AddMap(const std::string& name, Grid grid) {
     auto created = server_->store().Create(name, std::move(grid), false);
     ASSERT_TRUE(created.ok()) << created.status();
-    absl::MutexLock lock(&versions_mu_);
-    versions_[{name, (*created)->version}] = (*created)->grid;
+    server_->KeepMapVersion(name, *created);
   }
 
   std::shared_ptr<const Grid> Version(const std::string& name, uint64_t version) {
-    absl::MutexLock lock(&versions_mu_);
-    auto it = versions_.find({name, version});
-    return it == versions_.end() ? nullptr : it->second;
+    return server_->MapVersion(name, version);
   }
 
   // Another client blocks or frees cells through UpdateMap.
@@ -226,12 +216,9 @@ class NavigationTest : public ::testing::Test {
     EXPECT_NEAR(measured.cost, plan.cost(), 1e-9 * (1.0 + plan.cost()));
   }
 
-  std::unique_ptr<PathdServer> server_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
-  absl::Mutex versions_mu_;
-  std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>> versions_
-      ABSL_GUARDED_BY(versions_mu_);
+  std::unique_ptr<testing::InProcessServer> server_;
+  v1::PlannerService::Stub* planner_ = nullptr;
+  v1::MapService::Stub* maps_ = nullptr;
 };
 
 Grid OpenGrid(int width, int height) { return *Grid::Create(width, height); }

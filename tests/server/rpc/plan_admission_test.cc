@@ -26,6 +26,7 @@
 #include "server/map_store.h"
 #include "server/rpc/planner_service.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 #include "server/worker_pool.h"
 #include "spdlog/spdlog.h"
 
@@ -45,14 +46,11 @@ class PlanAdmissionTest : public ::testing::Test {
     service_ = std::make_unique<PlannerServiceImpl>(store_, *pool_, inflation_, cache_,
                                                     *sessions_,
                                                     PlannerServiceImpl::Options{});
-    grpc::ServerBuilder builder;
-    int port = 0;
-    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
-    builder.RegisterService(service_.get());
-    server_ = builder.BuildAndStart();
-    ASSERT_NE(server_, nullptr);
-    stub_ = v1::PlannerService::NewStub(grpc::CreateChannel(
-        "127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials()));
+    absl::StatusOr<testing::LoopbackServer> loopback =
+        testing::ServeOnLoopback(service_.get());
+    ASSERT_TRUE(loopback.ok()) << loopback.status();
+    server_ = std::move(loopback->server);
+    stub_ = v1::PlannerService::NewStub(loopback->channel);
   }
 
   void TearDown() override {
@@ -214,14 +212,10 @@ TEST_F(PlanAdmissionTest, PathLongerThanTheLimitIsResourceExhausted) {
   PlannerServiceImpl::Options options;
   options.max_path_points = 31;  // the diagonal of the 32 x 32 map has 32
   PlannerServiceImpl limited(store_, *pool_, inflation_, cache_, *sessions_, options);
-  grpc::ServerBuilder builder;
-  int port = 0;
-  builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
-  builder.RegisterService(&limited);
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
-  ASSERT_NE(server, nullptr);
-  auto stub = v1::PlannerService::NewStub(grpc::CreateChannel(
-      "127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials()));
+  absl::StatusOr<testing::LoopbackServer> loopback = testing::ServeOnLoopback(&limited);
+  ASSERT_TRUE(loopback.ok()) << loopback.status();
+  std::unique_ptr<grpc::Server>& server = loopback->server;
+  auto stub = v1::PlannerService::NewStub(loopback->channel);
 
   v1::PlanResponse response;
   grpc::ClientContext context;
@@ -255,16 +249,13 @@ namespace {
 TEST(PathdServerShutdownTest, AnswersEveryInFlightPlan) {
   constexpr int kCalls = 6;
   ServerOptions options;
-  options.address = "127.0.0.1:0";
   options.threads = 1;
   options.queue_depth = kCalls;
   options.shutdown_grace = absl::ZeroDuration();
-  PathdServer server(options);
+  testing::InProcessServer server(options);
   ASSERT_TRUE(server.Start().ok());
   ASSERT_TRUE(server.store().Create("big", *Grid::Create(400, 400), false).ok());
-
-  auto stub = v1::PlannerService::NewStub(grpc::CreateChannel(
-      server.listen_address(), grpc::InsecureChannelCredentials()));
+  v1::PlannerService::Stub* stub = &server.planner();
   struct Call {
     grpc::ClientContext context;
     v1::PlanRequest request;

@@ -23,6 +23,8 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/rpc/planner_service.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -34,27 +36,11 @@ constexpr absl::Duration kProgressInterval = absl::Milliseconds(5);
 // million expansions), small enough to keep the suite at a few seconds.
 constexpr int kBigSide = 1024;
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
-
-v1::PlanRequest PlanBetween(const std::string& map, int sx, int sy, int gx, int gy,
-                            v1::Planner planner = v1::PLANNER_ASTAR) {
-  v1::PlanRequest request;
-  request.set_map(map);
-  *request.mutable_start() = CellPos(sx, sy);
-  *request.mutable_goal() = CellPos(gx, gy);
-  request.set_planner(planner);
-  return request;
-}
+using testing::CellPos;
+using testing::PlanBetween;
 
 std::unique_ptr<grpc::ClientContext> Context() {
-  auto context = std::make_unique<grpc::ClientContext>();
-  context->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
-  return context;
+  return testing::Context(absl::Seconds(120));
 }
 
 // The trailing metadata value of `key`, empty when absent.
@@ -68,28 +54,21 @@ std::string Trailer(const grpc::ClientContext& context, const std::string& key) 
 class PlanStreamTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    ServerOptions options;
-    options.address = "127.0.0.1:0";
-    options.threads = 2;
+    ServerOptions options = testing::TestServerOptions();
     options.queue_depth = 256;
     options.max_map_cells = 1 << 22;
-    options.shutdown_grace = absl::Seconds(2);
     options.progress_interval = kProgressInterval;
-    server_ = new PathdServer(options);
+    server_ = new testing::InProcessServer(options);
     ASSERT_TRUE(server_->Start().ok());
-    channel_ = new std::shared_ptr<grpc::Channel>(grpc::CreateChannel(
-        server_->listen_address(), grpc::InsecureChannelCredentials()));
 
     options.batch_max_inflight = 1;
-    tiny_server_ = new PathdServer(options);
+    tiny_server_ = new testing::InProcessServer(options);
     ASSERT_TRUE(tiny_server_->Start().ok());
-    tiny_channel_ = new std::shared_ptr<grpc::Channel>(grpc::CreateChannel(
-        tiny_server_->listen_address(), grpc::InsecureChannelCredentials()));
 
-    for (std::shared_ptr<grpc::Channel>* channel : {channel_, tiny_channel_}) {
-      auto maps = v1::MapService::NewStub(*channel);
-      CreateMap(*maps, "big", kBigSide, kBigSide, std::string(kBigSide * kBigSide, '\0'));
-      CreateMap(*maps, "small", 8, 8, std::string(64, '\0'));
+    for (testing::InProcessServer* server : {server_, tiny_server_}) {
+      CreateMap(server->maps(), "big", kBigSide, kBigSide,
+                std::string(kBigSide * kBigSide, '\0'));
+      CreateMap(server->maps(), "small", 8, 8, std::string(64, '\0'));
     }
     // Two seeded random maps for the batch: 20% lethal cells, a free border
     // so most queries have a path.
@@ -103,34 +82,28 @@ class PlanStreamTest : public ::testing::Test {
           if (blocked(rng)) cells[static_cast<size_t>(y * side + x)] = static_cast<char>(254);
         }
       }
-      auto maps = v1::MapService::NewStub(*channel_);
-      CreateMap(*maps, name, side, side, cells);
+      CreateMap(server_->maps(), name, side, side, cells);
     }
   }
 
   static void TearDownTestSuite() {
-    delete channel_;
-    delete tiny_channel_;
     delete server_;
     delete tiny_server_;
+    server_ = tiny_server_ = nullptr;
   }
 
   static void CreateMap(v1::MapService::Stub& maps, const std::string& name, int width,
                         int height, const std::string& cells) {
-    v1::CreateMapRequest request;
-    request.set_name(name);
-    request.mutable_raw()->set_width(width);
-    request.mutable_raw()->set_height(height);
-    request.mutable_raw()->set_cells(cells);
     v1::CreateMapResponse response;
-    const grpc::Status s = maps.CreateMap(Context().get(), request, &response);
+    const grpc::Status s = maps.CreateMap(
+        Context().get(), testing::RawMapRequest(name, width, height, cells), &response);
     ASSERT_TRUE(s.ok()) << s.error_message();
   }
 
   void SetUp() override {
-    planner_ = v1::PlannerService::NewStub(*channel_);
-    tiny_planner_ = v1::PlannerService::NewStub(*tiny_channel_);
-    maps_ = v1::MapService::NewStub(*channel_);
+    planner_ = &server_->planner();
+    tiny_planner_ = &tiny_server_->planner();
+    maps_ = &server_->maps();
   }
 
   grpc::Status Plan(const v1::PlanRequest& request, v1::PlanResponse* response,
@@ -188,19 +161,16 @@ class PlanStreamTest : public ::testing::Test {
     return item;
   }
 
-  static PathdServer* server_;
-  static PathdServer* tiny_server_;
-  static std::shared_ptr<grpc::Channel>* channel_;
-  static std::shared_ptr<grpc::Channel>* tiny_channel_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
-  std::unique_ptr<v1::PlannerService::Stub> tiny_planner_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
+  // tiny_server_ runs PlanBatch with one item in flight per stream.
+  static testing::InProcessServer* server_;
+  static testing::InProcessServer* tiny_server_;
+  v1::PlannerService::Stub* planner_ = nullptr;
+  v1::PlannerService::Stub* tiny_planner_ = nullptr;
+  v1::MapService::Stub* maps_ = nullptr;
 };
 
-PathdServer* PlanStreamTest::server_ = nullptr;
-PathdServer* PlanStreamTest::tiny_server_ = nullptr;
-std::shared_ptr<grpc::Channel>* PlanStreamTest::channel_ = nullptr;
-std::shared_ptr<grpc::Channel>* PlanStreamTest::tiny_channel_ = nullptr;
+testing::InProcessServer* PlanStreamTest::server_ = nullptr;
+testing::InProcessServer* PlanStreamTest::tiny_server_ = nullptr;
 
 // --- PlanStream --------------------------------------------------------------
 

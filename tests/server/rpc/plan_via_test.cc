@@ -17,6 +17,9 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
+#include "tests/testing/shared_server_test.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -27,21 +30,9 @@ using ::testing::IsEmpty;
 
 constexpr int64_t kMaxReturned = 200;
 
-// '.' free, '#' lethal.
-std::string CellsFromRows(const std::vector<std::string>& rows) {
-  std::string cells;
-  for (const std::string& row : rows) {
-    for (const char c : row) cells.push_back(c == '#' ? static_cast<char>(254) : '\0');
-  }
-  return cells;
-}
+using testing::Context;
 
-v1::Position CellPos(int x, int y) {
-  v1::Position p;
-  p.mutable_cell()->set_x(x);
-  p.mutable_cell()->set_y(y);
-  return p;
-}
+using testing::CellPos;
 
 // A wall with a gap, and a walled-in pocket around (13, 2).
 const std::vector<std::string> kRows = {
@@ -53,48 +44,20 @@ const std::vector<std::string> kRows = {
     "..........#.........",
 };
 
-class PlanViaTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    ServerOptions options;
-    options.address = "127.0.0.1:0";
-    options.threads = 2;
-    options.queue_depth = 64;
+class PlanViaTest : public testing::SharedServerTest<PlanViaTest> {
+ public:
+  static ServerOptions SuiteOptions() {
+    ServerOptions options = testing::TestServerOptions();
     options.max_returned_expansions = kMaxReturned;
-    options.shutdown_grace = absl::Seconds(2);
-    server_ = new PathdServer(options);
-    const absl::Status started = server_->Start();
-    ASSERT_TRUE(started.ok()) << started;
-    channel_ = new std::shared_ptr<grpc::Channel>(grpc::CreateChannel(
-        server_->listen_address(), grpc::InsecureChannelCredentials()));
+    return options;
   }
 
-  static void TearDownTestSuite() {
-    delete channel_;
-    delete server_;
-  }
+ protected:
+  void SetUp() override { CreateMap("rooms", kRows); }
 
-  void SetUp() override {
-    maps_ = v1::MapService::NewStub(*channel_);
-    planner_ = v1::PlannerService::NewStub(*channel_);
-    CreateMap("rooms", kRows);
-  }
-
-  static std::unique_ptr<grpc::ClientContext> Context() {
-    auto context = std::make_unique<grpc::ClientContext>();
-    context->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-    return context;
-  }
-
+  // '.' free, '#' lethal.
   void CreateMap(const std::string& name, const std::vector<std::string>& rows) {
-    v1::CreateMapRequest request;
-    request.set_name(name);
-    request.mutable_raw()->set_width(static_cast<int>(rows[0].size()));
-    request.mutable_raw()->set_height(static_cast<int>(rows.size()));
-    request.mutable_raw()->set_cells(CellsFromRows(rows));
-    request.set_replace(true);
-    v1::CreateMapResponse response;
-    const grpc::Status s = maps_->CreateMap(Context().get(), request, &response);
+    const grpc::Status s = server_->CreateMapFromRows(name, rows, 0.0, /*replace=*/true);
     ASSERT_TRUE(s.ok()) << s.error_message();
   }
 
@@ -112,17 +75,9 @@ class PlanViaTest : public ::testing::Test {
   }
 
   grpc::Status Plan(const v1::PlanRequest& request, v1::PlanResponse* response) {
-    return planner_->Plan(Context().get(), request, response);
+    return server_->planner().Plan(Context().get(), request, response);
   }
-
-  static PathdServer* server_;
-  static std::shared_ptr<grpc::Channel>* channel_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
 };
-
-PathdServer* PlanViaTest::server_ = nullptr;
-std::shared_ptr<grpc::Channel>* PlanViaTest::channel_ = nullptr;
 
 bool SameCell(const v1::Cell& a, const v1::Position& b) {
   return a.x() == b.cell().x() && a.y() == b.cell().y();

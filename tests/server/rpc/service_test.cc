@@ -26,6 +26,10 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
+#include "tests/testing/shared_server_test.h"
+#include "tests/testing/temp_dir.h"
+#include "tests/testing/requests.h"
 
 namespace pathd::server {
 namespace {
@@ -61,12 +65,20 @@ constexpr char kRosYaml[] =
     "free_thresh: 0.196\n";
 constexpr char kRosPgm[] = "P2\n3 2\n255\n255 0 255\n255 255 255\n";
 
-class ServiceTest : public ::testing::Test {
+class ServiceTest : public testing::SharedServerTest<ServiceTest> {
+ public:
+  static ServerOptions SuiteOptions() {
+    ServerOptions options = testing::TestServerOptions();
+    options.max_map_cells = 1 << 16;
+    options.map_dir = (*root_ / "maps").string();
+    return options;
+  }
+
  protected:
   static void SetUpTestSuite() {
-    char tmpl[] = "/tmp/pathd_service_test_XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    root_ = new fs::path(tmpl);
+    scratch_ = new testing::TempDir("pathd_service_test");
+    ASSERT_FALSE(scratch_->path().empty()) << scratch_->error();
+    root_ = &scratch_->path();
     const fs::path dir = *root_ / "maps";
     fs::create_directories(dir / "sub");
     WriteFile(dir / "small.map", kSmallMovingAi);
@@ -82,59 +94,32 @@ class ServiceTest : public ::testing::Test {
     WriteFile(dir / "sneaky.yaml",
               "image: ../secret.pgm\nresolution: 1.0\norigin: [0, 0, 0]\n");
 
-    ServerOptions options;
-    options.address = "127.0.0.1:0";
-    options.threads = 2;
-    options.queue_depth = 64;
-    options.max_map_cells = 1 << 16;
-    options.map_dir = dir.string();
-    options.shutdown_grace = absl::Seconds(2);
-    server_ = new PathdServer(options);
-    const absl::Status started = server_->Start();
-    ASSERT_TRUE(started.ok()) << started;
+    SharedServerTest::SetUpTestSuite();
     ASSERT_GT(server_->port(), 0);
-
-    auto channel = grpc::CreateChannel(server_->listen_address(),
-                                       grpc::InsecureChannelCredentials());
-    channel_ = new std::shared_ptr<grpc::Channel>(channel);
+    channel_ = &server_->channel();
   }
 
   static void TearDownTestSuite() {
-    delete channel_;
-    delete server_;  // shuts down
-    std::error_code ec;
-    fs::remove_all(*root_, ec);
-    delete root_;
+    SharedServerTest::TearDownTestSuite();  // shuts down
+    delete scratch_;
+    scratch_ = nullptr;
   }
 
   void SetUp() override {
-    maps_ = v1::MapService::NewStub(*channel_);
-    planner_ = v1::PlannerService::NewStub(*channel_);
+    maps_ = &server_->maps();
+    planner_ = &server_->planner();
   }
 
-  static void Prepare(grpc::ClientContext& context) {
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  }
+  static void Prepare(grpc::ClientContext& context) { testing::SetDeadline(context); }
 
   grpc::Status CreateRaw(const std::string& name, int w, int h,
                          const std::string& cells, v1::CreateMapResponse* out,
                          double resolution = 0.0, bool replace = false) {
-    v1::CreateMapRequest request;
-    request.set_name(name);
-    request.mutable_raw()->set_width(w);
-    request.mutable_raw()->set_height(h);
-    request.mutable_raw()->set_cells(cells);
-    request.set_resolution(resolution);
-    request.set_replace(replace);
-    grpc::ClientContext context;
-    Prepare(context);
-    return maps_->CreateMap(&context, request, out);
+    return server_->CreateRawMap(name, w, h, cells, resolution, replace, out);
   }
 
   grpc::Status CreateFree(const std::string& name, int w, int h) {
-    v1::CreateMapResponse response;
-    return CreateRaw(name, w, h, std::string(static_cast<size_t>(w * h), '\0'),
-                     &response);
+    return server_->CreateFreeMap(name, w, h);
   }
 
   grpc::Status Plan(const v1::PlanRequest& request, v1::PlanResponse* response) {
@@ -145,25 +130,19 @@ class ServiceTest : public ::testing::Test {
 
   static v1::PlanRequest CellRequest(const std::string& map, int sx, int sy, int gx,
                                      int gy) {
-    v1::PlanRequest request;
-    request.set_map(map);
-    request.mutable_start()->mutable_cell()->set_x(sx);
-    request.mutable_start()->mutable_cell()->set_y(sy);
-    request.mutable_goal()->mutable_cell()->set_x(gx);
-    request.mutable_goal()->mutable_cell()->set_y(gy);
-    return request;
+    return testing::PlanBetween(map, sx, sy, gx, gy, v1::PLANNER_UNSPECIFIED);
   }
 
-  static PathdServer* server_;
-  static std::shared_ptr<grpc::Channel>* channel_;
-  static fs::path* root_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
-  std::unique_ptr<v1::PlannerService::Stub> planner_;
+  static const std::shared_ptr<grpc::Channel>* channel_;
+  static testing::TempDir* scratch_;
+  static const fs::path* root_;
+  v1::MapService::Stub* maps_ = nullptr;
+  v1::PlannerService::Stub* planner_ = nullptr;
 };
 
-PathdServer* ServiceTest::server_ = nullptr;
-std::shared_ptr<grpc::Channel>* ServiceTest::channel_ = nullptr;
-fs::path* ServiceTest::root_ = nullptr;
+testing::TempDir* ServiceTest::scratch_ = nullptr;
+const std::shared_ptr<grpc::Channel>* ServiceTest::channel_ = nullptr;
+const fs::path* ServiceTest::root_ = nullptr;
 
 TEST_F(ServiceTest, HealthServiceReportsServing) {
   // grpc.health.v1.Health/Check with an empty request (service ""); the reply
@@ -403,13 +382,11 @@ TEST_F(ServiceTest, MapDirFileCannotEscapeTheDirectory) {
 }
 
 TEST_F(ServiceTest, MapDirFileWithoutMapDirIsFailedPrecondition) {
-  ServerOptions options;
-  options.address = "127.0.0.1:0";
+  ServerOptions options = testing::TestServerOptions();
   options.threads = 1;
-  PathdServer bare(options);
+  testing::InProcessServer bare(options);
   ASSERT_TRUE(bare.Start().ok());
-  auto stub = v1::MapService::NewStub(
-      grpc::CreateChannel(bare.listen_address(), grpc::InsecureChannelCredentials()));
+  v1::MapService::Stub* stub = &bare.maps();
   v1::CreateMapRequest request;
   request.set_name("x");
   request.set_map_dir_file("small.map");
@@ -886,15 +863,13 @@ TEST_F(ServiceTest, CostToGoRejectsBadRequests) {
 }
 
 TEST_F(ServiceTest, CostToGoRefusesFieldsOverFourMiCells) {
-  ServerOptions options;
-  options.address = "127.0.0.1:0";
+  ServerOptions options = testing::TestServerOptions();
   options.threads = 1;
   options.max_map_cells = int64_t{1} << 23;
-  PathdServer big(options);
+  testing::InProcessServer big(options);
   ASSERT_TRUE(big.Start().ok());
-  auto channel = grpc::CreateChannel(big.listen_address(), grpc::InsecureChannelCredentials());
-  auto maps = v1::MapService::NewStub(channel);
-  auto planner = v1::PlannerService::NewStub(channel);
+  v1::MapService::Stub* maps = &big.maps();
+  v1::PlannerService::Stub* planner = &big.planner();
   v1::CreateMapRequest create;
   create.set_name("big");
   create.mutable_raw()->set_width(2048);

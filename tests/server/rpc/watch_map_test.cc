@@ -23,6 +23,7 @@
 #include "gtest/gtest.h"
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "server/server.h"
+#include "tests/testing/in_process_server.h"
 
 namespace pathd::server {
 namespace {
@@ -262,24 +263,15 @@ class Watch {
 class WatchMapTest : public ::testing::Test {
  protected:
   void StartServer(ServerOptions options = {}) {
-    options.address = "127.0.0.1:0";
     options.threads = 2;
-    server_ = std::make_unique<PathdServer>(options);
+    server_ = std::make_unique<testing::InProcessServer>(options);
     // Every version of every map, to check each event against the two
     // versions it lies between.
-    server_->store().AddListener(
-        [this](std::string_view name,
-               const std::shared_ptr<const MapSnapshot>& snapshot) {
-          if (snapshot == nullptr) return;
-          absl::MutexLock lock(&versions_mu_);
-          versions_[{std::string(name), snapshot->version}] = snapshot->grid;
-        });
-    ASSERT_TRUE(server_->Start().ok());
+    server_->KeepMapVersions();
     grpc::ChannelArguments args;
     args.SetMaxReceiveMessageSize(-1);
-    auto channel = grpc::CreateCustomChannel(
-        server_->listen_address(), grpc::InsecureChannelCredentials(), args);
-    maps_ = v1::MapService::NewStub(channel);
+    ASSERT_TRUE(server_->Start(args).ok());
+    maps_ = &server_->maps();
   }
 
   void TearDown() override {
@@ -295,8 +287,7 @@ class WatchMapTest : public ::testing::Test {
     }
     auto created = server_->store().Create(name, std::move(grid), false);
     ASSERT_TRUE(created.ok()) << created.status();
-    absl::MutexLock lock(&versions_mu_);
-    versions_[{name, 1}] = (*created)->grid;
+    server_->KeepMapVersion(name, *created);
   }
 
   // A Watch's call reaches the server asynchronously; a test that changes
@@ -311,9 +302,7 @@ class WatchMapTest : public ::testing::Test {
 
   std::shared_ptr<const Grid> StoredVersion(const std::string& name,
                                             uint64_t version) {
-    absl::MutexLock lock(&versions_mu_);
-    auto it = versions_.find({name, version});
-    return it == versions_.end() ? nullptr : it->second;
+    return server_->MapVersion(name, version);
   }
 
   grpc::Status Update(const v1::UpdateMapRequest& request,
@@ -377,11 +366,8 @@ class WatchMapTest : public ::testing::Test {
     }
   }
 
-  std::unique_ptr<PathdServer> server_;
-  std::unique_ptr<v1::MapService::Stub> maps_;
-  absl::Mutex versions_mu_;
-  std::map<std::pair<std::string, uint64_t>, std::shared_ptr<const Grid>>
-      versions_ ABSL_GUARDED_BY(versions_mu_);
+  std::unique_ptr<testing::InProcessServer> server_;
+  v1::MapService::Stub* maps_ = nullptr;
 };
 
 TEST_F(WatchMapTest, MirrorsEveryVersionWhileTwoClientsUpdate) {
