@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -272,7 +273,16 @@ void ServerMetrics::PokeListener() const {
 
 absl::Status ServerMetrics::Listen(const std::string& address) {
   try {
-    exposer_ = std::make_unique<prometheus::Exposer>(address, /*num_threads=*/2);
+    // civetweb gives each connection a thread until its request is read, and
+    // by default waits 30 s for it: with prometheus-cpp's 2 threads, two
+    // sockets that send half a request blinded every scrape. More threads
+    // than a scraper or two ever needs, and a request timeout well under a
+    // Prometheus scrape timeout, so stalled sockets cost a thread each only
+    // briefly and never all of them.
+    exposer_ = std::make_unique<prometheus::Exposer>(std::vector<std::string>{
+        "listening_ports", address, "num_threads",
+        std::to_string(kHttpThreads), "request_timeout_ms",
+        std::to_string(absl::ToInt64Milliseconds(kHttpRequestTimeout))});
   } catch (const std::exception& e) {
     // civetweb reports a bad address or a port in use by throwing.
     return absl::UnavailableError(

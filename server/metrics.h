@@ -10,6 +10,7 @@
 #include <string>
 
 #include "absl/status/status.h"
+#include "absl/time/time.h"
 #include "prometheus/counter.h"
 #include "prometheus/exposer.h"
 #include "prometheus/family.h"
@@ -43,6 +44,10 @@ class ServerMetrics final : public RequestObserver {
   // names are chosen by clients, so one series per map would let them grow
   // Prometheus's series count without bound; pathd_maps still counts all.
   static constexpr size_t kMaxMapSeries = 100;
+  // The HTTP server's threads (one per connection being served) and how long
+  // it waits for a connection's request or for its reader before closing it.
+  static constexpr int kHttpThreads = 16;
+  static constexpr absl::Duration kHttpRequestTimeout = absl::Seconds(5);
 
   explicit ServerMetrics(MetricsSources sources);
   // Stops the HTTP server (letting a scrape in progress finish) first.
