@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/synchronization/mutex.h"
+#include "absl/synchronization/notification.h"
 #include "absl/time/time.h"
 #include "absl/types/span.h"
 #include "server/config_file.h"
@@ -134,6 +136,11 @@ ABSL_FLAG(absl::Duration, snapshot_interval, absl::Minutes(10),
           "record; 0 = only by --snapshot_log_bytes");
 
 namespace {
+
+// How long past --shutdown_grace the process waits for Shutdown to return
+// before it exits anyway: cancelled planners poll their flag every few
+// thousand expansions and the workers are joined, which takes well under this.
+constexpr absl::Duration kShutdownOverrun = absl::Seconds(10);
 
 // absl 20220623's --help lists only flags from a file named after the binary
 // (pathd.cc); ours live in server/main.cc, so widen the filter to server/.
@@ -402,6 +409,20 @@ int main(int argc, char** argv) {
     spdlog::warn("second signal during shutdown, exiting now");
     std::_Exit(1);
   }).detach();
+  // Shutdown answers or cancels every call within the grace period; should a
+  // call still never end (a bug), exit anyway rather than hang until SIGKILL.
+  // Every acknowledged write is already synced (--data_dir), so this loses
+  // nothing acknowledged.
+  const absl::Duration overrun = options.shutdown_grace + kShutdownOverrun;
+  auto shut_down = std::make_shared<absl::Notification>();
+  std::thread([shut_down, overrun] {
+    if (shut_down->WaitForNotificationWithTimeout(overrun)) return;
+    spdlog::error("shutdown did not complete within --shutdown_grace + {}; exiting",
+                  absl::FormatDuration(kShutdownOverrun));
+    spdlog::default_logger()->flush();
+    std::_Exit(1);
+  }).detach();
   server.Shutdown();
+  shut_down->Notify();
   return 0;
 }

@@ -87,6 +87,11 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
         "Time workers spent running jobs (counted when a job ends); "
         "rate() / pathd_worker_threads is the utilisation.",
         kCounter, absl::ToDoubleSeconds(s_.pool->busy_time())));
+    families.push_back(Single(
+        "pathd_worker_job_failures_total",
+        "Jobs that threw (e.g. out of memory); each answered its call with "
+        "RESOURCE_EXHAUSTED or INTERNAL.",
+        kCounter, static_cast<double>(s_.pool->job_failures())));
     // One series per priority queue (interactive: Plan, CostToGo, Navigate,
     // cache repairs; batch: PlanBatch items).
     std::vector<prometheus::ClientMetric> queued;

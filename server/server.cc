@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include <grpc/grpc.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/security/server_credentials.h>
@@ -196,6 +197,10 @@ absl::Status PathdServer::Start() {
 
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options_.address, credentials, &port_);
+  // gRPC sets SO_REUSEPORT by default, so a second pathd on a busy port would
+  // bind it too and the kernel would split the clients between the two.
+  // Without it a busy port fails the bind, and start-up names the address.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.RegisterService(map_service_.get());
   builder.RegisterService(planner_service_.get());
   // gRPC refuses a larger request with RESOURCE_EXHAUSTED before reading it
@@ -218,8 +223,10 @@ absl::Status PathdServer::Start() {
       ClearRequestObserver(metrics_.get());
       metrics_.reset();
     }
-    return absl::UnavailableError(
-        absl::StrFormat("cannot listen on %s", options_.address));
+    return absl::UnavailableError(absl::StrFormat(
+        "cannot listen on %s (--address): the address is in use (another "
+        "pathd?), not local, or not a valid host:port",
+        options_.address));
   }
   if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
     health->SetServingStatus(true);

@@ -140,6 +140,11 @@ class PathdServer {
   const ServerOptions& options() const { return options_; }
   // WatchMap streams; valid after Start.
   const MapWatchers& map_watchers() const { return map_service_->watchers(); }
+  // Navigate sessions; valid after Start.
+  const NavigationSessions& navigation_sessions() const { return *sessions_; }
+  // The planning pool, for tests (WorkerPool::FailNextJobsForTesting); null
+  // before Start.
+  WorkerPool* worker_pool_for_testing() { return pool_.get(); }
 
  private:
   // Loads map_dir's maps into the store; returns how many loaded.

@@ -73,7 +73,16 @@ class NavigationSession final : public NavigateReactor {
     push_pending_ = true;
     ++outstanding_;
     const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this](SearchScratch&) { RunPush(); }, [this] { Release(); }));
+        [this](SearchScratch&) { RunPush(); }, [this] { Release(); },
+        [this](const absl::Status& failed) {
+          // The search may be half-repaired: the session cannot go on.
+          {
+            absl::MutexLock lock(&mu_);
+            push_pending_ = false;
+            EndWithLocked(failed);
+          }
+          Release();
+        }));
     if (!submitted.ok()) {
       // Not worth failing the session for: its next message repairs anyway.
       push_pending_ = false;
@@ -120,6 +129,16 @@ class NavigationSession final : public NavigateReactor {
             absl::MutexLock lock(&mu_);
             handling_ = false;
             FinishLocked(absl::UnavailableError("server is shutting down"));
+          }
+          Release();
+        },
+        [this](const absl::Status& failed) {
+          // RunMessage threw before its Release: answer and let go.
+          {
+            absl::MutexLock lock(&mu_);
+            handling_ = false;
+            ++messages_;
+            FinishLocked(failed);
           }
           Release();
         }));

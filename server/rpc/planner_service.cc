@@ -586,6 +586,8 @@ class PlanJob final : public Job {
     FinishCall(*call_, absl::UnavailableError("server is shutting down"),
                "DROPPED");
   }
+  // Run threw (WorkerPool answers every failed job through Fail).
+  void Fail(const absl::Status& status) override { FinishCall(*call_, status, "ERROR"); }
 
  private:
   std::shared_ptr<PlanCall> call_;
@@ -714,6 +716,9 @@ class CostToGoJob final : public Job {
   void Drop() override {
     FinishCostToGo(*call_, absl::UnavailableError("server is shutting down"),
                    "DROPPED");
+  }
+  void Fail(const absl::Status& status) override {
+    FinishCostToGo(*call_, status, "ERROR");
   }
 
  private:
