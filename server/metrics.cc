@@ -139,6 +139,7 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
         "pathd_map_watch_backlog_drops_total",
         "WatchMap backlogs replaced by a RESYNC because a reader was too slow.",
         kCounter, static_cast<double>(s_.watchers->backlog_drops())));
+    if (s_.budget != nullptr) AddMemoryBudget(families);
     return families;
   }
 
@@ -202,6 +203,41 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
       }
       families.push_back(Family(column.name, column.help, column.type, std::move(metrics)));
     }
+  }
+
+  void AddMemoryBudget(std::vector<prometheus::MetricFamily>& families) const {
+    using prometheus::MetricType;
+    const MemoryBudget& b = *s_.budget;
+    families.push_back(Family(
+        "pathd_memory_reserved_bytes",
+        "Bytes held against the memory budget (--memory_budget_bytes), by part.",
+        MetricType::Gauge,
+        {Value(MetricType::Gauge,
+               static_cast<double>(b.reserved(MemoryBudget::Part::kSessions)),
+               {{"part", "sessions"}}),
+         Value(MetricType::Gauge,
+               static_cast<double>(b.reserved(MemoryBudget::Part::kWatchers)),
+               {{"part", "watchers"}}),
+         Value(MetricType::Gauge, static_cast<double>(b.cache_bytes()),
+               {{"part", "caches"}})}));
+    families.push_back(Family(
+        "pathd_memory_budget_bytes",
+        "Limits of the memory budget: total (--memory_budget_bytes) and "
+        "sessions (--session_memory_bytes); 0 = unbounded.",
+        MetricType::Gauge,
+        {Value(MetricType::Gauge, static_cast<double>(b.options().total_bytes),
+               {{"part", "total"}}),
+         Value(MetricType::Gauge, static_cast<double>(b.options().session_bytes),
+               {{"part", "sessions"}})}));
+    families.push_back(Single(
+        "pathd_memory_refusals_total",
+        "Sessions and WatchMap streams refused (RESOURCE_EXHAUSTED) by the "
+        "memory budget or --max_watchers.",
+        MetricType::Counter, static_cast<double>(b.refusals())));
+    families.push_back(Single(
+        "pathd_memory_trims_total",
+        "Times freed memory was handed back to the system (malloc_trim).",
+        MetricType::Counter, static_cast<double>(b.trims())));
   }
 
   const MetricsSources s_;

@@ -19,6 +19,7 @@
 #include "server/incremental_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
+#include "server/memory_budget.h"
 #include "server/rpc/watch_map.h"
 #include "server/rpc/navigate.h"
 #include "server/request_log.h"
@@ -34,6 +35,8 @@ struct MetricsSources {
   const IncrementalCache* cache = nullptr;
   const NavigationSessions* sessions = nullptr;
   const MapWatchers* watchers = nullptr;
+  // Null = no memory budget series.
+  const MemoryBudget* budget = nullptr;
 };
 
 // Thread-safe. The metric names and labels are listed in the README ("Metrics

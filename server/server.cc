@@ -151,16 +151,29 @@ absl::Status PathdServer::Start() {
 
   pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{
       options_.threads, options_.queue_depth, options_.batch_queue_depth});
+  MemoryBudget::Options budget;
+  budget.total_bytes = options_.memory_budget_bytes;
+  budget.session_bytes = options_.session_memory_bytes;
+  budget.max_watchers = options_.max_watchers;
+  budget.caller_share = options_.caller_memory_share;
+  budget.callers_by_token = authenticator_ != nullptr;
+  budget.cache_bytes = [this] {
+    return cache_.stats(IncrementalCache::Kind::kSpm).bytes +
+           cache_.stats(IncrementalCache::Kind::kDStarLite).bytes +
+           static_cast<int64_t>(inflation_.stats().bytes);
+  };
+  budget_ = std::make_unique<MemoryBudget>(std::move(budget));
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
   map_service_ = std::make_unique<MapServiceImpl>(
       store_, options_.map_dir,
-      MapWatchers::Options{options_.watch_queue_events, max_message_bytes()},
+      MapWatchers::Options{options_.watch_queue_events, max_message_bytes(),
+                           options_.watch_backlog_bytes, budget_.get()},
       max_message_bytes(), authenticator_.get());
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
-                                  options_.max_expansions});
+                                  options_.max_expansions, budget_.get()});
   PlannerServiceImpl::Options planner_options;
   planner_options.max_expansions = options_.max_expansions;
   planner_options.max_path_points = options_.max_path_points;
@@ -179,7 +192,7 @@ absl::Status PathdServer::Start() {
     // without a window in which the daemon serves unobserved.
     metrics_ = std::make_shared<ServerMetrics>(
         MetricsSources{&store_, pool_.get(), &inflation_, &cache_, sessions_.get(),
-                       &map_service_->watchers()});
+                       &map_service_->watchers(), budget_.get()});
     if (absl::Status listening = metrics_->Listen(options_.metrics_address);
         !listening.ok()) {
       metrics_.reset();

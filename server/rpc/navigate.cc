@@ -37,9 +37,10 @@ using NavigateReactor = grpc::ServerBidiReactor<v1::NavigateRequest, v1::Navigat
 class NavigationSession final : public NavigateReactor {
  public:
   NavigationSession(NavigationSessions& owner, uint64_t id,
-                    absl::Status shared_observations)
+                    absl::Status shared_observations, std::string caller)
       : owner_(owner),
         id_(id),
+        caller_(std::move(caller)),
         opened_at_(absl::Now()),
         shared_observations_(std::move(shared_observations)) {
     absl::MutexLock lock(&mu_);
@@ -361,6 +362,7 @@ class NavigationSession final : public NavigateReactor {
                            EffectiveMaxExpansions(open.options(),
                                                   owner_.options_.max_expansions));
     PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, request));
+    PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
     PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
     if (radius_cells_ > 0.0 && grid_->cost(goal_) == kInscribedCost) {
       return absl::InvalidArgumentError(absl::StrFormat(
@@ -373,6 +375,21 @@ class NavigationSession final : public NavigateReactor {
       absl::MutexLock lock(&mu_);
       map_name_ = snapshot_->name;
     }
+    return absl::OkStatus();
+  }
+
+  // Reserves the search state's estimated bytes before anything is built, so
+  // sessions on a big map are refused instead of exhausting memory.
+  absl::Status ReserveMemory(const Grid& grid) ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
+    MemoryBudget* budget = owner_.options_.budget;
+    if (budget == nullptr) return absl::OkStatus();
+    const int64_t estimate =
+        static_cast<int64_t>(grid.size()) * NavigationSessions::kSessionBytesPerCell;
+    PATHD_ASSIGN_OR_RETURN(
+        reservation_,
+        budget->Reserve(MemoryBudget::Part::kSessions, caller_, estimate,
+                        absl::StrFormat("a navigation session on the %d x %d map '%s'",
+                                        grid.width(), grid.height(), snapshot_->name)));
     return absl::OkStatus();
   }
 
@@ -492,13 +509,22 @@ class NavigationSession final : public NavigateReactor {
     std::vector<Cell> path = result.ok() ? std::move(result->path) : std::vector<Cell>{};
     if (changed != nullptr) *changed = path != last_path_;
     last_path_ = std::move(path);
-    bytes_.store(static_cast<int64_t>(search_->MemoryBytes() + overlay_.size() * 16),
-                 std::memory_order_relaxed);
+    // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
+    const int64_t bytes = static_cast<int64_t>(
+        search_->MemoryBytes() + overlay_.size() * 48 +
+        (overlay_.empty() ? 0 : grid_->size()));
+    bytes_.store(bytes, std::memory_order_relaxed);
+    reservation_.Update(bytes);
     return absl::OkStatus();
   }
 
+  // First, so it is destroyed last: the bytes it returns (and the trim it
+  // may trigger) come after every other member is freed.
+  MemoryBudget::Reservation reservation_;
   NavigationSessions& owner_;
   const uint64_t id_;
+  // Whose share of the memory budget the session counts against.
+  const std::string caller_;
   const absl::Time opened_at_;
   // What a shared observation gets: OK, or the caller's PERMISSION_DENIED.
   const absl::Status shared_observations_;
@@ -578,14 +604,17 @@ void NavigationSessions::Shutdown() {
 }
 
 grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>*
-NavigationSessions::Start(grpc::CallbackServerContext* /*context*/,
+NavigationSessions::Start(grpc::CallbackServerContext* context,
                           absl::Status shared_observations) {
   uint64_t id;
   {
     absl::MutexLock lock(&mu_);
     id = next_id_++;
   }
-  auto* session = new NavigationSession(*this, id, std::move(shared_observations));
+  std::string caller =
+      options_.budget != nullptr ? options_.budget->CallerOf(*context) : std::string();
+  auto* session = new NavigationSession(*this, id, std::move(shared_observations),
+                                        std::move(caller));
   session->Begin(Add(session));
   return session;
 }
