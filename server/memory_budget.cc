@@ -82,7 +82,17 @@ void MemoryBudget::Reservation::Update(int64_t bytes) {
 
 // ---- MemoryBudget ----
 
-MemoryBudget::MemoryBudget(Options options) : options_(std::move(options)) {}
+MemoryBudget::MemoryBudget(Options options) : options_(std::move(options)) {
+  trimmer_ = std::thread([this] { TrimLoop(); });
+}
+
+MemoryBudget::~MemoryBudget() {
+  {
+    absl::MutexLock lock(&trim_mu_);
+    stopping_ = true;
+  }
+  trimmer_.join();
+}
 
 int64_t MemoryBudget::cache_bytes() const {
   return options_.cache_bytes ? options_.cache_bytes() : 0;
@@ -194,13 +204,41 @@ void MemoryBudget::Change(Part part, const std::string& caller, int64_t delta_by
       }
     }
   }
-  // glibc keeps freed heap memory (and raises its mmap threshold after large
-  // frees, so later big blocks come from the heap too): without this RSS
-  // stays at its peak after sessions and streams close. Outside the lock: it
-  // walks every arena.
   if (trim) {
-    malloc_trim(0);
-    trims_.fetch_add(1, std::memory_order_relaxed);
+    absl::MutexLock lock(&trim_mu_);
+    trim_pending_ = true;
+  }
+}
+
+void MemoryBudget::TrimLoop() {
+  absl::MutexLock lock(&trim_mu_);
+  for (;;) {
+    trim_mu_.Await(absl::Condition(
+        +[](MemoryBudget* self) ABSL_EXCLUSIVE_LOCKS_REQUIRED(self->trim_mu_) {
+          return self->trim_pending_ || self->stopping_;
+        },
+        this));
+    if (stopping_) return;
+    trim_pending_ = false;
+    // Now, and twice more a little later: gRPC frees a closed stream's
+    // buffers after the stream's reactor (and its reservation) is gone, and
+    // frees come in bursts (every stream of a deleted map, a client's
+    // sessions) whose tail would otherwise stay.
+    for (const absl::Duration delay :
+         {absl::ZeroDuration(), kTrimDelay, kTrimDelay * 5}) {
+      if (delay > absl::ZeroDuration()) {
+        trim_mu_.AwaitWithTimeout(absl::Condition(&stopping_), delay);
+      }
+      if (stopping_) return;
+      trim_mu_.Unlock();
+      // glibc keeps freed heap memory (and raises its mmap threshold after
+      // large frees, so later big blocks come from the heap too): without
+      // this RSS stays at its peak after sessions and streams close. Outside
+      // the lock: it walks every arena.
+      malloc_trim(0);
+      trims_.fetch_add(1, std::memory_order_relaxed);
+      trim_mu_.Lock();
+    }
   }
 }
 

@@ -13,6 +13,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 
 #include <grpcpp/server_context.h>
@@ -21,6 +22,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
 
 namespace pathd::server {
 
@@ -83,7 +85,10 @@ class MemoryBudget {
     int64_t bytes_ = 0;
   };
 
+  // Starts the thread that returns freed memory to the system.
   explicit MemoryBudget(Options options);
+  // Every reservation must have been released.
+  ~MemoryBudget();
   MemoryBudget(const MemoryBudget&) = delete;
   MemoryBudget& operator=(const MemoryBudget&) = delete;
 
@@ -110,6 +115,9 @@ class MemoryBudget {
   // Freed bytes after which the allocator is asked to return free memory to
   // the system (glibc keeps freed heap pages, so RSS would stay at its peak).
   static constexpr int64_t kTrimAfterFreedBytes = int64_t{16} << 20;
+  // After such a release the memory is returned at once, and again this long
+  // and five times this long after (what gRPC frees late).
+  static constexpr absl::Duration kTrimDelay = absl::Milliseconds(200);
 
  private:
   struct Usage {
@@ -134,6 +142,13 @@ class MemoryBudget {
   int64_t freed_since_trim_ ABSL_GUARDED_BY(mu_) = 0;
   std::atomic<int64_t> refusals_{0};
   std::atomic<int64_t> trims_{0};
+
+  // The trimming thread and what it waits for.
+  void TrimLoop();
+  absl::Mutex trim_mu_;
+  bool trim_pending_ ABSL_GUARDED_BY(trim_mu_) = false;
+  bool stopping_ ABSL_GUARDED_BY(trim_mu_) = false;
+  std::thread trimmer_;
 };
 
 }  // namespace pathd::server
