@@ -337,16 +337,30 @@ absl::Status Authorize(const TokenAuthenticator* auth,
 
 namespace internal {
 
-void LogRefusal(std::string_view method, const grpc::ServerContextBase& context,
-                const absl::Status& status) {
+void LogRefusal(const TokenAuthenticator& auth, std::string_view method,
+                const grpc::ServerContextBase& context, const absl::Status& status) {
   const size_t slash = method.rfind('/');
   const std::string_view rpc =
       slash == std::string_view::npos ? method : method.substr(slash + 1);
   // Refusals are logged at info level, unlike answered requests (debug):
-  // someone presenting bad tokens is worth seeing at the default level.
-  spdlog::info("refused {} from {}: {} {}", rpc, context.peer(),
-               absl::StatusCodeToString(status.code()),
-               std::string(status.message()));
+  // someone presenting bad tokens is worth seeing at the default level. But
+  // any caller can cause them at will, so at most one line per second per
+  // reason (code and message: a bounded set, never the peer) is written,
+  // carrying the count of those held back since the previous one.
+  const std::string code = absl::StatusCodeToString(status.code());
+  const std::string reason =
+      absl::StrCat(absl::string_view(rpc.data(), rpc.size()), " ", code, " ",
+                   status.message());
+  int64_t suppressed = 0;
+  if (auth.refusal_log().ShouldLog(reason, absl::Now(), &suppressed)) {
+    spdlog::info("refused {} from {}: {} {}{}", rpc, context.peer(), code,
+                 std::string(status.message()),
+                 suppressed == 0
+                     ? std::string()
+                     : absl::StrCat(" (and ", suppressed,
+                                    " more refusals like it not logged)"));
+  }
+  // Still counted in the metrics; the request line itself is debug level.
   LogRequest(rpc, "-", "", status, absl::Now());
 }
 

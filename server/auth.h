@@ -21,6 +21,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "server/grpc_status.h"
+#include "server/request_log.h"
 
 namespace pathd::server {
 
@@ -106,11 +107,16 @@ class TokenAuthenticator {
 
   const std::vector<TokenEntry>& entries() const { return entries_; }
 
+  // Bounds the log lines of calls this authenticator refused (see
+  // internal::LogRefusal). Thread-safe, so usable through a const object.
+  LogRateLimiter& refusal_log() const { return refusal_log_; }
+
  private:
   explicit TokenAuthenticator(std::vector<TokenEntry> entries)
       : entries_(std::move(entries)) {}
 
   std::vector<TokenEntry> entries_;
+  mutable LogRateLimiter refusal_log_{absl::Seconds(1)};
 };
 
 // `auth->Authorize(context, method)`, or OK when `auth` is null (no
@@ -131,9 +137,11 @@ class RefusedReactor final : public Reactor {
   void OnDone() override { delete this; }
 };
 
-// Logs a refused call through the request log (never the token).
-void LogRefusal(std::string_view method, const grpc::ServerContextBase& context,
-                const absl::Status& status);
+// Logs a call `auth` refused through the request log (never the token), at
+// most one line per second per reason (auth.refusal_log()), with the count of
+// the lines held back.
+void LogRefusal(const TokenAuthenticator& auth, std::string_view method,
+                const grpc::ServerContextBase& context, const absl::Status& status);
 
 }  // namespace internal
 
@@ -148,7 +156,8 @@ Reactor* RefuseUnauthorized(const TokenAuthenticator* auth,
                             std::string_view method) {
   const absl::Status status = Authorize(auth, *context, method);
   if (status.ok()) return nullptr;
-  internal::LogRefusal(method, *context, status);
+  // Not OK implies an authenticator.
+  internal::LogRefusal(*auth, method, *context, status);
   if constexpr (std::is_same_v<Reactor, grpc::ServerUnaryReactor>) {
     grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
     reactor->Finish(ToGrpcStatus(status));

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/synchronization/mutex.h"
+#include "absl/synchronization/notification.h"
 #include "absl/time/time.h"
 #include "absl/types/span.h"
 #include "server/config_file.h"
@@ -85,6 +87,26 @@ ABSL_FLAG(int, max_sessions, 1024,
 ABSL_FLAG(int, watch_queue_events, 64,
           "WatchMap events queued for a slow reader before its backlog is "
           "replaced by one whole-map RESYNC event");
+ABSL_FLAG(int64_t, watch_backlog_bytes, 0,
+          "bytes of WatchMap events queued for a slow reader before its "
+          "backlog is replaced by one whole-map RESYNC event; 0 = the map's "
+          "size (at least 64 KiB)");
+ABSL_FLAG(int64_t, max_watchers, 1024,
+          "WatchMap streams open at once; more get RESOURCE_EXHAUSTED");
+ABSL_FLAG(int64_t, memory_budget_bytes, int64_t{4} << 30,
+          "one memory budget for the caches (their current bytes), Navigate "
+          "sessions and WatchMap streams: a session or stream that would take "
+          "the sum past it gets RESOURCE_EXHAUSTED naming this flag; must be "
+          "at least --cache_bytes + --session_memory_bytes; 0 = unbounded");
+ABSL_FLAG(int64_t, session_memory_bytes, int64_t{1} << 30,
+          "bytes all Navigate sessions may hold together (a session reserves "
+          "about 16 bytes per map cell when it opens); beyond it "
+          "RESOURCE_EXHAUSTED naming this flag; 0 = only "
+          "--memory_budget_bytes");
+ABSL_FLAG(double, caller_memory_share, 0.5,
+          "share (0 < s <= 1) of --session_memory_bytes, --memory_budget_bytes "
+          "and --max_watchers one caller may hold (a caller is a bearer token "
+          "with --auth_tokens, else a peer IP address)");
 ABSL_FLAG(absl::Duration, progress_interval, absl::Milliseconds(100),
           "PlanStream: least time between two progress events of a plan (none "
           "for plans that end sooner)");
@@ -135,6 +157,11 @@ ABSL_FLAG(absl::Duration, snapshot_interval, absl::Minutes(10),
           "record; 0 = only by --snapshot_log_bytes");
 
 namespace {
+
+// How long past --shutdown_grace the process waits for Shutdown to return
+// before it exits anyway: cancelled planners poll their flag every few
+// thousand expansions and the workers are joined, which takes well under this.
+constexpr absl::Duration kShutdownOverrun = absl::Seconds(10);
 
 // absl 20220623's --help lists only flags from a file named after the binary
 // (pathd.cc); ours live in server/main.cc, so widen the filter to server/.
@@ -286,6 +313,30 @@ pathd::server::ServerOptions OptionsFromFlags() {
   }
   options.watch_queue_events =
       static_cast<size_t>(absl::GetFlag(FLAGS_watch_queue_events));
+  if (absl::GetFlag(FLAGS_watch_backlog_bytes) < 0) {
+    FlagError("watch_backlog_bytes", "must be >= 0");
+  }
+  options.watch_backlog_bytes =
+      static_cast<size_t>(absl::GetFlag(FLAGS_watch_backlog_bytes));
+  options.max_watchers = absl::GetFlag(FLAGS_max_watchers);
+  if (options.max_watchers < 1) FlagError("max_watchers", "must be >= 1");
+  options.memory_budget_bytes = absl::GetFlag(FLAGS_memory_budget_bytes);
+  if (options.memory_budget_bytes < 0) FlagError("memory_budget_bytes", "must be >= 0");
+  options.session_memory_bytes = absl::GetFlag(FLAGS_session_memory_bytes);
+  if (options.session_memory_bytes < 0) FlagError("session_memory_bytes", "must be >= 0");
+  if (options.memory_budget_bytes > 0 &&
+      static_cast<int64_t>(options.cache_bytes) + options.session_memory_bytes >
+          options.memory_budget_bytes) {
+    FlagError("memory_budget_bytes",
+              absl::StrFormat("is %d, less than --cache_bytes (%d) + "
+                              "--session_memory_bytes (%d); raise it or lower those",
+                              options.memory_budget_bytes, options.cache_bytes,
+                              options.session_memory_bytes));
+  }
+  options.caller_memory_share = absl::GetFlag(FLAGS_caller_memory_share);
+  if (!(options.caller_memory_share > 0.0 && options.caller_memory_share <= 1.0)) {
+    FlagError("caller_memory_share", "must be in (0, 1]");
+  }
   options.progress_interval = absl::GetFlag(FLAGS_progress_interval);
   if (options.progress_interval <= absl::ZeroDuration()) {
     FlagError("progress_interval", "must be positive");
@@ -404,6 +455,20 @@ int main(int argc, char** argv) {
     spdlog::warn("second signal during shutdown, exiting now");
     std::_Exit(1);
   }).detach();
+  // Shutdown answers or cancels every call within the grace period; should a
+  // call still never end (a bug), exit anyway rather than hang until SIGKILL.
+  // Every acknowledged write is already synced (--data_dir), so this loses
+  // nothing acknowledged.
+  const absl::Duration overrun = options.shutdown_grace + kShutdownOverrun;
+  auto shut_down = std::make_shared<absl::Notification>();
+  std::thread([shut_down, overrun] {
+    if (shut_down->WaitForNotificationWithTimeout(overrun)) return;
+    spdlog::error("shutdown did not complete within --shutdown_grace + {}; exiting",
+                  absl::FormatDuration(kShutdownOverrun));
+    spdlog::default_logger()->flush();
+    std::_Exit(1);
+  }).detach();
   server.Shutdown();
+  shut_down->Notify();
   return 0;
 }

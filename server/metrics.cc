@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -86,6 +87,11 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
         "Time workers spent running jobs (counted when a job ends); "
         "rate() / pathd_worker_threads is the utilisation.",
         kCounter, absl::ToDoubleSeconds(s_.pool->busy_time())));
+    families.push_back(Single(
+        "pathd_worker_job_failures_total",
+        "Jobs that threw (e.g. out of memory); each answered its call with "
+        "RESOURCE_EXHAUSTED or INTERNAL.",
+        kCounter, static_cast<double>(s_.pool->job_failures())));
     // One series per priority queue (interactive: Plan, CostToGo, Navigate,
     // cache repairs; batch: PlanBatch items).
     std::vector<prometheus::ClientMetric> queued;
@@ -133,6 +139,7 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
         "pathd_map_watch_backlog_drops_total",
         "WatchMap backlogs replaced by a RESYNC because a reader was too slow.",
         kCounter, static_cast<double>(s_.watchers->backlog_drops())));
+    if (s_.budget != nullptr) AddMemoryBudget(families);
     return families;
   }
 
@@ -196,6 +203,41 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
       }
       families.push_back(Family(column.name, column.help, column.type, std::move(metrics)));
     }
+  }
+
+  void AddMemoryBudget(std::vector<prometheus::MetricFamily>& families) const {
+    using prometheus::MetricType;
+    const MemoryBudget& b = *s_.budget;
+    families.push_back(Family(
+        "pathd_memory_reserved_bytes",
+        "Bytes held against the memory budget (--memory_budget_bytes), by part.",
+        MetricType::Gauge,
+        {Value(MetricType::Gauge,
+               static_cast<double>(b.reserved(MemoryBudget::Part::kSessions)),
+               {{"part", "sessions"}}),
+         Value(MetricType::Gauge,
+               static_cast<double>(b.reserved(MemoryBudget::Part::kWatchers)),
+               {{"part", "watchers"}}),
+         Value(MetricType::Gauge, static_cast<double>(b.cache_bytes()),
+               {{"part", "caches"}})}));
+    families.push_back(Family(
+        "pathd_memory_budget_bytes",
+        "Limits of the memory budget: total (--memory_budget_bytes) and "
+        "sessions (--session_memory_bytes); 0 = unbounded.",
+        MetricType::Gauge,
+        {Value(MetricType::Gauge, static_cast<double>(b.options().total_bytes),
+               {{"part", "total"}}),
+         Value(MetricType::Gauge, static_cast<double>(b.options().session_bytes),
+               {{"part", "sessions"}})}));
+    families.push_back(Single(
+        "pathd_memory_refusals_total",
+        "Sessions and WatchMap streams refused (RESOURCE_EXHAUSTED) by the "
+        "memory budget or --max_watchers.",
+        MetricType::Counter, static_cast<double>(b.refusals())));
+    families.push_back(Single(
+        "pathd_memory_trims_total",
+        "Times freed memory was handed back to the system (malloc_trim).",
+        MetricType::Counter, static_cast<double>(b.trims())));
   }
 
   const MetricsSources s_;
@@ -272,7 +314,16 @@ void ServerMetrics::PokeListener() const {
 
 absl::Status ServerMetrics::Listen(const std::string& address) {
   try {
-    exposer_ = std::make_unique<prometheus::Exposer>(address, /*num_threads=*/2);
+    // civetweb gives each connection a thread until its request is read, and
+    // by default waits 30 s for it: with prometheus-cpp's 2 threads, two
+    // sockets that send half a request blinded every scrape. More threads
+    // than a scraper or two ever needs, and a request timeout well under a
+    // Prometheus scrape timeout, so stalled sockets cost a thread each only
+    // briefly and never all of them.
+    exposer_ = std::make_unique<prometheus::Exposer>(std::vector<std::string>{
+        "listening_ports", address, "num_threads",
+        std::to_string(kHttpThreads), "request_timeout_ms",
+        std::to_string(absl::ToInt64Milliseconds(kHttpRequestTimeout))});
   } catch (const std::exception& e) {
     // civetweb reports a bad address or a port in use by throwing.
     return absl::UnavailableError(

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "absl/status/status.h"
+#include "absl/time/time.h"
 #include "prometheus/counter.h"
 #include "prometheus/exposer.h"
 #include "prometheus/family.h"
@@ -18,6 +19,7 @@
 #include "server/incremental_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
+#include "server/memory_budget.h"
 #include "server/rpc/watch_map.h"
 #include "server/rpc/navigate.h"
 #include "server/request_log.h"
@@ -33,6 +35,8 @@ struct MetricsSources {
   const IncrementalCache* cache = nullptr;
   const NavigationSessions* sessions = nullptr;
   const MapWatchers* watchers = nullptr;
+  // Null = no memory budget series.
+  const MemoryBudget* budget = nullptr;
 };
 
 // Thread-safe. The metric names and labels are listed in the README ("Metrics
@@ -43,6 +47,10 @@ class ServerMetrics final : public RequestObserver {
   // names are chosen by clients, so one series per map would let them grow
   // Prometheus's series count without bound; pathd_maps still counts all.
   static constexpr size_t kMaxMapSeries = 100;
+  // The HTTP server's threads (one per connection being served) and how long
+  // it waits for a connection's request or for its reader before closing it.
+  static constexpr int kHttpThreads = 16;
+  static constexpr absl::Duration kHttpRequestTimeout = absl::Seconds(5);
 
   explicit ServerMetrics(MetricsSources sources);
   // Stops the HTTP server (letting a scrape in progress finish) first.

@@ -81,6 +81,37 @@ void LogRequest(std::string_view rpc, std::string_view map, std::string_view det
   LogRequest(rpc, map, detail, status, received, RequestLabels{});
 }
 
+LogRateLimiter::LogRateLimiter(absl::Duration interval, size_t max_keys)
+    : interval_(interval), max_keys_(std::max<size_t>(max_keys, 1)) {}
+
+bool LogRateLimiter::ShouldLog(std::string_view key, absl::Time now,
+                               int64_t* suppressed) {
+  // The shared bucket for keys beyond max_keys_; cannot collide with a
+  // reason, which is never empty.
+  constexpr std::string_view kOverflowKey = "";
+  absl::MutexLock lock(&mu_);
+  auto it = buckets_.find(key);
+  if (it == buckets_.end()) {
+    if (buckets_.size() + 1 >= max_keys_) key = kOverflowKey;
+    it = buckets_.try_emplace(std::string(key)).first;
+  }
+  Bucket& bucket = it->second;
+  if (now - bucket.last_logged < interval_) {
+    ++bucket.suppressed;
+    ++suppressed_total_;
+    return false;
+  }
+  bucket.last_logged = now;
+  *suppressed = bucket.suppressed;
+  bucket.suppressed = 0;
+  return true;
+}
+
+int64_t LogRateLimiter::suppressed_total() const {
+  absl::MutexLock lock(&mu_);
+  return suppressed_total_;
+}
+
 void SetSlowRequestThreshold(absl::Duration threshold) {
   RequestLogSettings& settings = Settings();
   absl::MutexLock lock(&settings.mu);

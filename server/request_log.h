@@ -4,10 +4,16 @@
 #ifndef PATHD_SERVER_REQUEST_LOG_H_
 #define PATHD_SERVER_REQUEST_LOG_H_
 
+#include <cstddef>
+#include <cstdint>
+#include <map>
 #include <memory>
+#include <string>
 #include <string_view>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 
 namespace pathd::server {
@@ -65,6 +71,37 @@ void SetRequestObserver(std::shared_ptr<RequestObserver> observer);
 // Clears the observer only if it is still `observer`, so one server stopping
 // does not unhook another's.
 void ClearRequestObserver(const RequestObserver* observer);
+
+// Bounds log lines that callers can cause at will (refused calls): at most one
+// line per `interval` for each key (the reason), the rest counted and the
+// count reported on the next line let through for that key. Distinct keys
+// beyond `max_keys` share one bucket, so neither the lines nor this object's
+// memory grow with what callers send. Thread-safe.
+class LogRateLimiter {
+ public:
+  explicit LogRateLimiter(absl::Duration interval = absl::Seconds(1),
+                          size_t max_keys = 64);
+
+  // True when a line for `key` may be written at `now`; then `*suppressed`
+  // is set to the lines held back for this key since the last one written
+  // (0 for the first). False when the line must be dropped (it is counted).
+  bool ShouldLog(std::string_view key, absl::Time now, int64_t* suppressed);
+
+  // Lines dropped so far, over all keys.
+  int64_t suppressed_total() const;
+
+ private:
+  struct Bucket {
+    absl::Time last_logged = absl::InfinitePast();
+    int64_t suppressed = 0;
+  };
+
+  const absl::Duration interval_;
+  const size_t max_keys_;
+  mutable absl::Mutex mu_;
+  std::map<std::string, Bucket, std::less<>> buckets_ ABSL_GUARDED_BY(mu_);
+  int64_t suppressed_total_ ABSL_GUARDED_BY(mu_) = 0;
+};
 
 }  // namespace pathd::server
 

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include <grpc/grpc.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/security/server_credentials.h>
@@ -150,16 +151,29 @@ absl::Status PathdServer::Start() {
 
   pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{
       options_.threads, options_.queue_depth, options_.batch_queue_depth});
+  MemoryBudget::Options budget;
+  budget.total_bytes = options_.memory_budget_bytes;
+  budget.session_bytes = options_.session_memory_bytes;
+  budget.max_watchers = options_.max_watchers;
+  budget.caller_share = options_.caller_memory_share;
+  budget.callers_by_token = authenticator_ != nullptr;
+  budget.cache_bytes = [this] {
+    return cache_.stats(IncrementalCache::Kind::kSpm).bytes +
+           cache_.stats(IncrementalCache::Kind::kDStarLite).bytes +
+           static_cast<int64_t>(inflation_.stats().bytes);
+  };
+  budget_ = std::make_unique<MemoryBudget>(std::move(budget));
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
   map_service_ = std::make_unique<MapServiceImpl>(
       store_, options_.map_dir,
-      MapWatchers::Options{options_.watch_queue_events, max_message_bytes()},
+      MapWatchers::Options{options_.watch_queue_events, max_message_bytes(),
+                           options_.watch_backlog_bytes, budget_.get()},
       max_message_bytes(), authenticator_.get());
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
-                                  options_.max_expansions});
+                                  options_.max_expansions, budget_.get()});
   PlannerServiceImpl::Options planner_options;
   planner_options.max_expansions = options_.max_expansions;
   planner_options.max_path_points = options_.max_path_points;
@@ -178,7 +192,7 @@ absl::Status PathdServer::Start() {
     // without a window in which the daemon serves unobserved.
     metrics_ = std::make_shared<ServerMetrics>(
         MetricsSources{&store_, pool_.get(), &inflation_, &cache_, sessions_.get(),
-                       &map_service_->watchers()});
+                       &map_service_->watchers(), budget_.get()});
     if (absl::Status listening = metrics_->Listen(options_.metrics_address);
         !listening.ok()) {
       metrics_.reset();
@@ -196,6 +210,10 @@ absl::Status PathdServer::Start() {
 
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options_.address, credentials, &port_);
+  // gRPC sets SO_REUSEPORT by default, so a second pathd on a busy port would
+  // bind it too and the kernel would split the clients between the two.
+  // Without it a busy port fails the bind, and start-up names the address.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.RegisterService(map_service_.get());
   builder.RegisterService(planner_service_.get());
   // gRPC refuses a larger request with RESOURCE_EXHAUSTED before reading it
@@ -218,8 +236,10 @@ absl::Status PathdServer::Start() {
       ClearRequestObserver(metrics_.get());
       metrics_.reset();
     }
-    return absl::UnavailableError(
-        absl::StrFormat("cannot listen on %s", options_.address));
+    return absl::UnavailableError(absl::StrFormat(
+        "cannot listen on %s (--address): the address is in use (another "
+        "pathd?), not local, or not a valid host:port",
+        options_.address));
   }
   if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
     health->SetServingStatus(true);

@@ -20,6 +20,7 @@
 #include "server/incremental_cache.h"
 #include "server/rpc/map_service.h"
 #include "server/map_store.h"
+#include "server/memory_budget.h"
 #include "server/metrics.h"
 #include "server/rpc/navigate.h"
 #include "server/rpc/planner_service.h"
@@ -66,6 +67,16 @@ struct ServerOptions {
   // WatchMap events queued per stream before a slow reader's backlog is
   // replaced by one whole-map RESYNC event.
   size_t watch_queue_events = 64;
+  // The same bound in bytes of queued events; 0 = the map's size (at least
+  // 64 KiB).
+  size_t watch_backlog_bytes = 0;
+  // The memory budget (server/memory_budget.h): caches, sessions and WatchMap
+  // streams together (0 = unbounded); sessions alone (0 = only the total);
+  // WatchMap streams open at once; the share of each one caller may hold.
+  int64_t memory_budget_bytes = int64_t{4} << 30;
+  int64_t session_memory_bytes = int64_t{1} << 30;
+  int64_t max_watchers = 1024;
+  double caller_memory_share = 0.5;
   // "IP:PORT" serving Prometheus text metrics at /metrics; port 0 picks a
   // free port (see PathdServer::metrics_port); empty = no metrics.
   std::string metrics_address;
@@ -140,6 +151,13 @@ class PathdServer {
   const ServerOptions& options() const { return options_; }
   // WatchMap streams; valid after Start.
   const MapWatchers& map_watchers() const { return map_service_->watchers(); }
+  // The memory budget; valid after Start.
+  const MemoryBudget& memory_budget() const { return *budget_; }
+  // Navigate sessions; valid after Start.
+  const NavigationSessions& navigation_sessions() const { return *sessions_; }
+  // The planning pool, for tests (WorkerPool::FailNextJobsForTesting); null
+  // before Start.
+  WorkerPool* worker_pool_for_testing() { return pool_.get(); }
 
  private:
   // Loads map_dir's maps into the store; returns how many loaded.
@@ -153,6 +171,9 @@ class PathdServer {
   InflationCache inflation_;
   IncrementalCache cache_;
   std::unique_ptr<WorkerPool> pool_;
+  // Sessions and watchers reserve here; declared before them so it outlives
+  // them.
+  std::unique_ptr<MemoryBudget> budget_;
   // Loaded from auth_tokens; null = no token checks. The services hold a
   // pointer to it, so it is declared before them.
   std::unique_ptr<TokenAuthenticator> authenticator_;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <new>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -19,17 +20,42 @@ thread_local bool on_worker_thread = false;
 
 class FunctionJob : public Job {
  public:
-  FunctionJob(std::function<void(SearchScratch&)> run, std::function<void()> drop)
-      : run_(std::move(run)), drop_(std::move(drop)) {}
+  FunctionJob(std::function<void(SearchScratch&)> run, std::function<void()> drop,
+              std::function<void(const absl::Status&)> fail)
+      : run_(std::move(run)), drop_(std::move(drop)), fail_(std::move(fail)) {}
   void Run(SearchScratch& scratch) override { run_(scratch); }
   void Drop() override {
     if (drop_) drop_();
+  }
+  void Fail(const absl::Status& status) override {
+    if (fail_) {
+      fail_(status);
+    } else {
+      Drop();
+    }
   }
 
  private:
   std::function<void(SearchScratch&)> run_;
   std::function<void()> drop_;
+  std::function<void(const absl::Status&)> fail_;
 };
+
+// The status a job that threw answers with.
+absl::Status FailureStatus(std::exception_ptr thrown) {
+  try {
+    std::rethrow_exception(thrown);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError(
+        "the server ran out of memory while handling this request; retry later");
+  } catch (const std::exception& e) {
+    return absl::InternalError(
+        absl::StrFormat("the request failed inside the server: %s", e.what()));
+  } catch (...) {
+    return absl::InternalError(
+        "the request failed inside the server (a non-standard exception)");
+  }
+}
 
 int ThreadCount(int requested) {
   if (requested > 0) return requested;
@@ -38,9 +64,13 @@ int ThreadCount(int requested) {
 
 }  // namespace
 
+void Job::Fail(const absl::Status& /*status*/) { Drop(); }
+
 std::unique_ptr<Job> MakeJob(std::function<void(SearchScratch&)> run,
-                             std::function<void()> drop) {
-  return std::make_unique<FunctionJob>(std::move(run), std::move(drop));
+                             std::function<void()> drop,
+                             std::function<void(const absl::Status&)> fail) {
+  return std::make_unique<FunctionJob>(std::move(run), std::move(drop),
+                                       std::move(fail));
 }
 
 WorkerPool::WorkerPool(const Options& options)
@@ -139,14 +169,28 @@ void WorkerPool::WorkerLoop() {
     }
     busy_.fetch_add(1, std::memory_order_relaxed);
     const auto started = std::chrono::steady_clock::now();
+    std::exception_ptr thrown;
     try {
+      if (fail_next_jobs_.load(std::memory_order_relaxed) > 0 &&
+          fail_next_jobs_.fetch_sub(1, std::memory_order_relaxed) > 0) {
+        throw std::bad_alloc();
+      }
       job->Run(scratch);
-    } catch (const std::exception& e) {
-      // Jobs are expected to answer their own errors; this only keeps one bad
-      // job from taking the worker (and with it the daemon) down.
-      spdlog::error("worker job threw: {}", e.what());
     } catch (...) {
-      spdlog::error("worker job threw a non-standard exception");
+      thrown = std::current_exception();
+    }
+    if (thrown != nullptr) {
+      // Jobs answer their own errors; one that escaped still has to answer
+      // its call and release what it holds (Job::Fail), or the client waits
+      // forever and the server's shutdown waits for that call.
+      const absl::Status status = FailureStatus(thrown);
+      job_failures_.fetch_add(1, std::memory_order_relaxed);
+      spdlog::error("worker job threw; answering its call with {}", status.ToString());
+      try {
+        job->Fail(status);
+      } catch (...) {
+        spdlog::error("worker job threw again while failing; its call may be unanswered");
+      }
     }
     const auto ran_for_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                                 std::chrono::steady_clock::now() - started)

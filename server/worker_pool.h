@@ -23,7 +23,7 @@
 namespace pathd::server {
 
 // A unit of work. Once accepted by Submit, exactly one of Run or Drop is
-// called, exactly once.
+// called, exactly once; when Run throws, Fail follows it.
 class Job {
  public:
   virtual ~Job() = default;
@@ -32,11 +32,20 @@ class Job {
   // The pool shut down before the job ran; runs on the thread calling
   // Shutdown. Must not block for long (answer UNAVAILABLE and return).
   virtual void Drop() = 0;
+  // Run threw: `status` is RESOURCE_EXHAUSTED for std::bad_alloc, INTERNAL
+  // for anything else. Runs on the same pool thread. Must answer the call the
+  // job serves with `status` (unless Run already did) and release whatever
+  // the job holds, or the client waits forever and shutdown with it. The
+  // default calls Drop(), which answers and releases too, but with
+  // UNAVAILABLE; jobs that own a call should override it.
+  virtual void Fail(const absl::Status& status);
 };
 
-// A Job from two callables; `drop` may be empty.
+// A Job from callables; `drop` and `fail` may be empty (an empty `fail`
+// calls `drop`).
 std::unique_ptr<Job> MakeJob(std::function<void(SearchScratch&)> run,
-                             std::function<void()> drop = nullptr);
+                             std::function<void()> drop = nullptr,
+                             std::function<void(const absl::Status&)> fail = nullptr);
 
 // Thread-safe.
 class WorkerPool {
@@ -117,6 +126,17 @@ class WorkerPool {
   static constexpr absl::Duration kMinRetryAfter = absl::Milliseconds(10);
   static constexpr absl::Duration kMaxRetryAfter = absl::Seconds(30);
 
+  // Jobs whose Run threw (each answered through Job::Fail), since start.
+  int64_t job_failures() const {
+    return job_failures_.load(std::memory_order_relaxed);
+  }
+
+  // Test hook: the next `count` jobs throw std::bad_alloc on their worker
+  // right before Run, as an allocation failure inside the job would.
+  void FailNextJobsForTesting(int count) {
+    fail_next_jobs_.store(count, std::memory_order_relaxed);
+  }
+
   // True on a thread of any WorkerPool (lets tests and asserts check that
   // work is where it should be).
   static bool OnWorkerThread();
@@ -148,6 +168,8 @@ class WorkerPool {
   // Metrics only: relaxed atomics, so no job waits on them.
   std::atomic<int> busy_{0};
   std::atomic<int64_t> busy_ns_{0};
+  std::atomic<int64_t> job_failures_{0};
+  std::atomic<int> fail_next_jobs_{0};
 };
 
 }  // namespace pathd::server

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -32,6 +33,38 @@ using internal::Quote;
 using internal::ToAbsl;
 
 // ---------------------------------------------------------------- YAML ----
+
+// Plausible ranges of the metadata. Finite is not enough: a resolution of
+// 1e-320 (a denormal) or an origin of 1e308 metres passes isfinite but makes
+// every world coordinate overflow, underflow or lose all precision. A
+// micrometre to a thousand kilometres per cell and an origin within a million
+// kilometres cover every robot map with room to spare.
+constexpr double kMinResolution = 1e-6;
+constexpr double kMaxResolution = 1e6;
+constexpr double kMaxOriginMetres = 1e9;
+// Yaw in radians; map_server only ever writes 0, but a few turns either way
+// is still meaningful.
+constexpr double kMaxYawRadians = 100.0;
+
+// Empty when `value` is in range for `field` ("resolution", "origin" x/y or
+// "origin yaw"), else the problem, for both the YAML and the request paths.
+std::string RangeProblem(absl::string_view field, double value) {
+  if (field == "resolution") {
+    if (value < kMinResolution || value > kMaxResolution) {
+      return absl::StrCat("must be between ", kMinResolution, " and ",
+                          kMaxResolution, " metres per cell, got ", value);
+    }
+  } else if (field == "origin") {
+    if (std::fabs(value) > kMaxOriginMetres) {
+      return absl::StrCat("must be within +/-", kMaxOriginMetres,
+                          " metres, got ", value);
+    }
+  } else if (std::fabs(value) > kMaxYawRadians) {
+    return absl::StrCat("yaw must be within +/-", kMaxYawRadians,
+                        " radians, got ", value);
+  }
+  return "";
+}
 
 // "<source>:<line>" for a node yaml-cpp knows the position of, else "<source>".
 std::string Where(absl::string_view source, const YAML::Node& node) {
@@ -97,6 +130,10 @@ absl::StatusOr<RosMapMetadata> ParseRosMapYamlOrThrow(
         source, resolution, "resolution",
         absl::StrCat("must be positive, got ", metadata.resolution));
   }
+  if (std::string problem = RangeProblem("resolution", metadata.resolution);
+      !problem.empty()) {
+    return KeyError(source, resolution, "resolution", problem);
+  }
 
   const YAML::Node origin = root["origin"];
   if (!origin.IsDefined() || origin.IsNull()) {
@@ -117,6 +154,14 @@ absl::StatusOr<RosMapMetadata> ParseRosMapYamlOrThrow(
                          NumberValue(source, origin[1], "origin"));
   PATHD_ASSIGN_OR_RETURN(metadata.origin.yaw,
                          NumberValue(source, origin[2], "origin"));
+  for (const auto& [index, field, value] :
+       {std::tuple{0, "origin", metadata.origin.x},
+        std::tuple{1, "origin", metadata.origin.y},
+        std::tuple{2, "origin yaw", metadata.origin.yaw}}) {
+    if (std::string problem = RangeProblem(field, value); !problem.empty()) {
+      return KeyError(source, origin[index], "origin", problem);
+    }
+  }
 
   if (const YAML::Node negate = root["negate"];
       negate.IsDefined() && !negate.IsNull()) {
@@ -182,6 +227,15 @@ absl::Status ValidateMetadata(const RosMapMetadata& m,
   if (!std::isfinite(m.origin.x) || !std::isfinite(m.origin.y) ||
       !std::isfinite(m.origin.yaw)) {
     return bad("'origin' must be finite");
+  }
+  for (const auto& [field, value] :
+       {std::pair{"resolution", m.resolution}, std::pair{"origin", m.origin.x},
+        std::pair{"origin", m.origin.y}, std::pair{"origin yaw", m.origin.yaw}}) {
+    if (std::string problem = RangeProblem(field, value); !problem.empty()) {
+      const absl::string_view key =
+          absl::string_view(field) == "resolution" ? "resolution" : "origin";
+      return bad(absl::StrCat("'", key, "' ", problem));
+    }
   }
   if (!(m.free_thresh >= 0.0 && m.occupied_thresh <= 1.0 &&
         m.free_thresh < m.occupied_thresh)) {

@@ -38,9 +38,10 @@ using NavigateReactor = grpc::ServerBidiReactor<v1::NavigateRequest, v1::Navigat
 class NavigationSession final : public NavigateReactor {
  public:
   NavigationSession(NavigationSessions& owner, uint64_t id,
-                    absl::Status shared_observations)
+                    absl::Status shared_observations, std::string caller)
       : owner_(owner),
         id_(id),
+        caller_(std::move(caller)),
         opened_at_(absl::Now()),
         shared_observations_(std::move(shared_observations)) {
     absl::MutexLock lock(&mu_);
@@ -74,7 +75,16 @@ class NavigationSession final : public NavigateReactor {
     push_pending_ = true;
     ++outstanding_;
     const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this](SearchScratch&) { RunPush(); }, [this] { Release(); }));
+        [this](SearchScratch&) { RunPush(); }, [this] { Release(); },
+        [this](const absl::Status& failed) {
+          // The search may be half-repaired: the session cannot go on.
+          {
+            absl::MutexLock lock(&mu_);
+            push_pending_ = false;
+            EndWithLocked(failed);
+          }
+          Release();
+        }));
     if (!submitted.ok()) {
       // Not worth failing the session for: its next message repairs anyway.
       push_pending_ = false;
@@ -121,6 +131,16 @@ class NavigationSession final : public NavigateReactor {
             absl::MutexLock lock(&mu_);
             handling_ = false;
             FinishLocked(absl::UnavailableError("server is shutting down"));
+          }
+          Release();
+        },
+        [this](const absl::Status& failed) {
+          // RunMessage threw before its Release: answer and let go.
+          {
+            absl::MutexLock lock(&mu_);
+            handling_ = false;
+            ++messages_;
+            FinishLocked(failed);
           }
           Release();
         }));
@@ -345,6 +365,7 @@ class NavigationSession final : public NavigateReactor {
     cost_ = decoded.query.request.cost;
     radius_cells_ = decoded.query.robot_radius_cells;
     max_expansions_ = decoded.query.max_expansions;
+    PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
     PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
     if (radius_cells_ > 0.0) {
       PATHD_RETURN_IF_ERROR(
@@ -356,6 +377,21 @@ class NavigationSession final : public NavigateReactor {
       absl::MutexLock lock(&mu_);
       map_name_ = snapshot_->name;
     }
+    return absl::OkStatus();
+  }
+
+  // Reserves the search state's estimated bytes before anything is built, so
+  // sessions on a big map are refused instead of exhausting memory.
+  absl::Status ReserveMemory(const Grid& grid) ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
+    MemoryBudget* budget = owner_.options_.budget;
+    if (budget == nullptr) return absl::OkStatus();
+    const int64_t estimate =
+        static_cast<int64_t>(grid.size()) * NavigationSessions::kSessionBytesPerCell;
+    PATHD_ASSIGN_OR_RETURN(
+        reservation_,
+        budget->Reserve(MemoryBudget::Part::kSessions, caller_, estimate,
+                        absl::StrFormat("a navigation session on the %d x %d map '%s'",
+                                        grid.width(), grid.height(), snapshot_->name)));
     return absl::OkStatus();
   }
 
@@ -475,13 +511,22 @@ class NavigationSession final : public NavigateReactor {
     std::vector<Cell> path = std::move(answer.result.path);
     if (changed != nullptr) *changed = path != last_path_;
     last_path_ = std::move(path);
-    bytes_.store(static_cast<int64_t>(search_->MemoryBytes() + overlay_.size() * 16),
-                 std::memory_order_relaxed);
+    // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
+    const int64_t bytes = static_cast<int64_t>(
+        search_->MemoryBytes() + overlay_.size() * 48 +
+        (overlay_.empty() ? 0 : grid_->size()));
+    bytes_.store(bytes, std::memory_order_relaxed);
+    reservation_.Update(bytes);
     return absl::OkStatus();
   }
 
+  // First, so it is destroyed last: the bytes it returns (and the trim it
+  // may trigger) come after every other member is freed.
+  MemoryBudget::Reservation reservation_;
   NavigationSessions& owner_;
   const uint64_t id_;
+  // Whose share of the memory budget the session counts against.
+  const std::string caller_;
   const absl::Time opened_at_;
   // What a shared observation gets: OK, or the caller's PERMISSION_DENIED.
   const absl::Status shared_observations_;
@@ -561,14 +606,17 @@ void NavigationSessions::Shutdown() {
 }
 
 grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>*
-NavigationSessions::Start(grpc::CallbackServerContext* /*context*/,
+NavigationSessions::Start(grpc::CallbackServerContext* context,
                           absl::Status shared_observations) {
   uint64_t id;
   {
     absl::MutexLock lock(&mu_);
     id = next_id_++;
   }
-  auto* session = new NavigationSession(*this, id, std::move(shared_observations));
+  std::string caller =
+      options_.budget != nullptr ? options_.budget->CallerOf(*context) : std::string();
+  auto* session = new NavigationSession(*this, id, std::move(shared_observations),
+                                        std::move(caller));
   session->Begin(Add(session));
   return session;
 }

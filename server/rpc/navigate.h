@@ -19,6 +19,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
+#include "server/memory_budget.h"
 #include "server/worker_pool.h"
 
 namespace pathd::server {
@@ -40,7 +41,14 @@ class NavigationSessions {
     size_t max_sessions = 1024;
     // Expansion cap per session search; 0 = none (--max_expansions).
     int64_t max_expansions = 0;
+    // Where each session reserves its search state's bytes when it opens
+    // (about kSessionBytesPerCell per map cell); null = no byte limit. Must
+    // outlive this object.
+    MemoryBudget* budget = nullptr;
   };
+  // What an open session's D* Lite state costs per map cell, reserved before
+  // it is built (the reservation then follows the real size).
+  static constexpr int64_t kSessionBytesPerCell = 16;
 
   // `store`, `pool` and `inflation` must outlive this object. Registers a
   // map listener on `store` (so construct before serving) and starts the

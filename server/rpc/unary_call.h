@@ -149,6 +149,9 @@ class CallJob final : public Job {
   void Drop() override {
     finish_(*call_, absl::UnavailableError("server is shutting down"), "DROPPED");
   }
+  // The pool caught what escaped Run (e.g. a test's injected failure):
+  // answer with its status rather than Drop's UNAVAILABLE.
+  void Fail(const absl::Status& status) override { finish_(*call_, status, "ERROR"); }
 
  private:
   std::shared_ptr<Call> call_;

@@ -104,8 +104,10 @@ std::shared_ptr<const v1::MapEvent> MakeUpdatedEvent(
 
 // ---- MapEventQueue ----
 
-MapEventQueue::MapEventQueue(size_t max_events, const MapSnapshot& current)
+MapEventQueue::MapEventQueue(size_t max_events, const MapSnapshot& current,
+                             size_t max_bytes)
     : max_events_(std::max<size_t>(max_events, 1)),
+      max_bytes_(max_bytes),
       last_version_(current.version),
       map_id_(current.map_id) {}
 
@@ -146,7 +148,9 @@ void MapEventQueue::PushDeleted() {
 
 void MapEventQueue::Push(Item item,
                          const std::shared_ptr<const MapSnapshot>& snapshot) {
-  const size_t max_bytes = std::max(snapshot->grid->size(), kMinBacklogBytes);
+  const size_t max_bytes = max_bytes_ > 0
+                               ? max_bytes_
+                               : std::max(snapshot->grid->size(), kMinBacklogBytes);
   if (!items_.empty() &&
       (items_.size() >= max_events_ || bytes_ + item.bytes > max_bytes)) {
     // The client must replace its copy either way; REPLACED tells it the
@@ -191,10 +195,12 @@ class MapWatcher final : public grpc::ServerWriteReactor<v1::MapEvent> {
 
   // Starts the stream at `current`; called under the owner's mu_ so no
   // version published after `current` can be notified before this runs.
+  // `reservation` is what the stream holds in the memory budget.
   void Begin(std::shared_ptr<const MapSnapshot> current, uint64_t from_version,
-             size_t max_events) {
+             size_t max_events, MemoryBudget::Reservation reservation) {
     absl::MutexLock lock(&mu_);
-    queue_.emplace(max_events, *current);
+    reservation_ = std::move(reservation);
+    queue_.emplace(max_events, *current, owner_.options_.backlog_bytes);
     if (from_version != current->version) {
       queue_->PushFull(std::move(current), v1::MAP_EVENT_KIND_RESYNC);
       StartNextWriteLocked();
@@ -210,6 +216,15 @@ class MapWatcher final : public grpc::ServerWriteReactor<v1::MapEvent> {
              const std::shared_ptr<const v1::MapEvent>& updated) {
     absl::MutexLock lock(&mu_);
     if (finish_requested_) return;
+    if (snapshot->map_id != queue_->map_id() && owner_.options_.budget != nullptr) {
+      // Replaced: the worst case follows the new map's size.
+      if (absl::Status fits = reservation_.Resize(MapWatchers::WatcherBytes(
+              snapshot->grid->size(), owner_.options_.backlog_bytes));
+          !fits.ok()) {
+        FinishLocked(fits, /*drain=*/false);
+        return;
+      }
+    }
     const int64_t drops_before = queue_->backlog_drops();
     queue_->Offer(snapshot, updated);
     if (queue_->backlog_drops() != drops_before) {
@@ -308,6 +323,9 @@ class MapWatcher final : public grpc::ServerWriteReactor<v1::MapEvent> {
     StartWrite(current_.get());
   }
 
+  // First, so it is destroyed last: its bytes are returned (and memory
+  // trimmed) after the queue and the event in flight are freed.
+  MemoryBudget::Reservation reservation_;
   MapWatchers& owner_;
   const std::string name_;
   const absl::Time opened_at_;
@@ -326,6 +344,13 @@ class MapWatcher final : public grpc::ServerWriteReactor<v1::MapEvent> {
 };
 
 // ---- MapWatchers ----
+
+int64_t MapWatchers::WatcherBytes(size_t map_bytes, size_t backlog_bytes) {
+  const size_t backlog = backlog_bytes > 0
+                             ? std::max(backlog_bytes, map_bytes)
+                             : std::max(map_bytes, MapEventQueue::kMinBacklogBytes);
+  return static_cast<int64_t>(2 * map_bytes + backlog);
+}
 
 MapWatchers::MapWatchers(MapStore& store, Options options)
     : store_(store), options_(options) {
@@ -348,7 +373,7 @@ MapWatchers::~MapWatchers() {
 }
 
 grpc::ServerWriteReactor<v1::MapEvent>* MapWatchers::Start(
-    grpc::CallbackServerContext* /*context*/,
+    grpc::CallbackServerContext* context,
     const v1::WatchMapRequest& request) {
   auto* watcher = new MapWatcher(*this, request.name());
   absl::MutexLock lock(&mu_);
@@ -369,10 +394,24 @@ grpc::ServerWriteReactor<v1::MapEvent>* MapWatchers::Start(
     watcher->Refuse(current.status());
     return watcher;
   }
+  MemoryBudget::Reservation reservation;
+  if (options_.budget != nullptr) {
+    const Grid& grid = *(*current)->grid;
+    absl::StatusOr<MemoryBudget::Reservation> reserved = options_.budget->Reserve(
+        MemoryBudget::Part::kWatchers, options_.budget->CallerOf(*context),
+        WatcherBytes(grid.size(), options_.backlog_bytes),
+        absl::StrFormat("a WatchMap stream of the %d x %d map '%s'", grid.width(),
+                        grid.height(), request.name()));
+    if (!reserved.ok()) {
+      watcher->Refuse(reserved.status());
+      return watcher;
+    }
+    reservation = *std::move(reserved);
+  }
   watchers_[request.name()].insert(watcher);
   ++count_;
   watcher->Begin(*std::move(current), request.from_version(),
-                 options_.max_queued_events);
+                 options_.max_queued_events, std::move(reservation));
   return watcher;
 }
 

@@ -21,6 +21,7 @@
 #include "core/map/grid.h"
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "server/map_store.h"
+#include "server/memory_budget.h"
 
 namespace pathd::server {
 
@@ -61,8 +62,10 @@ class MapEventQueue {
   static constexpr size_t kMinBacklogBytes = size_t{64} << 10;
 
   // `current` is the version the client is taken to hold after any event
-  // queued by the caller at start (see PushFull).
-  MapEventQueue(size_t max_events, const MapSnapshot& current);
+  // queued by the caller at start (see PushFull). `max_bytes` bounds the
+  // queued events' bytes (0: the map's size, at least kMinBacklogBytes); one
+  // whole-map event is always let in, however large.
+  MapEventQueue(size_t max_events, const MapSnapshot& current, size_t max_bytes = 0);
 
   // Queues the whole of `snapshot` as `kind` (RESYNC or REPLACED).
   void PushFull(std::shared_ptr<const MapSnapshot> snapshot,
@@ -105,6 +108,7 @@ class MapEventQueue {
   void Push(Item item, const std::shared_ptr<const MapSnapshot>& snapshot);
 
   const size_t max_events_;
+  const size_t max_bytes_;
   std::deque<Item> items_;
   size_t bytes_ = 0;
   uint64_t last_version_;
@@ -127,7 +131,19 @@ class MapWatchers {
     // A larger one ends the stream with RESOURCE_EXHAUSTED naming the flag,
     // where gRPC's own refusal would name neither the event nor the flag.
     int64_t max_message_bytes = 0;
+    // Bytes of events queued per watcher before its backlog is replaced by
+    // one RESYNC (--watch_backlog_bytes); 0 = the map's size, at least
+    // MapEventQueue::kMinBacklogBytes.
+    size_t backlog_bytes = 0;
+    // Where each stream reserves WatcherBytes() when it opens (and the count
+    // of streams is checked); null = no limit. Must outlive this object.
+    MemoryBudget* budget = nullptr;
   };
+
+  // What a watcher of a map of `map_bytes` cells may hold at worst: its
+  // backlog, plus the whole-map event being written and gRPC's serialized
+  // copy of it.
+  static int64_t WatcherBytes(size_t map_bytes, size_t backlog_bytes);
 
   // Registers a listener on `store`, so construct before serving; `store`
   // must outlive this object.

@@ -1,7 +1,13 @@
 // Prometheus metrics of a real PathdServer: requests over gRPC on
 // 127.0.0.1:0, then GET /metrics over HTTP (libcurl) on the metrics port and
 // the samples checked by name and labels. Nothing asserts on timing.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <chrono>
+#include <thread>
 #include <map>
 #include <memory>
 #include <string>
@@ -38,7 +44,7 @@ size_t AppendToString(char* data, size_t size, size_t count, void* out) {
 }
 
 // GET http://127.0.0.1:`port`/metrics; the body, or "" with a test failure.
-std::string Scrape(int port) {
+std::string Scrape(int port, long timeout_ms = 30000) {
   std::unique_ptr<CURL, decltype(&curl_easy_cleanup)> curl(curl_easy_init(),
                                                            &curl_easy_cleanup);
   EXPECT_NE(curl, nullptr);
@@ -48,7 +54,7 @@ std::string Scrape(int port) {
   curl_easy_setopt(curl.get(), CURLOPT_URL, url.c_str());
   curl_easy_setopt(curl.get(), CURLOPT_WRITEFUNCTION, &AppendToString);
   curl_easy_setopt(curl.get(), CURLOPT_WRITEDATA, &body);
-  curl_easy_setopt(curl.get(), CURLOPT_TIMEOUT_MS, 30000L);
+  curl_easy_setopt(curl.get(), CURLOPT_TIMEOUT_MS, timeout_ms);
   const CURLcode code = curl_easy_perform(curl.get());
   EXPECT_EQ(code, CURLE_OK) << curl_easy_strerror(code);
   long http_status = 0;
@@ -267,6 +273,38 @@ TEST_F(MetricsTest, MetricsAddressInUseFailsStart) {
   // The first server's metrics are still served and still counted.
   ASSERT_TRUE(CreateFree("a", 2, 2).ok());
   EXPECT_EQ(Samples().at(R"(pathd_requests_total{code="OK",rpc="CreateMap"})"), 1);
+}
+
+// Issue 15: two sockets that sent half a "GET /metrics" and then nothing held
+// both of the exposer's threads until civetweb's 30 s request timeout, so
+// every scrape meanwhile timed out. Now more sockets than that stall and a
+// scrape is still answered at once; its timeout (15 s, a hang guard) is half
+// of what the stalled sockets would have held it before the fix.
+TEST_F(MetricsTest, ScrapeAnsweredWhileSocketsHoldPartialRequests) {
+  StartServer();
+  constexpr int kStalled = 6;
+  std::vector<int> stalled;
+  for (int i = 0; i < kStalled; ++i) {
+    const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    ASSERT_GE(fd, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<uint16_t>(server_->metrics_port()));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+    const std::string partial = "GET /metrics HTTP/1.1\r\nHost: x\r\n";
+    ASSERT_EQ(send(fd, partial.data(), partial.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(partial.size()));
+    stalled.push_back(fd);
+  }
+  // Give the server time to hand every stalled socket a thread (a scrape
+  // landing first would pass without the fix too); not an assertion.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  for (int round = 0; round < 3; ++round) {
+    const std::string body = Scrape(server_->metrics_port(), /*timeout_ms=*/15000);
+    EXPECT_THAT(body, HasSubstr("pathd_worker_threads")) << "round " << round;
+  }
+  for (const int fd : stalled) close(fd);
 }
 
 TEST_F(MetricsTest, NoMetricsAddressServesNoMetrics) {

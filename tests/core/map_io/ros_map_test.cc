@@ -142,6 +142,38 @@ TEST(RosMapYamlTest, RejectsBadYaml) {
                 {"m.yaml:4:", "'mode'", "'fancy'"});
 }
 
+// Issue 15: finite but absurd values (a denormal resolution, an origin near
+// DBL_MAX) were accepted and made every world coordinate meaningless.
+TEST(RosMapYamlTest, RejectsAbsurdResolutionAndOriginNamingTheField) {
+  for (const char* resolution : {"1e-320", "1e-7", "1e7", "1e308"}) {
+    SCOPED_TRACE(resolution);
+    ExpectInvalid(
+        ParseRosMapYaml(absl::StrCat("image: a\nresolution: ", resolution,
+                                     "\norigin: [0, 0, 0]\n"),
+                        "m.yaml")
+            .status(),
+        {"m.yaml:2:", "'resolution'", "metres per cell"});
+  }
+  for (const char* origin :
+       {"[1e308, -1e308, 0]", "[0, -1e10, 0]", "[2e9, 0, 0]", "[0, 0, 1e300]"}) {
+    SCOPED_TRACE(origin);
+    ExpectInvalid(ParseRosMapYaml(absl::StrCat("image: a\nresolution: 0.05\n"
+                                               "origin: ",
+                                               origin, "\n"),
+                                  "m.yaml")
+                      .status(),
+                  {"m.yaml:3", "'origin'", "within"});
+  }
+  // The bounds themselves are fine.
+  EXPECT_TRUE(ParseRosMapYaml("image: a\nresolution: 1e-6\n"
+                              "origin: [-1e9, 1e9, -3.14]\n",
+                              "m.yaml")
+                  .ok());
+  EXPECT_TRUE(
+      ParseRosMapYaml("image: a\nresolution: 1e6\norigin: [0, 0, 0]\n", "m.yaml")
+          .ok());
+}
+
 // ------------------------------------------------------------- ROS PGM ----
 
 RosMapMetadata Metadata() {
@@ -238,6 +270,19 @@ TEST(RosMapTest, MissingFilesAreNotFoundAndNamed) {
       (std::filesystem::path(yaml_path).parent_path() / "missing.pgm").string();
   EXPECT_NE(std::string(status.message()).find(image_path), std::string::npos)
       << status;
+}
+
+// The same ranges hold for metadata that did not come from a YAML file.
+TEST(RosMapTest, RejectsAbsurdMetadataNamingTheField) {
+  RosMapMetadata m = Metadata();
+  m.resolution = 1e-320;
+  ExpectInvalid(ParseRosMap(m, "P2 1 1 255\n255\n", "t.pgm").status(),
+                {"t.pgm", "'resolution'"});
+  m = Metadata();
+  m.origin.x = 1e308;
+  m.origin.y = -1e308;
+  ExpectInvalid(ParseRosMap(m, "P2 1 1 255\n255\n", "t.pgm").status(),
+                {"t.pgm", "'origin'"});
 }
 
 TEST(RosMapTest, TrinaryThresholdsAreStrict) {

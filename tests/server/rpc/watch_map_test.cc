@@ -179,6 +179,27 @@ TEST(MapEventQueueTest, BacklogOverTheBoundBecomesOneResyncOfTheNewest) {
   EXPECT_TRUE(queue.empty());
 }
 
+// --watch_backlog_bytes (issue 15): the bytes of queued events are bounded
+// by the flag when set, not only by the map's size.
+TEST(MapEventQueueTest, BacklogBytesBoundSetByTheFlag) {
+  std::vector<Cell> row;
+  for (int x = 0; x < 100; ++x) row.push_back(Cell{x, 0});
+  MapEventQueue bounded(1000, *Version(1, 1, 100, 100, 0), /*max_bytes=*/1000);
+  MapEventQueue by_map_size(1000, *Version(1, 1, 100, 100, 0));
+  for (uint64_t v = 2; v <= 21; ++v) {
+    const auto version = Version(1, v, 100, 100, static_cast<uint8_t>(v), row);
+    OfferVersion(bounded, version);
+    OfferVersion(by_map_size, version);
+  }
+  // 20 one-row events (~130 bytes each) fit in the map-sized default bound
+  // (64 KiB at least) but not in 1000 bytes.
+  EXPECT_EQ(by_map_size.backlog_drops(), 0);
+  EXPECT_EQ(by_map_size.size(), 20u);
+  EXPECT_GE(bounded.backlog_drops(), 1);
+  EXPECT_LT(bounded.size(), 10u);
+  EXPECT_EQ(bounded.Pop()->kind(), v1::MAP_EVENT_KIND_RESYNC);
+}
+
 // ---- WatchMap over gRPC ----
 
 // The map as a client mirrors it from events alone.
