@@ -211,34 +211,41 @@ void MemoryBudget::Change(Part part, const std::string& caller, int64_t delta_by
 }
 
 void MemoryBudget::TrimLoop() {
+  // Bytes the allocator held free after the last trim: a trim returns free
+  // pages but leaves them counted as free, so only growth since then says
+  // something new was freed.
+  size_t free_after_trim = mallinfo2().fordblks;
   absl::MutexLock lock(&trim_mu_);
   for (;;) {
-    trim_mu_.Await(absl::Condition(
-        +[](MemoryBudget* self) ABSL_EXCLUSIVE_LOCKS_REQUIRED(self->trim_mu_) {
-          return self->trim_pending_ || self->stopping_;
-        },
-        this));
+    // Woken at once by a large released reservation; otherwise every
+    // kTrimPoll, to catch what is freed late and unreserved (gRPC frees a
+    // closed stream's buffers after the stream's reactor and its
+    // reservation are gone, later still on a loaded machine).
+    trim_mu_.AwaitWithTimeout(
+        absl::Condition(
+            +[](MemoryBudget* self) ABSL_EXCLUSIVE_LOCKS_REQUIRED(self->trim_mu_) {
+              return self->trim_pending_ || self->stopping_;
+            },
+            this),
+        kTrimPoll);
     if (stopping_) return;
+    const bool pending = trim_pending_;
     trim_pending_ = false;
-    // Now, and twice more a little later: gRPC frees a closed stream's
-    // buffers after the stream's reactor (and its reservation) is gone, and
-    // frees come in bursts (every stream of a deleted map, a client's
-    // sessions) whose tail would otherwise stay.
-    for (const absl::Duration delay :
-         {absl::ZeroDuration(), kTrimDelay, kTrimDelay * 5}) {
-      if (delay > absl::ZeroDuration()) {
-        trim_mu_.AwaitWithTimeout(absl::Condition(&stopping_), delay);
-      }
-      if (stopping_) return;
-      trim_mu_.Unlock();
+    trim_mu_.Unlock();
+    const size_t free_now = mallinfo2().fordblks;
+    if (pending ||
+        free_now > free_after_trim + static_cast<size_t>(kTrimAfterFreedBytes)) {
       // glibc keeps freed heap memory (and raises its mmap threshold after
       // large frees, so later big blocks come from the heap too): without
       // this RSS stays at its peak after sessions and streams close. Outside
       // the lock: it walks every arena.
       malloc_trim(0);
       trims_.fetch_add(1, std::memory_order_relaxed);
-      trim_mu_.Lock();
+      free_after_trim = mallinfo2().fordblks;
+    } else if (free_now < free_after_trim) {
+      free_after_trim = free_now;  // reused since: measure growth from here
     }
+    trim_mu_.Lock();
   }
 }
 

@@ -115,9 +115,11 @@ class MemoryBudget {
   // Freed bytes after which the allocator is asked to return free memory to
   // the system (glibc keeps freed heap pages, so RSS would stay at its peak).
   static constexpr int64_t kTrimAfterFreedBytes = int64_t{16} << 20;
-  // After such a release the memory is returned at once, and again this long
-  // and five times this long after (what gRPC frees late).
-  static constexpr absl::Duration kTrimDelay = absl::Milliseconds(200);
+  // After such a release the memory is returned at once; besides, the
+  // allocator's free bytes are looked at this often and returned when they
+  // grew by kTrimAfterFreedBytes since the last trim (what gRPC frees late,
+  // outside any reservation).
+  static constexpr absl::Duration kTrimPoll = absl::Seconds(1);
 
  private:
   struct Usage {

@@ -5,8 +5,6 @@
 // the streams close, and a second pathd on a busy port failing to start.
 // Waits are hang guards; the RSS bounds are halfway marks that a leak or a
 // heap kept at its peak cannot meet and a freed one always does.
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -30,6 +28,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/process.h"
+#include "tests/testing/pathd_process.h"
 
 namespace pathd {
 namespace {
@@ -39,52 +38,16 @@ using Clock = std::chrono::steady_clock;
 using ::testing::HasSubstr;
 
 constexpr auto kHangGuard = std::chrono::seconds(90);
-constexpr char kListeningPrefix[] = "pathd listening on ";
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kRssReturns = false;  // ASan quarantines freed memory
+#else
+constexpr bool kRssReturns = true;
+#endif
 constexpr int kSide = 1024;  // 1 Mi cells: a session reserves 16 MiB
 
 std::chrono::system_clock::time_point Deadline() {
   return std::chrono::system_clock::now() + std::chrono::seconds(120);
 }
-
-// One pathd; stderr to a file, the listening line read from stdout.
-class Daemon {
- public:
-  Daemon(const fs::path& dir, const std::vector<std::string>& flags) : log_(dir / "pathd.log") {
-    int out[2];
-    e2e::MakePipe(out);
-    const int log_fd = open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    std::vector<std::string> argv = {PATHD_BIN, "--address=127.0.0.1:0", "--threads=1"};
-    argv.insert(argv.end(), flags.begin(), flags.end());
-    pid_ = e2e::Spawn(argv, {}, out[1], log_fd, true);
-    close(out[1]);
-    close(log_fd);
-    stdout_ = fdopen(out[0], "r");
-    char line[256] = {};
-    if (fgets(line, sizeof(line), stdout_) == nullptr) {
-      ADD_FAILURE() << "no listening line\n" << e2e::ReadFile(log_);
-      return;
-    }
-    absl::string_view text = absl::StripTrailingAsciiWhitespace(line);
-    EXPECT_TRUE(absl::ConsumePrefix(&text, kListeningPrefix)) << line;
-    address_ = std::string(text);
-  }
-  ~Daemon() {
-    if (pid_ > 0) {
-      kill(pid_, SIGTERM);
-      e2e::WaitForExit(pid_);
-    }
-    if (stdout_ != nullptr) fclose(stdout_);
-  }
-  const std::string& address() const { return address_; }
-  pid_t pid() const { return pid_; }
-  std::string Log() const { return e2e::ReadFile(log_); }
-
- private:
-  fs::path log_;
-  pid_t pid_ = -1;
-  FILE* stdout_ = nullptr;
-  std::string address_;
-};
 
 // VmRSS of `pid` in bytes; 0 when unreadable.
 int64_t RssBytes(pid_t pid) {
@@ -113,8 +76,13 @@ class LimitsTest : public ::testing::Test {
   }
 
   void Start(const std::vector<std::string>& flags) {
-    daemon_ = std::make_unique<Daemon>(dir_, flags);
-    ASSERT_FALSE(daemon_->address().empty());
+    testing::PathdProcessOptions options;
+    options.binary = PATHD_BIN;
+    options.flags = {"--threads=1"};
+    options.flags.insert(options.flags.end(), flags.begin(), flags.end());
+    options.log_file = dir_ / "pathd.log";
+    daemon_ = std::make_unique<testing::PathdProcess>(std::move(options));
+    ASSERT_TRUE(daemon_->listening()) << daemon_->status();
     channel_ = grpc::CreateChannel(daemon_->address(), grpc::InsecureChannelCredentials());
     maps_ = v1::MapService::NewStub(channel_);
     planner_ = v1::PlannerService::NewStub(channel_);
@@ -192,7 +160,7 @@ class LimitsTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  std::unique_ptr<Daemon> daemon_;
+  std::unique_ptr<testing::PathdProcess> daemon_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::MapService::Stub> maps_;
   std::unique_ptr<v1::PlannerService::Stub> planner_;
@@ -271,7 +239,7 @@ TEST_F(LimitsTest, SessionsAndWatchersAreBoundedAndTheirMemoryReturns) {
   const int64_t halfway = baseline + (peak - baseline) / 2;
   int64_t after = RssBytes(daemon_->pid());
   const Clock::time_point guard = Clock::now() + kHangGuard;
-  while (after > halfway && Clock::now() < guard) {
+  while (kRssReturns && after > halfway && Clock::now() < guard) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     after = RssBytes(daemon_->pid());
   }
@@ -280,7 +248,13 @@ TEST_F(LimitsTest, SessionsAndWatchersAreBoundedAndTheirMemoryReturns) {
               baseline / 1048576.0, peak / 1048576.0, after / 1048576.0);
   ASSERT_GT(peak - baseline, int64_t{64} << 20)
       << "the streams cost too little for the check below to mean anything";
-  EXPECT_LE(after, halfway);
+  if (kRssReturns) {
+    EXPECT_LE(after, halfway);
+  } else {
+    // ASan's allocator quarantines freed memory and malloc_trim does not
+    // reach it: RSS cannot fall here, so only the budget is checked.
+    std::printf("RSS return not checked under AddressSanitizer\n");
+  }
   // And the budget is free again: a session opens.
   const std::unique_ptr<Session> again = OpenSession("big");
   EXPECT_TRUE(again->opened) << again->refusal.error_message();
@@ -320,34 +294,18 @@ TEST_F(LimitsTest, OneCallerCannotTakeTheWholeBudget) {
 // the kernel split the clients between the two.
 TEST_F(LimitsTest, SecondPathdOnABusyPortExitsNamingTheAddress) {
   ASSERT_NO_FATAL_FAILURE(Start({}));
-  const fs::path out_file = dir_ / "second.out";
-  const fs::path err_file = dir_ / "second.err";
-  const int out_fd = open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  const int err_fd = open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  const pid_t second = e2e::Spawn(
-      {PATHD_BIN, absl::StrCat("--address=", daemon_->address()), "--threads=1"}, {},
-      out_fd, err_fd, true);
-  close(out_fd);
-  close(err_fd);
-  // It either exits (right) or says it listens (wrong); whichever comes first.
-  int status = 0;
-  pid_t waited = 0;
-  const Clock::time_point guard = Clock::now() + kHangGuard;
-  while ((waited = waitpid(second, &status, WNOHANG)) == 0 && Clock::now() < guard &&
-         !absl::StrContains(e2e::ReadFile(out_file), kListeningPrefix)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  if (waited == 0) {
-    ADD_FAILURE() << "a second pathd started on the busy " << daemon_->address() << ": "
-                  << e2e::ReadFile(out_file);
-    kill(second, SIGKILL);
-    waitpid(second, &status, 0);
-    return;
-  }
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_NE(WEXITSTATUS(status), 0);
-  EXPECT_THAT(e2e::ReadFile(err_file), HasSubstr(daemon_->address()));
-  EXPECT_THAT(e2e::ReadFile(err_file), HasSubstr("in use"));
+  // It either exits (right) or says it listens (wrong).
+  testing::PathdProcessOptions options;
+  options.binary = PATHD_BIN;
+  options.address = daemon_->address();
+  options.flags = {"--threads=1"};
+  options.log_file = dir_ / "second.log";
+  testing::PathdProcess second(std::move(options));
+  ASSERT_FALSE(second.listening())
+      << "a second pathd started on the busy " << daemon_->address();
+  EXPECT_NE(second.WaitForExit(), 0);
+  EXPECT_THAT(second.Log(), HasSubstr(daemon_->address()));
+  EXPECT_THAT(second.Log(), HasSubstr("in use"));
 }
 
 }  // namespace
