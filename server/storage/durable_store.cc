@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 #include <utility>
 
 #include "absl/strings/match.h"
@@ -42,6 +43,8 @@ DurableStore::~DurableStore() {
     stopping_ = true;
   }
   if (snapshot_thread_.joinable()) snapshot_thread_.join();
+  // Drains what is queued before returning.
+  if (completion_thread_.joinable()) completion_thread_.join();
   store_.SetJournal(nullptr);
   absl::MutexLock lock(&mu_);
   spdlog::info("--data_dir {}: {} record(s) in {} sync(s), {} snapshot(s) written, {} "
@@ -96,6 +99,7 @@ absl::StatusOr<std::unique_ptr<DurableStore>> DurableStore::Open(Options options
   store.SetJournal(durable.get());
   DurableStore* self = durable.get();
   durable->snapshot_thread_ = std::thread([self] { self->SnapshotLoop(); });
+  durable->completion_thread_ = std::thread([self] { self->CompletionLoop(); });
   return durable;
 }
 
@@ -224,6 +228,38 @@ absl::Status DurableStore::WaitDurable(uint64_t sequence) {
     LeadSync(/*rotate=*/false).IgnoreError();
   }
   return absl::OkStatus();
+}
+
+void DurableStore::OnDurable(uint64_t sequence, std::function<void(absl::Status)> done) {
+  absl::MutexLock lock(&mu_);
+  // Sequence numbers are handed out under mu_ and callers queue right after
+  // appending, but two callers may cross: keep the queue sorted.
+  auto at = completions_.end();
+  while (at != completions_.begin() && std::prev(at)->sequence > sequence) --at;
+  completions_.insert(at, Completion{sequence, std::move(done)});
+}
+
+void DurableStore::CompletionLoop() {
+  for (;;) {
+    std::vector<Completion> batch;
+    {
+      absl::MutexLock lock(&mu_);
+      mu_.Await(absl::Condition(this, &DurableStore::CompletionsDue));
+      if (completions_.empty()) return;  // stopping, and drained
+      batch.swap(completions_);
+    }
+    // One sync for the whole batch (and any writer waiting meanwhile); on a
+    // failure the records synced before it still succeed.
+    const absl::Status status = WaitDurable(batch.back().sequence);
+    uint64_t durable = 0;
+    {
+      absl::MutexLock lock(&mu_);
+      durable = durable_sequence_;
+    }
+    for (Completion& completion : batch) {
+      completion.done(completion.sequence <= durable ? absl::OkStatus() : status);
+    }
+  }
 }
 
 absl::Status DurableStore::WriteFileAtomically(const std::string& file,

@@ -115,8 +115,9 @@ class DurableStore final : public MapJournal {
   static absl::StatusOr<std::unique_ptr<DurableStore>> Open(Options options,
                                                              MapStore& store);
 
-  // Stops the snapshot thread and detaches from the store. Precondition: no
-  // writer is inside the store.
+  // Runs the completions still queued, stops the snapshot and completion
+  // threads and detaches from the store. Precondition: no writer is inside
+  // the store.
   ~DurableStore() override;
   DurableStore(const DurableStore&) = delete;
   DurableStore& operator=(const DurableStore&) = delete;
@@ -141,6 +142,10 @@ class DurableStore final : public MapJournal {
   uint64_t Append(std::string_view name, std::string record,
                   std::shared_ptr<const MapSnapshot> current) override;
   absl::Status WaitDurable(uint64_t sequence) override;
+  // Runs `done` on the completion thread once `sequence` is durable (or the
+  // log failed), so no caller thread waits for fdatasync: the thread leads
+  // one group commit for every completion queued meanwhile.
+  void OnDurable(uint64_t sequence, std::function<void(absl::Status)> done) override;
 
  private:
   // Per map name: what a checkpoint needs to know.
@@ -173,6 +178,10 @@ class DurableStore final : public MapJournal {
   absl::Status SyncDir();
   void Step(CheckpointStep step);
   void SnapshotLoop();
+  void CompletionLoop();
+  bool CompletionsDue() const ABSL_SHARED_LOCKS_REQUIRED(mu_) {
+    return stopping_ || !completions_.empty();
+  }
   bool NoLeader() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return !leader_; }
   bool SnapshotDue() const ABSL_SHARED_LOCKS_REQUIRED(mu_) {
     return stopping_ || checkpoint_wanted_;
@@ -208,6 +217,12 @@ class DurableStore final : public MapJournal {
   bool checkpoint_wanted_ ABSL_GUARDED_BY(mu_) = false;
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
   Stats stats_ ABSL_GUARDED_BY(mu_);
+  struct Completion {
+    uint64_t sequence = 0;
+    std::function<void(absl::Status)> done;
+  };
+  // OnDurable calls not yet run, in sequence order.
+  std::vector<Completion> completions_ ABSL_GUARDED_BY(mu_);
 
   // One checkpoint at a time.
   absl::Mutex checkpoint_mu_ ABSL_ACQUIRED_BEFORE(mu_);
@@ -216,6 +231,7 @@ class DurableStore final : public MapJournal {
   int exit_step_ = 0;
   int exit_checkpoint_ = 0;
   std::thread snapshot_thread_;
+  std::thread completion_thread_;
 };
 
 }  // namespace pathd::server
