@@ -7,6 +7,7 @@
 #ifndef PATHD_SERVER_STORAGE_DURABLE_STORE_H_
 #define PATHD_SERVER_STORAGE_DURABLE_STORE_H_
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -227,7 +228,7 @@ class DurableStore final : public MapJournal {
   // One checkpoint at a time.
   absl::Mutex checkpoint_mu_ ABSL_ACQUIRED_BEFORE(mu_);
   // Checkpoints begun, and PATHD_TEST_CHECKPOINT_EXIT's STEP:N (0: unset).
-  int checkpoints_started_ ABSL_GUARDED_BY(checkpoint_mu_) = 0;
+  std::atomic<int> checkpoints_started_{0};
   int exit_step_ = 0;
   int exit_checkpoint_ = 0;
   std::thread snapshot_thread_;

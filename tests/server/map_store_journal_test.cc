@@ -43,7 +43,7 @@ class GatedJournal : public MapJournal {
     absl::MutexLock lock(&mu_);
     return ++appended_;
   }
-  absl::Status WaitDurable(uint64_t sequence) override {
+  absl::Status WaitDurable(uint64_t /*sequence*/) override {
     absl::MutexLock lock(&mu_);
     mu_.Await(absl::Condition(
         +[](GatedJournal* j) ABSL_NO_THREAD_SAFETY_ANALYSIS { return j->released_; }, this));
