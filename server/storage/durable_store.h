@@ -74,7 +74,7 @@ class DurableStore final : public MapJournal {
     // PATHD_TEST_CHECKPOINT_EXIT="STEP:N" makes the process _exit(86) after
     // step STEP (the CheckpointStep number) of the N-th checkpoint, for the
     // end-to-end crash test.
-    std::function<void(CheckpointStep)> checkpoint_hook;
+    std::function<void(CheckpointStep)> checkpoint_hook = nullptr;
   };
 
   // Counters since Open, for logs and benchmarks.
