@@ -164,9 +164,11 @@ class MapStore {
   };
 
   // Called after a map got a new version (snapshot set) or was deleted
-  // (snapshot null). Calls for one name arrive in version order for updates;
-  // a listener must return quickly (queue work, do not plan) and must not call
-  // back into the store's writers.
+  // (snapshot null), once that is published (durable, with a journal). Calls
+  // arrive one at a time in log order, so in version order per name, on the
+  // thread that published them (a writer's, or the journal's completion
+  // thread); a listener must return quickly (queue work, do not plan) and
+  // must not call back into the store's writers.
   using Listener = std::function<void(std::string_view name,
                                       const std::shared_ptr<const MapSnapshot>& snapshot)>;
 
