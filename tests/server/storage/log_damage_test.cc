@@ -182,27 +182,20 @@ TEST_F(LogDamageTest, CorruptLengthOfSecondRecordIsDataLossNotATornTail) {
 
 // A crash's torn append: a prefix of a record, or one followed by zeros.
 TEST_F(LogDamageTest, TornAppendIsCutWithACopy) {
-  std::vector<size_t> offsets;
-  const std::string segment = MakeLog(&offsets);
-  const std::string clean = Read(dir_ / segment);
   const std::string record = wal::EncodeUpdated("m", kRecords + 1, {MapChange::ForCell(0, 0, 1)});
   for (const std::string& tail :
        {record.substr(0, 5), record.substr(0, record.size() - 1),
         record.substr(0, 12) + std::string(record.size(), '\0')}) {
+    // A fresh directory each time: the start-up compaction of the previous
+    // round may already have replaced the segment by snapshots.
+    std::vector<size_t> offsets;
+    const std::string segment = MakeLog(&offsets);
+    const std::string clean = Read(dir_ / segment);
     Write(dir_ / segment, clean + tail);
-    fs::remove(dir_ / (segment + ".corrupt"));
     ASSERT_TRUE(Open().ok());
     EXPECT_EQ((*store_->Get("m"))->version, static_cast<uint64_t>(kRecords));
     EXPECT_EQ(Read(dir_ / (segment + ".corrupt")), clean + tail);
     durable_.reset();
-    // Open started a new segment after the cut one; drop it to damage the
-    // same file again.
-    for (const auto& entry : fs::directory_iterator(dir_)) {
-      const std::string name = entry.path().filename().string();
-      if (name.rfind("wal-", 0) == 0 && name != segment && name.find(".corrupt") == std::string::npos) {
-        fs::remove(entry.path());
-      }
-    }
   }
 }
 
