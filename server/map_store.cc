@@ -9,6 +9,7 @@
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_format.h"
 #include "core/map/grid.h"
+#include "server/map_store_grid_pool.h"
 
 namespace pathd::server {
 namespace {
@@ -91,137 +92,6 @@ std::vector<RowSpan> CoveredSpans(absl::Span<const MapChange> changes,
 }
 
 }  // namespace
-
-// Spare grid buffers of one map id, and the cells its recent versions
-// changed. Owned by the map's store entry alone; a published grid's deleter
-// holds it weakly and hands the buffer back when the last snapshot drops it.
-class MapStore::GridPool {
- public:
-  explicit GridPool(size_t grid_cells)
-      : log_budget_(grid_cells / kLogCellsDivisor + kLogMinCells) {}
-
-  // The shared_ptr deleter of a published grid.
-  struct Release {
-    std::weak_ptr<GridPool> pool;
-    uint64_t version = 0;
-    void operator()(Grid* grid) const {
-      std::unique_ptr<Grid> owned(grid);
-      // A pool that is gone (map deleted or replaced, store destroyed) lets
-      // the buffer be freed here.
-      if (std::shared_ptr<GridPool> live = pool.lock()) {
-        live->Return(std::move(owned), version);
-      }
-    }
-  };
-
-  // Publishes `grid` as the buffer of `version`. Every call makes a new
-  // control block, so weak references to an earlier version held in the same
-  // buffer (the inflation cache's keys) can never match this one.
-  static std::shared_ptr<const Grid> Publish(const std::shared_ptr<GridPool>& pool,
-                                             std::unique_ptr<Grid> grid,
-                                             uint64_t version) {
-    {
-      absl::MutexLock lock(&pool->mu_);
-      ++pool->published_;
-    }
-    return std::shared_ptr<const Grid>(grid.release(), Release{pool, version});
-  }
-
-  // The newest spare (null when there is none) and, when the log reaches back
-  // to it, the changed cells of every version after it up to `to`, oldest
-  // first (`replayable`). Otherwise the caller copies the whole grid.
-  struct Taken {
-    std::unique_ptr<Grid> grid;
-    bool replayable = false;
-    std::vector<std::shared_ptr<const std::vector<Cell>>> replay;
-  };
-  Taken Take(uint64_t to) {
-    absl::MutexLock lock(&mu_);
-    if (published_ >= peak_published_ || ++peak_age_ > kSpareWindow) {
-      peak_published_ = published_;
-      peak_age_ = 0;
-    }
-    Taken taken;
-    if (spares_.empty()) return taken;
-    auto newest = std::max_element(
-        spares_.begin(), spares_.end(),
-        [](const Spare& a, const Spare& b) { return a.version < b.version; });
-    const uint64_t from = newest->version;
-    taken.grid = std::move(newest->grid);
-    spares_.erase(newest);
-    if (from == to) {
-      taken.replayable = true;
-    } else if (!log_.empty() && log_.back().version == to &&
-               log_.front().version <= from + 1) {
-      taken.replayable = true;
-      for (const LogEntry& entry : log_) {
-        if (entry.version > from) taken.replay.push_back(entry.cells);
-      }
-    }
-    return taken;
-  }
-
-  // Logs what version `snapshot` changed. A version whose changes are unknown
-  // or larger than the log's budget drops the log: no spare can be replayed
-  // across it.
-  void Record(const MapSnapshot& snapshot) {
-    absl::MutexLock lock(&mu_);
-    if (!snapshot.changes_known || snapshot.changed_cells.size() > log_budget_) {
-      log_.clear();
-      log_cells_ = 0;
-      return;
-    }
-    log_.push_back(LogEntry{snapshot.version, std::make_shared<const std::vector<Cell>>(
-                                                  snapshot.changed_cells)});
-    log_cells_ += snapshot.changed_cells.size();
-    while (log_cells_ > log_budget_ || log_.size() > kMaxLogVersions) {
-      log_cells_ -= log_.front().cells->size();
-      log_.pop_front();
-    }
-  }
-
- private:
-  struct Spare {
-    std::unique_ptr<Grid> grid;
-    uint64_t version = 0;
-  };
-  // Cells that differ between version - 1 and version.
-  struct LogEntry {
-    uint64_t version = 0;
-    std::shared_ptr<const std::vector<Cell>> cells;
-  };
-
-  // Keeps a released buffer while the pool holds fewer than the recent peak
-  // of published buffers plus one (see kSpareWindow), dropping the oldest
-  // spares beyond that: the newest needs the shortest replay.
-  void Return(std::unique_ptr<Grid> grid, uint64_t version) {
-    // Declared before the lock so buffers dropped here are freed after
-    // unlocking.
-    std::vector<Spare> dropped;
-    absl::MutexLock lock(&mu_);
-    --published_;
-    spares_.push_back(Spare{std::move(grid), version});
-    const size_t keep = peak_published_ + 1 > published_ ? peak_published_ + 1 - published_ : 0;
-    if (spares_.size() <= keep) return;
-    std::sort(spares_.begin(), spares_.end(),
-              [](const Spare& a, const Spare& b) { return a.version > b.version; });
-    std::move(spares_.begin() + static_cast<std::ptrdiff_t>(keep), spares_.end(),
-              std::back_inserter(dropped));
-    spares_.resize(keep);
-  }
-
-  const size_t log_budget_;
-  absl::Mutex mu_;
-  std::vector<Spare> spares_ ABSL_GUARDED_BY(mu_);
-  // Consecutive versions, oldest first, ending at the newest update.
-  std::deque<LogEntry> log_ ABSL_GUARDED_BY(mu_);
-  size_t log_cells_ ABSL_GUARDED_BY(mu_) = 0;
-  // Buffers published and not yet returned, and their most at an update
-  // within the last kSpareWindow updates (peak_age_ updates ago).
-  size_t published_ ABSL_GUARDED_BY(mu_) = 0;
-  size_t peak_published_ ABSL_GUARDED_BY(mu_) = 0;
-  int peak_age_ ABSL_GUARDED_BY(mu_) = 0;
-};
 
 // Every check runs before the copy is made, which is what makes a batch
 // all-or-nothing.
@@ -342,19 +212,21 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
   std::string record;
   uint64_t record_version = 0;
   uint64_t sequence = 0;
-  bool replaced = false;
+  uint64_t ticket = 0;
   // A replaced version and its pool are released after unlocking: freeing
   // large grids should not stall other callers.
-  std::shared_ptr<const MapSnapshot> old_current;
+  std::shared_ptr<const MapSnapshot> old_latest;
   std::shared_ptr<GridPool> old_pool;
-  std::shared_ptr<const MapSnapshot> published;
+  std::shared_ptr<const MapSnapshot> made;
   for (;;) {
     if (journal_ != nullptr) {
       uint64_t version = 1;
       {
         absl::ReaderMutexLock lock(&mu_);
         auto it = maps_.find(name);
-        if (it != maps_.end()) version = it->second.current->version + 1;
+        if (it != maps_.end() && it->second.latest != nullptr) {
+          version = it->second.latest->version + 1;
+        }
       }
       if (version != record_version) {
         absl::StatusOr<std::string> encoded = journal_->EncodeCreate(name, version, *buffer);
@@ -365,15 +237,16 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
     }
     absl::MutexLock lock(&mu_);
     auto it = maps_.find(name);
-    if (it != maps_.end() && !replace) {
+    const bool exists = it != maps_.end() && it->second.latest != nullptr;
+    if (exists && !replace) {
       return absl::AlreadyExistsError(absl::StrFormat(
           "map '%s' already exists (version %d); set replace to overwrite it", name,
-          it->second.current->version));
+          it->second.latest->version));
     }
     // Continuing the count on replace keeps "version" monotonic per name, so a
     // client holding expected_version from the old map cannot update the new
     // one by accident.
-    const uint64_t version = it == maps_.end() ? 1 : it->second.current->version + 1;
+    const uint64_t version = exists ? it->second.latest->version + 1 : 1;
     if (journal_ != nullptr && version != record_version) continue;
     auto snapshot = std::make_shared<MapSnapshot>();
     snapshot->name = std::string(name);
@@ -381,24 +254,23 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
     snapshot->version = version;
     snapshot->grid = GridPool::Publish(pool, std::move(buffer), snapshot->version);
     if (it == maps_.end()) {
-      maps_.emplace(std::string(name),
-                    Entry{snapshot, std::make_shared<absl::Mutex>(), std::move(pool)});
-    } else {
-      old_current = std::exchange(it->second.current, snapshot);
-      // The new map gets its own pool: the old one's buffers have the old
-      // size, and an update still working on the old map must not feed it.
-      old_pool = std::exchange(it->second.pool, std::move(pool));
-      replaced = true;
+      it = maps_.emplace(std::string(name), Entry{}).first;
     }
+    Entry& entry = it->second;
+    old_latest = std::exchange(entry.latest, snapshot);
+    // The new map gets its own pool: the old one's buffers have the old
+    // size, and an update still working on the old map must not feed it.
+    old_pool = std::exchange(entry.pool, std::move(pool));
+    // A map created again after a logged deletion is a new map to updates
+    // waiting on the old one's lock.
+    if (!exists || entry.update_mu == nullptr) entry.update_mu = std::make_shared<absl::Mutex>();
     if (journal_ != nullptr) sequence = journal_->Append(name, std::move(record), snapshot);
-    published = std::move(snapshot);
+    ticket = QueueChange(name, snapshot, exists ? ChangeKind::kReplaced : ChangeKind::kCreated);
+    made = std::move(snapshot);
     break;
   }
-  if (replaced) Notify(name, published);
-  if (journal_ != nullptr) {
-    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) return s;
-  }
-  return published;
+  if (absl::Status s = Complete(ticket, sequence); !s.ok()) return s;
+  return made;
 }
 
 absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Restore(
@@ -422,8 +294,9 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Restore(
   snapshot->map_id = ++last_map_id_;
   snapshot->version = version;
   snapshot->grid = GridPool::Publish(pool, std::move(buffer), version);
-  maps_.emplace(std::string(name),
-                Entry{snapshot, std::make_shared<absl::Mutex>(), std::move(pool)});
+  maps_.emplace(std::string(name), Entry{snapshot, snapshot, std::make_shared<absl::Mutex>(),
+                                         std::move(pool)});
+  ++visible_;
   return std::shared_ptr<const MapSnapshot>(std::move(snapshot));
 }
 
@@ -437,15 +310,17 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Get(
   if (absl::Status s = ValidateName(name); !s.ok()) return s;
   absl::ReaderMutexLock lock(&mu_);
   auto it = maps_.find(name);
-  if (it == maps_.end()) return NotFound(name);
+  if (it == maps_.end() || it->second.current == nullptr) return NotFound(name);
   return it->second.current;
 }
 
 std::vector<std::shared_ptr<const MapSnapshot>> MapStore::List() const {
   absl::ReaderMutexLock lock(&mu_);
   std::vector<std::shared_ptr<const MapSnapshot>> out;
-  out.reserve(maps_.size());
-  for (const auto& [name, entry] : maps_) out.push_back(entry.current);
+  out.reserve(visible_);
+  for (const auto& [name, entry] : maps_) {
+    if (entry.current != nullptr) out.push_back(entry.current);
+  }
   return out;
 }
 
@@ -456,38 +331,122 @@ absl::StatusOr<uint64_t> MapStore::Delete(std::string_view name) {
   std::shared_ptr<const MapSnapshot> removed;
   std::shared_ptr<GridPool> pool;
   uint64_t sequence = 0;
+  uint64_t ticket = 0;
   if (journal_ != nullptr) {
     if (absl::Status s = journal_->Writable(); !s.ok()) return s;
   }
   {
     absl::MutexLock lock(&mu_);
     auto it = maps_.find(name);
-    if (it == maps_.end()) return NotFound(name);
-    removed = std::move(it->second.current);
+    if (it == maps_.end() || it->second.latest == nullptr) return NotFound(name);
+    removed = std::move(it->second.latest);
     pool = std::move(it->second.pool);
-    maps_.erase(it);
+    // Updates waiting on the old lock find no latest version and give up.
+    it->second.update_mu = nullptr;
     if (journal_ != nullptr) {
       // A few bytes: encoding under the lock costs nothing worth avoiding.
       sequence = journal_->Append(name, journal_->EncodeDelete(name, removed->version),
                                   nullptr);
     }
+    ticket = QueueChange(name, nullptr, ChangeKind::kDeleted);
   }
-  Notify(name, nullptr);
-  if (journal_ != nullptr) {
-    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) return s;
-  }
+  if (absl::Status s = Complete(ticket, sequence); !s.ok()) return s;
   return removed->version;
 }
 
+uint64_t MapStore::QueueChange(std::string_view name,
+                               std::shared_ptr<const MapSnapshot> snapshot,
+                               ChangeKind kind) {
+  const uint64_t ticket = next_ticket_++;
+  pending_.push_back(PendingChange{ticket, std::string(name), std::move(snapshot), kind});
+  return ticket;
+}
+
+void MapStore::PublishThrough(uint64_t ticket) {
+  absl::MutexLock publish_lock(&publish_mu_);
+  for (;;) {
+    PendingChange change;
+    std::shared_ptr<const MapSnapshot> replaced;
+    {
+      absl::MutexLock lock(&mu_);
+      if (pending_.empty() || pending_.front().ticket > ticket) return;
+      change = std::move(pending_.front());
+      pending_.pop_front();
+      // Entries are erased only by publishing their deletion with nothing
+      // logged after it, so the entry of a queued change exists.
+      auto it = maps_.find(change.name);
+      Entry& entry = it->second;
+      if (entry.current == nullptr && change.snapshot != nullptr) ++visible_;
+      if (entry.current != nullptr && change.snapshot == nullptr) --visible_;
+      replaced = std::exchange(entry.current, change.snapshot);
+      if (entry.current == nullptr && entry.latest == nullptr) maps_.erase(it);
+    }
+    // A created map has no watchers to tell; the others do, in log order
+    // (publish_mu_ is held).
+    if (change.kind != ChangeKind::kCreated) Notify(change.name, change.snapshot);
+  }
+}
+
+void MapStore::DropFrom(uint64_t ticket) {
+  absl::MutexLock lock(&mu_);
+  while (!pending_.empty() && pending_.back().ticket >= ticket) pending_.pop_back();
+}
+
+absl::Status MapStore::Complete(uint64_t ticket, uint64_t sequence) {
+  if (journal_ != nullptr) {
+    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) {
+      DropFrom(ticket);
+      return s;
+    }
+  }
+  PublishThrough(ticket);
+  return absl::OkStatus();
+}
+
 absl::StatusOr<MapUpdateResult> MapStore::Update(
+    std::string_view name, absl::Span<const MapChange> changes,
+    std::optional<uint64_t> expected_version) {
+  absl::StatusOr<PreparedUpdate> prepared = PrepareUpdate(name, changes, expected_version);
+  if (!prepared.ok()) return prepared.status();
+  // Outside update_mu, so further updates of this map can queue their records
+  // behind this one and share its disk sync.
+  if (absl::Status s = Complete(prepared->ticket, prepared->sequence); !s.ok()) return s;
+  return std::move(prepared->result);
+}
+
+void MapStore::UpdateAsync(std::string_view name, absl::Span<const MapChange> changes,
+                           std::optional<uint64_t> expected_version, UpdateDone done) {
+  absl::StatusOr<PreparedUpdate> prepared = PrepareUpdate(name, changes, expected_version);
+  if (!prepared.ok()) {
+    done(prepared.status());
+    return;
+  }
+  if (journal_ == nullptr) {
+    PublishThrough(prepared->ticket);
+    done(std::move(prepared->result));
+    return;
+  }
+  const uint64_t ticket = prepared->ticket;
+  journal_->OnDurable(prepared->sequence,
+                      [this, ticket, result = std::move(prepared->result),
+                       done = std::move(done)](absl::Status status) mutable {
+                        if (!status.ok()) {
+                          DropFrom(ticket);
+                          done(status);
+                          return;
+                        }
+                        PublishThrough(ticket);
+                        done(std::move(result));
+                      });
+}
+
+absl::StatusOr<MapStore::PreparedUpdate> MapStore::PrepareUpdate(
     std::string_view name, absl::Span<const MapChange> changes,
     std::optional<uint64_t> expected_version) {
   if (absl::Status s = ValidateName(name); !s.ok()) return s;
   if (journal_ != nullptr) {
     if (absl::Status s = journal_->Writable(); !s.ok()) return s;
   }
-  MapUpdateResult result;
-  uint64_t sequence = 0;
   // Loops only when the map was replaced or deleted-and-recreated while this
   // update copied it; the retry then validates against the new version.
   for (;;) {
@@ -495,7 +454,7 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     {
       absl::ReaderMutexLock lock(&mu_);
       auto it = maps_.find(name);
-      if (it == maps_.end()) return NotFound(name);
+      if (it == maps_.end() || it->second.latest == nullptr) return NotFound(name);
       update_mu = it->second.update_mu;
     }
     absl::MutexLock update_lock(update_mu.get());
@@ -505,12 +464,11 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     {
       absl::ReaderMutexLock lock(&mu_);
       auto it = maps_.find(name);
-      if (it == maps_.end()) return NotFound(name);
+      if (it == maps_.end() || it->second.latest == nullptr) return NotFound(name);
       if (it->second.update_mu != update_mu) continue;
-      base = it->second.current;
+      base = it->second.latest;
       pool = it->second.pool;
     }
-
     if (expected_version.has_value() && *expected_version != base->version) {
       return absl::AbortedError(absl::StrFormat(
           "map '%s' is at version %d, expected %d", name, base->version,
@@ -566,29 +524,25 @@ absl::StatusOr<MapUpdateResult> MapStore::Update(
     snapshot->grid = GridPool::Publish(pool, std::move(grid), snapshot->version);
     std::string record;
     if (journal_ != nullptr) record = journal_->EncodeUpdate(name, snapshot->version, changes);
+    PreparedUpdate prepared;
     {
       absl::MutexLock lock(&mu_);
       auto it = maps_.find(name);
       // A Delete that raced with the copy wins: the map is gone.
-      if (it == maps_.end()) return NotFound(name);
-      if (it->second.current != base) continue;  // replaced meanwhile
-      it->second.current = snapshot;
-      if (journal_ != nullptr) sequence = journal_->Append(name, std::move(record), snapshot);
+      if (it == maps_.end() || it->second.latest == nullptr) return NotFound(name);
+      if (it->second.latest != base) continue;  // replaced meanwhile
+      it->second.latest = snapshot;
+      if (journal_ != nullptr) {
+        prepared.sequence = journal_->Append(name, std::move(record), snapshot);
+      }
+      prepared.ticket = QueueChange(name, snapshot, ChangeKind::kUpdated);
     }
     // Under update_mu, so the next update of this map sees this version
     // logged.
     pool->Record(*snapshot);
-    // Still under update_mu: listeners see this map's versions in order.
-    Notify(name, snapshot);
-    result = MapUpdateResult{std::move(snapshot), cells_changed};
-    break;
+    prepared.result = MapUpdateResult{std::move(snapshot), cells_changed};
+    return prepared;
   }
-  // Outside update_mu, so further updates of this map can queue their records
-  // behind this one and share its disk sync.
-  if (journal_ != nullptr) {
-    if (absl::Status s = journal_->WaitDurable(sequence); !s.ok()) return s;
-  }
-  return result;
 }
 
 std::unique_ptr<Grid> MapStore::AcquireGrid(GridPool& pool, const MapSnapshot& base) {
@@ -633,7 +587,7 @@ void MapStore::Notify(std::string_view name,
 
 size_t MapStore::size() const {
   absl::ReaderMutexLock lock(&mu_);
-  return maps_.size();
+  return visible_;
 }
 
 }  // namespace pathd::server

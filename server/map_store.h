@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
@@ -68,10 +69,11 @@ struct MapChange {
 };
 
 // Makes a store's changes durable (server/storage/durable_store.h). The store calls
-// Encode* without holding its locks, Append under the lock that publishes the
+// Encode* without holding its locks, Append under the lock that orders the
 // change (so the log order is the order versions are published, per map and
-// between a map's Create, Update and Delete), and WaitDurable after releasing
-// its locks, before it returns: writers waiting together share one disk sync.
+// between a map's Create, Update and Delete), and WaitDurable (or OnDurable)
+// after releasing its locks: writers waiting together share one disk sync.
+// A change is published to readers and listeners only once it is durable.
 // Implementations are thread-safe.
 class MapJournal {
  public:
@@ -95,9 +97,15 @@ class MapJournal {
   virtual uint64_t Append(std::string_view name, std::string record,
                           std::shared_ptr<const MapSnapshot> current) = 0;
   // Blocks until record `sequence` and every earlier one are on disk. An
-  // error means the change is applied in memory but will not survive a
-  // restart; later changes are refused (Writable).
+  // error means the change may not survive a restart: the store never
+  // publishes it, and later changes are refused (Writable).
   virtual absl::Status WaitDurable(uint64_t sequence) = 0;
+  // Calls `done` with what WaitDurable(sequence) would return, without
+  // blocking the caller when the implementation has a thread for it (the
+  // default blocks). `done` calls arrive in sequence order.
+  virtual void OnDurable(uint64_t sequence, std::function<void(absl::Status)> done) {
+    done(WaitDurable(sequence));
+  }
 };
 
 struct MapUpdateResult {
@@ -109,6 +117,13 @@ struct MapUpdateResult {
 // Thread-safe. Readers (Get/List) hold the store lock only to copy a pointer;
 // an update's work happens outside it, serialised per map name, so planning
 // and reads of other maps never wait for it.
+//
+// With a journal, a change is visible (Get, List, listeners) only once the
+// journal has it on disk: writers build on the newest version logged, readers
+// see the newest version durable, and versions are published in log order.
+// A change whose write fails is never published, and since the journal then
+// refuses every later change, its version number is never shown for other
+// content (docs/durability.md, "Full disk").
 //
 // An update costs O(changed area), not O(map): each map keeps a few grid
 // buffers that no snapshot references any more (a snapshot's grid returns to
@@ -149,9 +164,11 @@ class MapStore {
   };
 
   // Called after a map got a new version (snapshot set) or was deleted
-  // (snapshot null). Calls for one name arrive in version order for updates;
-  // a listener must return quickly (queue work, do not plan) and must not call
-  // back into the store's writers.
+  // (snapshot null), once that is published (durable, with a journal). Calls
+  // arrive one at a time in log order, so in version order per name, on the
+  // thread that published them (a writer's, or the journal's completion
+  // thread); a listener must return quickly (queue work, do not plan) and
+  // must not call back into the store's writers.
   using Listener = std::function<void(std::string_view name,
                                       const std::shared_ptr<const MapSnapshot>& snapshot)>;
 
@@ -216,6 +233,15 @@ class MapStore {
                                          absl::Span<const MapChange> changes,
                                          std::optional<uint64_t> expected_version);
 
+  // Update without waiting for the disk: applies the batch on the calling
+  // thread and calls `done` with Update's result once the new version is
+  // durable and published, on the journal's completion thread (or inline
+  // for an error found before logging, or without a journal). `changes` is
+  // read before this returns.
+  using UpdateDone = std::function<void(absl::StatusOr<MapUpdateResult>)>;
+  void UpdateAsync(std::string_view name, absl::Span<const MapChange> changes,
+                   std::optional<uint64_t> expected_version, UpdateDone done);
+
   // Installs `grid` as `name` at `version`, as recovered from --data_dir:
   // not journaled, no listener called. Errors as Create; FAILED_PRECONDITION
   // when the name exists. For start-up, before serving.
@@ -243,12 +269,48 @@ class MapStore {
   void Notify(std::string_view name,
               const std::shared_ptr<const MapSnapshot>& snapshot) const;
 
+  // A change logged (or, without a journal, made) and not yet published.
+  enum class ChangeKind { kCreated, kReplaced, kUpdated, kDeleted };
+  struct PendingChange {
+    uint64_t ticket = 0;
+    std::string name;
+    // The new version; null for kDeleted.
+    std::shared_ptr<const MapSnapshot> snapshot;
+    ChangeKind kind = ChangeKind::kUpdated;
+  };
+  // Queues a change in publication order and returns its ticket.
+  uint64_t QueueChange(std::string_view name, std::shared_ptr<const MapSnapshot> snapshot,
+                       ChangeKind kind) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Publishes every queued change up to `ticket` in order (their records
+  // are durable), calling the listeners for each.
+  void PublishThrough(uint64_t ticket) ABSL_LOCKS_EXCLUDED(mu_, publish_mu_);
+  // Forgets the queued changes from `ticket` on: their write failed.
+  void DropFrom(uint64_t ticket) ABSL_LOCKS_EXCLUDED(mu_);
+  // After the change of `ticket` (journal record `sequence`) was queued:
+  // waits for the disk and publishes it, or drops it on a write error.
+  absl::Status Complete(uint64_t ticket, uint64_t sequence);
+
+  // An update applied and logged, waiting to be durable and published.
+  struct PreparedUpdate {
+    MapUpdateResult result;
+    uint64_t ticket = 0;
+    uint64_t sequence = 0;
+  };
+  absl::StatusOr<PreparedUpdate> PrepareUpdate(std::string_view name,
+                                               absl::Span<const MapChange> changes,
+                                               std::optional<uint64_t> expected_version);
+
   // A buffer equal to `base`'s grid that no snapshot references: a recycled
   // spare from `pool` or a new copy. Counts which in grids_*_.
   std::unique_ptr<Grid> AcquireGrid(GridPool& pool, const MapSnapshot& base);
 
   struct Entry {
+    // What readers see: the newest published version; null while a created
+    // map is not yet durable, or once its deletion is published.
     std::shared_ptr<const MapSnapshot> current;
+    // What writers build on: the newest version logged; null once a
+    // deletion is logged (the entry goes when that is published).
+    std::shared_ptr<const MapSnapshot> latest;
     // Serialises updates of this name so two writers do not both copy the
     // map only for one to lose; shared so an updater can hold it without the
     // store lock while a concurrent Delete drops the entry.
@@ -259,7 +321,13 @@ class MapStore {
   };
 
   const int64_t max_cells_;
+  // Held while publishing, so listeners see changes in log order.
+  absl::Mutex publish_mu_ ABSL_ACQUIRED_BEFORE(mu_);
   mutable absl::Mutex mu_;
+  std::deque<PendingChange> pending_ ABSL_GUARDED_BY(mu_);
+  uint64_t next_ticket_ ABSL_GUARDED_BY(mu_) = 1;
+  // Readable maps (current set), for size().
+  size_t visible_ ABSL_GUARDED_BY(mu_) = 0;
   // std::map keeps List() sorted without a sort per call.
   std::map<std::string, Entry, std::less<>> maps_ ABSL_GUARDED_BY(mu_);
   uint64_t last_map_id_ ABSL_GUARDED_BY(mu_) = 0;

@@ -181,19 +181,6 @@ grpc::ServerUnaryReactor* MapServiceImpl::DeleteMap(
   return Answer(context, last.status());
 }
 
-absl::Status MapServiceImpl::DoUpdateMap(const v1::UpdateMapRequest& request,
-                                         v1::UpdateMapResponse* response) {
-  PATHD_ASSIGN_OR_RETURN(const std::vector<MapChange> changes,
-                         MapChangesFromProto(request.changes()));
-  std::optional<uint64_t> expected;
-  if (request.has_expected_version()) expected = request.expected_version();
-  PATHD_ASSIGN_OR_RETURN(const MapUpdateResult result,
-                         store_.Update(request.name(), changes, expected));
-  response->set_version(result.snapshot->version);
-  response->set_cells_changed(result.cells_changed);
-  return absl::OkStatus();
-}
-
 grpc::ServerUnaryReactor* MapServiceImpl::UpdateMap(
     grpc::CallbackServerContext* context, const v1::UpdateMapRequest* request,
     v1::UpdateMapResponse* response) {
@@ -201,12 +188,31 @@ grpc::ServerUnaryReactor* MapServiceImpl::UpdateMap(
     return refused;
   }
   const absl::Time received = absl::Now();
-  const absl::Status status = DoUpdateMap(*request, response);
-  LogRequest("UpdateMap", request->name(),
-             absl::StrFormat("changes=%d version=%d", request->changes_size(),
-                             response->version()),
-             status, received);
-  return Answer(context, status);
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  // Answers on whichever thread the update completes: this one for an error
+  // or without --data_dir, the journal's completion thread once the new
+  // version is durable, so no gRPC callback thread waits for fdatasync.
+  auto finish = [reactor, request, response,
+                 received](const absl::StatusOr<MapUpdateResult>& result) {
+    if (result.ok()) {
+      response->set_version(result->snapshot->version);
+      response->set_cells_changed(result->cells_changed);
+    }
+    LogRequest("UpdateMap", request->name(),
+               absl::StrFormat("changes=%d version=%d", request->changes_size(),
+                               response->version()),
+               result.status(), received);
+    reactor->Finish(ToGrpcStatus(result.status()));
+  };
+  absl::StatusOr<std::vector<MapChange>> changes = MapChangesFromProto(request->changes());
+  if (!changes.ok()) {
+    finish(changes.status());
+    return reactor;
+  }
+  std::optional<uint64_t> expected;
+  if (request->has_expected_version()) expected = request->expected_version();
+  store_.UpdateAsync(request->name(), *changes, expected, std::move(finish));
+  return reactor;
 }
 
 grpc::ServerWriteReactor<v1::MapEvent>* MapServiceImpl::WatchMap(

@@ -60,8 +60,6 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
                            v1::CreateMapResponse* response);
   absl::Status DoGetMap(const v1::GetMapRequest& request,
                         v1::GetMapResponse* response) const;
-  absl::Status DoUpdateMap(const v1::UpdateMapRequest& request,
-                           v1::UpdateMapResponse* response);
 
   MapStore& store_;
   const std::string map_dir_;

@@ -8,15 +8,19 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 #include <utility>
 
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
 #include "core/status_macros.h"
+#include "server/storage/data_files.h"
 #include "server/storage/wal_format.h"
 #include "spdlog/spdlog.h"
 
@@ -24,69 +28,9 @@ namespace pathd::server {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace data_files;  // NOLINT(build/namespaces): this file's vocabulary
 
-// char arrays: they convert to both std:: and Debian's absl::string_view.
-constexpr char kSegmentPrefix[] = "wal-";
-constexpr char kSegmentSuffix[] = ".log";
-constexpr char kSnapshotPrefix[] = "map-";
-constexpr char kSnapshotSuffix[] = ".snap";
-constexpr char kTempSuffix[] = ".tmp";
-
-std::string SegmentName(uint64_t first_sequence) {
-  return absl::StrFormat("%s%020d%s", kSegmentPrefix, first_sequence, kSegmentSuffix);
-}
-
-std::string SnapshotName(std::string_view map) {
-  return absl::StrCat(kSnapshotPrefix, std::string(map), kSnapshotSuffix);
-}
-
-absl::Status IoError(std::string_view what, const std::string& path) {
-  return absl::InternalError(
-      absl::StrFormat("%s %s: %s", what, path, std::strerror(errno)));
-}
-
-absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
-  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return IoError("cannot open", path);
-  std::string bytes;
-  char buffer[1 << 16];
-  for (;;) {
-    const ssize_t n = read(fd, buffer, sizeof(buffer));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      absl::Status error = IoError("cannot read", path);
-      close(fd);
-      return error;
-    }
-    if (n == 0) break;
-    bytes.append(buffer, static_cast<size_t>(n));
-  }
-  close(fd);
-  return bytes;
-}
-
-absl::Status WriteAll(int fd, std::string_view data, const std::string& path) {
-  while (!data.empty()) {
-    const ssize_t n = write(fd, data.data(), data.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return IoError("cannot write", path);
-    data.remove_prefix(static_cast<size_t>(n));
-  }
-  return absl::OkStatus();
-}
-
-// The first sequence number a segment file name holds; 0 for other names.
-uint64_t SegmentFirst(const std::string& file) {
-  if (!absl::StartsWith(file, kSegmentPrefix) || !absl::EndsWith(file, kSegmentSuffix)) {
-    return 0;
-  }
-  const absl::string_view digits = absl::string_view(file).substr(
-      sizeof(kSegmentPrefix) - 1,
-      file.size() - (sizeof(kSegmentPrefix) - 1) - (sizeof(kSegmentSuffix) - 1));
-  uint64_t first = 0;
-  if (digits.size() != 20 || !absl::SimpleAtoi(digits, &first)) return 0;
-  return first;
-}
+constexpr int kTestExitCode = 86;
 
 }  // namespace
 
@@ -99,6 +43,8 @@ DurableStore::~DurableStore() {
     stopping_ = true;
   }
   if (snapshot_thread_.joinable()) snapshot_thread_.join();
+  // Drains what is queued before returning.
+  if (completion_thread_.joinable()) completion_thread_.join();
   store_.SetJournal(nullptr);
   absl::MutexLock lock(&mu_);
   spdlog::info("--data_dir {}: {} record(s) in {} sync(s), {} snapshot(s) written, {} "
@@ -140,161 +86,21 @@ absl::StatusOr<std::unique_ptr<DurableStore>> DurableStore::Open(Options options
     }
     return IoError("cannot lock", lock_path);
   }
+  if (const char* spec = std::getenv("PATHD_TEST_CHECKPOINT_EXIT");
+      spec != nullptr && !durable->options_.checkpoint_hook) {
+    std::pair<std::string, std::string> parts = absl::StrSplit(spec, ':');
+    if (!absl::SimpleAtoi(parts.first, &durable->exit_step_) ||
+        !absl::SimpleAtoi(parts.second, &durable->exit_checkpoint_)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "PATHD_TEST_CHECKPOINT_EXIT is '%s'; expected STEP:N (two numbers)", spec));
+    }
+  }
   PATHD_RETURN_IF_ERROR(durable->Recover());
   store.SetJournal(durable.get());
   DurableStore* self = durable.get();
   durable->snapshot_thread_ = std::thread([self] { self->SnapshotLoop(); });
+  durable->completion_thread_ = std::thread([self] { self->CompletionLoop(); });
   return durable;
-}
-
-absl::Status DurableStore::Recover() {
-  std::vector<std::string> snapshot_files;
-  std::vector<uint64_t> segments;
-  std::error_code ec;
-  for (fs::directory_iterator it(options_.dir, ec), end; !ec && it != end;
-       it.increment(ec)) {
-    const std::string file = it->path().filename().string();
-    if (absl::EndsWith(file, kTempSuffix)) {
-      // A snapshot whose writer died before the rename: never part of the state.
-      fs::remove(it->path(), ec);
-      ec.clear();
-    } else if (absl::StartsWith(file, kSnapshotPrefix) &&
-               absl::EndsWith(file, kSnapshotSuffix)) {
-      snapshot_files.push_back(file);
-    } else if (const uint64_t first = SegmentFirst(file); first != 0) {
-      segments.push_back(first);
-    }
-  }
-  if (ec) {
-    return absl::InternalError(absl::StrFormat("cannot list --data_dir %s: %s",
-                                               options_.dir, ec.message()));
-  }
-  std::sort(snapshot_files.begin(), snapshot_files.end());
-  std::sort(segments.begin(), segments.end());
-
-  wal::Replayer replayer;
-  uint64_t newest_snapshot = 0;
-  std::string newest_snapshot_file;
-  for (const std::string& file : snapshot_files) {
-    const std::string path = Path(file);
-    PATHD_ASSIGN_OR_RETURN(const std::string bytes, ReadWholeFile(path));
-    absl::StatusOr<storage::v1::MapSnapshotRecord> snapshot = wal::ParseSnapshot(bytes);
-    if (!snapshot.ok()) {
-      return absl::DataLossError(
-          absl::StrFormat("snapshot %s: %s", path, snapshot.status().message()));
-    }
-    if (SnapshotName(snapshot->map().name()) != file) {
-      return absl::DataLossError(absl::StrFormat("snapshot %s holds map '%s'", path,
-                                                 snapshot->map().name()));
-    }
-    if (absl::Status added = replayer.AddSnapshot(*snapshot); !added.ok()) {
-      return absl::DataLossError(
-          absl::StrFormat("snapshot %s: %s", path, added.message()));
-    }
-    if (snapshot->sequence() > newest_snapshot) {
-      newest_snapshot = snapshot->sequence();
-      newest_snapshot_file = path;
-    }
-    ++recovery_.snapshots;
-  }
-
-  // The sequence number the next record gets: one past the last record of
-  // the newest segment.
-  uint64_t next = 0;
-  bool last_empty = false;
-  for (size_t i = 0; i < segments.size(); ++i) {
-    const std::string path = Path(SegmentName(segments[i]));
-    if (next != 0 && segments[i] != next) {
-      return absl::DataLossError(absl::StrFormat(
-          "log segment %s starts at record %d, but the segment before it ends at "
-          "record %d: records are missing",
-          path, segments[i], next - 1));
-    }
-    PATHD_ASSIGN_OR_RETURN(const std::string bytes, ReadWholeFile(path));
-    absl::StatusOr<wal::LogScan> scan = wal::ParseLogSegment(bytes);
-    if (!scan.ok()) {
-      return absl::DataLossError(
-          absl::StrFormat("log segment %s: %s", path, scan.status().message()));
-    }
-    if (!scan->torn_tail.empty()) {
-      if (i + 1 != segments.size()) {
-        // Only the newest segment is ever appended to; older ones were
-        // complete and synced before the next one started.
-        return absl::DataLossError(absl::StrFormat(
-            "log segment %s: offset %d: %s, but newer segments follow", path,
-            scan->valid_bytes, scan->torn_tail));
-      }
-      recovery_.torn_tail =
-          absl::StrFormat("%s: offset %d: %s", path, scan->valid_bytes, scan->torn_tail);
-      spdlog::warn("log segment {}: offset {}: {}; cutting the log there (a write the "
-                   "crash interrupted, never acknowledged)",
-                   path, scan->valid_bytes, scan->torn_tail);
-      if (truncate(path.c_str(), static_cast<off_t>(scan->valid_bytes)) != 0) {
-        return IoError("cannot truncate", path);
-      }
-    }
-    for (size_t k = 0; k < scan->entries.size(); ++k) {
-      const uint64_t sequence = segments[i] + k;
-      if (absl::Status applied = replayer.Apply(sequence, scan->entries[k].record);
-          !applied.ok()) {
-        return absl::DataLossError(absl::StrFormat("log segment %s: offset %d (record %d): %s",
-                                                   path, scan->entries[k].offset, sequence,
-                                                   applied.message()));
-      }
-    }
-    recovery_.records_replayed += static_cast<int64_t>(scan->entries.size());
-    next = segments[i] + scan->entries.size();
-    last_empty = scan->entries.empty();
-  }
-  recovery_.segments = static_cast<int>(segments.size());
-  if (next == 0) next = newest_snapshot + 1;
-  if (newest_snapshot >= next) {
-    return absl::DataLossError(absl::StrFormat(
-        "snapshot %s includes record %d, but the log ends at record %d: log segments "
-        "are missing",
-        newest_snapshot_file, newest_snapshot, next - 1));
-  }
-
-  // Restored before taking mu_: the store calls Append (mu_) under its own
-  // lock, so mu_ is never held while calling into the store.
-  std::map<std::string, NameState, std::less<>> names;
-  for (auto& [name, state] : replayer.mutable_names()) {
-    NameState& kept = names[name];
-    kept.last_sequence = state.last_sequence;
-    kept.snapshot_sequence = state.snapshot_sequence;
-    if (!state.has_map) continue;
-    absl::StatusOr<std::shared_ptr<const MapSnapshot>> restored =
-        store_.Restore(name, std::move(state.map.grid), state.map.version);
-    if (!restored.ok()) {
-      return absl::Status(restored.status().code(),
-                          absl::StrFormat("recovering map '%s' from --data_dir %s: %s",
-                                          name, options_.dir, restored.status().message()));
-    }
-    kept.current = *std::move(restored);
-    ++recovery_.maps;
-  }
-  // A segment the last run started but never appended to is reused.
-  if (last_empty && segments.back() == next) {
-    const std::string path = Path(SegmentName(next));
-    if (unlink(path.c_str()) != 0) return IoError("cannot remove", path);
-    segments.pop_back();
-  }
-  {
-    absl::MutexLock lock(&mu_);
-    names_ = std::move(names);
-    sealed_segments_ = segments;
-    // Older segments are compacted away right after start-up, so the next
-    // start replays only what changed since.
-    checkpoint_wanted_ = !sealed_segments_.empty();
-    next_sequence_ = next;
-    durable_sequence_ = next - 1;
-    segment_first_ = next;
-  }
-  spdlog::info("--data_dir {}: recovered {} map(s) from {} snapshot(s) and {} log "
-               "record(s) in {} segment(s)",
-               options_.dir, recovery_.maps, recovery_.snapshots,
-               recovery_.records_replayed, recovery_.segments);
-  return StartSegment(next);
 }
 
 absl::Status DurableStore::StartSegment(uint64_t first_sequence) {
@@ -336,7 +142,14 @@ absl::Status DurableStore::LeadSync(bool rotate) {
   if (!batch.empty()) {
     status = WriteAll(segment_fd_, batch, path);
     if (status.ok() && fdatasync(segment_fd_) != 0) status = IoError("cannot sync", path);
-    segment_bytes_ += static_cast<int64_t>(batch.size());
+    if (status.ok()) {
+      segment_bytes_ += static_cast<int64_t>(batch.size());
+    } else if (ftruncate(segment_fd_, static_cast<off_t>(segment_bytes_)) == 0) {
+      // The failed batch was never acknowledged nor published (the store
+      // publishes a version only once it is durable): take back whatever
+      // part of it reached the file, so no later start replays it.
+      fdatasync(segment_fd_);
+    }
   }
   bool rotated = false;
   if (status.ok() && segment_bytes_ > static_cast<int64_t>(wal::kLogMagic.size()) &&
@@ -417,18 +230,49 @@ absl::Status DurableStore::WaitDurable(uint64_t sequence) {
   return absl::OkStatus();
 }
 
-absl::Status DurableStore::WriteSnapshotFile(const MapSnapshot& snapshot,
-                                             uint64_t sequence) {
-  PATHD_ASSIGN_OR_RETURN(
-      const std::string bytes,
-      wal::EncodeSnapshot(sequence, snapshot.name, snapshot.version, *snapshot.grid));
-  const std::string path = Path(SnapshotName(snapshot.name));
+void DurableStore::OnDurable(uint64_t sequence, std::function<void(absl::Status)> done) {
+  absl::MutexLock lock(&mu_);
+  // Sequence numbers are handed out under mu_ and callers queue right after
+  // appending, but two callers may cross: keep the queue sorted.
+  auto at = completions_.end();
+  while (at != completions_.begin() && std::prev(at)->sequence > sequence) --at;
+  completions_.insert(at, Completion{sequence, std::move(done)});
+}
+
+void DurableStore::CompletionLoop() {
+  for (;;) {
+    std::vector<Completion> batch;
+    {
+      absl::MutexLock lock(&mu_);
+      mu_.Await(absl::Condition(this, &DurableStore::CompletionsDue));
+      if (completions_.empty()) return;  // stopping, and drained
+      batch.swap(completions_);
+    }
+    // One sync for the whole batch (and any writer waiting meanwhile); on a
+    // failure the records synced before it still succeed.
+    const absl::Status status = WaitDurable(batch.back().sequence);
+    uint64_t durable = 0;
+    {
+      absl::MutexLock lock(&mu_);
+      durable = durable_sequence_;
+    }
+    for (Completion& completion : batch) {
+      completion.done(completion.sequence <= durable ? absl::OkStatus() : status);
+    }
+  }
+}
+
+absl::Status DurableStore::WriteFileAtomically(const std::string& file,
+                                               std::string_view bytes,
+                                               const std::function<void()>& after_sync) {
+  const std::string path = Path(file);
   const std::string temp = path + kTempSuffix;
   const int fd = open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return IoError("cannot create", temp);
   absl::Status status = WriteAll(fd, bytes, temp);
   if (status.ok() && fsync(fd) != 0) status = IoError("cannot sync", temp);
   close(fd);
+  if (status.ok() && after_sync) after_sync();
   if (status.ok() && rename(temp.c_str(), path.c_str()) != 0) {
     status = IoError("cannot rename to " + path + ":", temp);
   }
@@ -436,70 +280,126 @@ absl::Status DurableStore::WriteSnapshotFile(const MapSnapshot& snapshot,
   return status;
 }
 
+absl::Status DurableStore::WriteSnapshotFile(const MapSnapshot& snapshot,
+                                             uint64_t sequence) {
+  PATHD_ASSIGN_OR_RETURN(
+      const std::string bytes,
+      wal::EncodeSnapshot(sequence, snapshot.name, snapshot.version, *snapshot.grid));
+  return WriteFileAtomically(SnapshotName(snapshot.name), bytes,
+                             [this] { Step(CheckpointStep::kSnapshotTempWritten); });
+}
+
+void DurableStore::Step(CheckpointStep step) {
+  if (options_.checkpoint_hook) {
+    options_.checkpoint_hook(step);
+  } else if (exit_step_ == static_cast<int>(step) &&
+             exit_checkpoint_ == checkpoints_started_) {
+    // What a kill -9 at this point leaves (the page cache survives either).
+    spdlog::warn("PATHD_TEST_CHECKPOINT_EXIT: exiting after step {} of checkpoint {}",
+                 exit_step_, exit_checkpoint_);
+    spdlog::default_logger()->flush();
+    _exit(kTestExitCode);
+  }
+}
+
 absl::Status DurableStore::Checkpoint() {
   absl::MutexLock checkpoint_lock(&checkpoint_mu_);
+  ++checkpoints_started_;
+  // Every name as it was just before `start`, the first record of the new
+  // segment. A map changed (or deleted) after `start` keeps its older state
+  // here: the log from `start` on holds those changes.
   struct Work {
     std::string name;
     std::shared_ptr<const MapSnapshot> current;
-    uint64_t sequence = 0;
+    uint64_t last_sequence = 0;
+    uint64_t snapshot_sequence = 0;
   };
   std::vector<Work> work;
   std::vector<uint64_t> covered_segments;
-  uint64_t newest = 0;
+  uint64_t start = 0;
   {
     absl::MutexLock lock(&mu_);
     checkpoint_wanted_ = false;
     mu_.Await(absl::Condition(this, &DurableStore::NoLeader));
     if (!failed_.ok()) return failed_;
-    // Every record so far goes to the segments about to be dropped; the
-    // snapshots below include them all.
-    PATHD_RETURN_IF_ERROR(LeadSync(/*rotate=*/true));
-    covered_segments = sealed_segments_;
+    // Captured in the critical section in which LeadSync picks the last
+    // record of the old segment, so `work` is exactly the state it ends with.
+    start = next_sequence_;
+    work.reserve(names_.size());
     for (const auto& [name, state] : names_) {
-      if (state.last_sequence <= state.snapshot_sequence) continue;
-      work.push_back(Work{name, state.current, state.last_sequence});
-      newest = std::max(newest, state.last_sequence);
+      work.push_back(Work{name, state.current, state.last_sequence, state.snapshot_sequence});
     }
+    PATHD_RETURN_IF_ERROR(LeadSync(/*rotate=*/true));
+    // Every sealed segment ends before `start`, and is synced.
+    covered_segments = sealed_segments_;
   }
-  // A snapshot must not hold a change the log may still lose.
-  PATHD_RETURN_IF_ERROR(WaitDurable(newest));
-  int written = 0;
+  Step(CheckpointStep::kRotated);
+
+  storage::v1::CheckpointRecord checkpoint;
+  checkpoint.set_first_sequence(start);
+  std::vector<const Work*> written;
+  std::vector<const Work*> stale;
   for (const Work& w : work) {
-    if (w.current != nullptr) {
-      PATHD_RETURN_IF_ERROR(WriteSnapshotFile(*w.current, w.sequence));
-      ++written;
-    } else {
-      const std::string path = Path(SnapshotName(w.name));
-      if (unlink(path.c_str()) != 0 && errno != ENOENT) {
-        return IoError("cannot remove", path);
-      }
+    if (w.current == nullptr) {
+      // Deleted before `start`: its file goes once CHECKPOINT no longer lists it.
+      if (w.snapshot_sequence != 0) stale.push_back(&w);
+      continue;
     }
+    uint64_t sequence = w.snapshot_sequence;
+    if (w.last_sequence > w.snapshot_sequence) {
+      PATHD_RETURN_IF_ERROR(WriteSnapshotFile(*w.current, w.last_sequence));
+      Step(CheckpointStep::kSnapshotRenamed);
+      written.push_back(&w);
+      sequence = w.last_sequence;
+    }
+    storage::v1::SnapshotRef* ref = checkpoint.add_snapshots();
+    ref->set_name(w.name);
+    ref->set_sequence(sequence);
   }
   PATHD_RETURN_IF_ERROR(SyncDir());
+  Step(CheckpointStep::kSnapshotsSynced);
+  PATHD_RETURN_IF_ERROR(
+      WriteFileAtomically(kCheckpointFile, wal::EncodeCheckpoint(checkpoint), {}));
+  PATHD_RETURN_IF_ERROR(SyncDir());
+  Step(CheckpointStep::kMarkerWritten);
+  {
+    absl::MutexLock lock(&mu_);
+    for (const Work* w : written) names_[w->name].snapshot_sequence = w->last_sequence;
+    stats_.snapshots_written += static_cast<int64_t>(written.size());
+  }
+  for (const Work* w : stale) {
+    const std::string path = Path(SnapshotName(w->name));
+    if (unlink(path.c_str()) != 0 && errno != ENOENT) return IoError("cannot remove", path);
+    Step(CheckpointStep::kStaleSnapshotRemoved);
+  }
   {
     absl::MutexLock lock(&mu_);
     for (const Work& w : work) {
+      if (w.current != nullptr) continue;
       auto it = names_.find(w.name);
-      it->second.snapshot_sequence = w.current != nullptr ? w.sequence : 0;
+      if (it == names_.end()) continue;
+      it->second.snapshot_sequence = 0;
       // Deleted, its file gone, and not re-created since: nothing to track.
-      if (it->second.current == nullptr && it->second.last_sequence == w.sequence) {
+      if (it->second.current == nullptr && it->second.last_sequence == w.last_sequence) {
         names_.erase(it);
       }
     }
-    stats_.snapshots_written += written;
   }
   for (const uint64_t first : covered_segments) {
     const std::string path = Path(SegmentName(first));
     if (unlink(path.c_str()) != 0 && errno != ENOENT) return IoError("cannot remove", path);
+    Step(CheckpointStep::kSegmentRemoved);
   }
   PATHD_RETURN_IF_ERROR(SyncDir());
+  Step(CheckpointStep::kDone);
   absl::MutexLock lock(&mu_);
   sealed_segments_.erase(sealed_segments_.begin(),
                          sealed_segments_.begin() +
                              static_cast<std::ptrdiff_t>(covered_segments.size()));
   stats_.segments_deleted += static_cast<int64_t>(covered_segments.size());
-  spdlog::debug("--data_dir {}: checkpoint wrote {} snapshot(s), deleted {} segment(s)",
-                options_.dir, written, covered_segments.size());
+  spdlog::debug("--data_dir {}: checkpoint at record {} wrote {} snapshot(s), removed {} "
+                "deleted map(s) and {} segment(s)",
+                options_.dir, start, written.size(), stale.size(), covered_segments.size());
   return absl::OkStatus();
 }
 

@@ -91,8 +91,35 @@ Frame ReadFrame(std::string_view bytes) {
   return frame;
 }
 
-bool AllZero(std::string_view bytes) {
-  return std::all_of(bytes.begin(), bytes.end(), [](char c) { return c == 0; });
+// Reads a base-128 varint at bytes[*pos], advancing *pos; false when it
+// runs off the end or past 5 bytes (a LogRecord field is under 2 GiB).
+bool ReadVarint(std::string_view bytes, size_t* pos, uint64_t* value) {
+  *value = 0;
+  for (int shift = 0; shift < 35 && *pos < bytes.size(); shift += 7) {
+    const auto byte = static_cast<uint8_t>(bytes[(*pos)++]);
+    *value |= static_cast<uint64_t>(byte & 0x7f) << shift;
+    if ((byte & 0x80) == 0) return true;
+  }
+  return false;
+}
+
+// A whole file of `magic` followed by exactly one frame: its payload.
+absl::StatusOr<std::string_view> ReadSingleFrameFile(std::string_view bytes,
+                                                     std::string_view magic,
+                                                     std::string_view what) {
+  if (bytes.size() < magic.size() || bytes.substr(0, magic.size()) != magic) {
+    return absl::DataLossError(
+        absl::StrFormat("not a pathd %s (bad magic or empty)", what));
+  }
+  const std::string_view rest = bytes.substr(magic.size());
+  const Frame frame = ReadFrame(rest);
+  if (!frame.problem.empty()) return absl::DataLossError(frame.problem);
+  if (kFrameHeaderBytes + frame.payload.size() != rest.size()) {
+    return absl::DataLossError(
+        absl::StrFormat("%d bytes after the %s record",
+                        rest.size() - kFrameHeaderBytes - frame.payload.size(), what));
+  }
+  return frame.payload;
 }
 
 absl::Status DataLoss(const std::string& message) {
@@ -215,36 +242,69 @@ absl::StatusOr<LogScan> ParseLogSegment(std::string_view bytes) {
       continue;
     }
     // A torn append leaves a cut-short frame, or (when the file grew before
-    // its data reached the disk) one followed only by zeros. Anything else
-    // after a bad frame is data the log would silently lose.
-    const size_t frame_end =
-        frame.truncated ? bytes.size()
-                        : offset + kFrameHeaderBytes + GetUint32(bytes.substr(offset, 4));
-    if (frame.truncated || AllZero(bytes.substr(frame_end))) {
-      scan.torn_tail = frame.problem;
-      return scan;
+    // its data reached the disk) one followed only by zeros: nothing valid
+    // can follow a torn record. A damaged length field also makes a frame
+    // look cut short, so the rest is searched for a valid record; finding
+    // one means data the log would silently lose.
+    if (const size_t next = FindValidRecord(bytes, offset + 1);
+        next != std::string_view::npos) {
+      return DataLoss(absl::StrFormat(
+          "offset %d: %s, and a valid record follows at offset %d (%d bytes of data "
+          "after the damage)",
+          offset, frame.problem, next, bytes.size() - next));
     }
-    return DataLoss(absl::StrFormat("offset %d: %s, and %d bytes of data follow it",
-                                    offset, frame.problem, bytes.size() - frame_end));
+    scan.torn_tail = frame.problem;
+    scan.tail_cut_short = frame.truncated;
+    return scan;
   }
   return scan;
 }
 
+size_t FindValidRecord(std::string_view bytes, size_t from) {
+  for (size_t k = from; k + kFrameHeaderBytes < bytes.size(); ++k) {
+    const uint32_t length = GetUint32(bytes.substr(k, 4));
+    if (length == 0 || length > bytes.size() - k - kFrameHeaderBytes) continue;
+    // A LogRecord is exactly one length-delimited field (created = 1,
+    // updated = 2, deleted = 3) filling the payload: tag, varint, message.
+    const std::string_view payload = bytes.substr(k + kFrameHeaderBytes, length);
+    const auto tag = static_cast<uint8_t>(payload[0]);
+    if (tag != 0x0a && tag != 0x12 && tag != 0x1a) continue;
+    size_t pos = 1;
+    uint64_t field_bytes = 0;
+    if (!ReadVarint(payload, &pos, &field_bytes) || pos + field_bytes != length) continue;
+    if (Crc32c(payload) != GetUint32(bytes.substr(k + 4, 4))) continue;
+    LogRecord record;
+    if (record.ParseFromArray(payload.data(), static_cast<int>(payload.size())) &&
+        record.change_case() != LogRecord::CHANGE_NOT_SET) {
+      return k;
+    }
+  }
+  return std::string_view::npos;
+}
+
+std::string EncodeCheckpoint(const storage::v1::CheckpointRecord& checkpoint) {
+  std::string file(kCheckpointMagic);
+  // A name and a number per map: far below kMaxPayloadBytes.
+  AppendFrame(checkpoint.SerializeAsString(), &file);
+  return file;
+}
+
+absl::StatusOr<storage::v1::CheckpointRecord> ParseCheckpoint(std::string_view bytes) {
+  PATHD_ASSIGN_OR_RETURN(const std::string_view payload,
+                         ReadSingleFrameFile(bytes, kCheckpointMagic, "checkpoint"));
+  storage::v1::CheckpointRecord checkpoint;
+  if (!checkpoint.ParseFromArray(payload.data(), static_cast<int>(payload.size()))) {
+    return DataLoss("record passes its CRC32C but is not a checkpoint");
+  }
+  if (checkpoint.first_sequence() == 0) return DataLoss("checkpoint at sequence 0");
+  return checkpoint;
+}
+
 absl::StatusOr<MapSnapshotRecord> ParseSnapshot(std::string_view bytes) {
-  if (bytes.size() < kSnapshotMagic.size() ||
-      bytes.substr(0, kSnapshotMagic.size()) != kSnapshotMagic) {
-    return DataLoss("not a pathd snapshot (bad magic or empty)");
-  }
-  const std::string_view rest = bytes.substr(kSnapshotMagic.size());
-  const Frame frame = ReadFrame(rest);
-  if (!frame.problem.empty()) return DataLoss(frame.problem);
-  if (kFrameHeaderBytes + frame.payload.size() != rest.size()) {
-    return DataLoss(absl::StrFormat("%d bytes after the snapshot record",
-                                    rest.size() - kFrameHeaderBytes - frame.payload.size()));
-  }
+  PATHD_ASSIGN_OR_RETURN(const std::string_view payload,
+                         ReadSingleFrameFile(bytes, kSnapshotMagic, "snapshot"));
   MapSnapshotRecord snapshot;
-  if (!snapshot.ParseFromArray(frame.payload.data(),
-                               static_cast<int>(frame.payload.size())) ||
+  if (!snapshot.ParseFromArray(payload.data(), static_cast<int>(payload.size())) ||
       !snapshot.has_map()) {
     return DataLoss("record passes its CRC32C but is not a map snapshot");
   }

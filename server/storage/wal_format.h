@@ -24,6 +24,7 @@ namespace pathd::server::wal {
 // First bytes of a log segment and of a snapshot file.
 inline constexpr std::string_view kLogMagic = "PATHDLG1";
 inline constexpr std::string_view kSnapshotMagic = "PATHDSN1";
+inline constexpr std::string_view kCheckpointMagic = "PATHDCP1";
 // A frame: payload length (uint32, little-endian), CRC32C of the payload
 // (uint32, little-endian), then the payload, a serialised proto. A zero
 // length is invalid, so a zero-filled tail never reads as a record.
@@ -50,6 +51,13 @@ std::string EncodeDeleted(std::string_view name, uint64_t last_version);
 absl::StatusOr<std::string> EncodeSnapshot(uint64_t sequence, std::string_view name,
                                            uint64_t version, const Grid& grid);
 
+// A whole CHECKPOINT file (magic + one framed CheckpointRecord).
+std::string EncodeCheckpoint(const storage::v1::CheckpointRecord& checkpoint);
+
+// Reads a CHECKPOINT file. DATA_LOSS naming the problem (bad magic,
+// truncated, CRC mismatch, trailing bytes, unparsable record).
+absl::StatusOr<storage::v1::CheckpointRecord> ParseCheckpoint(std::string_view bytes);
+
 struct LogEntry {
   // Byte offset of the record's frame in the segment.
   uint64_t offset = 0;
@@ -63,16 +71,29 @@ struct LogScan {
   // the magic itself is torn).
   uint64_t valid_bytes = 0;
   // Empty when the segment ends cleanly after a record; otherwise why the
-  // bytes from valid_bytes on are not a record (a write the crash cut short).
+  // bytes from valid_bytes on are not a record.
   std::string torn_tail;
+  // The bad record claims more bytes than the segment holds (what a write
+  // interrupted by a crash leaves), as opposed to one whose bytes are all
+  // there but fail their CRC32C.
+  bool tail_cut_short = false;
 };
 
-// Reads a log segment. Its last record may be torn or corrupt: that is what
-// a crash during an append leaves, so it is reported in torn_tail, not as an
-// error, when nothing but zero bytes follows it. DATA_LOSS "offset N: ..."
-// for a bad magic, or a bad record with data after it (corruption in the
-// middle of the log, which replay must not skip).
+// Reads a log segment. A bad record (cut short, failing its CRC32C, or of
+// length 0) is a torn tail only when no valid record starts anywhere after
+// it, i.e. it runs to the end of the data: that is what a crash during an
+// append leaves, and it is reported in torn_tail, not as an error. When a
+// valid record follows, the bad one is corruption in the middle of the log,
+// which replay must not skip: DATA_LOSS "offset N: ...". DATA_LOSS too for a
+// bad magic.
 absl::StatusOr<LogScan> ParseLogSegment(std::string_view bytes);
+
+// The offset of the first valid log record (a frame whose length fits,
+// whose CRC32C matches and whose payload is a LogRecord) starting in
+// `bytes` at or after `from`; npos when there is none. O(bytes): a frame's
+// CRC is computed only where its first payload bytes have the shape of a
+// LogRecord whose length matches the frame's.
+size_t FindValidRecord(std::string_view bytes, size_t from);
 
 // Reads a snapshot file. DATA_LOSS naming the problem (bad magic, truncated,
 // CRC mismatch, trailing bytes, unparsable record, inconsistent map).

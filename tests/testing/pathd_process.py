@@ -30,16 +30,27 @@ def _die_with_parent() -> None:
     ctypes.CDLL("libc.so.6", use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
 
 
-class PathdProcess:
-    """One pathd: `flags` after --address=127.0.0.1:0; its log appended to
-    `log_path` (None: the caller's stderr). Raises RuntimeError, naming the
-    exit code or the first line, when no listening line comes."""
+class ExitedBeforeListening(RuntimeError):
+    """pathd exited before its listening line; `code` is its exit code."""
 
-    def __init__(self, binary, flags=(), log_path=None, bound=BOUND_SECONDS):
+    def __init__(self, message, code):
+        super().__init__(message)
+        self.code = code
+
+
+class PathdProcess:
+    """One pathd: `flags` after --address=127.0.0.1:0, `extra_env` added to
+    the environment; its log appended to `log_path` (None: the caller's
+    stderr). Raises RuntimeError, naming the exit code or the first line,
+    when no listening line comes (ExitedBeforeListening when it exited)."""
+
+    def __init__(self, binary, flags=(), log_path=None, bound=BOUND_SECONDS,
+                 extra_env=None):
         self.bound = bound
         self.log_path = log_path
         self._log = open(log_path, "ab") if log_path is not None else None
         env = {k: v for k, v in os.environ.items() if k != "PATHD_SERVER"}
+        env.update(extra_env or {})
         self.proc = subprocess.Popen(
             [binary, "--address=127.0.0.1:0", *flags],
             stdout=subprocess.PIPE, stderr=self._log, env=env,
@@ -74,8 +85,9 @@ class PathdProcess:
             chunk = os.read(fd, 4096)
             if not chunk:
                 code = self.proc.wait(timeout=self.bound)
-                raise RuntimeError(f"pathd exited (code {code}) before listening"
-                                   f"{self._see_log()}")
+                raise ExitedBeforeListening(
+                    f"pathd exited (code {code}) before listening"
+                    f"{self._see_log()}", code)
             data += chunk
         return data.split(b"\n", 1)[0].decode()
 
@@ -98,6 +110,16 @@ class PathdProcess:
             self.proc.send_signal(signal.SIGKILL)
         self.proc.wait()
         self._close()
+
+    def wait(self, timeout):
+        """Waits up to `timeout` s for pathd to exit by itself: its exit code,
+        or None while it still runs."""
+        try:
+            code = self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return None
+        self._close()
+        return code
 
     def _close(self):
         self.proc.stdout.close()
