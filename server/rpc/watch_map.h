@@ -53,10 +53,10 @@ std::shared_ptr<const v1::MapEvent> MakeUpdatedEvent(
 // more than `max_events` events (or more bytes than the map itself, at least
 // kMinBacklogBytes) pile up, the backlog is dropped for a single RESYNC of the
 // newest version, so a watcher costs at most about one map of memory.
-// Versions offered out of order (the store notifies outside its lock, so a
-// replacing Create and an Update may cross) are handled too: an older version
-// than one already queued is ignored, and a gap is bridged by a whole-map
-// event. Not thread-safe: the owner locks.
+// The store publishes versions in log order, once durable, so they arrive in
+// order; the queue still copes with any order (defence in depth): an older
+// version than one already queued is ignored, and a gap is bridged by a
+// whole-map event. Not thread-safe: the owner locks.
 class MapEventQueue {
  public:
   static constexpr size_t kMinBacklogBytes = size_t{64} << 10;
