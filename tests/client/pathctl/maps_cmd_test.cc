@@ -15,6 +15,7 @@
 #include "grpcpp/server_builder.h"
 #include "gtest/gtest.h"
 #include "pathd/v1/map_service.grpc.pb.h"
+#include "tests/client/pathctl/command_fixture.h"
 
 namespace pathd::pathctl {
 namespace {
@@ -41,31 +42,7 @@ class FakeMaps final : public v1::MapService::Service {
   std::vector<v1::UpdateMapRequest> updates_ ABSL_GUARDED_BY(mu_);
 };
 
-class MapsCmdTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    grpc::ServerBuilder builder;
-    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port_);
-    builder.RegisterService(&fake_);
-    server_ = builder.BuildAndStart();
-    ASSERT_NE(server_, nullptr);
-    options_.global.server = absl::StrCat("127.0.0.1:", port_);
-  }
-  void TearDown() override { server_->Shutdown(); }
-
-  int Ctl(const std::vector<std::string>& args) {
-    out_.str("");
-    err_.str("");
-    return pathctl::Run(options_, args, out_, err_);
-  }
-
-  FakeMaps fake_;
-  std::unique_ptr<grpc::Server> server_;
-  int port_ = 0;
-  Options options_;
-  std::ostringstream out_;
-  std::ostringstream err_;
-};
+using MapsCmdTest = CommandTest<FakeMaps>;
 
 TEST_F(MapsCmdTest, RectSendsTheCornersAsGiven) {
   ASSERT_EQ(Ctl({"maps", "rect", "room", "1", "2", "3", "4", "lethal"}), kExitOk)
