@@ -2,8 +2,7 @@
 // progress bars.
 #include "tests/e2e/e2e_fixture.h"
 
-namespace pathd {
-namespace {
+namespace pathd::e2e_test {
 
 TEST_F(E2eTest, BatchAnswersEveryLineAndExitsOneOnItemErrors) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
@@ -422,5 +421,4 @@ TEST_F(E2eTest, NoProgressBarsWhenOutputIsNotATerminal) {
   EXPECT_EQ(quiet.err, "") << quiet;
 }
 
-}  // namespace
-}  // namespace pathd
+}  // namespace pathd::e2e_test

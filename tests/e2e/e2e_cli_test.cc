@@ -2,8 +2,7 @@
 // help and version, and map name checks.
 #include "tests/e2e/e2e_fixture.h"
 
-namespace pathd {
-namespace {
+namespace pathd::e2e_test {
 
 // Runs `script` in bash after loading pathctl's completion script, with the
 // helper `complete_line WORD...` printing the candidates for the last word.
@@ -385,5 +384,4 @@ TEST_F(E2eTest, ExportToAMissingFolderIsNotFoundNamingIt) {
                  {"folder " + folder + " does not exist"});
 }
 
-}  // namespace
-}  // namespace pathd
+}  // namespace pathd::e2e_test

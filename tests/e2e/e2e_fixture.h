@@ -52,7 +52,7 @@
 #include "tests/testing/temp_dir.h"
 #include "tests/testing/test_certs.h"
 
-namespace pathd {
+namespace pathd::e2e_test {
 
 namespace fs = std::filesystem;
 using e2e::ReadFile;
@@ -396,6 +396,6 @@ inline std::string PocketRoomMap() {
   return text;
 }
 
-}  // namespace pathd
+}  // namespace pathd::e2e_test
 
 #endif  // PATHD_TESTS_E2E_E2E_FIXTURE_H_

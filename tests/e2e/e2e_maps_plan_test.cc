@@ -2,8 +2,7 @@
 // its options, map updates changing the plan, server and usage errors.
 #include "tests/e2e/e2e_fixture.h"
 
-namespace pathd {
-namespace {
+namespace pathd::e2e_test {
 
 TEST_F(E2eTest, HealthReportsServing) {
   const ProcessResult r = Ctl({"health"});
@@ -490,5 +489,4 @@ TEST_F(E2eTest, UsageErrorsExitTwo) {
       << help;
 }
 
-}  // namespace
-}  // namespace pathd
+}  // namespace pathd::e2e_test

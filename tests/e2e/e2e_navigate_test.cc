@@ -2,8 +2,7 @@
 // statistics, D* Lite reuse, the arena2 scenarios and SIGTERM.
 #include "tests/e2e/e2e_fixture.h"
 
-namespace pathd {
-namespace {
+namespace pathd::e2e_test {
 
 // Path lines of `pathctl navigate` output ("  path (N cells): (x,y) ..."),
 // without the prefix.
@@ -307,5 +306,4 @@ TEST_F(E2eTest, SigtermExitsCleanly) {
   EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE: ")) << r;
 }
 
-}  // namespace
-}  // namespace pathd
+}  // namespace pathd::e2e_test

@@ -2,8 +2,7 @@
 // tolerance, metrics and plan --progress.
 #include "tests/e2e/e2e_fixture.h"
 
-namespace pathd {
-namespace {
+namespace pathd::e2e_test {
 
 // Runs pathd with `args` to its exit (a usage error, or --help).
 ProcessResult RunPathd(const std::vector<std::string>& args) {
@@ -329,5 +328,4 @@ TEST_F(E2eTest, PlanProgressStreamsProgressLinesThenTheSamePlan) {
                  {"goal (600, 0) is outside", "(outcome GOAL_OUTSIDE_MAP)"});
 }
 
-}  // namespace
-}  // namespace pathd
+}  // namespace pathd::e2e_test

@@ -1,8 +1,7 @@
 // service_test: CostToGo, GetCacheStats and ReplacePort.
 #include "tests/server/rpc/service_fixture.h"
 
-namespace pathd::server {
-namespace {
+namespace pathd::server::service_test {
 
 TEST_F(ServiceTest, CostToGoReturnsTheFieldOrAWindow) {
   // Free 6 x 4 map with one lethal cell at (2, 1).
@@ -189,5 +188,4 @@ TEST(ReplacePortTest, KeepsHostAndSwapsPort) {
   EXPECT_EQ(ReplacePort("0.0.0.0", 9), "0.0.0.0:9");
 }
 
-}  // namespace
-}  // namespace pathd::server
+}  // namespace pathd::server::service_test

@@ -35,7 +35,7 @@
 #include "tests/testing/temp_dir.h"
 #include "tests/testing/requests.h"
 
-namespace pathd::server {
+namespace pathd::server::service_test {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
@@ -143,6 +143,6 @@ class ServiceTest : public testing::SharedServerTest<ServiceTest> {
   v1::PlannerService::Stub* planner_ = nullptr;
 };
 
-}  // namespace pathd::server
+}  // namespace pathd::server::service_test
 
 #endif  // PATHD_TESTS_SERVER_RPC_SERVICE_FIXTURE_H_

@@ -3,13 +3,11 @@
 // and update.
 #include "tests/server/rpc/service_fixture.h"
 
-namespace pathd::server {
+namespace pathd::server::service_test {
 
 testing::TempDir* ServiceTest::scratch_ = nullptr;
 const std::shared_ptr<grpc::Channel>* ServiceTest::channel_ = nullptr;
 const fs::path* ServiceTest::root_ = nullptr;
-
-namespace {
 
 TEST_F(ServiceTest, HealthServiceReportsServing) {
   // grpc.health.v1.Health/Check with an empty request (service ""); the reply
@@ -319,5 +317,4 @@ TEST_F(ServiceTest, UpdateBumpsVersionAndRejectsStaleExpectedVersion) {
   }
 }
 
-}  // namespace
-}  // namespace pathd::server
+}  // namespace pathd::server::service_test

@@ -2,8 +2,7 @@
 // points, snapshots under concurrent updates and the planner caches.
 #include "tests/server/rpc/service_fixture.h"
 
-namespace pathd::server {
-namespace {
+namespace pathd::server::service_test {
 
 TEST_F(ServiceTest, PlanOnOpenGridHasOctileCost) {
   ASSERT_TRUE(CreateFree("open", 10, 10).ok());
@@ -296,5 +295,4 @@ TEST_F(ServiceTest, CachedPlannersReuseStateAndFollowUpdates) {
   }
 }
 
-}  // namespace
-}  // namespace pathd::server
+}  // namespace pathd::server::service_test
