@@ -1,8 +1,9 @@
 // Token authentication and role-based authorization of pathd's RPCs
 // (--auth_tokens). The method -> role table in auth.cc is the single source
 // of truth for which role each RPC needs; every pathd handler starts with
-// RefuseUnauthorized, and tests/server/security_test.cc proves that every
-// method of the service descriptors has a role and is refused without one.
+// RefuseUnauthorized, and security_test (tests/server/security_*_test.cc)
+// proves that every method of the service descriptors has a role and is
+// refused without one.
 #ifndef PATHD_SERVER_AUTH_H_
 #define PATHD_SERVER_AUTH_H_
 

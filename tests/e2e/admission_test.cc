@@ -46,7 +46,7 @@ using Clock = std::chrono::steady_clock;
 using ::testing::AnyOf;
 using ::testing::HasSubstr;
 
-// Hang guards only (see e2e_test.cc): a broken daemon fails instead of
+// Hang guards only (see e2e_fixture.h): a broken daemon fails instead of
 // hanging the test.
 constexpr auto kBound = std::chrono::seconds(120);
 

@@ -1,0 +1,309 @@
+// e2e_test: navigate sessions and pushes, maps watch, cost-to-go, the cache
+// statistics, D* Lite reuse, the arena2 scenarios and SIGTERM.
+#include "tests/e2e/e2e_fixture.h"
+
+namespace pathd::e2e_test {
+
+// Path lines of `pathctl navigate` output ("  path (N cells): (x,y) ..."),
+// without the prefix.
+std::vector<std::string> NavigatePaths(const std::string& out) {
+  std::vector<std::string> paths;
+  for (absl::string_view line : absl::StrSplit(out, '\n')) {
+    if (!absl::ConsumePrefix(&line, "  path (")) continue;
+    const size_t colon = line.find("): ");
+    if (colon != absl::string_view::npos) {
+      paths.emplace_back(line.substr(colon + 3));
+    }
+  }
+  return paths;
+}
+
+// The seed's D* Lite example, shipped as maps/dstar_example.map and
+// examples/navigate/dstar_example.nav: the robot steps from (4,2) to (3,2),
+// an obstacle appears at (2,2), the robot drives the repaired path.
+TEST_F(E2eTest, NavigateReplaysTheDstarLiteDemo) {
+  const std::string source_dir = PATHD_SOURCE_DIR;
+  ASSERT_EQ(Ctl({"maps", "create", "dstar_example", "--from",
+                 source_dir + "/maps/dstar_example.map"})
+                .exit_code,
+            0);
+  const ProcessResult r =
+      Ctl({"navigate", "dstar_example", "4", "2", "0", "0", "--script",
+           source_dir + "/examples/navigate/dstar_example.nav"});
+  ASSERT_EQ(r.exit_code, 0) << r;
+  const std::vector<std::string> paths = NavigatePaths(r.out);
+  // OPENED, MOVED, OBSERVED, then one answer per step.
+  ASSERT_GE(paths.size(), 4u) << r;
+  EXPECT_EQ(paths[0], "(4,2) (3,2) (2,2) (1,2) (0,2) (0,1) (0,0)") << r;
+  EXPECT_EQ(paths[1], "(3,2) (2,2) (1,2) (0,2) (0,1) (0,0)") << r;
+  // The only optimal detour: no corner cutting past (2,2) or (1,1).
+  EXPECT_EQ(paths[2], "(3,2) (3,3) (2,3) (1,3) (0,2) (0,1) (0,0)") << r;
+  for (size_t i = 2; i < paths.size(); ++i) {
+    EXPECT_FALSE(absl::StrContains(paths[i], "(2,2)")) << paths[i];
+  }
+  EXPECT_TRUE(absl::StrContains(r.out, "[OPENED] seq 1")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "found, cost 6.000000, 7 cells")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "found, cost 6.414214, 7 cells")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "at the goal (0,0)")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "closed: ")) << r;
+  // The demo's observation is private: the shared map is untouched.
+  const ProcessResult get = Ctl({"maps", "get", "dstar_example"});
+  EXPECT_TRUE(absl::StrContains(get.out, "version:     1")) << get;
+
+  // Without a script: the first path, then a clean close.
+  const ProcessResult open =
+      Ctl({"navigate", "dstar_example", "4", "2", "0", "0"});
+  ASSERT_EQ(open.exit_code, 0) << open;
+  EXPECT_EQ(NavigatePaths(open.out),
+            std::vector<std::string>{"(4,2) (3,2) (2,2) (1,2) (0,2) (0,1) (0,0)"})
+      << open;
+}
+
+// The headline: a robot driven by pathctl navigate sees its path
+// change when another client blocks a cell on it, without asking.
+TEST_F(E2eTest, NavigateSessionReceivesAPushWhenAnotherClientBlocksItsPath) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const std::string script = MapFile("push.nav", "expect-push 1000\n");
+  std::unique_ptr<PathctlProcess> robot =
+      StartCtl({"navigate", "room", "0", "0", "9", "9", "--script", script});
+  ASSERT_TRUE(robot->WaitForLine(" cells): ")) << robot->Finish();
+  const std::vector<std::string> first = NavigatePaths(robot->out());
+  ASSERT_EQ(first.size(), 1u) << robot->out();
+  // The open room's only shortest path is the diagonal; block its middle.
+  ASSERT_TRUE(absl::StrContains(first[0], "(4,4)")) << first[0];
+  const ProcessResult set = Ctl({"maps", "set", "room", "4", "4", "lethal"});
+  ASSERT_EQ(set.exit_code, 0) << set;
+
+  const ProcessResult r = robot->Finish();
+  ASSERT_EQ(r.exit_code, 0) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "[MAP_CHANGED, unasked] seq 0")) << r;
+  const std::vector<std::string> paths = NavigatePaths(r.out);
+  ASSERT_EQ(paths.size(), 2u) << r;
+  EXPECT_FALSE(absl::StrContains(paths[1], "(4,4)")) << paths[1];
+  EXPECT_TRUE(absl::StartsWith(paths[1], "(0,0) ")) << paths[1];
+  EXPECT_TRUE(absl::EndsWith(paths[1], " (9,9)")) << paths[1];
+}
+
+TEST_F(E2eTest, MapsWatchSeesAnotherClientsUpdateAndTheDelete) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  std::unique_ptr<PathctlProcess> watch = StartCtl({"maps", "watch", "room"});
+  std::unique_ptr<PathctlProcess> json =
+      StartCtl({"maps", "watch", "room", "--json", "--count", "2"});
+  // Without --from_version the whole map comes first, which also shows the
+  // stream is open before the update is made.
+  ASSERT_TRUE(watch->WaitForLine("version 1 resync: whole map 10x10")) << watch->Finish();
+  ASSERT_TRUE(json->WaitForLine("MAP_EVENT_KIND_RESYNC")) << json->Finish();
+  const ProcessResult rect = Ctl({"maps", "rect", "room", "2", "3", "4", "5", "lethal"});
+  ASSERT_EQ(rect.exit_code, 0) << rect;
+
+  const ProcessResult json_result = json->Finish();
+  ASSERT_EQ(json_result.exit_code, 0) << json_result;
+  const std::vector<std::string> lines =
+      absl::StrSplit(json_result.out, '\n', absl::SkipEmpty());
+  ASSERT_EQ(lines.size(), 2u) << json_result;
+  const auto updated = ParseJson<v1::MapEvent>(lines[1]);
+  EXPECT_EQ(updated.kind(), v1::MAP_EVENT_KIND_UPDATED);
+  EXPECT_EQ(updated.version(), 2u);
+  ASSERT_EQ(updated.changes_size(), 1);
+  EXPECT_EQ(updated.changes(0).rect().x_min(), 2);
+  EXPECT_EQ(updated.changes(0).rect().y_max(), 5);
+  EXPECT_EQ(updated.changes(0).costs(), std::string(9, '\xfe'));
+
+  const ProcessResult deleted = Ctl({"maps", "delete", "room"});
+  ASSERT_EQ(deleted.exit_code, 0) << deleted;
+  const ProcessResult r = watch->Finish();
+  EXPECT_EQ(r.exit_code, 0) << r;
+  EXPECT_EQ(r.out,
+            "version 1 resync: whole map 10x10\n"
+            "version 2 updated: 9 cells in 1 rect: (2,3)-(4,5)\n"
+            "version 2 deleted\n");
+}
+
+TEST_F(E2eTest, NavigateScriptErrorsAndFailedExpectations) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  // A bad line is reported with its place before anything is sent.
+  const std::string bad = MapFile("bad.nav", "move 1 1\njump 2 2\n");
+  const ProcessResult r =
+      Ctl({"navigate", "room", "0", "0", "9", "9", "--script", bad});
+  EXPECT_EQ(r.exit_code, 2) << r;
+  EXPECT_EQ(r.err, absl::StrCat("error: ", bad,
+                                ":2: unknown command 'jump'; expected move, "
+                                "follow, block, free, cost, rect, private, "
+                                "wait or expect-push\n"));
+  EXPECT_EQ(r.out, "") << r;
+  // Nobody else updates the map, so no push comes.
+  const std::string lonely = MapFile("lonely.nav", "move 1 1\nexpect-push 50\n");
+  ExpectRpcError({"navigate", "room", "0", "0", "9", "9", "--script", lonely},
+                 "DEADLINE_EXCEEDED", {"lonely.nav:2: expect-push"});
+  // A move off the map ends the session with the server's reason.
+  const std::string off = MapFile("off.nav", "move 40 1\n");
+  ExpectRpcError({"navigate", "room", "0", "0", "9", "9", "--script", off},
+                 "INVALID_ARGUMENT");
+  ExpectRpcError({"navigate", "nosuch", "0", "0", "9", "9"}, "NOT_FOUND",
+                 {"nosuch"});
+}
+
+TEST_F(E2eTest, CostToGoPrintsAWindowOrWritesItsCsv) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  // Columns 9..11 of rows 0..1 straddle the wall at x = 10.
+  const ProcessResult table =
+      Ctl({"cost-to-go", "walled", "17", "3", "--window", "9,0,3,2"});
+  ASSERT_EQ(table.exit_code, 0) << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "goal:        (17,3)")) << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "window:      x 9..11, y 0..1 (3x2 cells)"))
+      << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "reachable:   4 of 6 cells")) << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "  y\\x       9      10      11\n"))
+      << table;
+  EXPECT_TRUE(absl::StrContains(table.out, "     inf ")) << table;
+
+  const std::string csv = (temp_dir_ / "window.csv").string();
+  const ProcessResult written = Ctl({"cost-to-go", "walled", "17", "3", "--window",
+                                     "15,2,4,3", "--cost_to_go_file", csv});
+  ASSERT_EQ(written.exit_code, 0) << written;
+  EXPECT_TRUE(absl::StrContains(written.out, "12 cells written to")) << written;
+  std::ifstream in(csv);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    rows.push_back(absl::StrSplit(line, ','));
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  for (const auto& row : rows) ASSERT_EQ(row.size(), 4u);
+  EXPECT_EQ(rows[1][2], "0.000000");  // the goal (17,3)
+  EXPECT_EQ(rows[0][1], "1.414214");  // (16,2), one diagonal away
+  EXPECT_EQ(rows[1][3], "1.000000");  // (18,3)
+
+  // The whole field agrees with A* from a far start.
+  const std::string whole = (temp_dir_ / "whole.csv").string();
+  ASSERT_EQ(Ctl({"cost-to-go", "walled", "17", "3", "--cost_to_go_file", whole})
+                .exit_code,
+            0);
+  std::ifstream whole_in(whole);
+  std::vector<std::vector<std::string>> field;
+  for (std::string line; std::getline(whole_in, line);) {
+    field.push_back(absl::StrSplit(line, ','));
+  }
+  ASSERT_EQ(field.size(), 12u);
+  double start_cost = 0;
+  ASSERT_TRUE(absl::SimpleAtod(field[2][2], &start_cost));
+  const v1::PlanResponse astar = PlanJson({"walled", "2", "2", "17", "3"});
+  EXPECT_NEAR(start_cost, astar.cost(), 1e-4);  // the field holds floats
+
+  ExpectRpcError({"cost-to-go", "walled", "17", "3", "--window", "18,0,5,5"},
+                 "INVALID_ARGUMENT", {"window"});
+  ExpectRpcError({"cost-to-go", "walled", "10", "0"}, "INVALID_ARGUMENT",
+                 {"goal"});
+}
+
+TEST_F(E2eTest, CacheStatsCountSpmHits) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse first =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=spm"});
+  EXPECT_FALSE(first.cache_hit());
+  // Another start, the same goal and cost options: the cached field answers.
+  const v1::PlanResponse second =
+      PlanJson({"room", "0", "5", "9", "9", "--planner=spm"});
+  EXPECT_TRUE(second.cache_hit());
+  EXPECT_NEAR(second.cost(), 5 + 4 * kSqrt2, 1e-9);
+
+  const ProcessResult stats = Ctl({"cache-stats", "--json"});
+  ASSERT_EQ(stats.exit_code, 0) << stats;
+  const auto response = ParseJson<v1::GetCacheStatsResponse>(stats.out);
+  const v1::CacheStats* spm = nullptr;
+  for (const v1::CacheStats& c : response.caches()) {
+    if (c.name() == "spm") spm = &c;
+  }
+  ASSERT_NE(spm, nullptr) << stats;
+  EXPECT_GE(spm->hits(), 1) << stats;
+  EXPECT_GE(spm->misses(), 1) << stats;
+  EXPECT_GE(spm->entries(), 1) << stats;
+  EXPECT_GT(spm->bytes(), 0) << stats;
+
+  const ProcessResult text = Ctl({"cache-stats"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StartsWith(text.out, "CACHE ")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "\nspm ")) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "\nsessions:    0 open")) << text;
+}
+
+TEST_F(E2eTest, DstarLitePlansFromAMovingStartReuseTheirState) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  const v1::PlanResponse first =
+      PlanJson({"room", "0", "0", "9", "9", "--planner=dstar_lite"});
+  EXPECT_FALSE(first.cache_hit());
+  EXPECT_NEAR(first.cost(), 9 * kSqrt2, 1e-9);
+  // The robot moved one step along its path.
+  const ProcessResult moved =
+      Ctl({"plan", "room", "1", "1", "9", "9", "--planner=dstar_lite"});
+  ASSERT_EQ(moved.exit_code, 0) << moved;
+  EXPECT_TRUE(absl::StrContains(moved.out, "cache hit:   yes\n")) << moved;
+  EXPECT_TRUE(absl::StrContains(moved.out, "repaired:    0 cells\n")) << moved;
+  EXPECT_TRUE(absl::StrContains(moved.out, "cost:        11.313708")) << moved;
+  // Other planners do not claim a cache.
+  const ProcessResult astar = Ctl({"plan", "room", "1", "1", "9", "9"});
+  EXPECT_FALSE(absl::StrContains(astar.out, "cache hit")) << astar;
+}
+
+// Plans a spread of the benchmark's own scenarios on the bundled map and
+// checks the optimal lengths it publishes.
+TEST_F(E2eTest, Arena2ScenariosHaveTheirOptimalLengths) {
+  const std::string source_dir = PATHD_SOURCE_DIR;
+  const ProcessResult created = Ctl(
+      {"maps", "create", "arena2", "--from", source_dir + "/maps/arena2.map"});
+  ASSERT_EQ(created.exit_code, 0) << created;
+  EXPECT_TRUE(absl::StrContains(created.out, "281 x 209 cells")) << created;
+
+  const std::vector<std::string> lines =
+      absl::StrSplit(ReadFile(source_dir + "/maps/arena2.map.scen"), '\n',
+                     absl::SkipWhitespace());
+  ASSERT_GT(lines.size(), 100u);
+  std::vector<size_t> picks;
+  for (size_t i = 1; i < lines.size(); i += 97) picks.push_back(i);
+  picks.push_back(lines.size() - 1);  // the longest
+  for (size_t i : picks) {
+    SCOPED_TRACE(lines[i]);
+    // bucket, map, width, height, start x, start y, goal x, goal y, length
+    const std::vector<std::string> f =
+        absl::StrSplit(lines[i], absl::ByAnyChar(" \t"), absl::SkipEmpty());
+    ASSERT_EQ(f.size(), 9u);
+    double optimal = 0;
+    ASSERT_TRUE(absl::SimpleAtod(f[8], &optimal));
+    // Half a unit in the last stored decimal, plus float slack.
+    const size_t dot = f[8].find('.');
+    const int decimals =
+        dot == std::string::npos ? 0 : static_cast<int>(f[8].size() - dot - 1);
+    const double tolerance = 0.5 * std::pow(10.0, -decimals) + 1e-6;
+
+    const v1::PlanResponse astar = PlanJson({"arena2", f[4], f[5], f[6], f[7]});
+    ASSERT_TRUE(astar.found()) << astar.reason();
+    EXPECT_NEAR(astar.length(), optimal, tolerance);
+    // Every cell is free or lethal, so cost equals length.
+    EXPECT_NEAR(astar.cost(), astar.length(), 1e-6);
+    EXPECT_EQ(astar.path(0).x(), std::stoi(f[4]));
+    EXPECT_EQ(astar.path(0).y(), std::stoi(f[5]));
+    EXPECT_EQ(astar.path(astar.path_size() - 1).x(), std::stoi(f[6]));
+    EXPECT_EQ(astar.path(astar.path_size() - 1).y(), std::stoi(f[7]));
+  }
+  const std::vector<std::string> longest =
+      absl::StrSplit(lines.back(), absl::ByAnyChar(" \t"), absl::SkipEmpty());
+  const v1::PlanResponse dijkstra =
+      PlanJson({"arena2", longest[4], longest[5], longest[6], longest[7],
+                "--planner=dijkstra"});
+  double optimal = 0;
+  ASSERT_TRUE(absl::SimpleAtod(longest[8], &optimal));
+  EXPECT_NEAR(dijkstra.length(), optimal, 1e-3);
+}
+
+TEST_F(E2eTest, SigtermExitsCleanly) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
+  ASSERT_EQ(Ctl({"plan", "room", "0", "0", "9", "9"}).exit_code, 0);
+  const std::string address = address_;
+  EXPECT_EQ(StopDaemon(), 0);
+  // With the daemon gone the client reports the transport error, exit 5.
+  const ProcessResult r = RunPathctl(
+      {absl::StrCat("--server=", address), "--timeout=5s", "maps", "list"});
+  EXPECT_EQ(r.exit_code, 5) << r;
+  EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE: ")) << r;
+}
+
+}  // namespace pathd::e2e_test
