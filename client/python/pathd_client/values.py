@@ -1,0 +1,249 @@
+"""The client's value types (cells, map info, changes, plans, events) and the
+conversions between them and the pathd.v1 messages."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple, Union
+
+from pathd.v1 import common_pb2
+from pathd.v1 import map_service_pb2
+from pathd.v1 import planner_service_pb2
+
+# Request header naming the map a call is about; pathctl sets it too.
+MAP_HEADER = "x-pathd-map"
+# Trailing metadata key of a rejected Plan's PlanOutcome name.
+PLAN_OUTCOME_KEY = "pathd-plan-outcome"
+# Seconds each unary call may take unless the caller says otherwise (pathctl's
+# --timeout default).
+DEFAULT_TIMEOUT = 10.0
+
+# Nav2 cost values (one byte per cell).
+FREE = 0
+INSCRIBED = 253
+LETHAL = 254
+UNKNOWN = 255
+
+
+class Cell(NamedTuple):
+    """A grid cell: x is the column, y the row, both 0-based."""
+
+    x: int
+    y: int
+
+
+CellLike = Union[Cell, tuple[int, int]]
+
+
+@dataclasses.dataclass(frozen=True)
+class MapInfo:
+    """What the server knows about one map version."""
+
+    name: str
+    width: int
+    height: int
+    resolution: float
+    version: int
+    free_cells: int
+    blocked_cells: int
+    raw: common_pb2.MapInfo = dataclasses.field(repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, info: common_pb2.MapInfo) -> MapInfo:
+        return cls(info.name, info.width, info.height, info.resolution,
+                   info.version, info.free_cells, info.blocked_cells, info)
+
+
+@dataclasses.dataclass(frozen=True)
+class MapCells:
+    """A map version with its cost bytes, row-major."""
+
+    info: MapInfo
+    cells: bytes
+
+    def cost(self, cell: CellLike) -> int:
+        x, y = cell
+        return self.cells[y * self.info.width + x]
+
+
+@dataclasses.dataclass(frozen=True)
+class SetCell:
+    """An UpdateMap change: one cell gets `cost`."""
+
+    x: int
+    y: int
+    cost: int
+
+
+@dataclasses.dataclass(frozen=True)
+class SetRect:
+    """An UpdateMap change: every cell of the rectangle (corners included)."""
+
+    x_min: int
+    y_min: int
+    x_max: int
+    y_max: int
+    cost: int
+
+
+Change = Union[SetCell, SetRect]
+
+
+@dataclasses.dataclass(frozen=True)
+class UpdateResult:
+    """What UpdateMap (or a shared observation) did."""
+
+    version: int
+    cells_changed: int
+
+
+@dataclasses.dataclass(frozen=True)
+class PlanResult:
+    """A plan's answer; `found` False with an outcome such as "NO_PATH"."""
+
+    found: bool
+    outcome: str
+    reason: str
+    path: list[Cell]
+    cost: float
+    length: float
+    expansions: int
+    map_version: int
+    planner: str
+    raw: planner_service_pb2.PlanResponse = dataclasses.field(
+        repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, plan: planner_service_pb2.PlanResponse) -> PlanResult:
+        return cls(
+            found=plan.found,
+            outcome=_enum_name(planner_service_pb2.PlanOutcome, plan.outcome,
+                               "PLAN_OUTCOME_"),
+            reason=plan.reason,
+            path=[Cell(c.x, c.y) for c in plan.path],
+            cost=plan.cost,
+            length=plan.length,
+            expansions=plan.expansions,
+            map_version=plan.map_version,
+            planner=plan.planner,
+            raw=plan)
+
+
+@dataclasses.dataclass(frozen=True)
+class NavigateUpdate:
+    """One message of a Navigate session's server side.
+
+    `event` is "OPENED", "MOVED" or "OBSERVED" (the answer to request `seq`)
+    or "MAP_CHANGED" (pushed unasked, seq 0).
+    """
+
+    event: str
+    seq: int
+    session_id: int
+    plan: PlanResult
+    applied_version: int
+    raw: planner_service_pb2.NavigateResponse = dataclasses.field(
+        repr=False, compare=False)
+
+    @property
+    def pushed(self) -> bool:
+        return self.event == "MAP_CHANGED"
+
+    @classmethod
+    def from_proto(cls, response: planner_service_pb2.NavigateResponse
+                   ) -> NavigateUpdate:
+        return cls(
+            event=_enum_name(planner_service_pb2.NavigateEvent, response.event,
+                             "NAVIGATE_EVENT_"),
+            seq=response.seq,
+            session_id=response.session_id,
+            plan=PlanResult.from_proto(response.plan),
+            applied_version=response.applied_version,
+            raw=response)
+
+
+@dataclasses.dataclass(frozen=True)
+class ChangedRect:
+    """A rectangle of changed cells and their new costs, row-major."""
+
+    x_min: int
+    y_min: int
+    x_max: int
+    y_max: int
+    costs: bytes
+
+
+@dataclasses.dataclass(frozen=True)
+class MapEvent:
+    """One WatchMap event: "UPDATED" (changes), "RESYNC" / "REPLACED" (info
+    and the whole map in cells) or "DELETED" (the last one)."""
+
+    kind: str
+    version: int
+    changes: list[ChangedRect]
+    info: MapInfo | None
+    cells: bytes | None
+    raw: map_service_pb2.MapEvent = dataclasses.field(repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, event: map_service_pb2.MapEvent) -> MapEvent:
+        whole = event.HasField("info")
+        return cls(
+            kind=_enum_name(map_service_pb2.MapEventKind, event.kind,
+                            "MAP_EVENT_KIND_"),
+            version=event.version,
+            changes=[ChangedRect(c.rect.x_min, c.rect.y_min, c.rect.x_max,
+                                 c.rect.y_max, c.costs) for c in event.changes],
+            info=MapInfo.from_proto(event.info) if whole else None,
+            cells=event.cells if whole else None,
+            raw=event)
+
+
+def _enum_name(enum, value: int, prefix: str) -> str:
+    try:
+        return enum.Name(value).removeprefix(prefix)
+    except ValueError:  # a value newer than these stubs
+        return str(value)
+
+
+def _position(cell: CellLike) -> common_pb2.Position:
+    x, y = cell
+    return common_pb2.Position(cell=common_pb2.Cell(x=x, y=y))
+
+
+def _change_proto(change: Change) -> map_service_pb2.CellChange:
+    if isinstance(change, SetCell):
+        return map_service_pb2.CellChange(
+            cell=common_pb2.Cell(x=change.x, y=change.y), cost=change.cost)
+    if isinstance(change, SetRect):
+        return map_service_pb2.CellChange(
+            rect=map_service_pb2.CellRect(x_min=change.x_min, y_min=change.y_min,
+                                          x_max=change.x_max, y_max=change.y_max),
+            cost=change.cost)
+    raise TypeError(f"a change is a SetCell or SetRect, not {type(change).__name__}")
+
+
+def _planner(name: str | None) -> int:
+    if not name:
+        return planner_service_pb2.PLANNER_UNSPECIFIED
+    try:
+        return planner_service_pb2.Planner.Value("PLANNER_" + name.upper())
+    except ValueError:
+        raise ValueError(f"unknown planner '{name}'") from None
+
+
+def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
+                 unknown_is_free: bool = False,
+                 robot_radius_cells: float | None = None,
+                 simplify: bool = False) -> planner_service_pb2.PlanOptions:
+    """The common PlanOptions; build the message yourself for the rest."""
+    if connectivity not in (4, 8):
+        raise ValueError(f"connectivity must be 4 or 8, not {connectivity}")
+    options = planner_service_pb2.PlanOptions(
+        connectivity=connectivity, unknown_is_free=unknown_is_free,
+        simplify=simplify)
+    if cost_weight is not None:
+        options.cost_weight = cost_weight
+    if robot_radius_cells is not None:
+        options.robot_radius_cells = robot_radius_cells
+    return options
