@@ -30,6 +30,7 @@
 #include "server/grpc_status.h"
 #include "server/incremental_cache.h"
 #include "server/request_log.h"
+#include "server/rpc/navigate_search.h"
 
 namespace pathd::server {
 
@@ -41,9 +42,15 @@ class NavigationSession final : public NavigateReactor {
                     absl::Status shared_observations, std::string caller)
       : owner_(owner),
         id_(id),
-        caller_(std::move(caller)),
         opened_at_(absl::Now()),
-        shared_observations_(std::move(shared_observations)) {
+        search_(NavigationSearch::Deps{owner.store_, owner.inflation_,
+                                       owner.options_.budget,
+                                       owner.options_.max_expansions},
+                std::move(caller), std::move(shared_observations), &cancelled_,
+                &bytes_, [this](const std::string& map_name) {
+                  absl::MutexLock lock(&mu_);
+                  map_name_ = map_name;
+                }) {
     absl::MutexLock lock(&mu_);
     last_activity_ = opened_at_;
   }
@@ -245,7 +252,7 @@ class NavigationSession final : public NavigateReactor {
     absl::Status status;
     {
       absl::MutexLock plan_lock(&plan_mu_);
-      status = Handle(message, &response);
+      status = search_.Handle(message, &response);
     }
     {
       absl::MutexLock lock(&mu_);
@@ -277,7 +284,7 @@ class NavigationSession final : public NavigateReactor {
     absl::Status status;
     {
       absl::MutexLock plan_lock(&plan_mu_);
-      if (search_ != nullptr) status = Push(&response, &changed);
+      if (search_.is_open()) status = search_.Push(&response, &changed);
     }
     {
       absl::MutexLock lock(&mu_);
@@ -299,237 +306,9 @@ class NavigationSession final : public NavigateReactor {
     FinishLocked(status);
   }
 
-  // ---- navigation (plan_mu_) ----
-
-  absl::Status Handle(const v1::NavigateRequest& message, v1::NavigateResponse* response)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    response->set_seq(message.seq());
-    switch (message.kind_case()) {
-      case v1::NavigateRequest::kOpen:
-        if (search_ != nullptr) {
-          return absl::InvalidArgumentError(absl::StrFormat(
-              "message seq %d: the session is already open", message.seq()));
-        }
-        response->set_event(v1::NAVIGATE_EVENT_OPENED);
-        PATHD_RETURN_IF_ERROR(Open(message.open()));
-        break;
-      case v1::NavigateRequest::kPose: {
-        PATHD_RETURN_IF_ERROR(RequireOpen(message));
-        response->set_event(v1::NAVIGATE_EVENT_MOVED);
-        PATHD_ASSIGN_OR_RETURN(
-            const Cell cell, CellFromPosition(message.pose(), *snapshot_->grid, "pose"));
-        if (!grid_->InBounds(cell)) {
-          return absl::InvalidArgumentError(absl::StrFormat(
-              "pose %s is outside the %d x %d map", CellToString(cell),
-              grid_->width(), grid_->height()));
-        }
-        PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
-        start_ = cell;
-        PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
-        break;
-      }
-      case v1::NavigateRequest::kObserve: {
-        PATHD_RETURN_IF_ERROR(RequireOpen(message));
-        response->set_event(v1::NAVIGATE_EVENT_OBSERVED);
-        PATHD_ASSIGN_OR_RETURN(uint64_t applied, Observe(message.observe()));
-        response->set_applied_version(applied);
-        break;
-      }
-      case v1::NavigateRequest::KIND_NOT_SET:
-        return absl::InvalidArgumentError(absl::StrFormat(
-            "message seq %d sets none of open, pose, observe", message.seq()));
-    }
-    return PlanInto(response->mutable_plan(), /*changed=*/nullptr);
-  }
-
-  absl::Status RequireOpen(const v1::NavigateRequest& message)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    if (search_ != nullptr) return absl::OkStatus();
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "message seq %d: the first message of a session must be 'open'",
-        message.seq()));
-  }
-
-  absl::Status Open(const v1::NavigateOpen& open) ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    PATHD_ASSIGN_OR_RETURN(
-        DecodedQuery decoded,
-        DecodePlanQuery(WireQueryOf(open), owner_.store_,
-                        QueryLimits{.max_expansions = owner_.options_.max_expansions}));
-    snapshot_ = std::move(decoded.snapshot);
-    const Grid& stored = *snapshot_->grid;
-    // The session's search is its own D* Lite; the façade's rules still apply
-    // (a stateful search: one goal, no via points).
-    PATHD_RETURN_IF_ERROR(CheckPlanQuery(stored, /*stateful=*/true, &decoded.query));
-    start_ = decoded.query.request.start;
-    goal_ = decoded.query.request.goal;
-    cost_ = decoded.query.request.cost;
-    radius_cells_ = decoded.query.robot_radius_cells;
-    max_expansions_ = decoded.query.max_expansions;
-    PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
-    PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
-    if (radius_cells_ > 0.0) {
-      PATHD_RETURN_IF_ERROR(
-          CheckRadiusEndpoints(stored, *grid_, radius_cells_, {{goal_, "goal"}}));
-    }
-    PATHD_ASSIGN_OR_RETURN(search_, DStarLite::Create(grid_, goal_, cost_));
-    PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
-    {
-      absl::MutexLock lock(&mu_);
-      map_name_ = snapshot_->name;
-    }
-    return absl::OkStatus();
-  }
-
-  // Reserves the search state's estimated bytes before anything is built, so
-  // sessions on a big map are refused instead of exhausting memory.
-  absl::Status ReserveMemory(const Grid& grid) ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    MemoryBudget* budget = owner_.options_.budget;
-    if (budget == nullptr) return absl::OkStatus();
-    const int64_t estimate =
-        static_cast<int64_t>(grid.size()) * NavigationSessions::kSessionBytesPerCell;
-    PATHD_ASSIGN_OR_RETURN(
-        reservation_,
-        budget->Reserve(MemoryBudget::Part::kSessions, caller_, estimate,
-                        absl::StrFormat("a navigation session on the %d x %d map '%s'",
-                                        grid.width(), grid.height(), snapshot_->name)));
-    return absl::OkStatus();
-  }
-
-  // Applies sensed changes: to the shared map through the store (the same
-  // validation and versioning as UpdateMap), or to this session's overlay.
-  absl::StatusOr<uint64_t> Observe(const v1::NavigateObservation& observe)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    PATHD_ASSIGN_OR_RETURN(const std::vector<MapChange> changes,
-                           MapChangesFromProto(observe.changes()));
-    if (changes.empty()) {
-      return absl::InvalidArgumentError("observation has no changes");
-    }
-    if (!observe.session_only()) {
-      PATHD_RETURN_IF_ERROR(shared_observations_);
-      PATHD_ASSIGN_OR_RETURN(const MapUpdateResult result,
-                             owner_.store_.Update(snapshot_->name, changes, std::nullopt));
-      PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
-      return result.snapshot->version;
-    }
-    const Grid& stored = *snapshot_->grid;
-    PATHD_RETURN_IF_ERROR(MapStore::ValidateChanges(changes, stored));
-    for (const MapChange& change : changes) {
-      for (int32_t y = change.y_min; y <= change.y_max; ++y) {
-        for (int32_t x = change.x_min; x <= change.x_max; ++x) {
-          overlay_[stored.Index(x, y)] = static_cast<uint8_t>(change.cost);
-        }
-      }
-    }
-    PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/true));
-    return uint64_t{0};
-  }
-
-  // The grid the search runs on: the stored version, with this session's
-  // private cells over it, inflated by the robot radius (shared inflations
-  // come from the cache; private ones are computed here).
-  absl::StatusOr<std::shared_ptr<const Grid>> EffectiveGrid(const MapSnapshot& snapshot)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    if (overlay_.empty()) {
-      if (radius_cells_ <= 0.0) return snapshot.grid;
-      return owner_.inflation_.Get(snapshot.grid, radius_cells_);
-    }
-    Grid merged = *snapshot.grid;
-    for (const auto& [index, cost] : overlay_) {
-      merged.mutable_cells()[index] = cost;
-    }
-    if (radius_cells_ > 0.0) {
-      PATHD_ASSIGN_OR_RETURN(merged, InflateObstacles(merged, radius_cells_));
-    }
-    return std::make_shared<const Grid>(std::move(merged));
-  }
-
-  // Moves the search to the map's current version (and the current overlay):
-  // only the changed cells are handed to D* Lite.
-  absl::Status Refresh(bool overlay_changed) ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    absl::StatusOr<std::shared_ptr<const MapSnapshot>> latest =
-        owner_.store_.Get(snapshot_->name);
-    if (!latest.ok()) {
-      return absl::NotFoundError(absl::StrFormat(
-          "map '%s' was deleted during the navigation session", snapshot_->name));
-    }
-    if ((*latest)->version == snapshot_->version && !overlay_changed) {
-      return absl::OkStatus();
-    }
-    const Grid& before = *grid_;
-    if ((*latest)->grid->width() != before.width() ||
-        (*latest)->grid->height() != before.height()) {
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "map '%s' was replaced by a %d x %d map; open a new session",
-          snapshot_->name, (*latest)->grid->width(), (*latest)->grid->height()));
-    }
-    PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> after, EffectiveGrid(**latest));
-    // A replaced map (new map_id) has no change list, so this compares.
-    PATHD_ASSIGN_OR_RETURN(
-        const std::vector<Cell> changed,
-        ChangesBetween(before, snapshot_->version, *after, **latest));
-    PATHD_RETURN_IF_ERROR(search_->UpdateMap(after, changed));
-    repaired_cells_ += static_cast<int64_t>(changed.size());
-    snapshot_ = *std::move(latest);
-    grid_ = std::move(after);
-    return absl::OkStatus();
-  }
-
-  absl::Status Push(v1::NavigateResponse* response, bool* changed)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    const uint64_t version = snapshot_->version;
-    PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
-    if (snapshot_->version == version) return absl::OkStatus();
-    response->set_event(v1::NAVIGATE_EVENT_MAP_CHANGED);
-    return PlanInto(response->mutable_plan(), changed);
-  }
-
-  // Repairs the search, extracts the path from the robot's cell and fills
-  // `plan`. `changed` (optional) says whether the path differs from the one
-  // last sent. A robot standing on a blocked cell is an answer, not an error.
-  absl::Status PlanInto(v1::PlanResponse* plan, bool* changed)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(plan_mu_) {
-    const StopCondition stop(absl::InfiniteFuture(), &cancelled_, max_expansions_);
-    absl::StatusOr<PlanResult> result = search_->Plan(stop);
-    if (!result.ok() && result.status().code() != absl::StatusCode::kInvalidArgument) {
-      return result.status();
-    }
-    PlanQuery query;
-    query.planner = "dstar_lite";
-    query.request = PlanRequest::Between(start_, goal_, cost_);
-    query.requested_goal = goal_;
-    query.robot_radius_cells = radius_cells_;
-    query.max_expansions = max_expansions_;
-    PlanAnswer answer;
-    answer.goal = goal_;
-    answer.source = PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
-    if (result.ok()) answer.result = *std::move(result);
-    SetSingleLeg(&answer);
-    BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
-    if (!result.ok()) plan->set_reason(std::string(result.status().message()));
-    repaired_cells_ = 0;
-    ++plans_;
-    std::vector<Cell> path = std::move(answer.result.path);
-    if (changed != nullptr) *changed = path != last_path_;
-    last_path_ = std::move(path);
-    // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
-    const int64_t bytes = static_cast<int64_t>(
-        search_->MemoryBytes() + overlay_.size() * 48 +
-        (overlay_.empty() ? 0 : grid_->size()));
-    bytes_.store(bytes, std::memory_order_relaxed);
-    reservation_.Update(bytes);
-    return absl::OkStatus();
-  }
-
-  // First, so it is destroyed last: the bytes it returns (and the trim it
-  // may trigger) come after every other member is freed.
-  MemoryBudget::Reservation reservation_;
   NavigationSessions& owner_;
   const uint64_t id_;
-  // Whose share of the memory budget the session counts against.
-  const std::string caller_;
   const absl::Time opened_at_;
-  // What a shared observation gets: OK, or the caller's PERMISSION_DENIED.
-  const absl::Status shared_observations_;
   std::atomic<bool> cancelled_{false};
   std::atomic<int64_t> bytes_{0};
 
@@ -558,19 +337,9 @@ class NavigationSession final : public NavigateReactor {
   bool deleting_ ABSL_GUARDED_BY(mu_) = false;
 
   absl::Mutex plan_mu_;
-  std::shared_ptr<const MapSnapshot> snapshot_ ABSL_GUARDED_BY(plan_mu_);
-  std::shared_ptr<const Grid> grid_ ABSL_GUARDED_BY(plan_mu_);
-  std::unique_ptr<DStarLite> search_ ABSL_GUARDED_BY(plan_mu_);
-  // Session-only cell costs (cell index -> cost), laid over every version.
-  std::map<size_t, uint8_t> overlay_ ABSL_GUARDED_BY(plan_mu_);
-  Cell start_ ABSL_GUARDED_BY(plan_mu_);
-  Cell goal_ ABSL_GUARDED_BY(plan_mu_);
-  CostParams cost_ ABSL_GUARDED_BY(plan_mu_);
-  double radius_cells_ ABSL_GUARDED_BY(plan_mu_) = 0.0;
-  int64_t max_expansions_ ABSL_GUARDED_BY(plan_mu_) = 0;
-  int64_t repaired_cells_ ABSL_GUARDED_BY(plan_mu_) = 0;
-  int64_t plans_ ABSL_GUARDED_BY(plan_mu_) = 0;
-  std::vector<Cell> last_path_ ABSL_GUARDED_BY(plan_mu_);
+  // The D* Lite search and the session's reservation; declared last so it is
+  // destroyed first, while the flags it points to still exist.
+  NavigationSearch search_ ABSL_GUARDED_BY(plan_mu_);
 };
 
 NavigationSessions::NavigationSessions(MapStore& store, WorkerPool& pool,

@@ -1,0 +1,251 @@
+// The planning half of a Navigate session (navigate_search.h).
+#include "server/rpc/navigate_search.h"
+
+#include <utility>
+
+#include "absl/strings/str_format.h"
+#include "absl/time/time.h"
+#include "core/map/inflation.h"
+#include "core/planning/plan_query.h"
+#include "core/search/endpoints.h"
+#include "core/search/stop_condition.h"
+#include "core/status_macros.h"
+#include "server/convert.h"
+#include "server/incremental_cache.h"
+#include "server/rpc/navigate.h"
+
+namespace pathd::server {
+
+NavigationSearch::NavigationSearch(
+    Deps deps, std::string caller, absl::Status shared_observations,
+    const std::atomic<bool>* cancelled, std::atomic<int64_t>* bytes,
+    std::function<void(const std::string&)> on_open)
+    : deps_(deps),
+      caller_(std::move(caller)),
+      shared_observations_(std::move(shared_observations)),
+      cancelled_(cancelled),
+      bytes_(bytes),
+      on_open_(std::move(on_open)) {}
+
+absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
+                                      v1::NavigateResponse* response) {
+  response->set_seq(message.seq());
+  switch (message.kind_case()) {
+    case v1::NavigateRequest::kOpen:
+      if (search_ != nullptr) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "message seq %d: the session is already open", message.seq()));
+      }
+      response->set_event(v1::NAVIGATE_EVENT_OPENED);
+      PATHD_RETURN_IF_ERROR(Open(message.open()));
+      break;
+    case v1::NavigateRequest::kPose: {
+      PATHD_RETURN_IF_ERROR(RequireOpen(message));
+      response->set_event(v1::NAVIGATE_EVENT_MOVED);
+      PATHD_ASSIGN_OR_RETURN(
+          const Cell cell,
+          CellFromPosition(message.pose(), *snapshot_->grid, "pose"));
+      if (!grid_->InBounds(cell)) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "pose %s is outside the %d x %d map", CellToString(cell),
+            grid_->width(), grid_->height()));
+      }
+      PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
+      start_ = cell;
+      PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
+      break;
+    }
+    case v1::NavigateRequest::kObserve: {
+      PATHD_RETURN_IF_ERROR(RequireOpen(message));
+      response->set_event(v1::NAVIGATE_EVENT_OBSERVED);
+      PATHD_ASSIGN_OR_RETURN(uint64_t applied, Observe(message.observe()));
+      response->set_applied_version(applied);
+      break;
+    }
+    case v1::NavigateRequest::KIND_NOT_SET:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "message seq %d sets none of open, pose, observe", message.seq()));
+  }
+  return PlanInto(response->mutable_plan(), /*changed=*/nullptr);
+}
+
+absl::Status NavigationSearch::RequireOpen(const v1::NavigateRequest& message) {
+  if (search_ != nullptr) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "message seq %d: the first message of a session must be 'open'",
+      message.seq()));
+}
+
+absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
+  PATHD_ASSIGN_OR_RETURN(
+      DecodedQuery decoded,
+      DecodePlanQuery(WireQueryOf(open), deps_.store,
+                      QueryLimits{.max_expansions = deps_.max_expansions}));
+  snapshot_ = std::move(decoded.snapshot);
+  const Grid& stored = *snapshot_->grid;
+  // The session's search is its own D* Lite; the façade's rules still apply
+  // (a stateful search: one goal, no via points).
+  PATHD_RETURN_IF_ERROR(
+      CheckPlanQuery(stored, /*stateful=*/true, &decoded.query));
+  start_ = decoded.query.request.start;
+  goal_ = decoded.query.request.goal;
+  cost_ = decoded.query.request.cost;
+  radius_cells_ = decoded.query.robot_radius_cells;
+  max_expansions_ = decoded.query.max_expansions;
+  PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
+  PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
+  if (radius_cells_ > 0.0) {
+    PATHD_RETURN_IF_ERROR(
+        CheckRadiusEndpoints(stored, *grid_, radius_cells_, {{goal_, "goal"}}));
+  }
+  PATHD_ASSIGN_OR_RETURN(search_, DStarLite::Create(grid_, goal_, cost_));
+  PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
+  on_open_(snapshot_->name);
+  return absl::OkStatus();
+}
+
+// Reserves the search state's estimated bytes before anything is built, so
+// sessions on a big map are refused instead of exhausting memory.
+absl::Status NavigationSearch::ReserveMemory(const Grid& grid) {
+  MemoryBudget* budget = deps_.budget;
+  if (budget == nullptr) return absl::OkStatus();
+  const int64_t estimate = static_cast<int64_t>(grid.size()) *
+                           NavigationSessions::kSessionBytesPerCell;
+  PATHD_ASSIGN_OR_RETURN(
+      reservation_,
+      budget->Reserve(
+          MemoryBudget::Part::kSessions, caller_, estimate,
+          absl::StrFormat("a navigation session on the %d x %d map '%s'",
+                          grid.width(), grid.height(), snapshot_->name)));
+  return absl::OkStatus();
+}
+
+// Applies sensed changes: to the shared map through the store (the same
+// validation and versioning as UpdateMap), or to this session's overlay.
+absl::StatusOr<uint64_t> NavigationSearch::Observe(
+    const v1::NavigateObservation& observe) {
+  PATHD_ASSIGN_OR_RETURN(const std::vector<MapChange> changes,
+                         MapChangesFromProto(observe.changes()));
+  if (changes.empty()) {
+    return absl::InvalidArgumentError("observation has no changes");
+  }
+  if (!observe.session_only()) {
+    PATHD_RETURN_IF_ERROR(shared_observations_);
+    PATHD_ASSIGN_OR_RETURN(
+        const MapUpdateResult result,
+        deps_.store.Update(snapshot_->name, changes, std::nullopt));
+    PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
+    return result.snapshot->version;
+  }
+  const Grid& stored = *snapshot_->grid;
+  PATHD_RETURN_IF_ERROR(MapStore::ValidateChanges(changes, stored));
+  for (const MapChange& change : changes) {
+    for (int32_t y = change.y_min; y <= change.y_max; ++y) {
+      for (int32_t x = change.x_min; x <= change.x_max; ++x) {
+        overlay_[stored.Index(x, y)] = static_cast<uint8_t>(change.cost);
+      }
+    }
+  }
+  PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/true));
+  return uint64_t{0};
+}
+
+// The grid the search runs on: the stored version, with this session's
+// private cells over it, inflated by the robot radius (shared inflations
+// come from the cache; private ones are computed here).
+absl::StatusOr<std::shared_ptr<const Grid>> NavigationSearch::EffectiveGrid(
+    const MapSnapshot& snapshot) {
+  if (overlay_.empty()) {
+    if (radius_cells_ <= 0.0) return snapshot.grid;
+    return deps_.inflation.Get(snapshot.grid, radius_cells_);
+  }
+  Grid merged = *snapshot.grid;
+  for (const auto& [index, cost] : overlay_) {
+    merged.mutable_cells()[index] = cost;
+  }
+  if (radius_cells_ > 0.0) {
+    PATHD_ASSIGN_OR_RETURN(merged, InflateObstacles(merged, radius_cells_));
+  }
+  return std::make_shared<const Grid>(std::move(merged));
+}
+
+// Moves the search to the map's current version (and the current overlay):
+// only the changed cells are handed to D* Lite.
+absl::Status NavigationSearch::Refresh(bool overlay_changed) {
+  absl::StatusOr<std::shared_ptr<const MapSnapshot>> latest =
+      deps_.store.Get(snapshot_->name);
+  if (!latest.ok()) {
+    return absl::NotFoundError(absl::StrFormat(
+        "map '%s' was deleted during the navigation session", snapshot_->name));
+  }
+  if ((*latest)->version == snapshot_->version && !overlay_changed) {
+    return absl::OkStatus();
+  }
+  const Grid& before = *grid_;
+  if ((*latest)->grid->width() != before.width() ||
+      (*latest)->grid->height() != before.height()) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "map '%s' was replaced by a %d x %d map; open a new session",
+        snapshot_->name, (*latest)->grid->width(), (*latest)->grid->height()));
+  }
+  PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> after,
+                         EffectiveGrid(**latest));
+  // A replaced map (new map_id) has no change list, so this compares.
+  PATHD_ASSIGN_OR_RETURN(
+      const std::vector<Cell> changed,
+      ChangesBetween(before, snapshot_->version, *after, **latest));
+  PATHD_RETURN_IF_ERROR(search_->UpdateMap(after, changed));
+  repaired_cells_ += static_cast<int64_t>(changed.size());
+  snapshot_ = *std::move(latest);
+  grid_ = std::move(after);
+  return absl::OkStatus();
+}
+
+absl::Status NavigationSearch::Push(v1::NavigateResponse* response,
+                                    bool* changed) {
+  const uint64_t version = snapshot_->version;
+  PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
+  if (snapshot_->version == version) return absl::OkStatus();
+  response->set_event(v1::NAVIGATE_EVENT_MAP_CHANGED);
+  return PlanInto(response->mutable_plan(), changed);
+}
+
+// Repairs the search, extracts the path from the robot's cell and fills
+// `plan`. `changed` (optional) says whether the path differs from the one
+// last sent. A robot standing on a blocked cell is an answer, not an error.
+absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
+  const StopCondition stop(absl::InfiniteFuture(), cancelled_, max_expansions_);
+  absl::StatusOr<PlanResult> result = search_->Plan(stop);
+  if (!result.ok() &&
+      result.status().code() != absl::StatusCode::kInvalidArgument) {
+    return result.status();
+  }
+  PlanQuery query;
+  query.planner = "dstar_lite";
+  query.request = PlanRequest::Between(start_, goal_, cost_);
+  query.requested_goal = goal_;
+  query.robot_radius_cells = radius_cells_;
+  query.max_expansions = max_expansions_;
+  PlanAnswer answer;
+  answer.goal = goal_;
+  answer.source =
+      PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
+  if (result.ok()) answer.result = *std::move(result);
+  SetSingleLeg(&answer);
+  BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
+  if (!result.ok()) plan->set_reason(std::string(result.status().message()));
+  repaired_cells_ = 0;
+  ++plans_;
+  std::vector<Cell> path = std::move(answer.result.path);
+  if (changed != nullptr) *changed = path != last_path_;
+  last_path_ = std::move(path);
+  // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
+  const int64_t bytes =
+      static_cast<int64_t>(search_->MemoryBytes() + overlay_.size() * 48 +
+                           (overlay_.empty() ? 0 : grid_->size()));
+  bytes_->store(bytes, std::memory_order_relaxed);
+  reservation_.Update(bytes);
+  return absl::OkStatus();
+}
+
+}  // namespace pathd::server

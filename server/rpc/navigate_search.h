@@ -1,0 +1,101 @@
+// The planning half of a Navigate session: a D* Lite search on the newest
+// version of the session's map with the session's private cells laid over it,
+// repaired from the cells that changed between versions, and the session's
+// reservation in the memory budget. The stream half (reads, writes,
+// lifetime) is NavigationSession in navigate.cc.
+#ifndef PATHD_SERVER_RPC_NAVIGATE_SEARCH_H_
+#define PATHD_SERVER_RPC_NAVIGATE_SEARCH_H_
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/incremental/incremental_search.h"
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "pathd/v1/planner_service.pb.h"
+#include "server/inflation_cache.h"
+#include "server/map_store.h"
+#include "server/memory_budget.h"
+
+namespace pathd::server {
+
+// Not thread-safe: the session calls it under its plan_mu_ only.
+class NavigationSearch {
+ public:
+  struct Deps {
+    MapStore& store;
+    InflationCache& inflation;
+    // Where the search state's bytes are reserved; null = no byte limit.
+    MemoryBudget* budget;
+    // The server's expansion cap (--max_expansions); 0 = none.
+    int64_t max_expansions;
+  };
+
+  // `caller`: whose share of the budget the session counts against.
+  // `shared_observations`: what an observation of the shared map gets (OK or
+  // the caller's PERMISSION_DENIED). `cancelled` stops a running plan and
+  // `bytes` receives the state's size after each plan; both must outlive
+  // this object. `on_open` gets the map's name once the session is open.
+  NavigationSearch(Deps deps, std::string caller,
+                   absl::Status shared_observations,
+                   const std::atomic<bool>* cancelled,
+                   std::atomic<int64_t>* bytes,
+                   std::function<void(const std::string&)> on_open);
+
+  bool is_open() const { return search_ != nullptr; }
+
+  // Answers one client message (open, pose or observe) into `response`, with
+  // the new plan. An error ends the session.
+  absl::Status Handle(const v1::NavigateRequest& message,
+                      v1::NavigateResponse* response);
+  // Moves to the map's newest version; when there was one, fills `response`
+  // with the new plan and sets `changed` when the path differs from the last
+  // one sent. Requires is_open().
+  absl::Status Push(v1::NavigateResponse* response, bool* changed);
+
+ private:
+  absl::Status RequireOpen(const v1::NavigateRequest& message);
+  absl::Status Open(const v1::NavigateOpen& open);
+  absl::Status ReserveMemory(const Grid& grid);
+  absl::StatusOr<uint64_t> Observe(const v1::NavigateObservation& observe);
+  absl::StatusOr<std::shared_ptr<const Grid>> EffectiveGrid(
+      const MapSnapshot& snapshot);
+  absl::Status Refresh(bool overlay_changed);
+  absl::Status PlanInto(v1::PlanResponse* plan, bool* changed);
+
+  // First, so it is destroyed last: the bytes it returns (and the trim it
+  // may trigger) come after every other member is freed.
+  MemoryBudget::Reservation reservation_;
+  const Deps deps_;
+  const std::string caller_;
+  const absl::Status shared_observations_;
+  const std::atomic<bool>* const cancelled_;
+  std::atomic<int64_t>* const bytes_;
+  const std::function<void(const std::string&)> on_open_;
+
+  std::shared_ptr<const MapSnapshot> snapshot_;
+  std::shared_ptr<const Grid> grid_;
+  std::unique_ptr<DStarLite> search_;
+  // Session-only cell costs (cell index -> cost), laid over every version.
+  std::map<size_t, uint8_t> overlay_;
+  Cell start_;
+  Cell goal_;
+  CostParams cost_;
+  double radius_cells_ = 0.0;
+  int64_t max_expansions_ = 0;
+  int64_t repaired_cells_ = 0;
+  int64_t plans_ = 0;
+  std::vector<Cell> last_path_;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_RPC_NAVIGATE_SEARCH_H_
