@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import grpc
 
+from pathd_client.values import PLAN_OUTCOME_KEY
+
 class PathdError(Exception):
     """A call to pathd failed.
 
