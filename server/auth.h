@@ -80,7 +80,7 @@ struct TokenEntry {
 // thread-safe.
 class TokenAuthenticator {
  public:
-  // Parses the YAML token file text (format in README "Security"): a
+  // Parses the YAML token file text (format in docs/security.md): a
   // top-level `tokens:` list of {name, role, token | sha256}. INVALID_ARGUMENT
   // naming `source`, the entry (tokens[i]) and the key for a malformed file,
   // an unknown role or key, a token shorter than 16 characters or with

@@ -139,7 +139,7 @@ ABSL_FLAG(std::string, tls_client_ca, "",
           "client certificates");
 ABSL_FLAG(std::string, auth_tokens, "",
           "YAML file mapping bearer tokens to roles (read, write, admin; see "
-          "README 'Security'); calls without a valid 'authorization: Bearer "
+          "docs/security.md); calls without a valid 'authorization: Bearer "
           "<token>' get UNAUTHENTICATED, calls beyond the token's role "
           "PERMISSION_DENIED; Health needs no token; empty = no "
           "authentication");

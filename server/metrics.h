@@ -39,7 +39,7 @@ struct MetricsSources {
   const MemoryBudget* budget = nullptr;
 };
 
-// Thread-safe. The metric names and labels are listed in the README ("Metrics
+// Thread-safe. The metric names and labels are listed in docs/service.md ("Metrics
 // and logs").
 class ServerMetrics final : public RequestObserver {
  public:

@@ -23,7 +23,7 @@ struct Rgb {
   friend bool operator==(const Rgb&, const Rgb&) = default;
 };
 
-// Colours of the picture; README's "Pictures of plans" describes them.
+// Colours of the picture; docs/pathctl.md ("Pictures of plans") describes them.
 inline constexpr Rgb kFreeColour = {255, 255, 255};
 inline constexpr Rgb kLethalColour = {0, 0, 0};
 inline constexpr Rgb kInscribedColour = {48, 48, 48};

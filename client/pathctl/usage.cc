@@ -234,7 +234,7 @@ PlanBatchResponse line and the summary goes to stderr. --timeout bounds the
 whole batch. Exit code 0 when no item errored (no path is not an error), 1
 when any item errored or the stream failed.
 Every call about a map sends its name in the x-pathd-map header, which a load
-balancer in front of several pathd replicas routes by (README, Deployment).
+balancer in front of several pathd replicas routes by (docs/deployment.md).
 Through such a balancer a batch goes to the replica of its first line's map:
 give it one map per file (lines naming a map held elsewhere answer NOT_FOUND),
 and maps list, cache-stats and health reach whichever replica the balancer

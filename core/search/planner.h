@@ -40,7 +40,7 @@ struct PlannerTraits {
   bool needs_eight_connected = false;
   // Can return the full cost-to-go field (PlanRequest::want_cost_to_go).
   bool cost_to_go = false;
-  // One line for --help and the README.
+  // One line for --help and docs/planners.md.
   std::string_view description;
 };
 

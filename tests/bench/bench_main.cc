@@ -3,7 +3,7 @@
 // how many found a path, mean and p95 microseconds per query, mean expansions
 // and expansions per second, the mean path length over the scenario's optimal
 // length, and the speed-up over A* measured in the same run (A* runs first
-// when listed). Figures, not assertions: the README records them with the
+// when listed). Figures, not assertions: docs/performance.md records them with the
 // command that produced them.
 #include <algorithm>
 #include <cstdio>

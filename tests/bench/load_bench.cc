@@ -7,7 +7,7 @@
 // throughputs, their ratio and the gRPC latency percentiles, and the CPU
 // time per query of the planner alone, of the daemon and of the client, which
 // other load on the machine disturbs far less than the wall clock. Figures,
-// not assertions: the README records them with the command that produced
+// not assertions: docs/performance.md records them with the command that produced
 // them.
 #include <sys/resource.h>
 #include <unistd.h>

@@ -14,7 +14,7 @@ way:
 Every step is checked against the world (one move, no obstacle), so a stale
 path shows up as a collision.
 
-Run against `make serve` (see the README's "Python client" section):
+Run against `make serve` (see docs/python.md):
     PYTHONPATH=build/client/python python3 client/python/examples/robot_loop.py
 Exit status 0 when the robot reaches its goal, 1 otherwise.
 """
@@ -28,7 +28,7 @@ try:
                               SetCell)
 except ModuleNotFoundError as missing:
     sys.exit(f"{missing}: build pathd, then put build/client/python on PYTHONPATH "
-             "and run this with Debian's /usr/bin/python3 (README: Python client)")
+             "and run this with Debian's /usr/bin/python3 (docs/python.md)")
 
 # The map as the robot knows it at the start: a wall with a door at the top
 # (row 0) and a wide one at the bottom (rows 5-6).

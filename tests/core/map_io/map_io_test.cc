@@ -302,7 +302,7 @@ TEST(ScenarioToleranceTest, SixSignificantDigits) {
   s.optimal_length = 320.764;
   const double tolerance = ScenarioTolerance(s, "1");
   EXPECT_NEAR(tolerance, 0.0005 + 1e-5, 1e-12);
-  // The README's example: exact 320.764502 stored as 320.764.
+  // An exact 320.764502 stored as 320.764 is within the tolerance.
   EXPECT_LE(std::abs(320.764502 - s.optimal_length), tolerance);
   EXPECT_GT(std::abs(320.764 + 1e-3 - s.optimal_length), tolerance);
 
