@@ -25,7 +25,10 @@ class BestFirstPlanner final : public GridPlanner {
 
  protected:
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
-    const auto& [grid, request, stop, scratch] = q;
+    [[maybe_unused]] const Grid& grid = q.grid;
+    [[maybe_unused]] const PlanRequest& request = q.request;
+    [[maybe_unused]] const StopCondition& stop = q.stop;
+    [[maybe_unused]] SearchScratch& scratch = q.scratch;
     const GridDistanceHeuristic h{request.goal, request.cost.connectivity};
     switch (order_) {
       case Order::kAStar:

@@ -244,7 +244,10 @@ class DistanceTransformExactPlanner final : public GridPlanner {
 
  protected:
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
-    const auto& [grid, request, stop, scratch] = q;
+    [[maybe_unused]] const Grid& grid = q.grid;
+    [[maybe_unused]] const PlanRequest& request = q.request;
+    [[maybe_unused]] const StopCondition& stop = q.stop;
+    [[maybe_unused]] SearchScratch& scratch = q.scratch;
     return FinishFromField(grid, request,
                            DijkstraCostToGo(grid, request.goal, request.cost, stop,
                                             scratch, request.expansion_recorder));

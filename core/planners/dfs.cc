@@ -75,7 +75,10 @@ class DfsPlanner final : public GridPlanner {
 
  protected:
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
-    const auto& [grid, request, stop, scratch] = q;
+    [[maybe_unused]] const Grid& grid = q.grid;
+    [[maybe_unused]] const PlanRequest& request = q.request;
+    [[maybe_unused]] const StopCondition& stop = q.stop;
+    [[maybe_unused]] SearchScratch& scratch = q.scratch;
     const GridView view(grid, request.cost);
     scratch.BeginSearch(grid.size());
     const uint32_t start = view.Index(request.start.x, request.start.y);

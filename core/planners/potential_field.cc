@@ -274,7 +274,10 @@ class PotentialFieldPlanner final : public GridPlanner {
 
  protected:
   absl::StatusOr<PlanResult> Search(const GridQuery& query) const override {
-    const auto& [grid, request, stop, scratch] = query;
+    [[maybe_unused]] const Grid& grid = query.grid;
+    [[maybe_unused]] const PlanRequest& request = query.request;
+    [[maybe_unused]] const StopCondition& stop = query.stop;
+    [[maybe_unused]] SearchScratch& scratch = query.scratch;
     const PotentialFieldParams& params = request.potential;
     const internal::GridView view(grid, request.cost);
     const ObstacleDistance obstacles(grid, request.cost,

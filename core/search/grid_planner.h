@@ -18,6 +18,8 @@ namespace pathd {
 
 // One query as GridPlanner::Search() receives it: Plan()'s arguments, none
 // owned.
+// Planners name its parts as references, not with a structured binding:
+// clang 14 cannot capture structured bindings in lambdas.
 struct GridQuery {
   const Grid& grid;
   const PlanRequest& request;

@@ -457,7 +457,10 @@ class JpsPlanner final : public GridPlanner {
   // result.expansions counts jump points taken from the open list (the start
   // and goal included), not the cells the scans pass over.
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
-    const auto& [grid, request, stop, scratch] = q;
+    [[maybe_unused]] const Grid& grid = q.grid;
+    [[maybe_unused]] const PlanRequest& request = q.request;
+    [[maybe_unused]] const StopCondition& stop = q.stop;
+    [[maybe_unused]] SearchScratch& scratch = q.scratch;
     const uint8_t start_cost = grid.cost(request.start);
     const PackRule rule{
         .unknown_is_free = request.cost.unknown_is_free,
