@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
 
 namespace pathd::server {
 namespace {
@@ -90,6 +91,7 @@ MemoryBudget::~MemoryBudget() {
   {
     absl::MutexLock lock(&trim_mu_);
     stopping_ = true;
+    trim_cv_.Signal();
   }
   trimmer_.join();
 }
@@ -207,6 +209,7 @@ void MemoryBudget::Change(Part part, const std::string& caller, int64_t delta_by
   if (trim) {
     absl::MutexLock lock(&trim_mu_);
     trim_pending_ = true;
+    trim_cv_.Signal();
   }
 }
 
@@ -221,13 +224,13 @@ void MemoryBudget::TrimLoop() {
     // kTrimPoll, to catch what is freed late and unreserved (gRPC frees a
     // closed stream's buffers after the stream's reactor and its
     // reservation are gone, later still on a loaded machine).
-    trim_mu_.AwaitWithTimeout(
-        absl::Condition(
-            +[](MemoryBudget* self) ABSL_EXCLUSIVE_LOCKS_REQUIRED(self->trim_mu_) {
-              return self->trim_pending_ || self->stopping_;
-            },
-            this),
-        kTrimPoll);
+    // A CondVar and a predicate checked here, not Await with a Condition:
+    // Abseil may evaluate a Condition inside its wait, where the test-only
+    // TSan shim (tests/tsan/absl_mutex_tsan.cc) cannot show the lock held.
+    const absl::Time deadline = absl::Now() + kTrimPoll;
+    while (!trim_pending_ && !stopping_) {
+      if (trim_cv_.WaitWithDeadline(&trim_mu_, deadline)) break;  // timed out
+    }
     if (stopping_) return;
     const bool pending = trim_pending_;
     trim_pending_ = false;

@@ -148,6 +148,8 @@ class MemoryBudget {
   // The trimming thread and what it waits for.
   void TrimLoop();
   absl::Mutex trim_mu_;
+  // Signalled when trim_pending_ or stopping_ is set.
+  absl::CondVar trim_cv_;
   bool trim_pending_ ABSL_GUARDED_BY(trim_mu_) = false;
   bool stopping_ ABSL_GUARDED_BY(trim_mu_) = false;
   std::thread trimmer_;
