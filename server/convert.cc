@@ -441,6 +441,18 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
     w->set_x(p.x);
     w->set_y(p.y);
   }
+  response->mutable_polyline()->Reserve(static_cast<int>(result.polyline.size()));
+  response->mutable_world_polyline()->Reserve(
+      static_cast<int>(result.polyline.size()));
+  for (const CellPoint& p : result.polyline) {
+    v1::CellPoint* out = response->add_polyline();
+    out->set_x(p.x);
+    out->set_y(p.y);
+    const WorldPoint w = grid.CellPointToWorld(p);
+    v1::WorldPoint* world = response->add_world_polyline();
+    world->set_x(w.x);
+    world->set_y(w.y);
+  }
 }
 
 }  // namespace

@@ -77,6 +77,10 @@ ABSL_FLAG(int64_t, cache_bytes, int64_t{1} << 30,
           "byte budget of the cached incremental state (shortest path maps and "
           "D* Lite searches get half each); least recently used entries are "
           "evicted beyond it");
+ABSL_FLAG(int64_t, derived_cache_bytes, int64_t{512} << 20,
+          "byte budget of the structures derived from map versions for the "
+          "geometric planners (free-space bitmaps, visibility graphs, "
+          "navigation meshes, Voronoi graphs); least recently used beyond it");
 ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(5),
           "on SIGINT/SIGTERM, time in-flight calls get before they are cancelled");
 ABSL_FLAG(absl::Duration, session_idle_timeout, absl::Minutes(10),
@@ -276,6 +280,11 @@ pathd::server::ServerOptions OptionsFromFlags() {
       static_cast<size_t>(absl::GetFlag(FLAGS_inflation_cache_entries));
   if (absl::GetFlag(FLAGS_cache_bytes) < 0) FlagError("cache_bytes", "must be >= 0");
   options.cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_cache_bytes));
+  if (absl::GetFlag(FLAGS_derived_cache_bytes) < 0) {
+    FlagError("derived_cache_bytes", "must be >= 0");
+  }
+  options.derived_cache_bytes =
+      static_cast<size_t>(absl::GetFlag(FLAGS_derived_cache_bytes));
   if (threads < 0) FlagError("threads", "must be >= 0");
   if (queue_depth < 1) FlagError("queue_depth", "must be >= 1");
   if (options.max_map_cells < 1) FlagError("max_map_cells", "must be >= 1");

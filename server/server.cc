@@ -86,7 +86,8 @@ PathdServer::PathdServer(ServerOptions options)
     : options_(std::move(options)),
       store_(options_.max_map_cells),
       inflation_(&InflateObstacles, options_.inflation_cache_entries),
-      cache_(inflation_, options_.cache_bytes) {}
+      cache_(inflation_, options_.cache_bytes),
+      derived_(options_.derived_cache_bytes) {}
 
 PathdServer::~PathdServer() { Shutdown(); }
 
@@ -160,7 +161,8 @@ absl::Status PathdServer::Start() {
   budget.cache_bytes = [this] {
     return cache_.stats(IncrementalCache::Kind::kSpm).bytes +
            cache_.stats(IncrementalCache::Kind::kDStarLite).bytes +
-           static_cast<int64_t>(inflation_.stats().bytes);
+           static_cast<int64_t>(inflation_.stats().bytes) +
+           static_cast<int64_t>(derived_.stats().bytes);
   };
   budget_ = std::make_unique<MemoryBudget>(std::move(budget));
   // Before any service exists, as MapStore::AddListener requires.
@@ -183,6 +185,7 @@ absl::Status PathdServer::Start() {
   planner_options.batch_max_inflight = options_.batch_max_inflight;
   planner_options.max_returned_expansions = options_.max_returned_expansions;
   planner_options.authenticator = authenticator_.get();
+  planner_options.derived = &derived_;
   planner_service_ = std::make_unique<PlannerServiceImpl>(
       store_, *pool_, inflation_, cache_, *sessions_, planner_options);
 

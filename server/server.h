@@ -17,6 +17,7 @@
 #include "absl/time/time.h"
 #include "server/auth.h"
 #include "server/storage/durable_store.h"
+#include "server/derived_cache.h"
 #include "server/incremental_cache.h"
 #include "server/rpc/map_service.h"
 #include "server/map_store.h"
@@ -61,6 +62,10 @@ struct ServerOptions {
   // Byte budget of the incremental-state caches (shortest path maps and D*
   // Lite searches, half each).
   size_t cache_bytes = size_t{1} << 30;
+  // Byte budget of the derived representations of map versions (free-space
+  // bitmaps, visibility graphs, navigation meshes, Voronoi graphs, Euclidean
+  // shortest path maps), LRU beyond it.
+  size_t derived_cache_bytes = size_t{512} << 20;
   // Navigate sessions: idle expiry and the most open at once.
   absl::Duration session_idle_timeout = absl::Minutes(10);
   size_t max_sessions = 1024;
@@ -147,6 +152,7 @@ class PathdServer {
   // The --data_dir journal; null without data_dir or before Start.
   const DurableStore* durable_store() const { return durable_.get(); }
   const InflationCache& inflation_cache() const { return inflation_; }
+  const DerivedCache& derived_cache() const { return derived_; }
   const IncrementalCache& incremental_cache() const { return cache_; }
   const ServerOptions& options() const { return options_; }
   // WatchMap streams; valid after Start.
@@ -170,6 +176,7 @@ class PathdServer {
   std::unique_ptr<DurableStore> durable_;
   InflationCache inflation_;
   IncrementalCache cache_;
+  DerivedCache derived_;
   std::unique_ptr<WorkerPool> pool_;
   // Sessions and watchers reserve here; declared before them so it outlives
   // them.

@@ -50,8 +50,12 @@ absl::StatusOr<Grid> Grid::FromCells(int32_t width, int32_t height,
 }
 
 WorldPoint Grid::CellCenter(Cell c) const {
-  const double lx = (c.x + 0.5) * resolution_;
-  const double ly = (c.y + 0.5) * resolution_;
+  return CellPointToWorld(CellPoint{c.x + 0.5, c.y + 0.5});
+}
+
+WorldPoint Grid::CellPointToWorld(CellPoint p) const {
+  const double lx = p.x * resolution_;
+  const double ly = p.y * resolution_;
   const double cs = std::cos(origin_.yaw);
   const double sn = std::sin(origin_.yaw);
   return WorldPoint{origin_.x + cs * lx - sn * ly, origin_.y + sn * lx + cs * ly};

@@ -106,6 +106,8 @@ class Grid {
 
   // World point at the centre of a cell.
   WorldPoint CellCenter(Cell c) const;
+  // World point of a point in cell coordinates.
+  WorldPoint CellPointToWorld(CellPoint p) const;
   // The cell containing a world point; fails with OUT_OF_RANGE when the point
   // is outside the grid and INVALID_ARGUMENT when it is not finite.
   absl::StatusOr<Cell> WorldToCell(WorldPoint p) const;

@@ -119,6 +119,15 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
     moved.request.goal = answer.goal;
     settled = &moved;
   }
+  std::unique_ptr<DerivedStore> derived;
+  if (engine.derived && engine.planner != nullptr) {
+    derived = engine.derived(answer.source.grid, query.robot_radius_cells);
+    if (settled == &query) {
+      moved = query;
+      settled = &moved;
+    }
+    moved.request.derived = derived.get();
+  }
   const Grid& grid = *answer.source.grid;
   if (!settled->via.empty()) {
     // One grid for every leg: the snapshot (or its inflation) taken once.

@@ -119,6 +119,12 @@ struct PlanEngine {
   std::function<absl::StatusOr<std::shared_ptr<const Grid>>(
       const std::shared_ptr<const Grid>& stored, double radius_cells)>
       inflate;
+  // Derived representations of the planning grid (core/search/derived.h):
+  // the store for `grid`, the snapshot's grid or its inflation by
+  // robot_radius_cells; empty: planners build what they need per query.
+  std::function<std::unique_ptr<DerivedStore>(
+      const std::shared_ptr<const Grid>& grid, double robot_radius_cells)>
+      derived;
 };
 
 // The rules a query must pass on the stored map before it is worth queueing,

@@ -74,7 +74,8 @@ bool PrefixCosts(const Grid& grid, const CostParams& cost,
 void SimplifyPath(const Grid& grid, const CostParams& cost,
                   PlanResult* result) {
   std::vector<Cell>& path = result->path;
-  if (path.empty()) return;
+  // A geometric plan's polyline is its answer, and already straight.
+  if (path.empty() || !result->polyline.empty()) return;
   std::vector<double> prefix;
   if (!PrefixCosts(grid, cost, path, &prefix)) return;
   // A pass can leave a shortcut between two kept cells that the scan did not

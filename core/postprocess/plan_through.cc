@@ -89,6 +89,10 @@ absl::StatusOr<ThroughResult> PlanThrough(
       break;
     }
     if (options.simplify) SimplifyPath(grid, request.cost, &result);
+    const size_t skip_point = plan.polyline.empty() ? 0 : 1;
+    plan.polyline.insert(plan.polyline.end(),
+                         result.polyline.begin() + (result.polyline.empty() ? 0 : skip_point),
+                         result.polyline.end());
     plan.any_angle = plan.any_angle || result.any_angle;
     plan.cost += result.cost;
     plan.length += result.length;
@@ -102,6 +106,7 @@ absl::StatusOr<ThroughResult> PlanThrough(
   }
   if (!plan.found() && !options.allow_partial) {
     plan.path.clear();
+    plan.polyline.clear();
     plan.cost = 0.0;
     plan.length = 0.0;
     plan.any_angle = false;

@@ -1,9 +1,12 @@
 // The move rule on given paths and path measurement.
 #include "core/search/path_measure.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
+#include "core/geometry/free_space.h"
 #include "core/search/grid_view.h"
 #include "core/search/line_of_sight.h"
 
@@ -30,8 +33,41 @@ PathMeasure MeasureAnyAnglePath(const Grid& grid, const std::vector<Cell>& path,
   return m;
 }
 
+PathMeasure MeasurePolyline(const Grid& grid,
+                            const std::vector<CellPoint>& polyline,
+                            const CostParams& cost) {
+  PathMeasure m;
+  if (polyline.empty()) return m;
+  const FreeSpace space(grid, cost.unknown_is_free);
+  std::vector<LatticePoint> points;
+  points.reserve(polyline.size());
+  for (size_t i = 0; i < polyline.size(); ++i) {
+    const std::optional<LatticePoint> p = ToLatticePoint(polyline[i]);
+    if (!p || (i == 0 ? !space.PointFree(*p)
+                      : !space.SegmentClear(points.back(), *p))) {
+      m.first_invalid = i;
+      return m;
+    }
+    if (i > 0) {
+      const double length = Distance(points.back(), *p);
+      double factor = 1.0;
+      space.ForEachCellCrossed(points.back(), *p, [&](Cell c) {
+        if (grid.InBounds(c)) {
+          factor = std::max(factor, CellFactor(grid.cost(c), cost.cost_weight));
+        }
+      });
+      m.length += length;
+      m.cost += length * factor;
+    }
+    points.push_back(*p);
+  }
+  m.valid = true;
+  return m;
+}
+
 PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
                               const CostParams& cost) {
+  if (!result.polyline.empty()) return MeasurePolyline(grid, result.polyline, cost);
   return result.any_angle ? MeasureAnyAnglePath(grid, result.path, cost)
                           : MeasurePath(grid, result.path, cost);
 }

@@ -42,7 +42,17 @@ PathMeasure MeasurePath(const Grid& grid, const std::vector<Cell>& path,
 PathMeasure MeasureAnyAnglePath(const Grid& grid, const std::vector<Cell>& path,
                                 const CostParams& cost);
 
-// MeasureAnyAnglePath when result.any_angle, else MeasurePath.
+// Measures a geometric polyline (PlanResult::polyline): every vertex a cell
+// centre or grid corner, every segment clear under the free-space rule of
+// core/geometry/free_space.h; first_invalid is the index of the first bad
+// vertex or segment end. Length is Euclidean; cost the length of each
+// segment times the largest cell factor among the cells it crosses.
+PathMeasure MeasurePolyline(const Grid& grid,
+                            const std::vector<CellPoint>& polyline,
+                            const CostParams& cost);
+
+// MeasurePolyline for geometric results, MeasureAnyAnglePath when
+// result.any_angle, else MeasurePath.
 PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
                               const CostParams& cost);
 

@@ -11,6 +11,7 @@
 #include "absl/time/time.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
+#include "core/search/derived.h"
 
 namespace pathd {
 
@@ -94,6 +95,10 @@ struct PlanRequest {
   // PlanResult::expansions); the incremental planners (lpa_star, dstar_lite,
   // spm), the raster distance_transform and potential_field record nothing.
   ExpansionRecorder* expansion_recorder = nullptr;
+  // Not owned; null: planners that need a structure derived from the map
+  // (core/search/derived.h) build it for this query. The server passes its
+  // per-version cache.
+  DerivedStore* derived = nullptr;
 
   // A request with every option at its default.
   static PlanRequest Between(Cell start, Cell goal, CostParams cost = {}) {
@@ -128,6 +133,15 @@ struct PlanResult {
   // centres that pass line of sight (core/search/line_of_sight.h) instead of single
   // moves: any-angle planners and simplified paths.
   bool any_angle = false;
+  // Geometric planners (PlannerTraits::geometric): the path as an exact
+  // polyline in cell coordinates, from the start cell's centre to the goal
+  // cell's centre, bending only at obstacle corners, clear under the free
+  // space rule of core/geometry/free_space.h (it may touch obstacle
+  // boundaries, which line of sight does not allow). `path` then lists the
+  // cells the polyline crosses, in order (consecutive cells share an edge or
+  // a corner and need not be legal moves), any_angle is false, and length
+  // and cost are the polyline's. Empty for every other planner.
+  std::vector<CellPoint> polyline;
   // Cost under the cost model: sum of step costs, or of SegmentCost() for
   // any-angle paths.
   double cost = 0.0;

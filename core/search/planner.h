@@ -38,14 +38,18 @@ struct PlannerTraits {
   bool needs_uniform_cost = false;
   // Refuses (FAILED_PRECONDITION) 4-connected requests (JPS).
   bool needs_eight_connected = false;
+  // Plans in the continuous plane, not on the lattice: the answer is
+  // PlanResult::polyline (core/geometry/free_space.h).
+  bool geometric = false;
   // Can return the full cost-to-go field (PlanRequest::want_cost_to_go).
   bool cost_to_go = false;
   // One line for --help and docs/planners.md.
   std::string_view description;
 };
 
-// "optimal", "fewest moves", "bounded", "any-angle", "real-time" or
-// "heuristic": what a planner's paths guarantee, for listings.
+// "optimal", "fewest moves", "bounded", "any-angle", "real-time",
+// "euclidean-optimal", "geometric" or "heuristic": what a planner's paths
+// guarantee, for listings.
 std::string_view GuaranteeName(const PlannerTraits& traits);
 
 // A planning algorithm. Plan() is a pure function of the grid, the request and

@@ -83,18 +83,26 @@ class CachedSearch final : public StatefulSearch {
 // The job's work: the façade plans, the one builder fills the response.
 Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
                          InflationCache& inflation, IncrementalCache& cache,
-                         int64_t max_path_points, int64_t max_message_bytes) {
+                         DerivedCache* derived, int64_t max_path_points,
+                         int64_t max_message_bytes) {
   const PlanQuery& query = call.decoded.query;
   const StopCondition stop(call.deadline, &call.cancelled, query.max_expansions,
                            call.progress);
   std::optional<CachedSearch> cached;
   if (call.cached.has_value()) cached.emplace(cache, *call.cached, call);
-  const PlanEngine engine{
+  const std::shared_ptr<const MapSnapshot>& shared_snapshot = call.decoded.snapshot;
+  PlanEngine engine{
       .planner = call.planner,
       .stateful = cached.has_value() ? &*cached : nullptr,
       .inflate = [&inflation](const std::shared_ptr<const Grid>& stored,
                               double radius) { return inflation.Get(stored, radius); }};
-  const MapSnapshot& snapshot = *call.decoded.snapshot;
+  if (derived != nullptr) {
+    engine.derived = [derived, &shared_snapshot](const std::shared_ptr<const Grid>& grid,
+                                                 double radius) {
+      return derived->For(shared_snapshot, grid, radius);
+    };
+  }
+  const MapSnapshot& snapshot = *shared_snapshot;
   absl::StatusOr<PlanAnswer> answer =
       RunPlanQuery(query, PlanSnapshot{snapshot.grid, snapshot.version}, engine, stop,
                    scratch);
@@ -187,11 +195,11 @@ void FinishPlanCall(PlanCall& call, const absl::Status& status,
 std::unique_ptr<Job> MakePlanJob(const PlanDeps& deps, std::shared_ptr<PlanCall> call) {
   // The caches outlive every job (PlanDeps' rule); `deps` itself may not.
   auto work = [inflation = &deps.inflation, cache = &deps.cache,
-               max_path_points = deps.limits.max_path_points,
+               derived = deps.derived(), max_path_points = deps.limits.max_path_points,
                max_message_bytes = deps.limits.max_message_bytes](
                   PlanCall& call, SearchScratch& scratch) -> Verdict {
-    return RunPlanAndAnswer(call, scratch, *inflation, *cache, max_path_points,
-                            max_message_bytes);
+    return RunPlanAndAnswer(call, scratch, *inflation, *cache, derived,
+                            max_path_points, max_message_bytes);
   };
   return std::make_unique<CallJob<PlanCall>>(
       std::move(call), std::move(work), &FinishPlanCall,

@@ -33,6 +33,8 @@ struct PlanDeps {
   InflationCache& inflation;
   IncrementalCache& cache;
   const PlannerServiceImpl::Options& limits;
+  // limits.derived: null = planners build derived values per query.
+  DerivedCache* derived() const { return limits.derived; }
 };
 
 // Everything one plan needs, shared by the reactor (for OnCancel) and the

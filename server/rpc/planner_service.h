@@ -14,6 +14,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "server/auth.h"
 #include "server/incremental_cache.h"
+#include "server/derived_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/rpc/navigate.h"
@@ -57,6 +58,9 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     // Checks every call's token (--auth_tokens); null = none. Must outlive
     // the service.
     const TokenAuthenticator* authenticator = nullptr;
+    // Per-version derived representations for the geometric planners; null
+    // = built per query. Must outlive the service.
+    DerivedCache* derived = nullptr;
   };
 
   PlannerServiceImpl(const MapStore& store, WorkerPool& pool,

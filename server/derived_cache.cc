@@ -1,0 +1,184 @@
+#include "server/derived_cache.h"
+
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "server/incremental_cache.h"
+
+namespace pathd::server {
+
+// The store one query uses: the cache, bound to the query's snapshot and
+// planning grid.
+class DerivedCache::Store : public DerivedStore {
+ public:
+  Store(DerivedCache* cache, std::shared_ptr<const MapSnapshot> snapshot,
+        std::shared_ptr<const Grid> grid, double robot_radius_cells)
+      : cache_(cache),
+        snapshot_(std::move(snapshot)),
+        grid_(std::move(grid)),
+        prefix_(robot_radius_cells > 0.0
+                    ? absl::StrFormat("radius=%g ", robot_radius_cells)
+                    : std::string()) {}
+
+  std::shared_ptr<const void> Get(const std::string& key,
+                                  const DerivedRecipe& recipe) override {
+    return cache_->Get(*snapshot_, grid_, prefix_ + key, recipe);
+  }
+
+ private:
+  DerivedCache* cache_;
+  std::shared_ptr<const MapSnapshot> snapshot_;
+  std::shared_ptr<const Grid> grid_;
+  // Values of inflated grids advance only from the same radius's.
+  std::string prefix_;
+};
+
+DerivedCache::DerivedCache(size_t max_bytes) : max_bytes_(max_bytes) {}
+
+std::unique_ptr<DerivedStore> DerivedCache::For(
+    std::shared_ptr<const MapSnapshot> snapshot, std::shared_ptr<const Grid> grid,
+    double robot_radius_cells) {
+  return std::make_unique<Store>(this, std::move(snapshot), std::move(grid),
+                                 robot_radius_cells);
+}
+
+std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
+                                              const std::shared_ptr<const Grid>& grid,
+                                              const std::string& key,
+                                              const DerivedRecipe& recipe) {
+  std::shared_ptr<Entry> entry;
+  // The newest older version's entry to advance from, with its grid.
+  std::shared_ptr<Entry> base;
+  std::shared_ptr<const Grid> base_grid;
+  bool make = false;
+  {
+    absl::MutexLock lock(&mu_);
+    for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+      const Entry& e = **it;
+      if (e.key != key || e.map_id != snapshot.map_id) continue;
+      if (e.grid_address == grid.get() && e.grid.lock() == grid) {
+        entry = *it;
+        entries_.splice(entries_.begin(), entries_, it);
+        break;
+      }
+      if (e.done && e.value != nullptr && e.version < snapshot.version &&
+          e.stored_grid == (grid == snapshot.grid) &&
+          (base == nullptr || e.version > base->version)) {
+        base = *it;
+      }
+    }
+    if (entry == nullptr) {
+      entry = std::make_shared<Entry>();
+      entry->map = snapshot.name;
+      entry->map_id = snapshot.map_id;
+      entry->version = snapshot.version;
+      entry->stored_grid = grid == snapshot.grid;
+      entry->grid = grid;
+      entry->grid_address = grid.get();
+      entry->key = key;
+      entries_.push_front(entry);
+      make = true;
+    } else {
+      ++hits_;
+    }
+  }
+  if (!make) {
+    absl::MutexLock lock(&mu_);
+    mu_.Await(absl::Condition(+[](Entry* e) { return e->done; }, entry.get()));
+    return entry->value;
+  }
+
+  const absl::Time start = absl::Now();
+  std::shared_ptr<const void> value;
+  int64_t changed_cells = 0;
+  bool advanced = false;
+  if (base != nullptr && recipe.advance) {
+    base_grid = base->grid.lock();
+    std::vector<Cell> changed;
+    bool known = false;
+    if (base_grid != nullptr) {
+      absl::StatusOr<std::vector<Cell>> between =
+          ChangesBetween(*base_grid, base->version, *grid, snapshot);
+      if (between.ok()) {
+        changed = *std::move(between);
+        known = true;
+      }
+    } else if (base->stored_grid && snapshot.version == base->version + 1 &&
+               snapshot.changes_known) {
+      changed = snapshot.changed_cells;
+      known = true;
+    }
+    if (known) {
+      value = recipe.advance(base->value.get(), *grid, changed);
+      advanced = value != nullptr;
+      changed_cells = static_cast<int64_t>(changed.size());
+    }
+  }
+  if (value == nullptr) value = recipe.build(*grid);
+  const size_t bytes = recipe.bytes ? recipe.bytes(value.get()) : 0;
+
+  absl::MutexLock lock(&mu_);
+  entry->value = value;
+  entry->bytes = bytes;
+  entry->advanced = advanced;
+  entry->changed_cells = changed_cells;
+  entry->time = absl::Now() - start;
+  entry->done = true;
+  bytes_ += bytes;
+  ++(advanced ? advances_ : builds_);
+  EvictLocked();
+  return value;
+}
+
+void DerivedCache::EvictLocked() {
+  auto drop = [this](std::list<std::shared_ptr<Entry>>::iterator it) {
+    bytes_ -= (*it)->bytes;
+    return entries_.erase(it);
+  };
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    it = (*it)->done && (*it)->grid.expired() ? drop(it) : std::next(it);
+  }
+  // Least recently used first, never one being made, never the newest.
+  while (bytes_ > max_bytes_ && entries_.size() > 1) {
+    auto victim = entries_.end();
+    for (auto it = std::next(entries_.begin()); it != entries_.end(); ++it) {
+      if ((*it)->done) victim = it;
+    }
+    if (victim == entries_.end()) break;
+    drop(victim);
+  }
+}
+
+DerivedCache::Stats DerivedCache::stats() const {
+  absl::MutexLock lock(&mu_);
+  Stats s;
+  s.hits = hits_;
+  s.builds = builds_;
+  s.advances = advances_;
+  s.entries = entries_.size();
+  s.bytes = bytes_;
+  return s;
+}
+
+std::vector<DerivedCache::EntryInfo> DerivedCache::Entries(
+    const std::string& name) const {
+  std::vector<EntryInfo> out;
+  absl::MutexLock lock(&mu_);
+  for (const std::shared_ptr<Entry>& e : entries_) {
+    if (e->map != name || !e->done || e->grid.expired()) continue;
+    out.push_back(EntryInfo{e->map, e->version, e->key, e->bytes, e->advanced,
+                            e->changed_cells, e->time});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const EntryInfo& a, const EntryInfo& b) {
+    return a.version > b.version;
+  });
+  return out;
+}
+
+}  // namespace pathd::server

@@ -1,0 +1,115 @@
+// Derived representations of map versions (core/search/derived.h): free-space
+// bitmaps, visibility graphs, navigation meshes, Voronoi graphs, Euclidean
+// shortest path maps. One value per (planning grid, key), built once under
+// concurrency, advanced from the newest older version of the same map with
+// that step's changed cells instead of rebuilt, bounded in bytes with LRU
+// eviction and counted in the memory budget next to the other caches.
+#ifndef PATHD_SERVER_DERIVED_CACHE_H_
+#define PATHD_SERVER_DERIVED_CACHE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "core/map/grid.h"
+#include "core/search/derived.h"
+#include "server/map_store.h"
+
+namespace pathd::server {
+
+// Thread-safe.
+//
+// Keys: an entry belongs to one planning grid, held weakly (a cached value
+// never keeps an old version alive, and a freed grid can never be matched by
+// a new one at the same address), and to a key string naming the kind and
+// its parameters. The grid is a map version's own grid or its inflation for
+// a robot radius; the map's id and version come with it.
+//
+// Advancing: on a miss, the newest entry with the same map id and key at an
+// older version whose grid is still alive is advanced with the cells that
+// differ (the version's recorded changes for one step of a stored grid,
+// otherwise a comparison of the two grids), when the recipe can; otherwise
+// the value is built.
+class DerivedCache {
+ public:
+  struct Stats {
+    int64_t hits = 0;
+    int64_t builds = 0;
+    int64_t advances = 0;
+    size_t entries = 0;
+    size_t bytes = 0;
+  };
+  // One cached value, for `pathctl maps stats`.
+  struct EntryInfo {
+    std::string map;
+    uint64_t version = 0;
+    std::string key;
+    size_t bytes = 0;
+    // How the value was made and how long it took.
+    bool advanced = false;
+    int64_t changed_cells = 0;
+    absl::Duration time;
+  };
+
+  // Keeps at most `max_bytes` of values (the newest value stays even when
+  // it alone is larger).
+  explicit DerivedCache(size_t max_bytes);
+
+  // The store a query planning on `grid` (the snapshot's own grid, or its
+  // inflation by robot_radius_cells > 0) uses; valid while the cache lives.
+  std::unique_ptr<DerivedStore> For(std::shared_ptr<const MapSnapshot> snapshot,
+                                    std::shared_ptr<const Grid> grid,
+                                    double robot_radius_cells);
+
+  Stats stats() const ABSL_LOCKS_EXCLUDED(mu_);
+  // The live entries of map `name`, newest version first.
+  std::vector<EntryInfo> Entries(const std::string& name) const
+      ABSL_LOCKS_EXCLUDED(mu_);
+
+ private:
+  class Store;
+  struct Entry {
+    std::string map;
+    uint64_t map_id = 0;
+    uint64_t version = 0;
+    // The grid is the snapshot's own (not an inflated copy): its recorded
+    // changed cells describe it.
+    bool stored_grid = false;
+    std::weak_ptr<const Grid> grid;
+    const Grid* grid_address = nullptr;
+    std::string key;
+    // Under the cache's mu_: the maker sets them with done, waiters Await it.
+    bool done = false;
+    std::shared_ptr<const void> value;
+    size_t bytes = 0;
+    bool advanced = false;
+    int64_t changed_cells = 0;
+    absl::Duration time;
+  };
+
+  std::shared_ptr<const void> Get(const MapSnapshot& snapshot,
+                                  const std::shared_ptr<const Grid>& grid,
+                                  const std::string& key,
+                                  const DerivedRecipe& recipe)
+      ABSL_LOCKS_EXCLUDED(mu_);
+  void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+
+  const size_t max_bytes_;
+  mutable absl::Mutex mu_;
+  // Most recently used first.
+  std::list<std::shared_ptr<Entry>> entries_ ABSL_GUARDED_BY(mu_);
+  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t hits_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t builds_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t advances_ ABSL_GUARDED_BY(mu_) = 0;
+};
+
+}  // namespace pathd::server
+
+#endif  // PATHD_SERVER_DERIVED_CACHE_H_
