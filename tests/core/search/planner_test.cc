@@ -13,6 +13,7 @@
 #include "core/search/registry.h"
 #include "core/search/path_measure.h"
 #include "core/search/endpoints.h"
+#include "core/search/line_of_sight.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/search/planner.h"
@@ -322,13 +323,13 @@ TEST_P(EveryPlanner, FourAndEightConnectivity) {
   ASSERT_TRUE(r8->found() || !traits().complete);
   if (!r8->found()) return;
   ASSERT_TRUE(MeasureResultPath(grid, *r8, {}).valid);
-  if (traits().optimal || traits().fewest_moves) {
+  if ((traits().optimal || traits().fewest_moves) && !traits().geometric) {
     EXPECT_EQ(r8->path.size(), 10u);  // 9 diagonal moves
   }
   if (traits().optimal) {
     EXPECT_NEAR(r8->length, 9 * kSqrt2, 1e-9);
   }
-  if (traits().any_angle) {
+  if (traits().any_angle || traits().geometric) {
     EXPECT_LE(r8->length, 9 * kSqrt2 + 1e-9);
   }
 }
@@ -354,8 +355,10 @@ TEST_P(EveryPlanner, SearchScratchIsReusedAcrossMapSizes) {
 // results) and its reported cost and length match a re-measurement; what else
 // is checked follows the traits: optimal planners match an independent
 // Bellman-Ford, fewest-move planners a reference BFS in moves, bounded ones
-// stay within heuristic_weight times the optimum, any-angle ones are never
-// longer than the optimum on uniform-cost grids, complete ones find a path
+// stay within heuristic_weight times the optimum, any-angle and geometric
+// ones are never longer than the optimum on uniform-cost grids (geometric
+// ones never shorter than the straight line; their exactness is checked in
+// geometric_planners_test), complete ones find a path
 // exactly when one exists, and cost-to-go fields match Bellman-Ford from the
 // goal's side.
 TEST_P(EveryPlanner, RandomWeightedGridsAgreeWithReferences) {
@@ -430,8 +433,12 @@ TEST_P(EveryPlanner, RandomWeightedGridsAgreeWithReferences) {
     ASSERT_TRUE(m.valid) << "trial " << trial << " step " << m.first_invalid;
     EXPECT_NEAR(r->cost, m.cost, 1e-9 * (1 + m.cost)) << "trial " << trial;
     EXPECT_NEAR(r->length, m.length, 1e-9 * (1 + m.length)) << "trial " << trial;
-    if (t.optimal) {
+    if (t.optimal && !t.geometric) {
       EXPECT_NEAR(r->cost, optimum, 1e-9 * (1 + r->cost)) << "trial " << trial;
+    }
+    if (t.geometric) {
+      // Never below the straight line between the cell centres.
+      EXPECT_GE(r->length, SegmentLength(s, g) - 1e-9) << "trial " << trial;
     }
     if (t.fewest_moves) {
       const std::vector<int> moves = MoveCounts(grid, s, params);
@@ -442,7 +449,7 @@ TEST_P(EveryPlanner, RandomWeightedGridsAgreeWithReferences) {
       EXPECT_LE(r->cost, request.heuristic_weight * optimum + 1e-9 * (1 + optimum))
           << "trial " << trial;
     }
-    if (t.any_angle && params.cost_weight == 0.0) {
+    if ((t.any_angle || t.geometric) && params.cost_weight == 0.0) {
       EXPECT_LE(r->length, optimum + 1e-9 * (1 + optimum)) << "trial " << trial;
     }
   }
