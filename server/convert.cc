@@ -441,6 +441,11 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
     w->set_x(p.x);
     w->set_y(p.y);
   }
+  if (result.min_clearance >= 0.0) {
+    response->set_has_clearance(true);
+    response->set_min_clearance_cells(result.min_clearance);
+    response->set_min_clearance_m(result.min_clearance * grid.resolution());
+  }
   response->mutable_polyline()->Reserve(static_cast<int>(result.polyline.size()));
   response->mutable_world_polyline()->Reserve(
       static_cast<int>(result.polyline.size()));
