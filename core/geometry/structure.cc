@@ -1,9 +1,11 @@
 #include "core/geometry/structure.h"
 
+#include <string>
 #include <string_view>
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 
 namespace pathd {
@@ -38,9 +40,9 @@ absl::StatusOr<GeometricStructure> DescribeStructure(std::string_view kind,
   for (const Kind& k : Kinds()) {
     if (k.name == kind) return k.describe(grid, unknown_is_free);
   }
-  return absl::InvalidArgumentError(
-      absl::StrCat("unknown structure '", kind, "'; known: ",
-                   absl::StrJoin(StructureKinds(), ", ")));
+  std::vector<std::string> known(StructureKinds().begin(), StructureKinds().end());
+  return absl::InvalidArgumentError(absl::StrCat(
+      "unknown structure '", std::string(kind), "'; known: ", absl::StrJoin(known, ", ")));
 }
 
 }  // namespace pathd
