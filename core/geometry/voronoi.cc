@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
-#include <queue>
 #include <vector>
 
 #include "absl/time/clock.h"
@@ -69,13 +68,12 @@ VoronoiField::VoronoiField(const Grid& grid, bool unknown_is_free)
         const int32_t nx = x + kDx8[k];
         const int32_t ny = y + kDy8[k];
         if (InPadded(nx, ny) && !BlockedAt(Index(Cell{nx, ny}))) {
-          queue_.push_back(EntryOf(i));
+          Push(i);
           break;
         }
       }
     }
   }
-  std::make_heap(queue_.begin(), queue_.end());
   Lower(nullptr);
   for (int32_t y = 0; y < height_; ++y) {
     for (int32_t x = 0; x < width_; ++x) SetDiagramBit(Index(Cell{x, y}));
@@ -91,18 +89,24 @@ OctileLength VoronoiField::Distance(Cell c) const {
   return Between(i, site_[i]);
 }
 
-VoronoiField::Entry VoronoiField::EntryOf(int32_t cell) const {
-  return Entry{Between(cell, site_[cell]).value(), site_[cell], cell};
+void VoronoiField::Push(int32_t cell) {
+  const auto bucket = static_cast<size_t>(Between(cell, site_[cell]).value());
+  if (bucket >= buckets_.size()) buckets_.resize(bucket + 1);
+  buckets_[bucket].push_back(Entry{site_[cell], cell});
+  first_bucket_ = std::min(first_bucket_, bucket);
 }
 
 void VoronoiField::Lower(std::vector<int32_t>* touched) {
   // Label-correcting: the order (nearest first) only saves work; a cell
   // offered a better site is queued again, so the waves end at the unique
   // fixed point whatever was queued.
-  while (!queue_.empty()) {
-    std::pop_heap(queue_.begin(), queue_.end());
-    const Entry e = queue_.back();
-    queue_.pop_back();
+  while (true) {
+    while (first_bucket_ < buckets_.size() && buckets_[first_bucket_].empty()) {
+      ++first_bucket_;
+    }
+    if (first_bucket_ == buckets_.size()) break;
+    const Entry e = buckets_[first_bucket_].back();
+    buckets_[first_bucket_].pop_back();
     if (site_[e.cell] != e.site) continue;  // superseded
     const int32_t x = e.cell % stride_;
     const int32_t y = e.cell / stride_;
@@ -117,8 +121,7 @@ void VoronoiField::Lower(std::vector<int32_t>* touched) {
         if (c > 0 || (c == 0 && e.site >= site_[n])) continue;
       }
       site_[n] = e.site;
-      queue_.push_back(EntryOf(n));
-      std::push_heap(queue_.begin(), queue_.end());
+      Push(n);
       if (touched != nullptr) touched->push_back(n);
     }
   }
@@ -176,17 +179,16 @@ void VoronoiField::Update(const Grid& grid, absl::Span<const Cell> changed) {
   for (const int32_t i : blocked) {
     flags_[i] |= kBlockedBit;
     site_[i] = i;
-    queue_.push_back(EntryOf(i));
+    Push(i);
   }
   // Lower: the obstacles that appeared, and the intact cells around the
   // cleared ones, spread their sites into them.
   for (const int32_t c : cleared) {
     for (int k = 0; k < 8; ++k) {
       const int32_t n = c + kDx8[k] + kDy8[k] * stride_;
-      if (site_[n] != kCleared) queue_.push_back(EntryOf(n));
+      if (site_[n] != kCleared) Push(n);
     }
   }
-  std::make_heap(queue_.begin(), queue_.end());
   Lower(&touched);
   touched.insert(touched.end(), cleared.begin(), cleared.end());
   touched.insert(touched.end(), blocked.begin(), blocked.end());

@@ -89,13 +89,8 @@ class VoronoiField {
   static constexpr int32_t kCleared = -1;
 
   struct Entry {
-    double distance;
     int32_t site;
     int32_t cell;
-    // Reversed for std::priority_queue's max-heap: nearest first.
-    friend bool operator<(const Entry& a, const Entry& b) {
-      return a.distance != b.distance ? a.distance > b.distance : a.site > b.site;
-    }
   };
 
   // Padded index (one ring of border cells around the grid).
@@ -108,7 +103,8 @@ class VoronoiField {
     return x >= -1 && y >= -1 && x <= width_ && y <= height_;
   }
   OctileLength Between(int32_t a, int32_t b) const;
-  Entry EntryOf(int32_t cell) const;
+  // Queues `cell` to spread its site, in the bucket of its distance.
+  void Push(int32_t cell);
   // Spreads every queued site until nothing improves; appends each cell it
   // changes to `touched` when not null.
   void Lower(std::vector<int32_t>* touched);
@@ -122,7 +118,11 @@ class VoronoiField {
   bool unknown_is_free_ = false;
   std::vector<int32_t> site_;
   std::vector<uint8_t> flags_;
-  std::vector<Entry> queue_;
+  // The waves' queue: buckets of distance [k, k + 1), so nearer cells go
+  // first without a heap's log factor (the order within a bucket does not
+  // matter for the result, see Lower()).
+  std::vector<std::vector<Entry>> buckets_;
+  size_t first_bucket_ = 0;
 };
 
 }  // namespace pathd
