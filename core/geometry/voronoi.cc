@@ -7,7 +7,6 @@
 
 #include "absl/time/clock.h"
 #include "core/geometry/structure.h"
-
 #include "core/map/cost_model.h"
 
 namespace pathd {
@@ -210,6 +209,7 @@ int64_t VoronoiField::DiagramCells() const {
 GeometricStructure DescribeVoronoi(const Grid& grid, bool unknown_is_free) {
   GeometricStructure s;
   s.kind = "voronoi";
+  if (!VoronoiField::Fits(grid)) return s;
   const absl::Time started = absl::Now();
   const VoronoiField field(grid, unknown_is_free);
   s.build_time = absl::Now() - started;

@@ -57,6 +57,13 @@ struct OctileLength {
 // first (see VoronoiPlanner's advance).
 class VoronoiField {
  public:
+  // Cells are indexed with int32 over the grid and its border ring.
+  static bool Fits(const Grid& grid) {
+    return (static_cast<int64_t>(grid.width()) + 2) * (grid.height() + 2) <=
+           int64_t{1} << 31;
+  }
+
+  // Precondition: Fits(grid).
   VoronoiField(const Grid& grid, bool unknown_is_free);
 
   // Re-reads `changed` cells from `grid` (the same size as the one built

@@ -24,6 +24,7 @@
 // min_clearance is B*, the distance map's value (octile distance from a cell
 // centre to the nearest obstacle cell's centre or the map's outside) at the
 // path's lowest cell.
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -32,12 +33,15 @@
 #include <tuple>
 #include <vector>
 
+#include "absl/status/status.h"
+#include "absl/strings/str_format.h"
 #include "core/geometry/voronoi.h"
 #include "core/map/cost_model.h"
 #include "core/planners/planners.h"
 #include "core/search/derived.h"
 #include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
+#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -216,6 +220,16 @@ class VoronoiPlanner final : public GridPlanner {
                     "the Voronoi diagram; complete, not shortest"}) {}
 
  protected:
+  absl::Status Validate(const Grid& grid, const PlanRequest& request) const override {
+    PATHD_RETURN_IF_ERROR(GridPlanner::Validate(grid, request));
+    if (!VoronoiField::Fits(grid)) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "planner voronoi supports maps of up to 2^31 cells; this one is %d x %d",
+          grid.width(), grid.height()));
+    }
+    return absl::OkStatus();
+  }
+
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     const Grid& grid = q.grid;
     const PlanRequest& request = q.request;

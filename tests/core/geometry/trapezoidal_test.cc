@@ -12,10 +12,12 @@
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "core/geometry/free_space.h"
+#include "core/geometry/structure.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "gtest/gtest.h"
@@ -139,6 +141,20 @@ TEST(TrapezoidalDecomposition, MatchesTheVerticalExtensionsOnRandomMaps) {
       EXPECT_NE(std::find(right.begin(), right.end(), static_cast<int32_t>(p)), right.end());
     }
   }
+}
+
+TEST(TrapezoidalDecomposition, DescribesItsCellsAsOutlines) {
+  // One blocked cell in the middle: four cells (the left column, above it,
+  // below it, the right column), each joined to two others.
+  const Grid grid = MakeGrid({"...", ".#.", "..."});
+  const auto s = DescribeStructure("decomposition", grid, false);
+  ASSERT_TRUE(s.ok()) << s.status();
+  EXPECT_EQ(s->kind, "decomposition");
+  ASSERT_EQ(s->counts.size(), 2u);
+  EXPECT_EQ(s->counts[0], (std::pair<std::string, int64_t>{"cells", 4}));
+  EXPECT_EQ(s->counts[1], (std::pair<std::string, int64_t>{"adjacencies", 4}));
+  EXPECT_EQ(s->segments.size(), 16u);
+  EXPECT_GT(s->bytes, 0u);
 }
 
 TEST(TrapezoidalDecomposition, PinchesDoNotConnect) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/geometry/structure.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "gtest/gtest.h"
@@ -120,6 +121,18 @@ TEST(VoronoiField, CorridorCentreIsTheDiagram) {
   EXPECT_DOUBLE_EQ(field.Clearance({0, 2}), 1.0);  // the map's edge is a wall
   EXPECT_EQ(field.NearestObstacle({0, 2}), (Cell{-1, 2}));
   EXPECT_EQ(field.Clearance({3, 0}), 0.0);
+}
+
+TEST(VoronoiField, DescribesItsDiagramAsPoints) {
+  const Grid grid = MakeGrid({"##########", "..........", "..........",
+                              "..........", "##########"});
+  const auto s = DescribeStructure("voronoi", grid, false);
+  ASSERT_TRUE(s.ok()) << s.status();
+  const VoronoiField field(grid, false);
+  ASSERT_EQ(s->counts.size(), 1u);
+  EXPECT_EQ(s->counts[0].second, field.DiagramCells());
+  EXPECT_EQ(static_cast<int64_t>(s->points.size()), field.DiagramCells());
+  EXPECT_EQ(s->bytes, field.bytes());
 }
 
 TEST(VoronoiField, FreshBuildMatchesBruteForce) {
