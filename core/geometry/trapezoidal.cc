@@ -43,8 +43,7 @@ int64_t TriArea2(LatticePoint a, LatticePoint b, LatticePoint c) {
 
 TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
                                                    bool unknown_is_free)
-    : space_(grid, unknown_is_free),
-      cell_trapezoid_(grid.size(), kNone) {
+    : space_(grid, unknown_is_free), cell_trapezoid_(grid.size(), kNone) {
   const int32_t w = grid.width();
   std::vector<Run> previous;
   std::vector<Run> current;
@@ -166,7 +165,8 @@ std::vector<LatticePoint> PullString(LatticePoint start, LatticePoint goal,
   return path;
 }
 
-GeometricStructure DescribeDecomposition(const Grid& grid, bool unknown_is_free) {
+GeometricStructure DescribeDecomposition(const Grid& grid,
+                                         bool unknown_is_free) {
   GeometricStructure s;
   s.kind = "decomposition";
   const absl::Time started = absl::Now();

@@ -80,7 +80,8 @@ VoronoiField::VoronoiField(const Grid& grid, bool unknown_is_free)
 }
 
 OctileLength VoronoiField::Between(int32_t a, int32_t b) const {
-  return OctileLength::Between(a % stride_ - b % stride_, a / stride_ - b / stride_);
+  return OctileLength::Between(a % stride_ - b % stride_,
+                               a / stride_ - b / stride_);
 }
 
 OctileLength VoronoiField::Distance(Cell c) const {
@@ -130,7 +131,8 @@ void VoronoiField::SetDiagramBit(int32_t index) {
   flags_[index] &= static_cast<uint8_t>(~kDiagramBit);
   if (BlockedAt(index)) return;
   const int32_t s = site_[index];
-  for (const int32_t n : {index + 1, index - 1, index + stride_, index - stride_}) {
+  for (const int32_t n :
+       {index + 1, index - 1, index + stride_, index - stride_}) {
     if (BlockedAt(n)) continue;
     const int32_t t = site_[n];
     // The same obstacle: one cell or two touching ones.
@@ -195,7 +197,8 @@ void VoronoiField::Update(const Grid& grid, absl::Span<const Cell> changed) {
   for (const int32_t i : touched) {
     for (const int32_t n : {i, i + 1, i - 1, i + stride_, i - stride_}) {
       const Cell c = CellOf(n);
-      if (c.x >= 0 && c.y >= 0 && c.x < width_ && c.y < height_) SetDiagramBit(n);
+      if (c.x >= 0 && c.y >= 0 && c.x < width_ && c.y < height_)
+        SetDiagramBit(n);
     }
   }
 }
@@ -217,7 +220,8 @@ GeometricStructure DescribeVoronoi(const Grid& grid, bool unknown_is_free) {
   s.bytes = field.bytes();
   for (int32_t y = 0; y < grid.height(); ++y) {
     for (int32_t x = 0; x < grid.width(); ++x) {
-      if (field.OnDiagram(Cell{x, y})) s.points.push_back(CellPoint{x + 0.5, y + 0.5});
+      if (field.OnDiagram(Cell{x, y}))
+        s.points.push_back(CellPoint{x + 0.5, y + 0.5});
     }
   }
   return s;

@@ -88,7 +88,9 @@ class VoronoiField {
 
   // Cells on the diagram.
   int64_t DiagramCells() const;
-  size_t bytes() const { return site_.capacity() * sizeof(int32_t) + flags_.capacity(); }
+  size_t bytes() const {
+    return site_.capacity() * sizeof(int32_t) + flags_.capacity();
+  }
 
  private:
   static constexpr uint8_t kBlockedBit = 1;
@@ -105,7 +107,9 @@ class VoronoiField {
   Cell CellOf(int32_t index) const {
     return Cell{index % stride_ - 1, index / stride_ - 1};
   }
-  bool BlockedAt(int32_t index) const { return (flags_[index] & kBlockedBit) != 0; }
+  bool BlockedAt(int32_t index) const {
+    return (flags_[index] & kBlockedBit) != 0;
+  }
   bool InPadded(int32_t x, int32_t y) const {
     return x >= -1 && y >= -1 && x <= width_ && y <= height_;
   }

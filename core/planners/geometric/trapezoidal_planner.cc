@@ -42,14 +42,18 @@ std::shared_ptr<const TrapezoidalDecomposition> Decomposition(
   const bool unknown_is_free = request.cost.unknown_is_free;
   return GetDerived<TrapezoidalDecomposition>(
       request.derived, grid,
-      std::string("trapezoidal:unknown_is_free=") + (unknown_is_free ? "1" : "0"),
+      std::string("trapezoidal:unknown_is_free=") +
+          (unknown_is_free ? "1" : "0"),
       [unknown_is_free](const Grid& g) {
-        return std::make_shared<const TrapezoidalDecomposition>(g, unknown_is_free);
+        return std::make_shared<const TrapezoidalDecomposition>(
+            g, unknown_is_free);
       },
       // A change can merge or split trapezoids of any length across its
       // column; rebuilding is one sweep, O(cells).
       [](const TrapezoidalDecomposition&, const Grid&, absl::Span<const Cell>)
-          -> std::shared_ptr<const TrapezoidalDecomposition> { return nullptr; },
+          -> std::shared_ptr<const TrapezoidalDecomposition> {
+        return nullptr;
+      },
       [](const TrapezoidalDecomposition& d) { return d.bytes(); });
 }
 
@@ -136,7 +140,8 @@ class BoundarySearch {
   // Offers every other boundary point of trapezoid t to `from`.
   void Relax(int32_t from, int32_t t) {
     for (int32_t p : d_.PortalsOf(t)) {
-      for (int32_t k = 0; k < kNodesPerPortal; ++k) Offer(from, p * kNodesPerPortal + k);
+      for (int32_t k = 0; k < kNodesPerPortal; ++k)
+        Offer(from, p * kNodesPerPortal + k);
     }
     if (t == goal_trapezoid_) Offer(from, goal_node_);
   }

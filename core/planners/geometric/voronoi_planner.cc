@@ -62,7 +62,8 @@ std::shared_ptr<const VoronoiField> Field(const Grid& grid,
         return std::make_shared<const VoronoiField>(g, unknown_is_free);
       },
       [](const VoronoiField& previous, const Grid& g,
-         absl::Span<const Cell> changed) -> std::shared_ptr<const VoronoiField> {
+         absl::Span<const Cell> changed)
+          -> std::shared_ptr<const VoronoiField> {
         auto next = std::make_shared<VoronoiField>(previous);
         next->Update(g, changed);
         return next;
@@ -80,7 +81,8 @@ void ForEachMove(const VoronoiField& field, Cell c, Visit&& visit) {
   for (const Move& m : kMoves) {
     const Cell n{c.x + m.dx, c.y + m.dy};
     if (!free(n.x, n.y)) continue;
-    if (m.dx != 0 && m.dy != 0 && (!free(c.x + m.dx, c.y) || !free(c.x, c.y + m.dy))) {
+    if (m.dx != 0 && m.dy != 0 &&
+        (!free(c.x + m.dx, c.y) || !free(c.x, c.y + m.dy))) {
       continue;
     }
     visit(n, m.length);
@@ -118,7 +120,8 @@ class VoronoiSearch {
       const auto [b, neg_f, neg_g, i] = open.top();
       open.pop();
       if (closed_[i]) continue;
-      if (const PlanOutcome o = Expand(i, -neg_f); o != PlanOutcome::kFound) return o;
+      if (const PlanOutcome o = Expand(i, -neg_f); o != PlanOutcome::kFound)
+        return o;
       const Cell c = CellAt(i);
       if (c == request_.goal) {
         bottleneck = b;
@@ -153,7 +156,8 @@ class VoronoiSearch {
       const auto [f, i] = open.top();
       open.pop();
       if (closed_[i]) continue;
-      if (const PlanOutcome o = Expand(i, f); o != PlanOutcome::kFound) return o;
+      if (const PlanOutcome o = Expand(i, f); o != PlanOutcome::kFound)
+        return o;
       const Cell c = CellAt(i);
       if (c == request_.goal) {
         for (size_t k = i; k != size_; k = parent[k]) path.push_back(CellAt(k));
@@ -220,12 +224,14 @@ class VoronoiPlanner final : public GridPlanner {
                     "the Voronoi diagram; complete, not shortest"}) {}
 
  protected:
-  absl::Status Validate(const Grid& grid, const PlanRequest& request) const override {
+  absl::Status Validate(const Grid& grid,
+                        const PlanRequest& request) const override {
     PATHD_RETURN_IF_ERROR(GridPlanner::Validate(grid, request));
     if (!VoronoiField::Fits(grid)) {
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "planner voronoi supports maps of up to 2^31 cells; this one is %d x %d",
-          grid.width(), grid.height()));
+      return absl::FailedPreconditionError(
+          absl::StrFormat("planner voronoi supports maps of up to 2^31 cells; "
+                          "this one is %d x %d",
+                          grid.width(), grid.height()));
     }
     return absl::OkStatus();
   }

@@ -48,11 +48,13 @@ std::vector<int> BruteRegions(const Grid& grid, int& regions) {
   std::vector<bool> cut(static_cast<size_t>(w + 1) * h, false);
   for (int y = 0; y <= h; ++y) {
     for (int x = 0; x <= w; ++x) {
-      const int blocked = !free(x - 1, y - 1) + !free(x, y - 1) + !free(x - 1, y) +
-                          !free(x, y);
+      const int blocked =
+          !free(x - 1, y - 1) + !free(x, y - 1) + !free(x - 1, y) + !free(x, y);
       if (blocked != 1) continue;
-      for (int r = y; free(x - 1, r) && free(x, r); ++r) cut[r * (w + 1) + x] = true;
-      for (int r = y - 1; free(x - 1, r) && free(x, r); --r) cut[r * (w + 1) + x] = true;
+      for (int r = y; free(x - 1, r) && free(x, r); ++r)
+        cut[r * (w + 1) + x] = true;
+      for (int r = y - 1; free(x - 1, r) && free(x, r); --r)
+        cut[r * (w + 1) + x] = true;
     }
   }
   std::vector<int> label(grid.size(), -1);
@@ -91,7 +93,8 @@ TEST(TrapezoidalDecomposition, MatchesTheVerticalExtensionsOnRandomMaps) {
     const TrapezoidalDecomposition d(grid, false);
     int regions = 0;
     const std::vector<int> label = BruteRegions(grid, regions);
-    ASSERT_EQ(static_cast<int>(d.trapezoids().size()), regions) << "trial " << trial;
+    ASSERT_EQ(static_cast<int>(d.trapezoids().size()), regions)
+        << "trial " << trial;
     // Each region is one rectangle, the trapezoid covering its cells.
     std::map<int, int> region_of;  // trapezoid -> region
     std::vector<int> cells_in(regions, 0);
@@ -101,19 +104,23 @@ TEST(TrapezoidalDecomposition, MatchesTheVerticalExtensionsOnRandomMaps) {
         ASSERT_EQ(t < 0, label[grid.Index(x, y)] < 0) << "trial " << trial;
         if (t < 0) continue;
         const Trapezoid& r = d.trapezoids()[t];
-        ASSERT_TRUE(x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1) << "trial " << trial;
-        const auto [it, inserted] = region_of.emplace(t, label[grid.Index(x, y)]);
+        ASSERT_TRUE(x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1)
+            << "trial " << trial;
+        const auto [it, inserted] =
+            region_of.emplace(t, label[grid.Index(x, y)]);
         ASSERT_EQ(it->second, label[grid.Index(x, y)]) << "trial " << trial;
         ++cells_in[t];
       }
     }
     for (size_t t = 0; t < d.trapezoids().size(); ++t) {
       const Trapezoid& r = d.trapezoids()[t];
-      ASSERT_EQ(cells_in[t], (r.x1 - r.x0) * (r.y1 - r.y0)) << "trial " << trial;
+      ASSERT_EQ(cells_in[t], (r.x1 - r.x0) * (r.y1 - r.y0))
+          << "trial " << trial;
     }
     // Portals: one per pair of regions sharing unit edges on a grid line x,
     // spanning exactly those edges.
-    std::map<std::pair<int, int>, std::pair<int, int>> expected;  // (x, left) -> rows
+    std::map<std::pair<int, int>, std::pair<int, int>>
+        expected;  // (x, left) -> rows
     std::set<std::tuple<int, int, int>> pairs;
     for (int y = 0; y < h; ++y) {
       for (int x = 1; x < w; ++x) {
@@ -126,19 +133,23 @@ TEST(TrapezoidalDecomposition, MatchesTheVerticalExtensionsOnRandomMaps) {
     ASSERT_EQ(d.portals().size(), pairs.size()) << "trial " << trial;
     for (size_t p = 0; p < d.portals().size(); ++p) {
       const Portal& portal = d.portals()[p];
-      ASSERT_TRUE(pairs.count({portal.x, portal.left, portal.right})) << "trial " << trial;
+      ASSERT_TRUE(pairs.count({portal.x, portal.left, portal.right}))
+          << "trial " << trial;
       ASSERT_LT(portal.y0, portal.y1);
       for (int y = portal.y0 - 1; y <= portal.y1; ++y) {
         const bool inside = y >= portal.y0 && y < portal.y1;
-        const bool shared = grid.InBounds(portal.x - 1, y) && grid.InBounds(portal.x, y) &&
+        const bool shared = grid.InBounds(portal.x - 1, y) &&
+                            grid.InBounds(portal.x, y) &&
                             d.TrapezoidOf({portal.x - 1, y}) == portal.left &&
                             d.TrapezoidOf({portal.x, y}) == portal.right;
         ASSERT_EQ(inside, shared) << "trial " << trial << " row " << y;
       }
       const auto left = d.PortalsOf(portal.left);
       const auto right = d.PortalsOf(portal.right);
-      EXPECT_NE(std::find(left.begin(), left.end(), static_cast<int32_t>(p)), left.end());
-      EXPECT_NE(std::find(right.begin(), right.end(), static_cast<int32_t>(p)), right.end());
+      EXPECT_NE(std::find(left.begin(), left.end(), static_cast<int32_t>(p)),
+                left.end());
+      EXPECT_NE(std::find(right.begin(), right.end(), static_cast<int32_t>(p)),
+                right.end());
     }
   }
 }
@@ -177,7 +188,8 @@ TEST(TrapezoidalDecomposition, UnknownCellsFollowTheOption) {
 // side), and consecutive pieces lie in the same or consecutive rectangles, so
 // the segment passes from one to the next only through their portal, never
 // through a point where two others merely touch.
-bool InsideChannel(LatticePoint a, LatticePoint b, const std::vector<Trapezoid>& cells) {
+bool InsideChannel(LatticePoint a, LatticePoint b,
+                   const std::vector<Trapezoid>& cells) {
   const int n = static_cast<int>(cells.size());
   auto holds = [&](const Trapezoid& t, int64_t x2, int64_t num, int64_t den) {
     return x2 >= 2 * t.x0 && x2 <= 2 * t.x1 && num >= 2 * t.y0 * den &&
@@ -214,7 +226,8 @@ bool InsideChannel(LatticePoint a, LatticePoint b, const std::vector<Trapezoid>&
         if (!in[i]) continue;
         if (2 * cells[i].y0 <= lo && hi <= 2 * cells[i].y1) return true;
         for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j) {
-          const bool on_line = a.x2 >= 2 * cells[j].x0 && a.x2 <= 2 * cells[j].x1;
+          const bool on_line =
+              a.x2 >= 2 * cells[j].x0 && a.x2 <= 2 * cells[j].x1;
           const int64_t top = std::max(cells[i].y0, cells[j].y0);
           const int64_t bottom = std::min(cells[i].y1, cells[j].y1);
           if (!in[j] && on_line && bottom > top && 2 * bottom > lo) {
@@ -231,7 +244,8 @@ bool InsideChannel(LatticePoint a, LatticePoint b, const std::vector<Trapezoid>&
   }
   std::vector<int64_t> xs{a.x2, b.x2};
   for (const Trapezoid& t : cells) {
-    for (const int64_t x : {2 * static_cast<int64_t>(t.x0), 2 * static_cast<int64_t>(t.x1)}) {
+    for (const int64_t x :
+         {2 * static_cast<int64_t>(t.x0), 2 * static_cast<int64_t>(t.x1)}) {
       if (x > std::min(a.x2, b.x2) && x < std::max(a.x2, b.x2)) xs.push_back(x);
     }
   }
@@ -251,7 +265,8 @@ bool InsideChannel(LatticePoint a, LatticePoint b, const std::vector<Trapezoid>&
     const auto [n1, d1] = y_at(xs[k]);
     std::vector<bool> holding(n, false);
     for (int i = 0; i < n; ++i) {
-      holding[i] = holds(cells[i], xs[k - 1], n0, d0) && holds(cells[i], xs[k], n1, d1);
+      holding[i] =
+          holds(cells[i], xs[k - 1], n0, d0) && holds(cells[i], xs[k], n1, d1);
     }
     if (!step(holding)) return false;
   }
@@ -268,7 +283,8 @@ double BruteChannelShortest(LatticePoint start, LatticePoint goal,
     nodes.push_back(g.left);
     nodes.push_back(g.right);
   }
-  std::vector<double> dist(nodes.size(), std::numeric_limits<double>::infinity());
+  std::vector<double> dist(nodes.size(),
+                           std::numeric_limits<double>::infinity());
   std::vector<bool> done(nodes.size(), false);
   dist[0] = 0.0;
   for (size_t round = 0; round < nodes.size(); ++round) {
@@ -294,8 +310,10 @@ TEST(PullString, IsTheShortestPathInItsChannel) {
     const int h = 2 + static_cast<int>(rng() % 14);
     const Grid grid = RandomGrid(rng, w, h, static_cast<int>(rng() % 45));
     const TrapezoidalDecomposition d(grid, false);
-    const Cell s{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
-    const Cell g{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+    const Cell s{static_cast<int32_t>(rng() % w),
+                 static_cast<int32_t>(rng() % h)};
+    const Cell g{static_cast<int32_t>(rng() % w),
+                 static_cast<int32_t>(rng() % h)};
     const int ts = d.TrapezoidOf(s);
     const int tg = d.TrapezoidOf(g);
     if (ts < 0 || tg < 0 || ts == tg) continue;
@@ -324,16 +342,19 @@ TEST(PullString, IsTheShortestPathInItsChannel) {
       t = prev;
     }
     std::reverse(gates.begin(), gates.end());
-    const std::vector<LatticePoint> path = PullString(CentreOf(s), CentreOf(g), gates);
+    const std::vector<LatticePoint> path =
+        PullString(CentreOf(s), CentreOf(g), gates);
     ASSERT_GE(path.size(), 2u);
     EXPECT_EQ(path.front(), CentreOf(s));
     EXPECT_EQ(path.back(), CentreOf(g));
     EXPECT_TRUE(d.space().PolylineClear(path)) << "trial " << trial;
     for (size_t i = 1; i < path.size(); ++i) {
-      EXPECT_TRUE(InsideChannel(path[i - 1], path[i], cells)) << "trial " << trial;
+      EXPECT_TRUE(InsideChannel(path[i - 1], path[i], cells))
+          << "trial " << trial;
     }
     EXPECT_NEAR(PolylineLength(path),
-                BruteChannelShortest(CentreOf(s), CentreOf(g), cells, gates), 1e-9)
+                BruteChannelShortest(CentreOf(s), CentreOf(g), cells, gates),
+                1e-9)
         << "trial " << trial;
     ++channels;
   }

@@ -33,7 +33,8 @@ std::vector<Cell> BruteNearest(const Grid& grid, bool unknown_is_free) {
   std::vector<Cell> obstacles;
   for (int y = -1; y <= grid.height(); ++y) {
     for (int x = -1; x <= grid.width(); ++x) {
-      if (BlockedOrOutside(grid, x, y, unknown_is_free)) obstacles.push_back({x, y});
+      if (BlockedOrOutside(grid, x, y, unknown_is_free))
+        obstacles.push_back({x, y});
     }
   }
   std::vector<Cell> nearest(grid.size());
@@ -52,15 +53,17 @@ std::vector<Cell> BruteNearest(const Grid& grid, bool unknown_is_free) {
   return nearest;
 }
 
-OctileLength Oct(Cell a, Cell b) { return OctileLength::Between(a.x - b.x, a.y - b.y); }
+OctileLength Oct(Cell a, Cell b) {
+  return OctileLength::Between(a.x - b.x, a.y - b.y);
+}
 
 // The diagram rule, from brute-force nearest obstacles.
 bool BruteOnDiagram(const Grid& grid, const std::vector<Cell>& nearest, Cell c,
                     bool unknown_is_free) {
   if (BlockedOrOutside(grid, c.x, c.y, unknown_is_free)) return false;
   const Cell s = nearest[grid.Index(c)];
-  for (const Cell n : {Cell{c.x + 1, c.y}, Cell{c.x - 1, c.y}, Cell{c.x, c.y + 1},
-                       Cell{c.x, c.y - 1}}) {
+  for (const Cell n : {Cell{c.x + 1, c.y}, Cell{c.x - 1, c.y},
+                       Cell{c.x, c.y + 1}, Cell{c.x, c.y - 1}}) {
     if (BlockedOrOutside(grid, n.x, n.y, unknown_is_free)) continue;
     const Cell t = nearest[grid.Index(n)];
     if (std::abs(s.x - t.x) <= 1 && std::abs(s.y - t.y) <= 1) continue;
@@ -77,7 +80,8 @@ Grid RandomGrid(std::mt19937& rng, int w, int h, int obstacle_pct) {
   Grid grid = Grid::Create(w, h).value();
   for (uint8_t& v : grid.mutable_cells()) {
     const int roll = static_cast<int>(rng() % 100);
-    v = roll < obstacle_pct ? (rng() % 4 == 0 ? kUnknownCost : kLethalCost) : kFreeCost;
+    v = roll < obstacle_pct ? (rng() % 4 == 0 ? kUnknownCost : kLethalCost)
+                            : kFreeCost;
   }
   return grid;
 }
@@ -88,19 +92,24 @@ void ExpectSameField(const VoronoiField& a, const VoronoiField& b,
     for (int32_t x = 0; x < a.width(); ++x) {
       const Cell c{x, y};
       ASSERT_EQ(a.Blocked(c), b.Blocked(c)) << where << " " << At(c);
-      ASSERT_EQ(a.NearestObstacle(c), b.NearestObstacle(c)) << where << " " << At(c);
+      ASSERT_EQ(a.NearestObstacle(c), b.NearestObstacle(c))
+          << where << " " << At(c);
       ASSERT_EQ(a.OnDiagram(c), b.OnDiagram(c)) << where << " " << At(c);
     }
   }
 }
 
 TEST(OctileLength, ComparesExactly) {
-  EXPECT_EQ(Compare(OctileLength::Between(3, 4), OctileLength::Between(4, 3)), 0);
+  EXPECT_EQ(Compare(OctileLength::Between(3, 4), OctileLength::Between(4, 3)),
+            0);
   // 1 + 3 sqrt2 = 5.243 vs 5 + 0: longer.
-  EXPECT_EQ(Compare(OctileLength::Between(3, 4), OctileLength::Between(5, 0)), 1);
+  EXPECT_EQ(Compare(OctileLength::Between(3, 4), OctileLength::Between(5, 0)),
+            1);
   // 7 sqrt2 = 9.8995 vs 10: shorter; 12 sqrt2 = 16.97 vs 17.
-  EXPECT_EQ(Compare(OctileLength::Between(7, 7), OctileLength::Between(10, 0)), -1);
-  EXPECT_EQ(Compare(OctileLength::Between(12, 12), OctileLength::Between(17, 0)), -1);
+  EXPECT_EQ(Compare(OctileLength::Between(7, 7), OctileLength::Between(10, 0)),
+            -1);
+  EXPECT_EQ(
+      Compare(OctileLength::Between(12, 12), OctileLength::Between(17, 0)), -1);
   // 70 sqrt2 = 98.995: between 98 and 99.
   EXPECT_EQ(Compare(OctileLength{0, 70}, OctileLength{99, 0}), -1);
   EXPECT_EQ(Compare(OctileLength{0, 70}, OctileLength{98, 0}), 1);
@@ -110,8 +119,8 @@ TEST(OctileLength, ComparesExactly) {
 TEST(VoronoiField, CorridorCentreIsTheDiagram) {
   // A corridor three cells high between two walls: its middle row is the
   // diagram, at clearance 2 from each wall.
-  const Grid grid = MakeGrid({"##########", "..........", "..........",
-                              "..........", "##########"});
+  const Grid grid = MakeGrid(
+      {"##########", "..........", "..........", "..........", "##########"});
   const VoronoiField field(grid, false);
   for (int x = 2; x < 8; ++x) {
     EXPECT_TRUE(field.OnDiagram({x, 2})) << x;
@@ -124,8 +133,8 @@ TEST(VoronoiField, CorridorCentreIsTheDiagram) {
 }
 
 TEST(VoronoiField, DescribesItsDiagramAsPoints) {
-  const Grid grid = MakeGrid({"##########", "..........", "..........",
-                              "..........", "##########"});
+  const Grid grid = MakeGrid(
+      {"##########", "..........", "..........", "..........", "##########"});
   const auto s = DescribeStructure("voronoi", grid, false);
   ASSERT_TRUE(s.ok()) << s.status();
   const VoronoiField field(grid, false);
@@ -148,10 +157,12 @@ TEST(VoronoiField, FreshBuildMatchesBruteForce) {
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const Cell c{x, y};
-        ASSERT_EQ(field.Blocked(c), BlockedOrOutside(grid, x, y, unknown_is_free));
+        ASSERT_EQ(field.Blocked(c),
+                  BlockedOrOutside(grid, x, y, unknown_is_free));
         ASSERT_EQ(field.NearestObstacle(c), nearest[grid.Index(c)])
             << "trial " << trial << " " << At(c);
-        EXPECT_EQ(Compare(field.Distance(c), Oct(c, nearest[grid.Index(c)])), 0);
+        EXPECT_EQ(Compare(field.Distance(c), Oct(c, nearest[grid.Index(c)])),
+                  0);
         const bool on = BruteOnDiagram(grid, nearest, c, unknown_is_free);
         ASSERT_EQ(field.OnDiagram(c), on) << "trial " << trial << " " << At(c);
         diagram += on ? 1 : 0;
@@ -178,7 +189,8 @@ TEST(VoronoiField, UpdatesEqualAFreshBuild) {
       const int kind = static_cast<int>(rng() % 3);
       const int count = kind == 0 ? 1 : 1 + static_cast<int>(rng() % 8);
       for (int k = 0; k < count; ++k) {
-        const Cell c{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+        const Cell c{static_cast<int32_t>(rng() % w),
+                     static_cast<int32_t>(rng() % h)};
         if (kind == 2) {
           // A rectangle set to one value.
           const int rw = 1 + static_cast<int>(rng() % 4);
@@ -193,15 +205,18 @@ TEST(VoronoiField, UpdatesEqualAFreshBuild) {
           break;
         }
         const int roll = static_cast<int>(rng() % 10);
-        grid.set_cost(c, roll < 4 ? kLethalCost : roll < 5 ? kUnknownCost : kFreeCost);
+        grid.set_cost(c, roll < 4   ? kLethalCost
+                         : roll < 5 ? kUnknownCost
+                                    : kFreeCost);
         changed.push_back(c);
         if (rng() % 5 == 0) changed.push_back(c);
       }
       if (rng() % 6 == 0) changed.push_back({0, 0});  // listed, maybe unchanged
       field.Update(grid, changed);
       ++updates;
-      ExpectSameField(field, VoronoiField(grid, unknown_is_free),
-                      "trial " + std::to_string(trial) + " step " + std::to_string(step));
+      ExpectSameField(
+          field, VoronoiField(grid, unknown_is_free),
+          "trial " + std::to_string(trial) + " step " + std::to_string(step));
       if (HasFatalFailure()) return;
     }
   }
@@ -210,8 +225,8 @@ TEST(VoronoiField, UpdatesEqualAFreshBuild) {
 
 TEST(VoronoiField, OpeningAWallLetsTheFarSideIn) {
   // Removing a whole wall: every cell that was nearest to it must move on.
-  Grid grid = MakeGrid({"........", "........", "########", "........",
-                        "........", "........"});
+  Grid grid = MakeGrid(
+      {"........", "........", "########", "........", "........", "........"});
   VoronoiField field(grid, false);
   std::vector<Cell> changed;
   for (int x = 0; x < 8; ++x) {

@@ -33,8 +33,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 absl::StatusOr<PlanResult> Plan(const std::string& name, const Grid& grid,
                                 const PlanRequest& request) {
   SearchScratch scratch;
-  return PlannerRegistry::Default().Get(name)->Plan(grid, request,
-                                                     StopCondition::None(), scratch);
+  return PlannerRegistry::Default().Get(name)->Plan(
+      grid, request, StopCondition::None(), scratch);
 }
 
 bool Free(const Grid& grid, int x, int y, bool unknown_is_free) {
@@ -53,16 +53,18 @@ Grid RandomGrid(std::mt19937& rng, int w, int h) {
 
 // Free cells reachable from `start` through shared edges (free space's
 // connectivity; a diagonal step without corner cutting is two such steps).
-std::vector<bool> Reachable(const Grid& grid, Cell start, bool unknown_is_free) {
+std::vector<bool> Reachable(const Grid& grid, Cell start,
+                            bool unknown_is_free) {
   std::vector<bool> seen(grid.size(), false);
   std::vector<Cell> stack{start};
   seen[grid.Index(start)] = true;
   while (!stack.empty()) {
     const Cell c = stack.back();
     stack.pop_back();
-    for (const Cell n : {Cell{c.x + 1, c.y}, Cell{c.x - 1, c.y}, Cell{c.x, c.y + 1},
-                         Cell{c.x, c.y - 1}}) {
-      if (!Free(grid, n.x, n.y, unknown_is_free) || seen[grid.Index(n)]) continue;
+    for (const Cell n : {Cell{c.x + 1, c.y}, Cell{c.x - 1, c.y},
+                         Cell{c.x, c.y + 1}, Cell{c.x, c.y - 1}}) {
+      if (!Free(grid, n.x, n.y, unknown_is_free) || seen[grid.Index(n)])
+        continue;
       seen[grid.Index(n)] = true;
       stack.push_back(n);
     }
@@ -73,7 +75,8 @@ std::vector<bool> Reachable(const Grid& grid, Cell start, bool unknown_is_free) 
 // Euclidean shortest path length between the cell centres in free space:
 // Dijkstra over start, goal and every convex obstacle corner, joined where
 // the segment is clear.
-double EuclideanShortest(const Grid& grid, Cell s, Cell g, bool unknown_is_free) {
+double EuclideanShortest(const Grid& grid, Cell s, Cell g,
+                         bool unknown_is_free) {
   const FreeSpace space(grid, unknown_is_free);
   std::vector<LatticePoint> nodes{CentreOf(s), CentreOf(g)};
   for (const LatticePoint p : space.BendCorners()) nodes.push_back(p);
@@ -83,7 +86,9 @@ double EuclideanShortest(const Grid& grid, Cell s, Cell g, bool unknown_is_free)
   while (true) {
     size_t u = nodes.size();
     for (size_t i = 0; i < nodes.size(); ++i) {
-      if (!done[i] && !std::isinf(dist[i]) && (u == nodes.size() || dist[i] < dist[u])) u = i;
+      if (!done[i] && !std::isinf(dist[i]) &&
+          (u == nodes.size() || dist[i] < dist[u]))
+        u = i;
     }
     if (u == nodes.size()) return kInf;
     if (u == 1) return dist[1];
@@ -110,9 +115,9 @@ std::vector<double> BruteClearance(const Grid& grid, bool unknown_is_free) {
       for (const Cell& o : obstacles) {
         const double dx = std::abs(x - o.x);
         const double dy = std::abs(y - o.y);
-        d[grid.Index(x, y)] = std::min(
-            d[grid.Index(x, y)],
-            std::max(dx, dy) - std::min(dx, dy) + std::sqrt(2.0) * std::min(dx, dy));
+        d[grid.Index(x, y)] = std::min(d[grid.Index(x, y)],
+                                       std::max(dx, dy) - std::min(dx, dy) +
+                                           std::sqrt(2.0) * std::min(dx, dy));
       }
     }
   }
@@ -122,8 +127,8 @@ std::vector<double> BruteClearance(const Grid& grid, bool unknown_is_free) {
 // The largest bottleneck (smallest clearance over the path's cells) of any
 // legal 8-connected path from s to g, by relaxing until nothing changes; -1
 // when g is unreachable.
-double BruteWidest(const Grid& grid, const std::vector<double>& clearance, Cell s,
-                   Cell g, bool unknown_is_free) {
+double BruteWidest(const Grid& grid, const std::vector<double>& clearance,
+                   Cell s, Cell g, bool unknown_is_free) {
   std::vector<double> best(grid.size(), -1.0);
   best[grid.Index(s)] = clearance[grid.Index(s)];
   for (bool changed = true; changed;) {
@@ -169,15 +174,19 @@ TEST(TrapezoidalPlanner, RandomMapsAgreeWithBruteForce) {
     const Grid grid = RandomGrid(rng, w, h);
     CostParams params;
     params.unknown_is_free = trial % 3 == 0;
-    const Cell s{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
-    const Cell g{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+    const Cell s{static_cast<int32_t>(rng() % w),
+                 static_cast<int32_t>(rng() % h)};
+    const Cell g{static_cast<int32_t>(rng() % w),
+                 static_cast<int32_t>(rng() % h)};
     if (!Free(grid, s.x, s.y, params.unknown_is_free) ||
         !Free(grid, g.x, g.y, params.unknown_is_free)) {
       continue;
     }
-    const auto r = Plan("trapezoidal", grid, PlanRequest::Between(s, g, params));
+    const auto r =
+        Plan("trapezoidal", grid, PlanRequest::Between(s, g, params));
     ASSERT_TRUE(r.ok()) << r.status();
-    const bool reachable = Reachable(grid, s, params.unknown_is_free)[grid.Index(g)];
+    const bool reachable =
+        Reachable(grid, s, params.unknown_is_free)[grid.Index(g)];
     ASSERT_EQ(r->found(), reachable) << "trial " << trial;
     if (!reachable) {
       EXPECT_EQ(r->outcome, PlanOutcome::kNoPath);
@@ -202,7 +211,8 @@ TEST(TrapezoidalPlanner, RandomMapsAgreeWithBruteForce) {
 
 TEST(TrapezoidalPlanner, GoesStraightThroughOpenSpace) {
   const Grid grid = Grid::Create(20, 10).value();
-  const auto r = Plan("trapezoidal", grid, PlanRequest::Between({0, 0}, {19, 9}));
+  const auto r =
+      Plan("trapezoidal", grid, PlanRequest::Between({0, 0}, {19, 9}));
   ASSERT_TRUE(r.ok() && r->found());
   EXPECT_EQ(r->polyline.size(), 2u);
   EXPECT_DOUBLE_EQ(r->length, std::hypot(19.0, 9.0));
@@ -212,14 +222,16 @@ TEST(TrapezoidalPlanner, BendsAtTheCornerOfAWall) {
   // Around the wall's lower end: the funnel bends at its corner (5, 4).
   const Grid grid = MakeGrid({".....#....", ".....#....", ".....#....",
                               ".....#....", "..........", ".........."});
-  const auto r = Plan("trapezoidal", grid, PlanRequest::Between({1, 1}, {8, 1}));
+  const auto r =
+      Plan("trapezoidal", grid, PlanRequest::Between({1, 1}, {8, 1}));
   ASSERT_TRUE(r.ok() && r->found());
   ASSERT_EQ(r->polyline.size(), 4u);
   EXPECT_DOUBLE_EQ(r->polyline[1].x, 5.0);
   EXPECT_DOUBLE_EQ(r->polyline[1].y, 4.0);
   EXPECT_DOUBLE_EQ(r->polyline[2].x, 6.0);
   EXPECT_DOUBLE_EQ(r->polyline[2].y, 4.0);
-  EXPECT_NEAR(r->length, std::hypot(3.5, 2.5) + 1.0 + std::hypot(2.5, 2.5), 1e-12);
+  EXPECT_NEAR(r->length, std::hypot(3.5, 2.5) + 1.0 + std::hypot(2.5, 2.5),
+              1e-12);
 }
 
 TEST(VoronoiPlanner, RandomMapsReachTheBestBottleneck) {
@@ -232,8 +244,10 @@ TEST(VoronoiPlanner, RandomMapsReachTheBestBottleneck) {
     const Grid grid = RandomGrid(rng, w, h);
     CostParams params;
     params.unknown_is_free = trial % 3 == 0;
-    const Cell s{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
-    const Cell g{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+    const Cell s{static_cast<int32_t>(rng() % w),
+                 static_cast<int32_t>(rng() % h)};
+    const Cell g{static_cast<int32_t>(rng() % w),
+                 static_cast<int32_t>(rng() % h)};
     if (!Free(grid, s.x, s.y, params.unknown_is_free) ||
         !Free(grid, g.x, g.y, params.unknown_is_free)) {
       continue;
@@ -241,7 +255,8 @@ TEST(VoronoiPlanner, RandomMapsReachTheBestBottleneck) {
     const PlanRequest request = PlanRequest::Between(s, g, params);
     const auto r = Plan("voronoi", grid, request);
     ASSERT_TRUE(r.ok()) << r.status();
-    const bool reachable = Reachable(grid, s, params.unknown_is_free)[grid.Index(g)];
+    const bool reachable =
+        Reachable(grid, s, params.unknown_is_free)[grid.Index(g)];
     ASSERT_EQ(r->found(), reachable) << "trial " << trial;
     if (!reachable) {
       EXPECT_EQ(r->outcome, PlanOutcome::kNoPath);
@@ -254,10 +269,13 @@ TEST(VoronoiPlanner, RandomMapsReachTheBestBottleneck) {
     EXPECT_NEAR(r->length, m.length, 1e-9);
     ASSERT_EQ(r->path.front(), s);
     ASSERT_EQ(r->path.back(), g);
-    const std::vector<double> clearance = BruteClearance(grid, params.unknown_is_free);
-    const double best = BruteWidest(grid, clearance, s, g, params.unknown_is_free);
+    const std::vector<double> clearance =
+        BruteClearance(grid, params.unknown_is_free);
+    const double best =
+        BruteWidest(grid, clearance, s, g, params.unknown_is_free);
     EXPECT_NEAR(r->min_clearance, best, 1e-9) << "trial " << trial;
-    EXPECT_NEAR(PathClearance(grid, clearance, r->path), best, 1e-9) << "trial " << trial;
+    EXPECT_NEAR(PathClearance(grid, clearance, r->path), best, 1e-9)
+        << "trial " << trial;
     const auto a = Plan("astar", grid, request);
     ASSERT_TRUE(a.ok() && a->found());
     const double astar = PathClearance(grid, clearance, a->path);
@@ -285,13 +303,15 @@ TEST(VoronoiPlanner, KeepsToTheMiddleOfAHall) {
       "#.............#",
       "###############",
   });
-  const auto hall = Plan("voronoi", grid, PlanRequest::Between({1, 9}, {13, 5}));
+  const auto hall =
+      Plan("voronoi", grid, PlanRequest::Between({1, 9}, {13, 5}));
   ASSERT_TRUE(hall.ok() && hall->found());
   EXPECT_DOUBLE_EQ(hall->min_clearance, 1.0);  // the corner cells bound it
   int on_middle_row = 0;
   for (const Cell c : hall->path) on_middle_row += c.y == 7 ? 1 : 0;
   EXPECT_GE(on_middle_row, 7);
-  const auto inside = Plan("voronoi", grid, PlanRequest::Between({4, 7}, {10, 7}));
+  const auto inside =
+      Plan("voronoi", grid, PlanRequest::Between({4, 7}, {10, 7}));
   ASSERT_TRUE(inside.ok() && inside->found());
   EXPECT_DOUBLE_EQ(inside->min_clearance, 3.0);
   for (const Cell c : inside->path) EXPECT_EQ(c.y, 7) << c.x;
@@ -333,7 +353,8 @@ class AdvancingStore final : public DerivedStore {
       return values_[key] = recipe.build(*grid_);
     }
     if (!changed_.empty()) {
-      std::shared_ptr<const void> next = recipe.advance(it->second.get(), *grid_, changed_);
+      std::shared_ptr<const void> next =
+          recipe.advance(it->second.get(), *grid_, changed_);
       if (next == nullptr) {
         ++builds_;
         next = recipe.build(*grid_);
@@ -365,13 +386,16 @@ TEST(CellPlanners, AdvancedStructuresAnswerLikeFreshOnes) {
     for (int step = 0; step < 200; ++step) {
       std::vector<Cell> changed;
       for (int k = 0; k < 1 + static_cast<int>(rng() % 4); ++k) {
-        const Cell c{static_cast<int32_t>(rng() % 24), static_cast<int32_t>(rng() % 18)};
+        const Cell c{static_cast<int32_t>(rng() % 24),
+                     static_cast<int32_t>(rng() % 18)};
         grid.set_cost(c, rng() % 2 ? kLethalCost : kFreeCost);
         changed.push_back(c);
       }
       store.SetGrid(&grid, step == 0 ? std::vector<Cell>{} : changed);
-      const Cell s{static_cast<int32_t>(rng() % 24), static_cast<int32_t>(rng() % 18)};
-      const Cell g{static_cast<int32_t>(rng() % 24), static_cast<int32_t>(rng() % 18)};
+      const Cell s{static_cast<int32_t>(rng() % 24),
+                   static_cast<int32_t>(rng() % 18)};
+      const Cell g{static_cast<int32_t>(rng() % 24),
+                   static_cast<int32_t>(rng() % 18)};
       grid.set_cost(s, kFreeCost);
       grid.set_cost(g, kFreeCost);
       // The endpoints were freed after the store was told: tell it too.
@@ -385,7 +409,8 @@ TEST(CellPlanners, AdvancedStructuresAnswerLikeFreshOnes) {
       ASSERT_TRUE(fresh.ok() && cached.ok());
       ASSERT_EQ(fresh->outcome, cached->outcome) << name << " step " << step;
       EXPECT_EQ(fresh->path, cached->path) << name << " step " << step;
-      EXPECT_EQ(fresh->min_clearance, cached->min_clearance) << name << " step " << step;
+      EXPECT_EQ(fresh->min_clearance, cached->min_clearance)
+          << name << " step " << step;
     }
     EXPECT_EQ(store.builds_ + store.advances_, 200) << name;
     if (std::string(name) == "voronoi") {
