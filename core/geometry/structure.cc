@@ -20,6 +20,8 @@ struct Kind {
 const std::vector<Kind>& Kinds() {
   static const std::vector<Kind>* const kKinds = new std::vector<Kind>{
       {"polygons", &DescribeObstaclePolygons},
+      {"decomposition", &DescribeDecomposition},
+      {"voronoi", &DescribeVoronoi},
   };
   return *kKinds;
 }
