@@ -22,6 +22,7 @@ const std::vector<Kind>& Kinds() {
       {"polygons", &DescribeObstaclePolygons},
       {"decomposition", &DescribeDecomposition},
       {"voronoi", &DescribeVoronoi},
+      {"visibility", &DescribeVisibilityGraph},
   };
   return *kKinds;
 }

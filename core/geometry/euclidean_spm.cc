@@ -1,0 +1,289 @@
+#include "core/geometry/euclidean_spm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <queue>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+
+namespace pathd {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+struct Entry {
+  double d;
+  uint32_t id;
+  bool operator>(const Entry& o) const { return d > o.d; }
+};
+using MinQueue = std::priority_queue<Entry, std::vector<Entry>, std::greater<>>;
+
+// A shortest path from `c` may bend at vertex `u` (blocked quadrant `q`) on
+// its way to `next`: the segment c-u is tangent at u and the turn from c-u
+// to u-next wraps the blocked cell (the cell is on the inner side of the
+// turn, or the path runs straight on). Otherwise the corner could be cut.
+bool TautAt(LatticePoint c, LatticePoint u, CornerQuadrant q, LatticePoint next) {
+  if (!Tangent(u, q, c)) return false;
+  const int64_t ax = u.x2 - c.x2;
+  const int64_t ay = u.y2 - c.y2;
+  const int64_t turn = ax * (next.y2 - u.y2) - ay * (next.x2 - u.x2);
+  const int64_t side = ax * q.qy - ay * q.qx;
+  return turn == 0 || (turn > 0) == (side > 0);
+}
+
+// The cells of the goal's free region: free cells joined by shared edges
+// (two free cells touching only at a corner are joined through a side cell,
+// or not at all: a pinch).
+std::vector<uint8_t> GoalRegion(const FreeSpace& space, Cell goal) {
+  const int32_t w = space.width();
+  const int32_t h = space.height();
+  std::vector<uint8_t> in(static_cast<size_t>(w) * h, 0);
+  std::vector<Cell> stack = {goal};
+  in[static_cast<size_t>(goal.y) * w + goal.x] = 1;
+  while (!stack.empty()) {
+    const Cell c = stack.back();
+    stack.pop_back();
+    const Cell around[] = {{c.x + 1, c.y}, {c.x - 1, c.y}, {c.x, c.y + 1}, {c.x, c.y - 1}};
+    for (const Cell& n : around) {
+      if (space.Blocked(n.x, n.y)) continue;  // the outside reads as blocked
+      uint8_t& seen = in[static_cast<size_t>(n.y) * w + n.x];
+      if (seen) continue;
+      seen = 1;
+      stack.push_back(n);
+    }
+  }
+  return in;
+}
+
+// Makes every root of the goal's region exact. The first bend of a
+// shortest path from point c is a vertex u seen from c (or the goal), so the
+// distance is min over those of |c u| + dist(u). The propagated root's value
+// `best` is the length of a clear path, so only vertices with dist(u) +
+// |c u| below it can do better: those are tested in order of that sum, and
+// the first whose segment is clear (and tangent) is the root. Vertices come
+// sorted by dist, so the scan stops at the first with dist(u) >= best.
+// Usually no candidate survives the bounds and the propagated root stands.
+void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>& dist,
+                 const std::vector<uint32_t>& next_root,
+                 const std::vector<double>& best, std::vector<uint32_t>& roots) {
+  const FreeSpace& space = vg.space();
+  const int32_t w = space.width();
+  const auto n = static_cast<uint32_t>(vg.vertex_count());
+  std::vector<uint32_t> order;
+  for (uint32_t v = 0; v < n; ++v) {
+    if (dist[v] < kInfinity) order.push_back(v);
+  }
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return dist[a] < dist[b]; });
+  const LatticePoint goal_point = CentreOf(goal);
+  const std::vector<uint8_t> region = GoalRegion(space, goal);
+  std::vector<Entry> candidates;
+  for (size_t i = 0; i < roots.size(); ++i) {
+    if (!region[i]) continue;
+    const LatticePoint c = CentreOf(Cell{static_cast<int32_t>(i % w),
+                                         static_cast<int32_t>(i / w)});
+    // Strictly below the propagated value (a tie keeps its root).
+    const double bound = best[i] - 1e-9 * (1.0 + best[i]);
+    candidates.clear();
+    const double to_goal = Distance(c, goal_point);
+    if (to_goal < bound) candidates.push_back({to_goal, n});
+    for (uint32_t v : order) {
+      const double slack = bound - dist[v];
+      if (slack <= 0.0) break;
+      const LatticePoint u = vg.vertex(v);
+      const double dx = static_cast<double>(u.x2 - c.x2) / 2.0;
+      const double dy = static_cast<double>(u.y2 - c.y2) / 2.0;
+      if (dx * dx + dy * dy >= slack * slack) continue;
+      const LatticePoint next = next_root[v] == n ? goal_point : vg.vertex(next_root[v]);
+      if (!TautAt(c, u, vg.quadrant(v), next)) continue;
+      candidates.push_back({dist[v] + std::sqrt(dx * dx + dy * dy), v});
+    }
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Entry& a, const Entry& b) { return a.d < b.d; });
+    for (const Entry& e : candidates) {
+      if (space.SegmentClear(c, e.id == n ? goal_point : vg.vertex(e.id))) {
+        roots[i] = e.id;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
+    std::shared_ptr<const VisibilityGraph> graph, Cell goal) {
+  const absl::Time started = absl::Now();
+  auto spm = std::shared_ptr<EuclideanSpm>(new EuclideanSpm());
+  spm->graph_ = std::move(graph);
+  spm->goal_ = goal;
+  const VisibilityGraph& vg = *spm->graph_;
+  const FreeSpace& space = vg.space();
+  const auto n = static_cast<uint32_t>(vg.vertex_count());
+  const uint32_t goal_id = n;
+  const LatticePoint goal_point = CentreOf(goal);
+
+  // Vertices: Dijkstra from the goal.
+  std::vector<double>& dist = spm->distance_;
+  std::vector<uint32_t>& next = spm->next_;
+  dist.assign(n + 1, kInfinity);
+  next.assign(n + 1, kNoRoot);
+  dist[goal_id] = 0.0;
+  MinQueue queue;
+  vg.ForEachTangentVisible(goal_point, [&](uint32_t v, double d) {
+    dist[v] = d;
+    next[v] = goal_id;
+    queue.push({d, v});
+  });
+  while (!queue.empty()) {
+    const Entry top = queue.top();
+    queue.pop();
+    if (top.d != dist[top.id]) continue;
+    for (const VisibilityGraph::Edge& e : vg.EdgesOf(top.id)) {
+      const double d = top.d + e.length;
+      if (d < dist[e.to]) {
+        dist[e.to] = d;
+        next[e.to] = top.id;
+        queue.push({d, e.to});
+      }
+    }
+  }
+
+  // Cells: roots propagated in order of distance.
+  const int32_t w = space.width();
+  const int32_t h = space.height();
+  std::vector<uint32_t>& roots = spm->roots_;
+  roots.assign(static_cast<size_t>(w) * h, kNoRoot);
+  std::vector<double> best(roots.size(), kInfinity);
+  std::vector<uint8_t> done(roots.size(), 0);
+  auto point_of = [&](uint32_t r) {
+    return r == goal_id ? goal_point : vg.vertex(r);
+  };
+  auto offer = [&](int32_t x, int32_t y, uint32_t r) {
+    if (r == kNoRoot || dist[r] == kInfinity) return;
+    const size_t i = static_cast<size_t>(y) * w + x;
+    if (done[i]) return;
+    const LatticePoint c = CentreOf(Cell{x, y});
+    const LatticePoint p = point_of(r);
+    const double d = Distance(c, p) + dist[r];
+    // Near-ties (a cell centre on the line through a root and its next
+    // root) go to the deeper root, the one nearer the cell: the cells along
+    // a shadow's edge then carry the shadow's root to the cells inside it.
+    const double tolerance = 1e-9 * (1.0 + d);
+    if (d > best[i] + tolerance) return;
+    if (d >= best[i] - tolerance &&
+        (roots[i] == r || dist[r] <= dist[roots[i]])) {
+      return;
+    }
+    if (r != goal_id && !TautAt(c, p, vg.quadrant(r), point_of(next[r]))) return;
+    if (!space.SegmentClear(c, p)) return;
+    best[i] = d;
+    roots[i] = r;
+    queue.push({d, static_cast<uint32_t>(i)});
+  };
+  // The vertex ids at grid corners, for the corner candidates.
+  std::vector<uint32_t> corner_vertex(static_cast<size_t>(w + 1) * (h + 1), kNoRoot);
+  for (uint32_t v = 0; v < n; ++v) {
+    const LatticePoint p = vg.vertex(v);
+    corner_vertex[static_cast<size_t>(p.y2 / 2) * (w + 1) + p.x2 / 2] = v;
+  }
+  // A vertex's region begins as a thin wedge between the extension of the
+  // segment from its next root and the obstacle edge at the corner. Cell
+  // centres there may have no neighbour in the wedge, so the vertex is
+  // offered to the cells along that extension until the wedge is two cells
+  // wide, from where on neighbours carry it.
+  auto SeedShadow = [&](uint32_t v) {
+    if (dist[v] == kInfinity) return;
+    const LatticePoint u = vg.vertex(v);
+    const LatticePoint from = point_of(next[v]);
+    const double dx = static_cast<double>(u.x2 - from.x2);
+    const double dy = static_cast<double>(u.y2 - from.y2);
+    const double norm = std::hypot(dx, dy);
+    const CornerQuadrant q = vg.quadrant(v);
+    // The edge of the blocked cell that points forward along the extension.
+    const double ex = dx * q.qx >= 0 ? q.qx : 0.0;
+    const double ey = ex == 0.0 ? q.qy : 0.0;
+    if (dx * ex + dy * ey < 0) return;
+    const double sine = std::abs(dx * ey - dy * ex) / norm;
+    if (sine == 0.0) return;
+    const double reach = std::min(2.0 / sine + 2.0, static_cast<double>(w + h));
+    const double ux = static_cast<double>(u.x2) / 2.0;
+    const double uy = static_cast<double>(u.y2) / 2.0;
+    for (double t = 0.25; t <= reach; t += 0.5) {
+      const auto px = static_cast<int32_t>(std::floor(ux + t * dx / norm));
+      const auto py = static_cast<int32_t>(std::floor(uy + t * dy / norm));
+      if (px < 0 || py < 0 || px >= w || py >= h || space.Blocked(px, py)) return;
+      for (int32_t y = std::max(py - 1, 0); y <= std::min(py + 1, h - 1); ++y) {
+        for (int32_t x = std::max(px - 1, 0); x <= std::min(px + 1, w - 1); ++x) {
+          if (!space.Blocked(x, y)) offer(x, y, v);
+        }
+      }
+    }
+  };
+  offer(goal.x, goal.y, goal_id);
+  for (uint32_t v = 0; v < n; ++v) SeedShadow(v);
+  while (!queue.empty()) {
+    const Entry top = queue.top();
+    queue.pop();
+    if (done[top.id] || top.d != best[top.id]) continue;
+    done[top.id] = 1;
+    const auto cx = static_cast<int32_t>(top.id % w);
+    const auto cy = static_cast<int32_t>(top.id / w);
+    const uint32_t root = roots[top.id];
+    const uint32_t after = next[root];
+    for (int32_t y = std::max(cy - 1, 0); y <= std::min(cy + 1, h - 1); ++y) {
+      for (int32_t x = std::max(cx - 1, 0); x <= std::min(cx + 1, w - 1); ++x) {
+        if (done[static_cast<size_t>(y) * w + x] || space.Blocked(x, y)) continue;
+        offer(x, y, root);
+        offer(x, y, after);
+        if (after != kNoRoot) offer(x, y, next[after]);
+        // The corners around the cell: a shadow starts at one of them.
+        for (int32_t j = std::max(y - 1, 0); j <= std::min(y + 2, h); ++j) {
+          for (int32_t i = std::max(x - 1, 0); i <= std::min(x + 2, w); ++i) {
+            offer(x, y, corner_vertex[static_cast<size_t>(j) * (w + 1) + i]);
+          }
+        }
+      }
+    }
+  }
+  SettleRoots(vg, goal, dist, next, best, roots);
+  spm->build_time_ = absl::Now() - started;
+  return spm;
+}
+
+double EuclideanSpm::DistanceFrom(Cell c) const {
+  const uint32_t r = RootOf(c);
+  if (r == kNoRoot) return kInfinity;
+  return Distance(CentreOf(c), RootPoint(r)) + distance_[r];
+}
+
+size_t EuclideanSpm::bytes() const {
+  return sizeof(*this) + distance_.capacity() * sizeof(double) +
+         next_.capacity() * sizeof(uint32_t) + roots_.capacity() * sizeof(uint32_t);
+}
+
+std::shared_ptr<const EuclideanSpm> GetEuclideanSpm(DerivedStore* store,
+                                                    const Grid& grid, Cell goal,
+                                                    bool unknown_is_free) {
+  const std::string key = absl::StrCat("euclidean_spm goal=", goal.x, ",", goal.y,
+                                       " unknown_is_free=", unknown_is_free ? 1 : 0);
+  return GetDerived<EuclideanSpm>(
+      store, grid, key,
+      [store, goal, unknown_is_free](const Grid& g) {
+        return EuclideanSpm::Build(GetVisibilityGraph(store, g, unknown_is_free), goal);
+      },
+      // Any changed cell can move roots anywhere: rebuild.
+      [](const EuclideanSpm&, const Grid&, absl::Span<const Cell>) {
+        return std::shared_ptr<const EuclideanSpm>();
+      },
+      [](const EuclideanSpm& spm) { return spm.bytes(); });
+}
+
+}  // namespace pathd

@@ -1,0 +1,272 @@
+#include "core/geometry/visibility_graph.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "core/geometry/structure.h"
+
+namespace pathd {
+namespace {
+
+std::string FlagKey(const char* kind, bool unknown_is_free) {
+  return absl::StrCat(kind, " unknown_is_free=", unknown_is_free ? 1 : 0);
+}
+
+}  // namespace
+
+CornerQuadrant QuadrantAt(const FreeSpace& space, LatticePoint p) {
+  if (p.x2 % 2 != 0 || p.y2 % 2 != 0) return {};
+  const int64_t x = p.x2 / 2;
+  const int64_t y = p.y2 / 2;
+  if (!space.IsBendCorner(x, y)) return {};
+  // CornerMask bits: 0 (x-1, y-1), 1 (x, y-1), 2 (x-1, y), 3 (x, y).
+  switch (space.CornerMask(x, y)) {
+    case 1: return {-1, -1};
+    case 2: return {1, -1};
+    case 4: return {-1, 1};
+    default: return {1, 1};
+  }
+}
+
+std::shared_ptr<const VisibilityGraph> VisibilityGraph::Build(
+    std::shared_ptr<const FreeSpace> space) {
+  const absl::Time started = absl::Now();
+  auto graph = std::shared_ptr<VisibilityGraph>(new VisibilityGraph());
+  graph->space_ = std::move(space);
+  const FreeSpace& fs = *graph->space_;
+  graph->vertices_ = fs.BendCorners();
+  const auto n = static_cast<uint32_t>(graph->vertices_.size());
+  graph->quadrants_.reserve(n);
+  for (LatticePoint v : graph->vertices_) {
+    graph->quadrants_.push_back(QuadrantAt(fs, v));
+  }
+  std::vector<std::vector<Edge>> adjacency(n);
+  const std::vector<LatticePoint>& vs = graph->vertices_;
+  const std::vector<CornerQuadrant>& qs = graph->quadrants_;
+  for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t j = i + 1; j < n; ++j) {
+      // Tangency at both ends rejects about three pairs in four for free.
+      if (!Tangent(vs[i], qs[i], vs[j]) || !Tangent(vs[j], qs[j], vs[i])) continue;
+      if (!fs.SegmentClear(vs[i], vs[j])) continue;
+      const double length = Distance(vs[i], vs[j]);
+      adjacency[i].push_back(Edge{j, length});
+      adjacency[j].push_back(Edge{i, length});
+    }
+  }
+  graph->offsets_.assign(n + 1, 0);
+  for (uint32_t v = 0; v < n; ++v) {
+    graph->offsets_[v + 1] =
+        graph->offsets_[v] + static_cast<uint32_t>(adjacency[v].size());
+  }
+  graph->edges_.reserve(graph->offsets_[n]);
+  for (std::vector<Edge>& edges : adjacency) {
+    graph->edges_.insert(graph->edges_.end(), edges.begin(), edges.end());
+    std::vector<Edge>().swap(edges);
+  }
+  graph->build_time_ = absl::Now() - started;
+  return graph;
+}
+
+size_t VisibilityGraph::bytes() const {
+  return sizeof(*this) + space_->bytes() +
+         vertices_.capacity() * sizeof(LatticePoint) +
+         quadrants_.capacity() * sizeof(CornerQuadrant) +
+         offsets_.capacity() * sizeof(uint32_t) + edges_.capacity() * sizeof(Edge);
+}
+
+std::shared_ptr<const FreeSpace> GetVisibilityFreeSpace(DerivedStore* store,
+                                                        const Grid& grid,
+                                                        bool unknown_is_free) {
+  return GetDerived<FreeSpace>(
+      store, grid, FlagKey("visibility_free_space", unknown_is_free),
+      [unknown_is_free](const Grid& g) {
+        return std::make_shared<const FreeSpace>(g, unknown_is_free);
+      },
+      [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed) {
+        auto next = std::make_shared<FreeSpace>(previous);
+        next->Update(g, changed);
+        return std::shared_ptr<const FreeSpace>(std::move(next));
+      },
+      [](const FreeSpace& space) { return space.bytes(); });
+}
+
+std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
+                                                          const Grid& grid,
+                                                          bool unknown_is_free) {
+  return GetDerived<VisibilityGraph>(
+      store, grid, FlagKey("visibility_graph", unknown_is_free),
+      [store, unknown_is_free](const Grid& g) {
+        return VisibilityGraph::Build(
+            GetVisibilityFreeSpace(store, g, unknown_is_free));
+      },
+      // A changed cell can open or close any pair's segment: rebuild.
+      [](const VisibilityGraph&, const Grid&, absl::Span<const Cell>) {
+        return std::shared_ptr<const VisibilityGraph>();
+      },
+      [](const VisibilityGraph& graph) { return graph.bytes(); });
+}
+
+std::shared_ptr<const ObstacleCorners> ObstacleCorners::Build(
+    std::shared_ptr<const FreeSpace> space) {
+  auto result = std::shared_ptr<ObstacleCorners>(new ObstacleCorners());
+  result->space_ = std::move(space);
+  const FreeSpace& fs = *result->space_;
+  const int64_t pw = static_cast<int64_t>(fs.width()) + 2;
+  const int64_t ph = static_cast<int64_t>(fs.height()) + 2;
+  std::vector<int32_t>& label = result->obstacle_;
+  label.assign(static_cast<size_t>(pw * ph), -1);
+  // Flood fill over 8-neighbours of the padded grid (padded index of cell
+  // (x, y) is (y + 1) * pw + x + 1).
+  int32_t obstacles = 0;
+  std::vector<int64_t> stack;
+  for (int64_t start = 0; start < pw * ph; ++start) {
+    const int64_t sx = start % pw - 1;
+    const int64_t sy = start / pw - 1;
+    if (label[start] >= 0 || !fs.Blocked(sx, sy)) continue;
+    label[start] = obstacles;
+    stack.push_back(start);
+    while (!stack.empty()) {
+      const int64_t at = stack.back();
+      stack.pop_back();
+      const int64_t x = at % pw - 1;
+      const int64_t y = at / pw - 1;
+      for (int64_t ny = std::max<int64_t>(y - 1, -1);
+           ny <= std::min<int64_t>(y + 1, ph - 2); ++ny) {
+        for (int64_t nx = std::max<int64_t>(x - 1, -1);
+             nx <= std::min<int64_t>(x + 1, pw - 2); ++nx) {
+          const int64_t next = (ny + 1) * pw + nx + 1;
+          if (label[next] >= 0 || !fs.Blocked(nx, ny)) continue;
+          label[next] = obstacles;
+          stack.push_back(next);
+        }
+      }
+    }
+    ++obstacles;
+  }
+  // Bend corners grouped by obstacle (counting sort keeps row order).
+  const std::vector<LatticePoint> bends = fs.BendCorners();
+  std::vector<int32_t> owner;
+  owner.reserve(bends.size());
+  result->corner_offsets_.assign(static_cast<size_t>(obstacles) + 1, 0);
+  for (LatticePoint c : bends) {
+    const CornerQuadrant q = QuadrantAt(fs, c);
+    const int64_t cx = c.x2 / 2 + (q.qx < 0 ? -1 : 0);
+    const int64_t cy = c.y2 / 2 + (q.qy < 0 ? -1 : 0);
+    owner.push_back(result->ObstacleOf(cx, cy));
+    ++result->corner_offsets_[owner.back() + 1];
+  }
+  std::partial_sum(result->corner_offsets_.begin(), result->corner_offsets_.end(),
+                   result->corner_offsets_.begin());
+  result->corners_.resize(bends.size());
+  std::vector<uint32_t> fill(result->corner_offsets_.begin(),
+                             result->corner_offsets_.end() - 1);
+  for (size_t i = 0; i < bends.size(); ++i) {
+    result->corners_[fill[owner[i]]++] = bends[i];
+  }
+  return result;
+}
+
+int32_t ObstacleCorners::ObstacleOf(int64_t x, int64_t y) const {
+  const int64_t pw = static_cast<int64_t>(space_->width()) + 2;
+  return obstacle_[static_cast<size_t>((y + 1) * pw + x + 1)];
+}
+
+std::optional<int32_t> ObstacleCorners::Blocker(LatticePoint a,
+                                                LatticePoint b) const {
+  const FreeSpace& fs = *space_;
+  if (fs.SegmentClear(a, b)) return std::nullopt;
+  // A blocked cell whose interior the segment crosses, or the second of two
+  // blocked cells along a grid line (ForEachCellCrossed reports it then).
+  std::optional<int32_t> found;
+  fs.ForEachCellCrossed(a, b, [&](Cell c) {
+    if (!found.has_value() && fs.Blocked(c.x, c.y)) found = ObstacleOf(c.x, c.y);
+  });
+  if (found.has_value()) return found;
+  // Otherwise a closed grid corner on the segment (a pinch): any blocked
+  // cell there. The segment's lattice points are a + k (d / gcd).
+  const int64_t dx = b.x2 - a.x2;
+  const int64_t dy = b.y2 - a.y2;
+  const int64_t steps = std::gcd(std::abs(dx), std::abs(dy));
+  for (int64_t k = 0; k <= steps; ++k) {
+    const int64_t x2 = a.x2 + k * (dx / steps);
+    const int64_t y2 = a.y2 + k * (dy / steps);
+    if (x2 % 2 != 0 || y2 % 2 != 0 || fs.CornerFree(x2 / 2, y2 / 2)) continue;
+    for (int64_t cy = y2 / 2 - 1; cy <= y2 / 2; ++cy) {
+      for (int64_t cx = x2 / 2 - 1; cx <= x2 / 2; ++cx) {
+        if (fs.Blocked(cx, cy)) return ObstacleOf(cx, cy);
+      }
+    }
+  }
+  // SegmentClear fails only for the three causes above.
+  std::abort();
+}
+
+size_t ObstacleCorners::bytes() const {
+  return sizeof(*this) + space_->bytes() + obstacle_.capacity() * sizeof(int32_t) +
+         corner_offsets_.capacity() * sizeof(uint32_t) +
+         corners_.capacity() * sizeof(LatticePoint);
+}
+
+std::shared_ptr<const ObstacleCorners> GetObstacleCorners(DerivedStore* store,
+                                                          const Grid& grid,
+                                                          bool unknown_is_free) {
+  return GetDerived<ObstacleCorners>(
+      store, grid, FlagKey("obstacle_corners", unknown_is_free),
+      [store, unknown_is_free](const Grid& g) {
+        return ObstacleCorners::Build(
+            GetVisibilityFreeSpace(store, g, unknown_is_free));
+      },
+      // One changed cell can merge or split obstacles anywhere: rebuild.
+      [](const ObstacleCorners&, const Grid&, absl::Span<const Cell>) {
+        return std::shared_ptr<const ObstacleCorners>();
+      },
+      [](const ObstacleCorners& corners) { return corners.bytes(); });
+}
+
+void FillPolylineResult(const FreeSpace& space,
+                        absl::Span<const LatticePoint> polyline,
+                        double cell_factor, PlanResult& result) {
+  result.outcome = PlanOutcome::kFound;
+  result.polyline.clear();
+  for (LatticePoint p : polyline) result.polyline.push_back(ToCellPoint(p));
+  result.path = CellsAlongPolyline(space, polyline);
+  result.any_angle = false;
+  result.length = PolylineLength(polyline);
+  result.cost = result.length * cell_factor;
+}
+
+GeometricStructure DescribeVisibilityGraph(const Grid& grid, bool unknown_is_free) {
+  // Drawing more segments than this helps nobody and costs megabytes.
+  constexpr int64_t kMaxSegments = 200000;
+  const std::shared_ptr<const VisibilityGraph> graph =
+      GetVisibilityGraph(nullptr, grid, unknown_is_free);
+  GeometricStructure s;
+  s.kind = "visibility";
+  s.counts = {{"vertices", static_cast<int64_t>(graph->vertex_count())},
+              {"edges", graph->edge_count()}};
+  s.bytes = graph->bytes();
+  s.build_time = graph->build_time();
+  for (uint32_t v = 0; v < graph->vertex_count(); ++v) {
+    s.points.push_back(ToCellPoint(graph->vertex(v)));
+    for (const VisibilityGraph::Edge& e : graph->EdgesOf(v)) {
+      if (e.to < v) continue;
+      if (static_cast<int64_t>(s.segments.size()) == kMaxSegments) break;
+      s.segments.push_back({ToCellPoint(graph->vertex(v)), ToCellPoint(graph->vertex(e.to))});
+    }
+  }
+  if (graph->edge_count() > kMaxSegments) {
+    s.counts.push_back({"edges drawn", kMaxSegments});
+  }
+  return s;
+}
+
+}  // namespace pathd
