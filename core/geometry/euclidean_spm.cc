@@ -25,19 +25,6 @@ struct Entry {
 };
 using MinQueue = std::priority_queue<Entry, std::vector<Entry>, std::greater<>>;
 
-// A shortest path from `c` may bend at vertex `u` (blocked quadrant `q`) on
-// its way to `next`: the segment c-u is tangent at u and the turn from c-u
-// to u-next wraps the blocked cell (the cell is on the inner side of the
-// turn, or the path runs straight on). Otherwise the corner could be cut.
-bool TautAt(LatticePoint c, LatticePoint u, CornerQuadrant q, LatticePoint next) {
-  if (!Tangent(u, q, c)) return false;
-  const int64_t ax = u.x2 - c.x2;
-  const int64_t ay = u.y2 - c.y2;
-  const int64_t turn = ax * (next.y2 - u.y2) - ay * (next.x2 - u.x2);
-  const int64_t side = ax * q.qy - ay * q.qx;
-  return turn == 0 || (turn > 0) == (side > 0);
-}
-
 // The cells of the goal's free region: free cells joined by shared edges
 // (two free cells touching only at a corner are joined through a side cell,
 // or not at all: a pinch).
@@ -146,7 +133,12 @@ std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
     const Entry top = queue.top();
     queue.pop();
     if (top.d != dist[top.id]) continue;
+    const LatticePoint at = vg.vertex(top.id);
+    const LatticePoint after = next[top.id] == goal_id ? goal_point : vg.vertex(next[top.id]);
     for (const VisibilityGraph::Edge& e : vg.EdgesOf(top.id)) {
+      // Paths from the vertex's neighbours to the goal through it are
+      // shortest only if taut there.
+      if (!TautAt(vg.vertex(e.to), at, vg.quadrant(top.id), after)) continue;
       const double d = top.d + e.length;
       if (d < dist[e.to]) {
         dist[e.to] = d;

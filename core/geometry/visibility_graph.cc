@@ -124,14 +124,17 @@ std::shared_ptr<const ObstacleCorners> ObstacleCorners::Build(
   const int64_t ph = static_cast<int64_t>(fs.height()) + 2;
   std::vector<int32_t>& label = result->obstacle_;
   label.assign(static_cast<size_t>(pw * ph), -1);
-  // Flood fill over 8-neighbours of the padded grid (padded index of cell
-  // (x, y) is (y + 1) * pw + x + 1).
+  // Flood fill over the 8-neighbours of the map's cells (padded index of
+  // cell (x, y) is (y + 1) * pw + x + 1); the padding stays -1.
   int32_t obstacles = 0;
   std::vector<int64_t> stack;
   for (int64_t start = 0; start < pw * ph; ++start) {
     const int64_t sx = start % pw - 1;
     const int64_t sy = start / pw - 1;
-    if (label[start] >= 0 || !fs.Blocked(sx, sy)) continue;
+    if (sx < 0 || sy < 0 || sx >= fs.width() || sy >= fs.height() ||
+        label[start] >= 0 || !fs.Blocked(sx, sy)) {
+      continue;
+    }
     label[start] = obstacles;
     stack.push_back(start);
     while (!stack.empty()) {
@@ -139,10 +142,10 @@ std::shared_ptr<const ObstacleCorners> ObstacleCorners::Build(
       stack.pop_back();
       const int64_t x = at % pw - 1;
       const int64_t y = at / pw - 1;
-      for (int64_t ny = std::max<int64_t>(y - 1, -1);
-           ny <= std::min<int64_t>(y + 1, ph - 2); ++ny) {
-        for (int64_t nx = std::max<int64_t>(x - 1, -1);
-             nx <= std::min<int64_t>(x + 1, pw - 2); ++nx) {
+      for (int64_t ny = std::max<int64_t>(y - 1, 0);
+           ny <= std::min<int64_t>(y + 1, fs.height() - 1); ++ny) {
+        for (int64_t nx = std::max<int64_t>(x - 1, 0);
+             nx <= std::min<int64_t>(x + 1, fs.width() - 1); ++nx) {
           const int64_t next = (ny + 1) * pw + nx + 1;
           if (label[next] >= 0 || !fs.Blocked(nx, ny)) continue;
           label[next] = obstacles;
@@ -186,13 +189,17 @@ std::optional<int32_t> ObstacleCorners::Blocker(LatticePoint a,
   if (fs.SegmentClear(a, b)) return std::nullopt;
   // A blocked cell whose interior the segment crosses, or the second of two
   // blocked cells along a grid line (ForEachCellCrossed reports it then).
+  // Along the bottom or right border the second is outside the map and the
+  // first, the one inside, is the blocker.
   std::optional<int32_t> found;
   fs.ForEachCellCrossed(a, b, [&](Cell c) {
-    if (!found.has_value() && fs.Blocked(c.x, c.y)) found = ObstacleOf(c.x, c.y);
+    const int32_t obstacle = ObstacleOf(std::min(c.x, fs.width() - 1),
+                                        std::min(c.y, fs.height() - 1));
+    if (!found.has_value() && fs.Blocked(c.x, c.y) && obstacle >= 0) found = obstacle;
   });
   if (found.has_value()) return found;
   // Otherwise a closed grid corner on the segment (a pinch): any blocked
-  // cell there. The segment's lattice points are a + k (d / gcd).
+  // cell of the map there. The segment's lattice points are a + k (d / gcd).
   const int64_t dx = b.x2 - a.x2;
   const int64_t dy = b.y2 - a.y2;
   const int64_t steps = std::gcd(std::abs(dx), std::abs(dy));
@@ -202,11 +209,12 @@ std::optional<int32_t> ObstacleCorners::Blocker(LatticePoint a,
     if (x2 % 2 != 0 || y2 % 2 != 0 || fs.CornerFree(x2 / 2, y2 / 2)) continue;
     for (int64_t cy = y2 / 2 - 1; cy <= y2 / 2; ++cy) {
       for (int64_t cx = x2 / 2 - 1; cx <= x2 / 2; ++cx) {
-        if (fs.Blocked(cx, cy)) return ObstacleOf(cx, cy);
+        if (ObstacleOf(cx, cy) >= 0) return ObstacleOf(cx, cy);
       }
     }
   }
-  // SegmentClear fails only for the three causes above.
+  // SegmentClear fails only for the causes above, and within the map each
+  // involves a blocked cell of the map.
   std::abort();
 }
 

@@ -53,6 +53,23 @@ inline bool Tangent(LatticePoint p, CornerQuadrant q, LatticePoint other) {
   return sx * q.qx * sy * q.qy <= 0;
 }
 
+// A shortest path may run prev -> p -> next, bending at `p` (blocked
+// quadrant `q`): both segments are tangent at p and the turn wraps the
+// blocked cell (it lies on the inner side of the turn), or the path runs
+// straight on. Otherwise the corner could be cut, so no shortest path does
+// this; searches use it to skip successors of a node given its parent.
+// Always true for q = {0, 0}.
+inline bool TautAt(LatticePoint prev, LatticePoint p, CornerQuadrant q,
+                   LatticePoint next) {
+  if (q.qx == 0) return true;
+  if (!Tangent(p, q, prev) || !Tangent(p, q, next)) return false;
+  const int64_t ax = p.x2 - prev.x2;
+  const int64_t ay = p.y2 - prev.y2;
+  const int64_t turn = ax * (next.y2 - p.y2) - ay * (next.x2 - p.x2);
+  const int64_t side = ax * q.qy - ay * q.qx;
+  return turn == 0 || (turn > 0) == (side > 0);
+}
+
 // The tangent visibility graph of one FreeSpace. Immutable once built, so one
 // value is shared by every query on its map version. Thread-safe (const).
 class VisibilityGraph {
@@ -122,11 +139,16 @@ std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
                                                           bool unknown_is_free);
 
 // The obstacles of a FreeSpace as Minimal Construct sees them: the connected
-// groups of blocked cells (cells sharing an edge or a corner, the outside of
-// the map included) with the bend corners of each. Two blocked cells that
-// close a segment together (along the edge between them, or through a pinch)
-// always belong to one obstacle, so a blocked segment is blocked by one
-// obstacle alone. Immutable; thread-safe.
+// groups of the map's blocked cells (cells sharing an edge or a corner) with
+// the bend corners of each. Two blocked cells that close a segment together
+// (along the edge between them, or through a pinch) always belong to one
+// obstacle, so a blocked segment is blocked by one obstacle alone. The
+// outside of the map belongs to none: a segment between points of the map
+// never crosses it, and where it closes a segment along the border (or at a
+// pinch there) together with a cell of the map, that cell's obstacle is the
+// blocker; it has no bend corners either (every corner on the border has two
+// outside cells). So walls that merely touch the border stay separate
+// obstacles. Immutable; thread-safe.
 class ObstacleCorners {
  public:
   static std::shared_ptr<const ObstacleCorners> Build(
@@ -143,6 +165,8 @@ class ObstacleCorners {
                                    corner_offsets_[obstacle]);
   }
   // The obstacle that blocks segment a-b, nullopt when it is clear.
+  // Precondition: a and b are free points of the map (within 0..width x
+  // 0..height).
   std::optional<int32_t> Blocker(LatticePoint a, LatticePoint b) const;
   size_t bytes() const;
 
@@ -152,7 +176,7 @@ class ObstacleCorners {
 
   std::shared_ptr<const FreeSpace> space_;
   // Per cell of the grid padded by one on every side: the obstacle it
-  // belongs to, -1 when free.
+  // belongs to, -1 when free or outside the map.
   std::vector<int32_t> obstacle_;
   std::vector<uint32_t> corner_offsets_;
   std::vector<LatticePoint> corners_;

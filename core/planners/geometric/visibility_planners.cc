@@ -148,10 +148,16 @@ class VisibilityGraphPlanner final : public GridPlanner {
         }
         continue;
       }
+      // Only taut continuations: a shortest path wraps each corner it bends at.
+      const LatticePoint at = graph->vertex(top.node);
+      const LatticePoint from = point(parent[top.node]);
+      const CornerQuadrant q = graph->quadrant(top.node);
       for (const VisibilityGraph::Edge& e : graph->EdgesOf(top.node)) {
-        relax(top.node, e.to, e.length);
+        if (TautAt(from, at, q, graph->vertex(e.to))) relax(top.node, e.to, e.length);
       }
-      if (to_goal[top.node] < kInfinity) relax(top.node, goal_id, to_goal[top.node]);
+      if (to_goal[top.node] < kInfinity && TautAt(from, at, q, goal)) {
+        relax(top.node, goal_id, to_goal[top.node]);
+      }
     }
     std::vector<LatticePoint> polyline;
     for (uint32_t at = goal_id; at != kNone; at = parent[at]) {
@@ -243,12 +249,16 @@ class MinimalConstruct {
     return (static_cast<uint64_t>(a) << 32) | b;
   }
 
-  // a-b may be part of a shortest path: tangent at both ends and not known
-  // to be blocked.
+  // a-b may continue a shortest path that reached expanded node a through
+  // its parent: taut at a, tangent at b, and not known to be blocked.
   bool MayLink(uint32_t a, uint32_t b) const {
     const Node& na = nodes_[a];
     const Node& nb = nodes_[b];
-    if (!Tangent(na.p, na.q, nb.p) || !Tangent(nb.p, nb.q, na.p)) return false;
+    if (!Tangent(nb.p, nb.q, na.p)) return false;
+    if (na.parent == kNone ? !Tangent(na.p, na.q, nb.p)
+                           : !TautAt(nodes_[na.parent].p, na.p, na.q, nb.p)) {
+      return false;
+    }
     const auto it = tested_.find(Key(a, b));
     return it == tested_.end() || it->second;
   }

@@ -149,17 +149,20 @@ TEST(VisibilityGraphTest, EdgesAreExactlyTheClearTangentPairs) {
 }
 
 TEST(ObstacleCornersTest, BlockersAndCornersByObstacle) {
-  // Two separate blocks; the outside is obstacle 0.
-  const Grid grid = MakeGrid({"......", ".#....", "......", "....#.", "......"});
+  // Two separate blocks and a wall on the border, which the outside does
+  // not join to anything.
+  const Grid grid = MakeGrid({"......", ".#....", "......", "....#.", "##...."});
   const auto obstacles = GetObstacleCorners(nullptr, grid, false);
   ASSERT_EQ(obstacles->obstacle_count(), 3);
-  EXPECT_TRUE(obstacles->CornersOf(0).empty());
+  EXPECT_EQ(obstacles->CornersOf(0).size(), 4u);
   EXPECT_EQ(obstacles->CornersOf(1).size(), 4u);
-  EXPECT_EQ(obstacles->CornersOf(2).size(), 4u);
-  EXPECT_EQ(obstacles->Blocker(CentreOf({0, 0}), CentreOf({2, 2})), 1);
-  EXPECT_EQ(obstacles->Blocker(CentreOf({3, 3}), CentreOf({5, 3})), 2);
-  EXPECT_EQ(obstacles->Blocker(CentreOf({0, 4}), CentreOf({5, 4})), std::nullopt);
-  EXPECT_EQ(obstacles->Blocker(CentreOf({0, 0}), CornerAt(-1, 0)), 0);
+  // The wall's corners on the border are enclosed by the outside.
+  EXPECT_EQ(obstacles->CornersOf(2).size(), 1u);
+  EXPECT_EQ(obstacles->Blocker(CentreOf({0, 0}), CentreOf({2, 2})), 0);
+  EXPECT_EQ(obstacles->Blocker(CentreOf({3, 3}), CentreOf({5, 3})), 1);
+  EXPECT_EQ(obstacles->Blocker(CentreOf({0, 2}), CentreOf({5, 2})), std::nullopt);
+  // Along the border line under the wall: the outside and the wall close it.
+  EXPECT_EQ(obstacles->Blocker(CornerAt(0, 5), CornerAt(3, 5)), 2);
 }
 
 TEST(ObstacleCornersTest, PinchesAndWallsBlockThroughOneObstacle) {
@@ -167,11 +170,11 @@ TEST(ObstacleCornersTest, PinchesAndWallsBlockThroughOneObstacle) {
   // pinch is blocked by it.
   const Grid grid = MakeGrid({"....", ".#..", "..#.", "...."});
   const auto obstacles = GetObstacleCorners(nullptr, grid, false);
-  ASSERT_EQ(obstacles->obstacle_count(), 2);
-  EXPECT_EQ(obstacles->Blocker(CentreOf({2, 1}), CentreOf({1, 2})), 1);
-  EXPECT_EQ(obstacles->Blocker(CornerAt(1, 1), CornerAt(3, 3)), 1);
+  ASSERT_EQ(obstacles->obstacle_count(), 1);
+  EXPECT_EQ(obstacles->Blocker(CentreOf({2, 1}), CentreOf({1, 2})), 0);
+  EXPECT_EQ(obstacles->Blocker(CornerAt(1, 1), CornerAt(3, 3)), 0);
   // Corners of both cells except the pinch.
-  EXPECT_EQ(obstacles->CornersOf(1).size(), 6u);
+  EXPECT_EQ(obstacles->CornersOf(0).size(), 6u);
 }
 
 TEST(ObstacleCornersTest, RandomBlockersAgreeWithSegmentClear) {
