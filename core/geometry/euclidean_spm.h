@@ -27,13 +27,20 @@ class EuclideanSpm {
  public:
   static constexpr uint32_t kNoRoot = std::numeric_limits<uint32_t>::max();
 
-  // Dijkstra from the goal over `graph` gives each vertex its exact
-  // distance. Cell roots are then propagated in order of distance, as a
-  // continuous Dijkstra would sweep the plane: a cell is offered the roots of
-  // its eight neighbours, the next vertex after each of them, and the
-  // vertices at its own corners (where a shadow region starts), and keeps
-  // the best whose segment is clear and tangent. Precondition: `goal` is a
-  // free cell of graph->space().
+  // Dijkstra from the goal over `graph` (taut continuations only) gives
+  // each vertex its exact distance. Cell roots are then propagated in order
+  // of distance, as a continuous Dijkstra would sweep the plane: a cell is
+  // offered the roots of its eight neighbours, the next two roots after
+  // them, the vertices at the corners around it (where a shadow region
+  // starts) and, along each vertex's shadow edge, the vertex itself; it
+  // keeps the best whose segment is clear and taut. That is right for
+  // almost every cell but not provably for all (a region can be a sliver
+  // between lattice points), so a last pass settles every cell exactly: a
+  // root must be a seen vertex u (or the goal) minimising |c u| + dist(u),
+  // and only vertices below the propagated value need their segment tested,
+  // in increasing order until one is clear. O(cells x vertices) arithmetic
+  // at worst, segment tests only for the few vertices that pass the bounds.
+  // Precondition: `goal` is a free cell of graph->space().
   static std::shared_ptr<const EuclideanSpm> Build(
       std::shared_ptr<const VisibilityGraph> graph, Cell goal);
 

@@ -14,6 +14,11 @@
 //    Obstacles here are the connected groups of blocked cells
 //    (ObstacleCorners); a map whose walls touch its border is one obstacle.
 //
+// Both searches relax only taut continuations: a node reached through its
+// parent is extended only to nodes such that the path wraps the node's
+// blocked cell (TautAt); any other bend could be cut, so no shortest path
+// makes it. For Minimal Construct this halves the segment tests.
+//
 // Minimal Construct differs from the paper in one way, for exactness: a
 // node discovered late can make an expanded node cheaper, so f is not
 // monotone and the paper's closed list could keep a detour. Expanded nodes
@@ -23,10 +28,15 @@
 // shortest path among the obstacles discovered so far always waits in the
 // open list with f <= that path's length, so the goal is popped, through a
 // clear segment, at the optimum.
+#include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <queue>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"

@@ -199,6 +199,28 @@ TEST(ObstacleCornersTest, RandomBlockersAgreeWithSegmentClear) {
   }
 }
 
+// Regression: cells whose root region holds no neighbouring cell centre
+// got the wrong root (or none) from propagation alone.
+TEST(EuclideanSpmTest, CellsInSliversGetTheirRoot) {
+  // (7, 0) lies in the shadow of the wall's corner (7, 2); its neighbours
+  // see the goal past that corner.
+  const Grid wedge = MakeGrid({"......#....", "......#....", "...........",
+                               "...........", "........###", "........###",
+                               "...........", "...........", "...........",
+                               ".........##"});
+  auto spm = GetEuclideanSpm(nullptr, wedge, {0, 8}, false);
+  EXPECT_NEAR(spm->DistanceFrom({7, 0}), 10.773526985509307, 1e-12);
+  EXPECT_EQ(spm->RootPoint(spm->RootOf({7, 0})), CornerAt(7, 2));
+  // (3, 0) is the one centre of corner (4, 4)'s region that the regions of
+  // its neighbours' roots cut off.
+  const Grid sliver = MakeGrid({"......#..", "##..##...", "#.#.#..#.", "..#.#..##",
+                                "##.......", "....#....", ".##......", "...##.#..",
+                                "...##....", "..#.#..#.", "..#..#..."});
+  spm = GetEuclideanSpm(nullptr, sliver, {5, 9}, false);
+  EXPECT_NEAR(spm->DistanceFrom({3, 0}), 9.4774400373745422, 1e-12);
+  EXPECT_EQ(spm->RootPoint(spm->RootOf({3, 0})), CornerAt(4, 4));
+}
+
 // The shortest path map's distance from every free cell equals Dijkstra's
 // over the complete graph of bend corners, that cell and the goal, and the
 // roots chain to the goal through clear segments.
