@@ -87,6 +87,101 @@ PlanResult SinglePoint(const FreeSpace& space, LatticePoint p) {
   return result;
 }
 
+// One A* query over a visibility graph, the start and the goal linked to the
+// vertices they see. Nodes are the graph's vertices, then the start, then
+// the goal. Single use.
+class GraphSearch {
+ public:
+  GraphSearch(const VisibilityGraph& graph, LatticePoint start, LatticePoint goal)
+      : graph_(graph),
+        start_(start),
+        goal_(goal),
+        start_id_(static_cast<uint32_t>(graph.vertex_count())),
+        goal_id_(start_id_ + 1),
+        to_goal_(graph.vertex_count(), kInfinity),
+        g_(graph.vertex_count() + 2, kInfinity),
+        parent_(graph.vertex_count() + 2, kNone),
+        closed_(graph.vertex_count() + 2, 0) {
+    graph_.ForEachTangentVisible(goal, [&](uint32_t v, double d) { to_goal_[v] = d; });
+    g_[start_id_] = 0.0;
+    open_.push({Distance(start, goal), 0.0, start_id_});
+  }
+
+  // Runs until the goal is popped, the open list empties, or `stop` fires;
+  // counts pops in `expansions`.
+  PlanOutcome Run(const StopCondition& stop, int64_t& expansions) {
+    while (true) {
+      const double best_f = open_.empty() ? StopCondition::kNoKey : open_.top().f;
+      const PlanOutcome outcome = stop.Check(expansions, best_f);
+      if (outcome != PlanOutcome::kFound) return outcome;
+      if (open_.empty()) return PlanOutcome::kNoPath;
+      const OpenEntry top = open_.top();
+      open_.pop();
+      if (closed_[top.node] || top.g != g_[top.node]) continue;
+      ++expansions;
+      if (top.node == goal_id_) return PlanOutcome::kFound;
+      closed_[top.node] = 1;
+      Expand(top.node);
+    }
+  }
+
+  // Start to goal, after Run() found it.
+  std::vector<LatticePoint> Polyline() const {
+    std::vector<LatticePoint> polyline;
+    for (uint32_t at = goal_id_; at != kNone; at = parent_[at]) {
+      polyline.push_back(Point(at));
+    }
+    std::reverse(polyline.begin(), polyline.end());
+    return polyline;
+  }
+
+ private:
+  LatticePoint Point(uint32_t id) const {
+    return id == start_id_ ? start_ : id == goal_id_ ? goal_ : graph_.vertex(id);
+  }
+
+  void Relax(uint32_t from, uint32_t to, double length) {
+    const double g = g_[from] + length;
+    if (closed_[to] || g >= g_[to]) return;
+    g_[to] = g;
+    parent_[to] = from;
+    open_.push({g + Distance(Point(to), goal_), g, to});
+  }
+
+  void Expand(uint32_t id) {
+    if (id == start_id_) {
+      graph_.ForEachTangentVisible(
+          start_, [&](uint32_t v, double d) { Relax(start_id_, v, d); });
+      if (graph_.space().SegmentClear(start_, goal_)) {
+        Relax(start_id_, goal_id_, Distance(start_, goal_));
+      }
+      return;
+    }
+    // Only taut continuations: a shortest path wraps each corner it bends at.
+    const LatticePoint at = graph_.vertex(id);
+    const LatticePoint from = Point(parent_[id]);
+    const CornerQuadrant q = graph_.quadrant(id);
+    for (const VisibilityGraph::Edge& e : graph_.EdgesOf(id)) {
+      if (TautAt(from, at, q, graph_.vertex(e.to))) Relax(id, e.to, e.length);
+    }
+    if (to_goal_[id] < kInfinity && TautAt(from, at, q, goal_)) {
+      Relax(id, goal_id_, to_goal_[id]);
+    }
+  }
+
+  const VisibilityGraph& graph_;
+  const LatticePoint start_;
+  const LatticePoint goal_;
+  const uint32_t start_id_;
+  const uint32_t goal_id_;
+  // Per vertex: the length of its clear, tangent segment to the goal.
+  std::vector<double> to_goal_;
+  std::vector<double> g_;
+  std::vector<uint32_t> parent_;
+  std::vector<uint8_t> closed_;
+  OpenQueue open_;
+};
+
 class VisibilityGraphPlanner final : public GridPlanner {
  public:
   VisibilityGraphPlanner()
@@ -103,78 +198,16 @@ class VisibilityGraphPlanner final : public GridPlanner {
     const PlanRequest& request = q.request;
     const std::shared_ptr<const VisibilityGraph> graph = GetVisibilityGraph(
         request.derived, q.grid, request.cost.unknown_is_free);
-    const FreeSpace& space = graph->space();
     const LatticePoint start = CentreOf(request.start);
     const LatticePoint goal = CentreOf(request.goal);
-    if (start == goal) return SinglePoint(space, start);
-
-    const auto n = static_cast<uint32_t>(graph->vertex_count());
-    const uint32_t start_id = n;
-    const uint32_t goal_id = n + 1;
-    auto point = [&](uint32_t id) {
-      return id == start_id ? start : id == goal_id ? goal : graph->vertex(id);
-    };
-    // The vertices that see the goal, with their distance to it.
-    std::vector<double> to_goal(n, kInfinity);
-    graph->ForEachTangentVisible(goal, [&](uint32_t v, double d) { to_goal[v] = d; });
-
-    std::vector<double> g(n + 2, kInfinity);
-    std::vector<uint32_t> parent(n + 2, kNone);
-    std::vector<uint8_t> closed(n + 2, 0);
-    OpenQueue open;
-    auto relax = [&](uint32_t from, uint32_t to, double length) {
-      const double tentative = g[from] + length;
-      if (closed[to] || tentative >= g[to]) return;
-      g[to] = tentative;
-      parent[to] = from;
-      open.push({tentative + Distance(point(to), goal), tentative, to});
-    };
-    g[start_id] = 0.0;
-    open.push({Distance(start, goal), 0.0, start_id});
-
+    if (start == goal) return SinglePoint(graph->space(), start);
+    GraphSearch search(*graph, start, goal);
     PlanResult result;
-    while (true) {
-      const double best_f = open.empty() ? StopCondition::kNoKey : open.top().f;
-      const PlanOutcome stop = q.stop.Check(result.expansions, best_f);
-      if (stop != PlanOutcome::kFound) {
-        result.outcome = stop;
-        return result;
-      }
-      if (open.empty()) {
-        result.outcome = PlanOutcome::kNoPath;
-        return result;
-      }
-      const OpenEntry top = open.top();
-      open.pop();
-      if (closed[top.node] || top.g != g[top.node]) continue;
-      ++result.expansions;
-      if (top.node == goal_id) break;
-      closed[top.node] = 1;
-      if (top.node == start_id) {
-        graph->ForEachTangentVisible(
-            start, [&](uint32_t v, double d) { relax(start_id, v, d); });
-        if (space.SegmentClear(start, goal)) {
-          relax(start_id, goal_id, Distance(start, goal));
-        }
-        continue;
-      }
-      // Only taut continuations: a shortest path wraps each corner it bends at.
-      const LatticePoint at = graph->vertex(top.node);
-      const LatticePoint from = point(parent[top.node]);
-      const CornerQuadrant q = graph->quadrant(top.node);
-      for (const VisibilityGraph::Edge& e : graph->EdgesOf(top.node)) {
-        if (TautAt(from, at, q, graph->vertex(e.to))) relax(top.node, e.to, e.length);
-      }
-      if (to_goal[top.node] < kInfinity && TautAt(from, at, q, goal)) {
-        relax(top.node, goal_id, to_goal[top.node]);
-      }
+    result.outcome = search.Run(q.stop, result.expansions);
+    if (result.found()) {
+      FillPolylineResult(graph->space(), search.Polyline(),
+                         UniformFactor(q.grid, request), result);
     }
-    std::vector<LatticePoint> polyline;
-    for (uint32_t at = goal_id; at != kNone; at = parent[at]) {
-      polyline.push_back(point(at));
-    }
-    std::reverse(polyline.begin(), polyline.end());
-    FillPolylineResult(space, polyline, UniformFactor(q.grid, request), result);
     return result;
   }
 };
