@@ -26,6 +26,37 @@ struct Entry {
 };
 using MinQueue = std::priority_queue<Entry, std::vector<Entry>, std::greater<>>;
 
+// The open segment a-b meets the open interior of cell `c`: then it is not
+// clear (exact: t ranges compared as fractions).
+bool CrossesInterior(LatticePoint a, LatticePoint b, Cell c) {
+  // t in (lo_n / lo_d, hi_n / hi_d) within (0, 1), denominators > 0.
+  int64_t lo_n = 0, lo_d = 1, hi_n = 1, hi_d = 1;
+  auto clip = [&](int64_t from, int64_t delta, int64_t cell) {
+    const int64_t low = 2 * cell;
+    const int64_t high = 2 * cell + 2;
+    if (delta == 0) return low < from && from < high;
+    // from + t delta in (low, high).
+    int64_t n0 = low - from, n1 = high - from, d = delta;
+    if (d < 0) {
+      std::swap(n0, n1);
+      n0 = -n0;
+      n1 = -n1;
+      d = -d;
+    }
+    if (n0 * lo_d > lo_n * d) {
+      lo_n = n0;
+      lo_d = d;
+    }
+    if (n1 * hi_d < hi_n * d) {
+      hi_n = n1;
+      hi_d = d;
+    }
+    return true;
+  };
+  if (!clip(a.x2, b.x2 - a.x2, c.x) || !clip(a.y2, b.y2 - a.y2, c.y)) return false;
+  return lo_n * hi_d < hi_n * lo_d;
+}
+
 // The cells of the goal's free region: free cells joined by shared edges
 // (two free cells touching only at a corner are joined through a side cell,
 // or not at all: a pinch).
@@ -50,6 +81,76 @@ std::vector<uint8_t> GoalRegion(const FreeSpace& space, Cell goal) {
   return in;
 }
 
+// The vertices with a finite distance, bucketed by square tiles of the map
+// with each tile's smallest distance, so that a cell can skip every tile
+// whose vertices cannot beat a bound.
+class RootTiles {
+ public:
+  struct Root {
+    LatticePoint p;
+    CornerQuadrant q;
+    LatticePoint next;
+    double dist;
+    uint32_t id;
+  };
+
+  RootTiles(const VisibilityGraph& vg, const std::vector<double>& dist,
+            const std::vector<uint32_t>& next_root, LatticePoint goal_point)
+      : across_((vg.space().width() + kTile) / kTile),
+        down_((vg.space().height() + kTile) / kTile),
+        tiles_(static_cast<size_t>(across_) * down_) {
+    const auto n = static_cast<uint32_t>(vg.vertex_count());
+    for (uint32_t v = 0; v < n; ++v) {
+      if (dist[v] == kInfinity) continue;
+      const LatticePoint p = vg.vertex(v);
+      const LatticePoint next = next_root[v] == n ? goal_point : vg.vertex(next_root[v]);
+      Tile& tile = tiles_[static_cast<size_t>(p.y2 / (2 * kTile)) * across_ +
+                          p.x2 / (2 * kTile)];
+      tile.roots.push_back({p, vg.quadrant(v), next, dist[v], v});
+      tile.min_dist = std::min(tile.min_dist, dist[v]);
+    }
+  }
+
+  // Calls visit(root, d) for each root r whose path from `c` through it,
+  // d = |c r| + dist(r), is below `bound` and taut at r.
+  template <typename Visit>
+  void ForEachBelow(LatticePoint c, double bound, Visit&& visit) const {
+    const double cx = static_cast<double>(c.x2) / 2.0;
+    const double cy = static_cast<double>(c.y2) / 2.0;
+    for (int32_t ty = 0; ty < down_; ++ty) {
+      // Distance from c to the tile's rectangle, split by axis.
+      const double y0 = static_cast<double>(ty) * kTile;
+      const double gap_y = std::max({y0 - cy, cy - (y0 + kTile), 0.0});
+      for (int32_t tx = 0; tx < across_; ++tx) {
+        const Tile& tile = tiles_[static_cast<size_t>(ty) * across_ + tx];
+        if (tile.roots.empty()) continue;
+        const double x0 = static_cast<double>(tx) * kTile;
+        const double gap_x = std::max({x0 - cx, cx - (x0 + kTile), 0.0});
+        const double slack = bound - tile.min_dist;
+        if (slack <= 0.0 || gap_x * gap_x + gap_y * gap_y >= slack * slack) continue;
+        for (const Root& r : tile.roots) {
+          const double dx = static_cast<double>(r.p.x2 - c.x2) / 2.0;
+          const double dy = static_cast<double>(r.p.y2 - c.y2) / 2.0;
+          const double left = bound - r.dist;
+          if (left <= 0.0 || dx * dx + dy * dy >= left * left) continue;
+          if (!TautAt(c, r.p, r.q, r.next)) continue;
+          visit(r, r.dist + std::sqrt(dx * dx + dy * dy));
+        }
+      }
+    }
+  }
+
+ private:
+  static constexpr int32_t kTile = 16;
+  struct Tile {
+    std::vector<Root> roots;
+    double min_dist = kInfinity;
+  };
+  int32_t across_;
+  int32_t down_;
+  std::vector<Tile> tiles_;
+};
+
 // Makes every root of the goal's region exact. The first bend of a
 // shortest path from point c is a vertex u seen from c (or the goal), so the
 // distance is min over those of |c u| + dist(u). The propagated root's value
@@ -64,15 +165,13 @@ void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>
   const FreeSpace& space = vg.space();
   const int32_t w = space.width();
   const auto n = static_cast<uint32_t>(vg.vertex_count());
-  std::vector<uint32_t> order;
-  for (uint32_t v = 0; v < n; ++v) {
-    if (dist[v] < kInfinity) order.push_back(v);
-  }
-  std::sort(order.begin(), order.end(),
-            [&](uint32_t a, uint32_t b) { return dist[a] < dist[b]; });
   const LatticePoint goal_point = CentreOf(goal);
+  const RootTiles tiles(vg, dist, next_root, goal_point);
   const std::vector<uint8_t> region = GoalRegion(space, goal);
   std::vector<Entry> candidates;
+  // Per root: a blocked cell that hid it from an earlier cell. Neighbouring
+  // cells tend to be hidden by the same one, and testing that costs O(1).
+  std::vector<Cell> hidden_by(n + 1, Cell{-1, -1});
   for (size_t i = 0; i < roots.size(); ++i) {
     if (!region[i]) continue;
     const LatticePoint c = CentreOf(Cell{static_cast<int32_t>(i % w),
@@ -82,24 +181,22 @@ void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>
     candidates.clear();
     const double to_goal = Distance(c, goal_point);
     if (to_goal < bound) candidates.push_back({to_goal, n});
-    for (uint32_t v : order) {
-      const double slack = bound - dist[v];
-      if (slack <= 0.0) break;
-      const LatticePoint u = vg.vertex(v);
-      const double dx = static_cast<double>(u.x2 - c.x2) / 2.0;
-      const double dy = static_cast<double>(u.y2 - c.y2) / 2.0;
-      if (dx * dx + dy * dy >= slack * slack) continue;
-      const LatticePoint next = next_root[v] == n ? goal_point : vg.vertex(next_root[v]);
-      if (!TautAt(c, u, vg.quadrant(v), next)) continue;
-      candidates.push_back({dist[v] + std::sqrt(dx * dx + dy * dy), v});
-    }
+    tiles.ForEachBelow(c, bound, [&](const RootTiles::Root& r, double d) {
+      candidates.push_back({d, r.id});
+    });
     std::sort(candidates.begin(), candidates.end(),
               [](const Entry& a, const Entry& b) { return a.d < b.d; });
     for (const Entry& e : candidates) {
-      if (space.SegmentClear(c, e.id == n ? goal_point : vg.vertex(e.id))) {
+      const LatticePoint u = e.id == n ? goal_point : vg.vertex(e.id);
+      Cell& block = hidden_by[e.id];
+      if (block.x >= 0 && CrossesInterior(c, u, block)) continue;
+      if (space.SegmentClear(c, u)) {
         roots[i] = e.id;
         break;
       }
+      space.ForEachCellCrossed(c, u, [&](Cell crossed) {
+        if (space.Blocked(crossed.x, crossed.y)) block = crossed;
+      });
     }
   }
 }
