@@ -5,6 +5,7 @@
 // corners, the cell and the goal.
 #include "core/geometry/visibility_graph.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -262,6 +263,52 @@ TEST(EuclideanSpmTest, EveryCellMatchesTheCompleteGraph) {
     }
   }
   EXPECT_GT(checked, 10000);
+}
+
+// Maps of several vertex tiles (RootTiles groups vertices by 16 x 16 cells),
+// every cell against the complete graph.
+TEST(EuclideanSpmTest, LargerMapsMatchTheCompleteGraph) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 4; ++trial) {
+    const int w = 30 + static_cast<int>(rng() % 15);
+    const int h = 30 + static_cast<int>(rng() % 15);
+    Grid grid = Grid::Create(w, h).value();
+    for (int r = 0; r < 30; ++r) {
+      const int x0 = static_cast<int>(rng() % w);
+      const int y0 = static_cast<int>(rng() % h);
+      const int x1 = std::min(w - 1, x0 + static_cast<int>(rng() % 6));
+      const int y1 = std::min(h - 1, y0 + static_cast<int>(rng() % 6));
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) grid.set_cost(x, y, kLethalCost);
+      }
+    }
+    const FreeSpace space(grid, false);
+    std::vector<Cell> free;
+    for (int32_t y = 0; y < h; ++y) {
+      for (int32_t x = 0; x < w; ++x) {
+        if (!space.Blocked(x, y)) free.push_back({x, y});
+      }
+    }
+    const Cell goal = free[rng() % free.size()];
+    const auto spm = GetEuclideanSpm(nullptr, grid, goal, false);
+    std::vector<LatticePoint> points = space.BendCorners();
+    const size_t corners = points.size();
+    for (Cell c : free) points.push_back(CentreOf(c));
+    const std::vector<double> want = CompleteGraphDistances(
+        space, points, corners + static_cast<size_t>(
+                                     std::find(free.begin(), free.end(), goal) -
+                                     free.begin()));
+    for (size_t i = 0; i < free.size(); ++i) {
+      const double d = want[corners + i];
+      const double got = spm->DistanceFrom(free[i]);
+      if (std::isinf(d)) {
+        ASSERT_TRUE(std::isinf(got)) << "trial " << trial;
+        continue;
+      }
+      ASSERT_NEAR(got, d, 1e-9 * (1 + d))
+          << "trial " << trial << " cell " << CellToString(free[i]) << "\n" << Dump(grid);
+    }
+  }
 }
 
 }  // namespace
