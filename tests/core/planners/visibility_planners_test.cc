@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
+#include <memory>
 #include <optional>
 #include <random>
 #include <string>
@@ -296,6 +298,52 @@ TEST(VisibilityPlannersTest, StopConditions) {
     EXPECT_TRUE(r->found()) << name;
     EXPECT_GT(r->expansions, 5) << name;
   }
+}
+
+// A store like the server's: one value per key for one grid, counting builds.
+class CountingStore final : public DerivedStore {
+ public:
+  explicit CountingStore(const Grid& grid) : grid_(grid) {}
+  std::shared_ptr<const void> Get(const std::string& key,
+                                  const DerivedRecipe& recipe) override {
+    auto it = values_.find(key);
+    if (it != values_.end()) return it->second;
+    ++builds[key];
+    return values_[key] = recipe.build(grid_);
+  }
+  std::map<std::string, int> builds;
+
+ private:
+  const Grid& grid_;
+  std::map<std::string, std::shared_ptr<const void>> values_;
+};
+
+TEST(VisibilityPlannersTest, DerivedValuesAreBuiltOncePerKey) {
+  const Grid grid = MakeGrid({"........", "..##....", "..##..#.", "......#.", "........"});
+  CountingStore store(grid);
+  SearchScratch scratch;
+  for (const Cell start : {Cell{0, 0}, Cell{0, 4}, Cell{7, 4}}) {
+    for (const Cell goal : {Cell{7, 0}, Cell{4, 2}}) {
+      PlanRequest request = PlanRequest::Between(start, goal);
+      request.derived = &store;
+      for (const char* name : {"visibility_graph", "minimal_construct", "euclidean_spm"}) {
+        const auto with_store = Get(name).Plan(grid, request, StopCondition::None(), scratch);
+        request.derived = nullptr;
+        const auto without = Get(name).Plan(grid, request, StopCondition::None(), scratch);
+        request.derived = &store;
+        ASSERT_TRUE(with_store.ok() && without.ok());
+        ASSERT_TRUE(with_store->found()) << name;
+        EXPECT_EQ(with_store->polyline.size(), without->polyline.size()) << name;
+        EXPECT_DOUBLE_EQ(with_store->length, without->length) << name;
+      }
+    }
+  }
+  EXPECT_EQ(store.builds["visibility_free_space unknown_is_free=0"], 1);
+  EXPECT_EQ(store.builds["visibility_graph unknown_is_free=0"], 1);
+  EXPECT_EQ(store.builds["obstacle_corners unknown_is_free=0"], 1);
+  EXPECT_EQ(store.builds["euclidean_spm goal=7,0 unknown_is_free=0"], 1);
+  EXPECT_EQ(store.builds["euclidean_spm goal=4,2 unknown_is_free=0"], 1);
+  EXPECT_EQ(store.builds.size(), 5u);
 }
 
 }  // namespace
