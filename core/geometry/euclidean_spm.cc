@@ -26,6 +26,40 @@ struct Entry {
 };
 using MinQueue = std::priority_queue<Entry, std::vector<Entry>, std::greater<>>;
 
+// Exact distances to the goal (`goal_point`, id vertex_count()) and the next
+// root towards it, for every vertex: Dijkstra from the goal over the graph.
+void DistancesFromGoal(const VisibilityGraph& vg, LatticePoint goal_point,
+                       std::vector<double>& dist, std::vector<uint32_t>& next) {
+  const auto goal_id = static_cast<uint32_t>(vg.vertex_count());
+  dist.assign(goal_id + 1, kInfinity);
+  next.assign(goal_id + 1, EuclideanSpm::kNoRoot);
+  dist[goal_id] = 0.0;
+  MinQueue queue;
+  vg.ForEachTangentVisible(goal_point, [&](uint32_t v, double d) {
+    dist[v] = d;
+    next[v] = goal_id;
+    queue.push({d, v});
+  });
+  while (!queue.empty()) {
+    const Entry top = queue.top();
+    queue.pop();
+    if (top.d != dist[top.id]) continue;
+    const LatticePoint at = vg.vertex(top.id);
+    const LatticePoint after = next[top.id] == goal_id ? goal_point : vg.vertex(next[top.id]);
+    for (const VisibilityGraph::Edge& e : vg.EdgesOf(top.id)) {
+      // Paths from the vertex's neighbours to the goal through it are
+      // shortest only if taut there.
+      if (!TautAt(vg.vertex(e.to), at, vg.quadrant(top.id), after)) continue;
+      const double d = top.d + e.length;
+      if (d < dist[e.to]) {
+        dist[e.to] = d;
+        next[e.to] = top.id;
+        queue.push({d, e.to});
+      }
+    }
+  }
+}
+
 // The open segment a-b meets the open interior of cell `c`: then it is not
 // clear (exact: t ranges compared as fractions).
 bool CrossesInterior(LatticePoint a, LatticePoint b, Cell c) {
@@ -156,9 +190,9 @@ class RootTiles {
 // distance is min over those of |c u| + dist(u). The propagated root's value
 // `best` is the length of a clear path, so only vertices with dist(u) +
 // |c u| below it can do better: those are tested in order of that sum, and
-// the first whose segment is clear (and tangent) is the root. Vertices come
-// sorted by dist, so the scan stops at the first with dist(u) >= best.
-// Usually no candidate survives the bounds and the propagated root stands.
+// the first whose segment is clear (and taut) is the root. Tiles whose
+// vertices are all too far for the bound are skipped whole, and a blocked
+// cell that hid a vertex from a cell usually hides it from the next.
 void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>& dist,
                  const std::vector<uint32_t>& next_root,
                  const std::vector<double>& best, std::vector<uint32_t>& roots) {
@@ -215,36 +249,10 @@ std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
   const uint32_t goal_id = n;
   const LatticePoint goal_point = CentreOf(goal);
 
-  // Vertices: Dijkstra from the goal.
   std::vector<double>& dist = spm->distance_;
   std::vector<uint32_t>& next = spm->next_;
-  dist.assign(n + 1, kInfinity);
-  next.assign(n + 1, kNoRoot);
-  dist[goal_id] = 0.0;
+  DistancesFromGoal(vg, goal_point, dist, next);
   MinQueue queue;
-  vg.ForEachTangentVisible(goal_point, [&](uint32_t v, double d) {
-    dist[v] = d;
-    next[v] = goal_id;
-    queue.push({d, v});
-  });
-  while (!queue.empty()) {
-    const Entry top = queue.top();
-    queue.pop();
-    if (top.d != dist[top.id]) continue;
-    const LatticePoint at = vg.vertex(top.id);
-    const LatticePoint after = next[top.id] == goal_id ? goal_point : vg.vertex(next[top.id]);
-    for (const VisibilityGraph::Edge& e : vg.EdgesOf(top.id)) {
-      // Paths from the vertex's neighbours to the goal through it are
-      // shortest only if taut there.
-      if (!TautAt(vg.vertex(e.to), at, vg.quadrant(top.id), after)) continue;
-      const double d = top.d + e.length;
-      if (d < dist[e.to]) {
-        dist[e.to] = d;
-        next[e.to] = top.id;
-        queue.push({d, e.to});
-      }
-    }
-  }
 
   // Cells: roots propagated in order of distance.
   const int32_t w = space.width();
