@@ -60,35 +60,10 @@ void DistancesFromGoal(const VisibilityGraph& vg, LatticePoint goal_point,
   }
 }
 
-// The open segment a-b meets the open interior of cell `c`: then it is not
-// clear (exact: t ranges compared as fractions).
+// The segment a-b crosses the open interior of cell `c`: then it is not
+// clear.
 bool CrossesInterior(LatticePoint a, LatticePoint b, Cell c) {
-  // t in (lo_n / lo_d, hi_n / hi_d) within (0, 1), denominators > 0.
-  int64_t lo_n = 0, lo_d = 1, hi_n = 1, hi_d = 1;
-  auto clip = [&](int64_t from, int64_t delta, int64_t cell) {
-    const int64_t low = 2 * cell;
-    const int64_t high = 2 * cell + 2;
-    if (delta == 0) return low < from && from < high;
-    // from + t delta in (low, high).
-    int64_t n0 = low - from, n1 = high - from, d = delta;
-    if (d < 0) {
-      std::swap(n0, n1);
-      n0 = -n0;
-      n1 = -n1;
-      d = -d;
-    }
-    if (n0 * lo_d > lo_n * d) {
-      lo_n = n0;
-      lo_d = d;
-    }
-    if (n1 * hi_d < hi_n * d) {
-      hi_n = n1;
-      hi_d = d;
-    }
-    return true;
-  };
-  if (!clip(a.x2, b.x2 - a.x2, c.x) || !clip(a.y2, b.y2 - a.y2, c.y)) return false;
-  return lo_n * hi_d < hi_n * lo_d;
+  return SegmentMeetsBox(a, b, CornerAt(c.x, c.y), CornerAt(c.x + 1, c.y + 1), true);
 }
 
 // The cells of the goal's free region: free cells joined by shared edges

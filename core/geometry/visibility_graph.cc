@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -37,6 +38,119 @@ CornerQuadrant QuadrantAt(const FreeSpace& space, LatticePoint p) {
   }
 }
 
+bool SegmentMeetsBox(LatticePoint a, LatticePoint b, LatticePoint lo,
+                     LatticePoint hi, bool open) {
+  // t in [lo_n / lo_d, hi_n / hi_d] within [0, 1], denominators > 0.
+  int64_t lo_n = 0, lo_d = 1, hi_n = 1, hi_d = 1;
+  auto clip = [&](int64_t from, int64_t delta, int64_t low, int64_t high) {
+    if (delta == 0) return open ? low < from && from < high : low <= from && from <= high;
+    // from + t delta between low and high.
+    int64_t n0 = low - from, n1 = high - from, d = delta;
+    if (d < 0) {
+      std::swap(n0, n1);
+      n0 = -n0;
+      n1 = -n1;
+      d = -d;
+    }
+    if (n0 * lo_d > lo_n * d) {
+      lo_n = n0;
+      lo_d = d;
+    }
+    if (n1 * hi_d < hi_n * d) {
+      hi_n = n1;
+      hi_d = d;
+    }
+    return true;
+  };
+  if (!clip(a.x2, b.x2 - a.x2, lo.x2, hi.x2) || !clip(a.y2, b.y2 - a.y2, lo.y2, hi.y2)) {
+    return false;
+  }
+  return open ? lo_n * hi_d < hi_n * lo_d : lo_n * hi_d <= hi_n * lo_d;
+}
+
+void VisibilityGraph::Compress(std::vector<std::vector<Edge>>& adjacency) {
+  const auto n = static_cast<uint32_t>(adjacency.size());
+  offsets_.assign(n + 1, 0);
+  for (uint32_t v = 0; v < n; ++v) {
+    offsets_[v + 1] = offsets_[v] + static_cast<uint32_t>(adjacency[v].size());
+  }
+  edges_.clear();
+  edges_.reserve(offsets_[n]);
+  for (std::vector<Edge>& edges : adjacency) {
+    edges_.insert(edges_.end(), edges.begin(), edges.end());
+    std::vector<Edge>().swap(edges);
+  }
+}
+
+std::shared_ptr<const VisibilityGraph> VisibilityGraph::Advance(
+    const VisibilityGraph& previous, std::shared_ptr<const FreeSpace> space,
+    absl::Span<const Cell> changed) {
+  if (changed.size() > kMaxAdvanceCells) return nullptr;
+  const absl::Time started = absl::Now();
+  auto graph = std::shared_ptr<VisibilityGraph>(new VisibilityGraph());
+  graph->space_ = std::move(space);
+  const FreeSpace& fs = *graph->space_;
+  graph->vertices_ = fs.BendCorners();
+  const auto n = static_cast<uint32_t>(graph->vertices_.size());
+  for (LatticePoint v : graph->vertices_) graph->quadrants_.push_back(QuadrantAt(fs, v));
+  const std::vector<LatticePoint>& vs = graph->vertices_;
+  const std::vector<CornerQuadrant>& qs = graph->quadrants_;
+
+  // Old ids of the vertices that kept their corner and blocked cell (both
+  // lists are in row order); kNew for the others.
+  constexpr uint32_t kNew = std::numeric_limits<uint32_t>::max();
+  std::vector<uint32_t> old_id(n, kNew);
+  std::vector<uint32_t> new_id(previous.vertex_count(), kNew);
+  auto row_less = [](LatticePoint a, LatticePoint b) {
+    return a.y2 != b.y2 ? a.y2 < b.y2 : a.x2 < b.x2;
+  };
+  for (uint32_t i = 0, j = 0; i < n && j < previous.vertex_count();) {
+    const LatticePoint o = previous.vertex(j);
+    if (row_less(vs[i], o)) {
+      ++i;
+    } else if (row_less(o, vs[i])) {
+      ++j;
+    } else {
+      const CornerQuadrant q = previous.quadrant(j);
+      if (q.qx == qs[i].qx && q.qy == qs[i].qy) {
+        old_id[i] = j;
+        new_id[j] = i;
+      }
+      ++i;
+      ++j;
+    }
+  }
+  // Segments that miss every changed cell's closed square kept their state.
+  LatticePoint lo{std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max()};
+  LatticePoint hi{std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::min()};
+  for (const Cell& c : changed) {
+    lo = {std::min<int64_t>(lo.x2, 2 * c.x), std::min<int64_t>(lo.y2, 2 * c.y)};
+    hi = {std::max<int64_t>(hi.x2, 2 * c.x + 2), std::max<int64_t>(hi.y2, 2 * c.y + 2)};
+  }
+  std::vector<std::vector<Edge>> adjacency(n);
+  // Per new id: 1 + the old vertex whose edges are marked (stamp).
+  std::vector<uint32_t> was_edge(n, 0);
+  for (uint32_t i = 0; i < n; ++i) {
+    if (old_id[i] != kNew) {
+      for (const Edge& e : previous.EdgesOf(old_id[i])) {
+        if (new_id[e.to] != kNew) was_edge[new_id[e.to]] = i + 1;
+      }
+    }
+    for (uint32_t j = i + 1; j < n; ++j) {
+      if (!Tangent(vs[i], qs[i], vs[j]) || !Tangent(vs[j], qs[j], vs[i])) continue;
+      const bool kept = old_id[i] != kNew && old_id[j] != kNew &&
+                        (changed.empty() || !SegmentMeetsBox(vs[i], vs[j], lo, hi, false));
+      if (kept ? was_edge[j] != i + 1 : !fs.SegmentClear(vs[i], vs[j])) continue;
+      const double length = Distance(vs[i], vs[j]);
+      adjacency[i].push_back(Edge{j, length});
+      adjacency[j].push_back(Edge{i, length});
+    }
+  }
+  graph->Compress(adjacency);
+  graph->build_time_ = absl::Now() - started;
+  return graph;
+}
+
 std::shared_ptr<const VisibilityGraph> VisibilityGraph::Build(
     std::shared_ptr<const FreeSpace> space) {
   const absl::Time started = absl::Now();
@@ -62,16 +176,7 @@ std::shared_ptr<const VisibilityGraph> VisibilityGraph::Build(
       adjacency[j].push_back(Edge{i, length});
     }
   }
-  graph->offsets_.assign(n + 1, 0);
-  for (uint32_t v = 0; v < n; ++v) {
-    graph->offsets_[v + 1] =
-        graph->offsets_[v] + static_cast<uint32_t>(adjacency[v].size());
-  }
-  graph->edges_.reserve(graph->offsets_[n]);
-  for (std::vector<Edge>& edges : adjacency) {
-    graph->edges_.insert(graph->edges_.end(), edges.begin(), edges.end());
-    std::vector<Edge>().swap(edges);
-  }
+  graph->Compress(adjacency);
   graph->build_time_ = absl::Now() - started;
   return graph;
 }
@@ -108,9 +213,10 @@ std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
         return VisibilityGraph::Build(
             GetVisibilityFreeSpace(store, g, unknown_is_free));
       },
-      // A changed cell can open or close any pair's segment: rebuild.
-      [](const VisibilityGraph&, const Grid&, absl::Span<const Cell>) {
-        return std::shared_ptr<const VisibilityGraph>();
+      [store, unknown_is_free](const VisibilityGraph& previous, const Grid& g,
+                               absl::Span<const Cell> changed) {
+        return VisibilityGraph::Advance(
+            previous, GetVisibilityFreeSpace(store, g, unknown_is_free), changed);
       },
       [](const VisibilityGraph& graph) { return graph.bytes(); });
 }

@@ -70,6 +70,12 @@ inline bool TautAt(LatticePoint prev, LatticePoint p, CornerQuadrant q,
   return turn == 0 || (turn > 0) == (side > 0);
 }
 
+// The segment a-b meets the box [lo, hi] (lattice coordinates): its closed
+// box when `open` is false, its open interior when true. Exact (Liang-Barsky
+// with the parameter ranges compared as fractions).
+bool SegmentMeetsBox(LatticePoint a, LatticePoint b, LatticePoint lo,
+                     LatticePoint hi, bool open);
+
 // The tangent visibility graph of one FreeSpace. Immutable once built, so one
 // value is shared by every query on its map version. Thread-safe (const).
 class VisibilityGraph {
@@ -84,6 +90,16 @@ class VisibilityGraph {
   // O(V^2) pairs for V bend corners.
   static std::shared_ptr<const VisibilityGraph> Build(
       std::shared_ptr<const FreeSpace> space);
+  // The graph of `space`, whose cells differ from previous.space()'s exactly
+  // in `changed`: vertices whose corner kept its blocked cell keep their
+  // edges, except pairs whose segment meets the bounding box of the changed
+  // cells, which are tested again; new or changed vertices are tested
+  // against all. Null (rebuild) past kMaxAdvanceCells changed cells. Equal to
+  // Build(space).
+  static std::shared_ptr<const VisibilityGraph> Advance(
+      const VisibilityGraph& previous, std::shared_ptr<const FreeSpace> space,
+      absl::Span<const Cell> changed);
+  static constexpr size_t kMaxAdvanceCells = 256;
 
   const FreeSpace& space() const { return *space_; }
   size_t vertex_count() const { return vertices_.size(); }
@@ -114,6 +130,8 @@ class VisibilityGraph {
 
  private:
   VisibilityGraph() = default;
+  // Fills offsets_ and edges_ from per-vertex lists.
+  void Compress(std::vector<std::vector<Edge>>& adjacency);
 
   std::shared_ptr<const FreeSpace> space_;
   std::vector<LatticePoint> vertices_;
@@ -132,8 +150,8 @@ std::shared_ptr<const FreeSpace> GetVisibilityFreeSpace(DerivedStore* store,
                                                         bool unknown_is_free);
 
 // The visibility graph of `grid` under `unknown_is_free`, from `store` (key
-// "visibility_graph unknown_is_free=N"; rebuilt for every map version) or
-// built now when `store` is null.
+// "visibility_graph unknown_is_free=N"; advanced from the previous version's
+// graph, VisibilityGraph::Advance) or built now when `store` is null.
 std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
                                                           const Grid& grid,
                                                           bool unknown_is_free);

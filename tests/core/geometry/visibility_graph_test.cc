@@ -13,6 +13,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -145,6 +146,55 @@ TEST(VisibilityGraphTest, EdgesAreExactlyTheClearTangentPairs) {
                           Tangent(pb, QuadrantAt(space, pb), pa);
         ASSERT_EQ(edges.count({a, b}) == 1, want) << "trial " << trial;
       }
+    }
+  }
+}
+
+// The edges of a graph as (vertex, vertex, length) triples, comparable.
+std::set<std::tuple<int64_t, int64_t, int64_t, int64_t, double>> EdgeSet(
+    const VisibilityGraph& graph) {
+  std::set<std::tuple<int64_t, int64_t, int64_t, int64_t, double>> edges;
+  for (uint32_t v = 0; v < graph.vertex_count(); ++v) {
+    for (const auto& e : graph.EdgesOf(v)) {
+      const LatticePoint a = graph.vertex(v);
+      const LatticePoint b = graph.vertex(e.to);
+      edges.insert({a.x2, a.y2, b.x2, b.y2, e.length});
+    }
+  }
+  return edges;
+}
+
+TEST(VisibilityGraphTest, AdvanceEqualsRebuild) {
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 1500; ++trial) {
+    Grid grid = RandomMap(rng);
+    auto space = std::make_shared<const FreeSpace>(grid, false);
+    auto graph = VisibilityGraph::Build(space);
+    for (int step = 0; step < 3; ++step) {
+      // A few cells flipped, clustered or anywhere.
+      std::vector<Cell> changed;
+      const int count = static_cast<int>(rng() % 4);
+      const Cell near{static_cast<int32_t>(rng() % grid.width()),
+                      static_cast<int32_t>(rng() % grid.height())};
+      for (int k = 0; k < count; ++k) {
+        Cell c{static_cast<int32_t>(rng() % grid.width()),
+               static_cast<int32_t>(rng() % grid.height())};
+        if (trial % 2 == 0) {
+          c = {std::min(grid.width() - 1, near.x + static_cast<int32_t>(rng() % 2)),
+               std::min(grid.height() - 1, near.y + static_cast<int32_t>(rng() % 2))};
+        }
+        grid.set_cost(c, grid.cost(c) == kFreeCost ? kLethalCost : kFreeCost);
+        changed.push_back(c);
+      }
+      auto next_space = std::make_shared<FreeSpace>(*space);
+      next_space->Update(grid, changed);
+      auto advanced = VisibilityGraph::Advance(*graph, next_space, changed);
+      ASSERT_NE(advanced, nullptr);
+      const auto rebuilt = VisibilityGraph::Build(std::make_shared<const FreeSpace>(grid, false));
+      ASSERT_EQ(advanced->vertex_count(), rebuilt->vertex_count()) << "trial " << trial;
+      ASSERT_EQ(EdgeSet(*advanced), EdgeSet(*rebuilt)) << "trial " << trial << "\n" << Dump(grid);
+      space = next_space;
+      graph = advanced;
     }
   }
 }
