@@ -19,6 +19,7 @@ struct Kind {
 // One line per kind.
 const std::vector<Kind>& Kinds() {
   static const std::vector<Kind>* const kKinds = new std::vector<Kind>{
+      {"mesh", &DescribeNavMesh},
   };
   return *kKinds;
 }

@@ -27,6 +27,7 @@ std::unique_ptr<Planner> MakeJpsPlanner();
 std::unique_ptr<Planner> MakeLpaStarPlanner();
 std::unique_ptr<Planner> MakeDStarLitePlanner();
 std::unique_ptr<Planner> MakeShortestPathMapPlanner();
+std::unique_ptr<Planner> MakeNavMeshPlanner();
 
 }  // namespace pathd
 
