@@ -5,6 +5,8 @@
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -37,6 +39,20 @@ class BlockedCells {
   bool operator()(int32_t x, int32_t y) const {
     return !grid_.InBounds(x, y) ||
            !Traversable(grid_.cost(x, y), unknown_is_free_);
+  }
+  // The cost values of traversable cells in [x0, x1) x [y0, y1), as a bit
+  // set (unknown traversed as free: 0).
+  std::array<uint64_t, 4> CostsIn(int32_t x0, int32_t y0, int32_t x1, int32_t y1) const {
+    std::array<uint64_t, 4> bits{};
+    for (int32_t y = y0; y < y1; ++y) {
+      for (int32_t x = x0; x < x1; ++x) {
+        uint8_t c = grid_.cost(x, y);
+        if (!Traversable(c, unknown_is_free_)) continue;
+        if (c == kUnknownCost) c = kFreeCost;
+        bits[c >> 6] |= uint64_t{1} << (c & 63);
+      }
+    }
+    return bits;
   }
 
  private:
@@ -87,6 +103,7 @@ class TileBuilder {
     tile->x1 = x1_;
     tile->y1 = y1_;
     tile->vertex_count = static_cast<int32_t>(cdt_.number_of_vertices());
+    tile->traversable_costs = blocked_.CostsIn(x0_, y0_, x1_, y1_);
     ExtractTriangles(*tile);
     IndexCells(*tile);
     IndexBorder(*tile);
@@ -427,6 +444,16 @@ std::vector<NavRef> NavMesh::Locate(Cell cell) const {
     if (other.valid()) found.push_back(other);
   }
   return found;
+}
+
+bool NavMesh::UniformCost() const {
+  std::array<uint64_t, 4> all{};
+  for (const auto& t : tiles_) {
+    for (int i = 0; i < 4; ++i) all[i] |= t->traversable_costs[i];
+  }
+  int values = 0;
+  for (const uint64_t w : all) values += std::popcount(w);
+  return values <= 1;
 }
 
 int64_t NavMesh::triangle_count() const {

@@ -59,6 +59,10 @@ struct NavTile {
   std::array<std::vector<std::pair<int32_t, int32_t>>, 4> border;
   // Mesh vertices of the tile (grid corners), for descriptions.
   int32_t vertex_count = 0;
+  // Bit v set when a traversable cell of the tile costs v (unknown cells
+  // traversed as free count as 0), so planners that need uniform cost can
+  // check a whole map in a few words per tile.
+  std::array<uint64_t, 4> traversable_costs{};
 
   size_t bytes() const;
 };
@@ -111,6 +115,10 @@ class NavMesh {
   // The free triangles whose closure holds the centre of `cell` (one, or
   // two when it lies on their shared edge); empty for a blocked cell.
   std::vector<NavRef> Locate(Cell cell) const;
+
+  // Every traversable cell costs the same (at most one cost value over all
+  // tiles). O(tiles).
+  bool UniformCost() const;
 
   // Totals over the tiles.
   int64_t triangle_count() const;

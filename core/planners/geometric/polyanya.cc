@@ -21,7 +21,6 @@
 #include <utility>
 #include <vector>
 
-#include "absl/container/flat_hash_map.h"
 #include "core/geometry/free_space.h"
 #include "core/map/cost_model.h"
 #include "core/planners/planners.h"
@@ -81,11 +80,81 @@ struct NodeKey {
   int32_t tile, triangle;
   int32_t edge;
   friend bool operator==(const NodeKey&, const NodeKey&) = default;
-  template <typename H>
-  friend H AbslHashValue(H h, const NodeKey& k) {
-    return H::combine(std::move(h), k.root_x2, k.root_y2, k.lx, k.ly, k.rx, k.ry,
-                      k.tile, k.triangle, k.edge);
+  size_t Hash() const {
+    uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (const int64_t v : {root_x2, root_y2, lx, ly, rx, ry,
+                            static_cast<int64_t>(tile), static_cast<int64_t>(triangle),
+                            static_cast<int64_t>(edge)}) {
+      // splitmix64 over the running value.
+      h += static_cast<uint64_t>(v) + 0x9e3779b97f4a7c15ull;
+      h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+      h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+      h ^= h >> 31;
+    }
+    return static_cast<size_t>(h);
   }
+};
+
+// The smallest g each node was queued with: open addressing whose slots
+// are emptied between searches by a stamp, so a search costs nothing for
+// the table's size and its memory is kept.
+class QueuedTable {
+ public:
+  // Starts a new search: every slot empty.
+  void Clear() {
+    size_ = 0;
+    if (++stamp_ == 0) {
+      for (Slot& s : slots_) s.stamp = 0;
+      stamp_ = 1;
+    }
+  }
+  // The g recorded for `key`, inserting `g` when absent (then returns
+  // nullptr).
+  double* FindOrInsert(const NodeKey& key, double g) {
+    if (2 * (size_ + 1) > slots_.size()) Grow();
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
+      Slot& s = slots_[i];
+      if (s.stamp != stamp_) {
+        s = Slot{key, g, stamp_};
+        ++size_;
+        return nullptr;
+      }
+      if (s.key == key) return &s.g;
+    }
+  }
+  const double* Find(const NodeKey& key) const {
+    if (slots_.empty()) return nullptr;
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
+      const Slot& s = slots_[i];
+      if (s.stamp != stamp_) return nullptr;
+      if (s.key == key) return &s.g;
+    }
+  }
+  size_t bytes() const { return slots_.capacity() * sizeof(Slot); }
+
+ private:
+  struct Slot {
+    NodeKey key;
+    double g = 0.0;
+    uint32_t stamp = 0;
+  };
+  void Grow() {
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(std::max<size_t>(1024, 2 * old.size()), Slot{});
+    const uint32_t live = stamp_;
+    stamp_ = 1;
+    size_ = 0;
+    for (const Slot& s : old) {
+      if (s.stamp == live) FindOrInsert(s.key, s.g);
+    }
+  }
+
+  std::vector<Slot> slots_;
+  size_t size_ = 0;
+  uint32_t stamp_ = 1;
 };
 
 struct HeapEntry {
@@ -105,7 +174,7 @@ struct PolyanyaScratch final : public SearchScratch::Extension {
   std::vector<Record> records;
   std::vector<HeapEntry> open;
   // The smallest g each node was queued with.
-  absl::flat_hash_map<NodeKey, double> queued;
+  QueuedTable queued;
   // Root-level pruning: the best g a vertex (grid corner) was reached with,
   // valid where stamp == search.
   std::vector<double> best_g;
@@ -115,7 +184,7 @@ struct PolyanyaScratch final : public SearchScratch::Extension {
   size_t MemoryBytes() const override {
     return nodes.capacity() * sizeof(Node) + records.capacity() * sizeof(Record) +
            open.capacity() * sizeof(HeapEntry) +
-           queued.capacity() * (sizeof(NodeKey) + sizeof(double)) +
+           queued.bytes() +
            best_g.capacity() * sizeof(double) +
            stamp.capacity() * sizeof(uint32_t);
   }
@@ -247,7 +316,7 @@ class Search {
     s_.nodes.clear();
     s_.records.clear();
     s_.open.clear();
-    s_.queued.clear();
+    s_.queued.Clear();
   }
 
   bool IsGoalPolygon(NavRef p) const {
@@ -321,15 +390,30 @@ class Search {
       r = RayHit(root, right, a, b);
     }
     const Node node{root, left, right, next, entry, g, 0.0, record};
-    auto [it, inserted] = s_.queued.try_emplace(KeyOf(node), g);
-    if (!inserted) {
-      if (it->second <= g + 1e-9) return;
-      it->second = g;
+    if (DeadEnd(next) && !IsGoalPolygon(next)) return;
+    // Only a turn (a root new to this branch) or a sweep round a root's fan
+    // can meet a node queued before; the cone of one root splits without
+    // overlap.
+    const bool may_repeat = record != expanding_record_ || Orient(a, b, root) == 0;
+    if (may_repeat) {
+      if (double* queued = s_.queued.FindOrInsert(KeyOf(node), g)) {
+        if (*queued <= g + 1e-9) return;
+        *queued = g;
+      }
     }
     const double h = 0.5 * IntervalHeuristic(ToPt(root), l, r, ToPt(goal_));
     Node queued = node;
     queued.f = g + h;
     PushEntry(queued);
+  }
+
+  // A triangle with one open edge: whatever enters it can only leave the
+  // way it came (dead-end pruning, from the paper).
+  bool DeadEnd(NavRef p) const {
+    const NavTriangle& t = mesh_.triangle(p);
+    int open = 0;
+    for (const int32_t a : t.across) open += a == NavTriangle::kWall ? 0 : 1;
+    return open <= 1;
   }
 
   NodeKey KeyOf(const Node& n) const {
@@ -345,8 +429,8 @@ class Search {
   // A node queued again later with a smaller g.
   bool Superseded(const Node& n) const {
     if (n.edge == kFinal) return false;
-    const auto it = s_.queued.find(KeyOf(n));
-    return it != s_.queued.end() && it->second < n.g - 1e-9;
+    const double* queued = s_.queued.Find(KeyOf(n));
+    return queued != nullptr && *queued < n.g - 1e-9;
   }
 
   void PushFinal(double g, int32_t record) {
@@ -359,6 +443,7 @@ class Search {
   }
 
   void Expand(const Node& node) {
+    expanding_record_ = node.record;
     const NavTriangle& t = mesh_.triangle(node.polygon);
     const int e = node.edge;
     const LatticePoint a = t.corners[e];
@@ -397,19 +482,12 @@ class Search {
       Push(s, node.left, node.right, node.polygon, ca, node.g, node.record);
     } else {
       // c in the closed cone: [c, right end] on b-c and [left end, c] on
-      // c-a. A ray through c exactly gives a one-point interval on both
-      // edges, so the path may go on past c on either side of the fan.
+      // c-a; c ends both, so either side may turn there. A ray through c
+      // exactly gives a one-point interval on both edges: beyond c the
+      // point walks round c's fan both ways, so a path going straight on
+      // past c finds the side an obstacle at c leaves open.
       Push(s, sc, node.right, node.polygon, bc, node.g, node.record);
       Push(s, node.left, sc, node.polygon, ca, node.g, node.record);
-      if ((op == 0 || oq == 0) && IsBend(c)) {
-        // Passing c exactly is also a turn by zero there.
-        const double g = node.g + Distance(s, c);
-        if (RecordRootG(c, g)) {
-          const int32_t rec = Turn(c, node.record);
-          Push(c, Sub(c, c), Sub(b, c), node.polygon, bc, g, rec);
-          Push(c, Sub(a, c), Sub(c, c), node.polygon, ca, g, rec);
-        }
-      }
     }
 
     // Non-observable successors: around an end of the interval that is an
@@ -465,6 +543,8 @@ class Search {
   const std::vector<NavRef> goal_polygons_;
   const StopCondition& stop_;
   PolyanyaScratch& s_;
+  // The root record of the node being expanded (the start's while seeding).
+  int32_t expanding_record_ = 0;
 };
 
 class NavMeshPlanner final : public GridPlanner {
@@ -483,6 +563,16 @@ class NavMeshPlanner final : public GridPlanner {
                             "expansions count search nodes (edge intervals)"}) {}
 
  protected:
+  // Uniform cost needs every cell read: the mesh keeps the cost values of
+  // each tile, so Search() checks it in O(tiles) and runs the full
+  // ValidateRequest only to word the error when it fails (as jps does).
+  absl::Status Validate(const Grid& grid,
+                        const PlanRequest& request) const override {
+    PlannerTraits endpoint_traits = traits();
+    endpoint_traits.needs_uniform_cost = false;
+    return ValidateRequest(grid, request, name(), endpoint_traits);
+  }
+
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     const Grid& grid = q.grid;
     const PlanRequest& request = q.request;
@@ -495,6 +585,9 @@ class NavMeshPlanner final : public GridPlanner {
           return NavMesh::Advance(previous, g, changed);
         },
         [](const NavMesh& m) { return m.bytes(); });
+    if (request.cost.cost_weight != 0.0 && !mesh->UniformCost()) {
+      return ValidateRequest(grid, request, name(), traits());
+    }
     PolyanyaPath path = PolyanyaSearch(*mesh, grid, request.start, request.goal,
                                        q.stop, q.scratch);
     PlanResult result;
