@@ -173,6 +173,7 @@ struct PolyanyaScratch final : public SearchScratch::Extension {
   std::vector<Node> nodes;
   std::vector<Record> records;
   std::vector<HeapEntry> open;
+  std::vector<Node> pending;
   // The smallest g each node was queued with.
   QueuedTable queued;
   // Root-level pruning: the best g a vertex (grid corner) was reached with,
@@ -183,7 +184,7 @@ struct PolyanyaScratch final : public SearchScratch::Extension {
 
   size_t MemoryBytes() const override {
     return nodes.capacity() * sizeof(Node) + records.capacity() * sizeof(Record) +
-           open.capacity() * sizeof(HeapEntry) +
+           open.capacity() * sizeof(HeapEntry) + pending.capacity() * sizeof(Node) +
            queued.bytes() +
            best_g.capacity() * sizeof(double) +
            stamp.capacity() * sizeof(uint32_t);
@@ -197,7 +198,11 @@ struct Pt {
 Pt ToPt(LatticePoint p) {
   return Pt{static_cast<double>(p.x2), static_cast<double>(p.y2)};
 }
-double Dist(Pt a, Pt b) { return std::hypot(b.x - a.x, b.y - a.y); }
+double Dist(Pt a, Pt b) {
+  const double dx = b.x - a.x;
+  const double dy = b.y - a.y;
+  return std::sqrt(dx * dx + dy * dy);
+}
 double CrossD(Pt o, Pt a, Pt b) {
   return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
 }
@@ -278,6 +283,7 @@ class Search {
         Push(start_, Sub(w, start_), Sub(u, start_), p, i, 0.0, 0);
       }
     }
+    FlushPending();
     while (!s_.open.empty()) {
       const HeapEntry top = s_.open.front();
       const PlanOutcome o = stop_.Check(out.expansions, top.f);
@@ -287,7 +293,7 @@ class Search {
       }
       std::pop_heap(s_.open.begin(), s_.open.end());
       s_.open.pop_back();
-      const Node node = s_.nodes[static_cast<size_t>(top.node)];
+      Node node = s_.nodes[static_cast<size_t>(top.node)];
       if (Superseded(node)) continue;
       ++out.expansions;
       if (node.edge == kFinal) {
@@ -296,6 +302,21 @@ class Search {
         return out;
       }
       Expand(node);
+      // Intermediate pruning (the paper's): a lone successor with the same
+      // root is expanded at once instead of through the open list.
+      while (s_.pending.size() == 1 && s_.pending[0].edge != kFinal &&
+             s_.pending[0].record == node.record) {
+        const PlanOutcome o2 = stop_.Check(out.expansions, s_.pending[0].f);
+        if (o2 != PlanOutcome::kFound) {
+          out.outcome = o2;
+          return out;
+        }
+        node = s_.pending[0];
+        s_.pending.clear();
+        ++out.expansions;
+        Expand(node);
+      }
+      FlushPending();
     }
     out.outcome = PlanOutcome::kNoPath;
     return out;
@@ -316,6 +337,7 @@ class Search {
     s_.nodes.clear();
     s_.records.clear();
     s_.open.clear();
+    s_.pending.clear();
     s_.queued.Clear();
   }
 
@@ -359,10 +381,15 @@ class Search {
     return static_cast<int32_t>(s_.records.size() - 1);
   }
 
-  void PushEntry(const Node& n) {
-    s_.nodes.push_back(n);
-    s_.open.push_back(HeapEntry{n.f, n.g, static_cast<int32_t>(s_.nodes.size() - 1)});
-    std::push_heap(s_.open.begin(), s_.open.end());
+  // Successors wait in `pending` until their parent's expansion is done.
+  void PushEntry(const Node& n) { s_.pending.push_back(n); }
+  void FlushPending() {
+    for (const Node& n : s_.pending) {
+      s_.nodes.push_back(n);
+      s_.open.push_back(HeapEntry{n.f, n.g, static_cast<int32_t>(s_.nodes.size() - 1)});
+      std::push_heap(s_.open.begin(), s_.open.end());
+    }
+    s_.pending.clear();
   }
 
   // Queues the interval of edge `edge` of `from` bounded by the rays
