@@ -360,12 +360,16 @@ class Search {
     return n == 1;
   }
 
+  size_t CornerId(LatticePoint corner) const {
+    return static_cast<size_t>(corner.y2 / 2) * (grid_.width() + 1) +
+           static_cast<size_t>(corner.x2 / 2);
+  }
+
   // Root-level pruning (the paper's): a node whose root, a vertex, was
   // already reached more cheaply is dominated. False when pruned.
   bool RecordRootG(LatticePoint root, double g) {
     if (root == start_) return true;
-    const size_t id = static_cast<size_t>(root.y2 / 2) * (grid_.width() + 1) +
-                      static_cast<size_t>(root.x2 / 2);
+    const size_t id = CornerId(root);
     if (s_.stamp[id] != s_.search) {
       s_.stamp[id] = s_.search;
       s_.best_g[id] = g;
@@ -397,41 +401,32 @@ class Search {
   void Push(LatticePoint root, Vec left, Vec right, NavRef from, int edge,
             double g, int32_t record) {
     const NavRef next = mesh_.Across(from, edge);
-    if (!next.valid()) return;
+    if (!next.valid() || (DeadEnd(next) && !IsGoalPolygon(next))) return;
     const NavTriangle& ft = mesh_.triangle(from);
-    const LatticePoint a = ft.corners[(edge + 1) % 3];  // next's entry edge: a -> b
+    // The next polygon's entry edge runs a -> b.
+    const LatticePoint a = ft.corners[(edge + 1) % 3];
     const LatticePoint b = ft.corners[edge];
+    const bool on_line = Orient(a, b, root) == 0;
+    // On the edge's line only an end of the edge may be the root.
+    if (on_line && !(root == a) && !(root == b)) return;
+    if (!RecordRootG(root, g)) return;
     const NavTriangle& nt = mesh_.triangle(next);
     int8_t entry = 0;
     while (!(nt.corners[entry] == a)) ++entry;
-    if (!RecordRootG(root, g)) return;
-    Pt l;
-    Pt r;
-    if (Orient(a, b, root) == 0) {
-      // Root on the edge's line: only an end of the edge may be the root.
-      if (!(root == a) && !(root == b)) return;
-      l = ToPt(a);
-      r = ToPt(b);
-    } else {
-      l = RayHit(root, left, a, b);
-      r = RayHit(root, right, a, b);
-    }
-    const Node node{root, left, right, next, entry, g, 0.0, record};
-    if (DeadEnd(next) && !IsGoalPolygon(next)) return;
+    Node node{root, left, right, next, entry, g, 0.0, record};
     // Only a turn (a root new to this branch) or a sweep round a root's fan
     // can meet a node queued before; the cone of one root splits without
     // overlap.
-    const bool may_repeat = record != expanding_record_ || Orient(a, b, root) == 0;
-    if (may_repeat) {
+    if (record != expanding_record_ || on_line) {
       if (double* queued = s_.queued.FindOrInsert(KeyOf(node), g)) {
         if (*queued <= g + 1e-9) return;
         *queued = g;
       }
     }
-    const double h = 0.5 * IntervalHeuristic(ToPt(root), l, r, ToPt(goal_));
-    Node queued = node;
-    queued.f = g + h;
-    PushEntry(queued);
+    const Pt l = on_line ? ToPt(a) : RayHit(root, left, a, b);
+    const Pt r = on_line ? ToPt(b) : RayHit(root, right, a, b);
+    node.f = g + 0.5 * IntervalHeuristic(ToPt(root), l, r, ToPt(goal_));
+    PushEntry(node);
   }
 
   // A triangle with one open edge: whatever enters it can only leave the
@@ -453,9 +448,15 @@ class Search {
     return NodeKey{n.root.x2, n.root.y2, l.x, l.y, r.x, r.y,
                    n.polygon.tile, n.polygon.triangle, n.edge};
   }
-  // A node queued again later with a smaller g.
+  // A node queued again later with a smaller g, or whose root has been
+  // reached more cheaply since it was queued (root-level pruning applied
+  // again when it leaves the open list).
   bool Superseded(const Node& n) const {
     if (n.edge == kFinal) return false;
+    if (!(n.root == start_)) {
+      const size_t id = CornerId(n.root);
+      if (s_.stamp[id] == s_.search && s_.best_g[id] < n.g - 1e-9) return true;
+    }
     const double* queued = s_.queued.Find(KeyOf(n));
     return queued != nullptr && *queued < n.g - 1e-9;
   }
