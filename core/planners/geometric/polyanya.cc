@@ -351,13 +351,32 @@ class Search {
            !Traversable(grid_.cost(static_cast<int32_t>(x), static_cast<int32_t>(y)),
                         mesh_.unknown_is_free());
   }
-  // Exactly one of the four cells around the vertex is blocked.
-  bool IsBend(LatticePoint v) const {
+  // Whether a path from `from` may bend at vertex v, turning left (or
+  // right): v must be a bend corner (exactly one of its four cells
+  // blocked) with that cell reaching into the open half-plane the path
+  // turns towards. A taut path bends round an obstacle inside the bend;
+  // elsewhere the mesh merely ends an interval at v, and a turn there could
+  // be cut short.
+  bool CanTurn(LatticePoint from, LatticePoint v, bool left) const {
     const int64_t x = v.x2 / 2;
     const int64_t y = v.y2 / 2;
-    const int n = (Blocked(x - 1, y - 1) ? 1 : 0) + (Blocked(x, y - 1) ? 1 : 0) +
-                  (Blocked(x - 1, y) ? 1 : 0) + (Blocked(x, y) ? 1 : 0);
-    return n == 1;
+    int blocked = 0;
+    Vec quadrant;
+    for (const int dy : {-1, 1}) {
+      for (const int dx : {-1, 1}) {
+        if (Blocked(dx < 0 ? x - 1 : x, dy < 0 ? y - 1 : y)) {
+          ++blocked;
+          quadrant = Vec{dx, dy};
+        }
+      }
+    }
+    if (blocked != 1) return false;
+    const Vec d = Sub(v, from);
+    const int64_t sign = left ? 1 : -1;
+    // The blocked cell's corners other than v, relative to v.
+    return sign * Cross(d, Vec{2 * quadrant.x, 0}) > 0 ||
+           sign * Cross(d, Vec{0, 2 * quadrant.y}) > 0 ||
+           sign * Cross(d, Vec{2 * quadrant.x, 2 * quadrant.y}) > 0;
   }
 
   size_t CornerId(LatticePoint corner) const {
@@ -496,9 +515,9 @@ class Search {
       const int64_t gr = Cross(node.right, sg);
       if (gl <= 0 && gr >= 0) {
         PushFinal(node.g + Distance(s, goal_), node.record);
-      } else if (gl > 0 && left_at_a && IsBend(a)) {
+      } else if (gl > 0 && left_at_a && CanTurn(s, a, /*left=*/true)) {
         PushFinal(node.g + Distance(s, a) + Distance(a, goal_), Turn(a, node.record));
-      } else if (gr < 0 && right_at_b && IsBend(b)) {
+      } else if (gr < 0 && right_at_b && CanTurn(s, b, /*left=*/false)) {
         PushFinal(node.g + Distance(s, b) + Distance(b, goal_), Turn(b, node.record));
       }
     }
@@ -520,7 +539,7 @@ class Search {
 
     // Non-observable successors: around an end of the interval that is an
     // obstacle corner, with that corner as the new root.
-    if (left_at_a && IsBend(a)) {
+    if (left_at_a && CanTurn(s, a, /*left=*/true)) {
       const double g = node.g + Distance(s, a);
       if (RecordRootG(a, g)) {
         const int32_t rec = Turn(a, node.record);
@@ -529,7 +548,7 @@ class Search {
         Push(a, Sub(a, a), Sub(c, a), node.polygon, ca, g, rec);
       }
     }
-    if (right_at_b && IsBend(b)) {
+    if (right_at_b && CanTurn(s, b, /*left=*/false)) {
       const double g = node.g + Distance(s, b);
       if (RecordRootG(b, g)) {
         const int32_t rec = Turn(b, node.record);
