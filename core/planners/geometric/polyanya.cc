@@ -8,7 +8,17 @@
 // edge a ray leaves a triangle through, whether an end is a vertex, whether
 // the goal is in view) is then an integer cross product; floating point
 // only enters the heuristic. A turn is taken only at a bend corner (exactly
-// one of the four cells blocked): a taut path bends nowhere else.
+// one of the four cells blocked) whose blocked cell lies inside the bend: a
+// taut path bends nowhere else.
+//
+// Pruning: the paper's root-level (a node whose root was reached more
+// cheaply is dropped, when queued and again when taken), dead-end (no node
+// into a triangle with one open edge) and intermediate (a lone successor
+// with the same root is expanded at once); and duplicates: on a grid map
+// many rays graze vertices exactly, so equal intervals from equal roots are
+// reached in several ways, and left alone they multiply at every corner
+// (exponentially along a serpentine), so nodes that start a new root or
+// sweep a root's fan are queued once per g.
 #include "core/planners/geometric/polyanya.h"
 
 #include <algorithm>
