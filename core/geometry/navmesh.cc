@@ -336,7 +336,7 @@ std::shared_ptr<const NavMesh> NavMesh::Build(const Grid& grid,
   mesh->width_ = grid.width();
   mesh->height_ = grid.height();
   mesh->unknown_is_free_ = unknown_is_free;
-  mesh->tile_size_ = std::clamp(tile_size, 1, kTileSize);
+  mesh->tile_size_ = std::clamp(tile_size, 1, kMaxTileSize);
   mesh->tiles_x_ = (grid.width() + mesh->tile_size_ - 1) / mesh->tile_size_;
   mesh->tiles_y_ = (grid.height() + mesh->tile_size_ - 1) / mesh->tile_size_;
   const BlockedCells blocked(grid, unknown_is_free);

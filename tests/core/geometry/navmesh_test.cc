@@ -105,9 +105,12 @@ TEST(NavMesh, TrianglesTileTheFreeCellsExactly) {
 
 TEST(NavMesh, OpenMapIsTwoTrianglesPerTile) {
   const Grid grid = Grid::Create(100, 70).value();
-  const auto mesh = NavMesh::Build(grid, false);
+  const auto mesh = NavMesh::Build(grid, false, 64);
   EXPECT_EQ(mesh->tiles().size(), 4u);
   EXPECT_EQ(mesh->triangle_count(), 8);
+  const auto big = NavMesh::Build(grid, false, 128);
+  EXPECT_EQ(big->tiles().size(), 1u);
+  EXPECT_EQ(big->triangle_count(), 2);
 }
 
 TEST(NavMesh, PinchCornerJoinsNoTriangles) {
