@@ -6,12 +6,14 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "absl/time/clock.h"
 #include "core/geometry/free_space.h"
+#include "core/geometry/funnel.h"
 #include "core/geometry/navmesh.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
@@ -184,6 +186,100 @@ TEST(Polyanya, MatchesTheVisibilityGraphOnRandomMaps) {
   }
   EXPECT_GT(found, 5000);
   EXPECT_GT(unreachable, 300);
+}
+
+// Maps whose obstacles all reach the border through 8-connected chains, so
+// the free space has no holes. Meshed as one tile, every vertex is then on
+// the boundary, so between two triangles there is exactly one channel (the
+// dual graph of a triangulated simple polygon is a tree) and the funnel
+// through it is the shortest path.
+Grid HoleFreeMap(std::mt19937& rng) {
+  const int w = 3 + static_cast<int>(rng() % 14);
+  const int h = 3 + static_cast<int>(rng() % 14);
+  Grid grid = Grid::Create(w, h).value();
+  const int walls = static_cast<int>(rng() % 6);
+  for (int i = 0; i < walls; ++i) {
+    int x = 0;
+    int y = 0;
+    switch (rng() % 4) {
+      case 0: x = static_cast<int>(rng() % w); break;
+      case 1: x = static_cast<int>(rng() % w); y = h - 1; break;
+      case 2: y = static_cast<int>(rng() % h); break;
+      default: y = static_cast<int>(rng() % h); x = w - 1; break;
+    }
+    const int len = 1 + static_cast<int>(rng() % 10);
+    for (int k = 0; k < len && grid.InBounds(x, y); ++k) {
+      grid.set_cost(x, y, kLethalCost);
+      x += static_cast<int>(rng() % 3) - 1;
+      y += static_cast<int>(rng() % 3) - 1;
+    }
+  }
+  return grid;
+}
+
+// The portals from a start triangle to a goal triangle (breadth-first over
+// the mesh), each seen walking towards the goal; nullopt when none joins.
+std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
+                                           const std::vector<NavRef>& from,
+                                           const std::vector<NavRef>& to) {
+  struct Step {
+    NavRef at;
+    int parent;
+    int edge;  // of the parent's triangle, crossed to get here
+  };
+  std::vector<Step> steps;
+  for (const NavRef& r : from) steps.push_back({r, -1, -1});
+  auto seen = [&](NavRef r) {
+    return std::any_of(steps.begin(), steps.end(), [&](const Step& s) { return s.at == r; });
+  };
+  for (size_t i = 0; i < steps.size(); ++i) {
+    if (std::find(to.begin(), to.end(), steps[i].at) != to.end()) {
+      std::vector<Portal> portals;
+      for (int k = static_cast<int>(i); steps[k].parent >= 0; k = steps[k].parent) {
+        const NavTriangle& t = mesh.triangle(steps[steps[k].parent].at);
+        // Leaving a counter-clockwise triangle through corner e -> e + 1:
+        // the far end is on the left.
+        portals.push_back(Portal{ToCellPoint(t.corners[(steps[k].edge + 1) % 3]),
+                                 ToCellPoint(t.corners[steps[k].edge])});
+      }
+      std::reverse(portals.begin(), portals.end());
+      return portals;
+    }
+    for (int e = 0; e < 3; ++e) {
+      const NavRef n = mesh.Across(steps[i].at, e);
+      if (n.valid() && !seen(n)) steps.push_back({n, static_cast<int>(i), e});
+    }
+  }
+  return std::nullopt;
+}
+
+TEST(Funnel, ThroughMeshChannelsIsTheShortestPath) {
+  std::mt19937 rng(99);
+  int compared = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    const Grid grid = HoleFreeMap(rng);
+    const std::vector<Cell> free = FreeCells(grid, false);
+    if (free.empty()) continue;
+    const auto mesh = NavMesh::Build(grid, false, NavMesh::kMaxTileSize);
+    const FreeSpace space(grid, false);
+    const Cell s = free[rng() % free.size()];
+    const Cell g = free[rng() % free.size()];
+    const auto portals = Channel(*mesh, mesh->Locate(s), mesh->Locate(g));
+    const double expected = BruteForce(space, s, g);
+    ASSERT_EQ(portals.has_value(), expected < kInf) << "trial " << trial;
+    if (!portals) continue;
+    const std::vector<CellPoint> path =
+        FunnelPath(ToCellPoint(CentreOf(s)), *portals, ToCellPoint(CentreOf(g)));
+    std::vector<LatticePoint> lattice;
+    for (const CellPoint& p : path) lattice.push_back(*ToLatticePoint(p));
+    EXPECT_TRUE(space.PolylineClear(lattice))
+        << "trial " << trial << " " << Describe(grid, false, NavMesh::kMaxTileSize, s, g);
+    EXPECT_NEAR(PolylineLength(lattice), expected, 1e-9 * (1 + expected))
+        << "trial " << trial << " " << Describe(grid, false, NavMesh::kMaxTileSize, s, g);
+    if (HasFailure()) return;
+    ++compared;
+  }
+  EXPECT_GT(compared, 1000);
 }
 
 TEST(Polyanya, PinchCornersAreClosed) {
