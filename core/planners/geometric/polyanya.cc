@@ -669,7 +669,9 @@ class NavMeshPlanner final : public GridPlanner {
     result.polyline.reserve(path.polyline.size());
     for (const LatticePoint& p : path.polyline) result.polyline.push_back(ToCellPoint(p));
     result.length = PolylineLength(path.polyline);
-    result.cost = result.length;
+    // Every traversable cell costs what the start cell costs.
+    result.cost = result.length * CellFactor(grid.cost(request.start),
+                                             request.cost.cost_weight);
     return result;
   }
 };

@@ -339,6 +339,21 @@ TEST(NavMeshPlanner, AnswersWithAnExactPolylineAndItsCells) {
   EXPECT_NEAR(m.length, expected, 1e-12);
 }
 
+TEST(NavMeshPlanner, UniformNonZeroCostScalesTheCost) {
+  const Planner* planner = PlannerRegistry::Default().Get("navmesh");
+  ASSERT_NE(planner, nullptr);
+  SearchScratch scratch;
+  const Grid grid = MakeGrid({"3333", "3#33", "3333"});
+  auto r = planner->Plan(grid, PlanRequest::Between({0, 0}, {3, 2}),
+                         StopCondition::None(), scratch);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_TRUE(r->found());
+  const PathMeasure m = MeasureResultPath(grid, *r, {});
+  ASSERT_TRUE(m.valid);
+  EXPECT_NEAR(r->cost, m.cost, 1e-12);
+  EXPECT_NEAR(r->cost, r->length * (1 + 84.0 / 252), 1e-12);
+}
+
 TEST(NavMeshPlanner, RefusesWeightedAndFourConnectedRequests) {
   const Planner* planner = PlannerRegistry::Default().Get("navmesh");
   ASSERT_NE(planner, nullptr);
