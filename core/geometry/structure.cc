@@ -23,6 +23,7 @@ const std::vector<Kind>& Kinds() {
       {"decomposition", &DescribeDecomposition},
       {"voronoi", &DescribeVoronoi},
       {"visibility", &DescribeVisibilityGraph},
+      {"mesh", &DescribeNavMesh},
   };
   return *kKinds;
 }

@@ -32,6 +32,7 @@ std::unique_ptr<Planner> MakeVoronoiPlanner();
 std::unique_ptr<Planner> MakeVisibilityGraphPlanner();
 std::unique_ptr<Planner> MakeMinimalConstructPlanner();
 std::unique_ptr<Planner> MakeEuclideanSpmPlanner();
+std::unique_ptr<Planner> MakeNavMeshPlanner();
 
 }  // namespace pathd
 
