@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/map/cost_model.h"
@@ -138,6 +141,22 @@ bool FreeSpace::PolylineClear(absl::Span<const LatticePoint> polyline) const {
     if (!SegmentClear(polyline[i - 1], polyline[i])) return false;
   }
   return true;
+}
+
+std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
+                                                 bool unknown_is_free) {
+  return GetDerived<FreeSpace>(
+      store, grid,
+      std::string("free_space unknown_is_free=") + (unknown_is_free ? "1" : "0"),
+      [unknown_is_free](const Grid& g) {
+        return std::make_shared<const FreeSpace>(g, unknown_is_free);
+      },
+      [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed) {
+        auto next = std::make_shared<FreeSpace>(previous);
+        next->Update(g, changed);
+        return std::shared_ptr<const FreeSpace>(std::move(next));
+      },
+      [](const FreeSpace& space) { return space.bytes(); });
 }
 
 std::vector<Cell> CellsAlongPolyline(const FreeSpace& space,

@@ -30,11 +30,13 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "absl/types/span.h"
 #include "core/map/grid.h"
+#include "core/search/derived.h"
 
 namespace pathd {
 
@@ -145,6 +147,12 @@ class FreeSpace {
   bool unknown_is_free_ = false;
   std::vector<uint8_t> blocked_;
 };
+
+// The FreeSpace of `grid` under `unknown_is_free`, shared by every geometric
+// planner through `store` (key "free_space unknown_is_free=N", advanced with
+// FreeSpace::Update), or built now when `store` is null.
+std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
+                                                 bool unknown_is_free);
 
 // The cells a polyline crosses, start to end, without repeats of the
 // previous cell: the `path` of a geometric plan (PlanResult::polyline).

@@ -188,22 +188,6 @@ size_t VisibilityGraph::bytes() const {
          offsets_.capacity() * sizeof(uint32_t) + edges_.capacity() * sizeof(Edge);
 }
 
-std::shared_ptr<const FreeSpace> GetVisibilityFreeSpace(DerivedStore* store,
-                                                        const Grid& grid,
-                                                        bool unknown_is_free) {
-  return GetDerived<FreeSpace>(
-      store, grid, FlagKey("visibility_free_space", unknown_is_free),
-      [unknown_is_free](const Grid& g) {
-        return std::make_shared<const FreeSpace>(g, unknown_is_free);
-      },
-      [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed) {
-        auto next = std::make_shared<FreeSpace>(previous);
-        next->Update(g, changed);
-        return std::shared_ptr<const FreeSpace>(std::move(next));
-      },
-      [](const FreeSpace& space) { return space.bytes(); });
-}
-
 std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
                                                           const Grid& grid,
                                                           bool unknown_is_free) {
@@ -211,12 +195,12 @@ std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
       store, grid, FlagKey("visibility_graph", unknown_is_free),
       [store, unknown_is_free](const Grid& g) {
         return VisibilityGraph::Build(
-            GetVisibilityFreeSpace(store, g, unknown_is_free));
+            SharedFreeSpace(store, g, unknown_is_free));
       },
       [store, unknown_is_free](const VisibilityGraph& previous, const Grid& g,
                                absl::Span<const Cell> changed) {
         return VisibilityGraph::Advance(
-            previous, GetVisibilityFreeSpace(store, g, unknown_is_free), changed);
+            previous, SharedFreeSpace(store, g, unknown_is_free), changed);
       },
       [](const VisibilityGraph& graph) { return graph.bytes(); });
 }
@@ -337,7 +321,7 @@ std::shared_ptr<const ObstacleCorners> GetObstacleCorners(DerivedStore* store,
       store, grid, FlagKey("obstacle_corners", unknown_is_free),
       [store, unknown_is_free](const Grid& g) {
         return ObstacleCorners::Build(
-            GetVisibilityFreeSpace(store, g, unknown_is_free));
+            SharedFreeSpace(store, g, unknown_is_free));
       },
       // One changed cell can merge or split obstacles anywhere: rebuild.
       [](const ObstacleCorners&, const Grid&, absl::Span<const Cell>) {

@@ -142,13 +142,6 @@ class VisibilityGraph {
   absl::Duration build_time_;
 };
 
-// The FreeSpace of `grid` under `unknown_is_free`, from `store` (key
-// "visibility_free_space unknown_is_free=N", advanced by FreeSpace::Update)
-// or built now when `store` is null.
-std::shared_ptr<const FreeSpace> GetVisibilityFreeSpace(DerivedStore* store,
-                                                        const Grid& grid,
-                                                        bool unknown_is_free);
-
 // The visibility graph of `grid` under `unknown_is_free`, from `store` (key
 // "visibility_graph unknown_is_free=N"; advanced from the previous version's
 // graph, VisibilityGraph::Advance) or built now when `store` is null.

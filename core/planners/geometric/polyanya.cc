@@ -653,18 +653,8 @@ class NavMeshPlanner final : public GridPlanner {
     if (!result.found()) return result;
     // The free-space bitmap is derived per version too: building it here
     // would cost a pass over the map on every query.
-    const std::shared_ptr<const FreeSpace> space = GetDerived<FreeSpace>(
-        request.derived, grid,
-        std::string("free_space unknown_is_free=") + (unknown_is_free ? "1" : "0"),
-        [unknown_is_free](const Grid& g) {
-          return std::make_shared<const FreeSpace>(g, unknown_is_free);
-        },
-        [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed) {
-          auto next = std::make_shared<FreeSpace>(previous);
-          next->Update(g, changed);
-          return std::shared_ptr<const FreeSpace>(std::move(next));
-        },
-        [](const FreeSpace& f) { return f.bytes(); });
+    const std::shared_ptr<const FreeSpace> space =
+        SharedFreeSpace(request.derived, grid, unknown_is_free);
     result.path = CellsAlongPolyline(*space, path.polyline);
     result.polyline.reserve(path.polyline.size());
     for (const LatticePoint& p : path.polyline) result.polyline.push_back(ToCellPoint(p));

@@ -7,25 +7,13 @@
 #include <vector>
 
 #include "gtest/gtest.h"
+#include "tests/testing/test_grids.h"
 
 namespace pathd {
 namespace {
 
-// '#' blocked, '.' free; row 0 is the first string.
-Grid GridFrom(const std::vector<std::string>& rows) {
-  Grid grid = *Grid::Create(static_cast<int32_t>(rows[0].size()),
-                            static_cast<int32_t>(rows.size()));
-  for (size_t y = 0; y < rows.size(); ++y) {
-    for (size_t x = 0; x < rows[y].size(); ++x) {
-      grid.set_cost(static_cast<int32_t>(x), static_cast<int32_t>(y),
-                    rows[y][x] == '#' ? kLethalCost : kFreeCost);
-    }
-  }
-  return grid;
-}
-
 TEST(FreeSpaceTest, OpenGridAndItsBorder) {
-  const FreeSpace space(GridFrom({"...", "...", "..."}), false);
+  const FreeSpace space(MakeGrid({"...", "...", "..."}), false);
   EXPECT_TRUE(space.SegmentClear(CentreOf({0, 0}), CentreOf({2, 2})));
   // Along the map border: the outside is blocked, the inside free.
   EXPECT_TRUE(space.SegmentClear(CornerAt(0, 0), CornerAt(3, 0)));
@@ -38,7 +26,7 @@ TEST(FreeSpaceTest, OpenGridAndItsBorder) {
 }
 
 TEST(FreeSpaceTest, OneBlockedCellIsTouchedNotCrossed) {
-  const FreeSpace space(GridFrom({"...", ".#.", "..."}), false);
+  const FreeSpace space(MakeGrid({"...", ".#.", "..."}), false);
   EXPECT_FALSE(space.SegmentClear(CentreOf({0, 0}), CentreOf({2, 2})));
   EXPECT_FALSE(space.SegmentClear(CornerAt(1, 1), CornerAt(2, 2)));
   // Along its edges and through its corners.
@@ -56,7 +44,7 @@ TEST(FreeSpaceTest, OneBlockedCellIsTouchedNotCrossed) {
 
 TEST(FreeSpaceTest, PinchesAreClosed) {
   // (0, 0) and (1, 1) blocked: they touch at corner (1, 1).
-  const FreeSpace space(GridFrom({"#..", ".#.", "..."}), false);
+  const FreeSpace space(MakeGrid({"#..", ".#.", "..."}), false);
   EXPECT_FALSE(space.PointFree(CornerAt(1, 1)));
   EXPECT_FALSE(space.SegmentClear(CentreOf({1, 0}), CentreOf({0, 1})));
   EXPECT_FALSE(space.IsBendCorner(1, 1));
@@ -65,7 +53,7 @@ TEST(FreeSpaceTest, PinchesAreClosed) {
 }
 
 TEST(FreeSpaceTest, WallsAreClosedBetweenTheirCells) {
-  const FreeSpace space(GridFrom({"....", ".##.", "...."}), false);
+  const FreeSpace space(MakeGrid({"....", ".##.", "...."}), false);
   // The edge between the two wall cells.
   EXPECT_FALSE(space.SegmentClear(CornerAt(2, 1), CornerAt(2, 2)));
   EXPECT_FALSE(space.SegmentClear(CornerAt(2, 0), CornerAt(2, 3)));
@@ -77,7 +65,7 @@ TEST(FreeSpaceTest, WallsAreClosedBetweenTheirCells) {
 }
 
 TEST(FreeSpaceTest, CellsAlongPolylineFollowTheSegments) {
-  const FreeSpace space(GridFrom({"...", ".#.", "..."}), false);
+  const FreeSpace space(MakeGrid({"...", ".#.", "..."}), false);
   // Round the blocked cell's left side.
   const std::vector<LatticePoint> polyline = {CentreOf({0, 0}), CornerAt(1, 1),
                                               CornerAt(1, 2), CentreOf({1, 2})};
@@ -93,7 +81,7 @@ TEST(FreeSpaceTest, CellsAlongPolylineFollowTheSegments) {
 }
 
 TEST(FreeSpaceTest, UpdateReadsChangedCells) {
-  Grid grid = GridFrom({"...", "...", "..."});
+  Grid grid = MakeGrid({"...", "...", "..."});
   FreeSpace space(grid, false);
   grid.set_cost(1, 1, kLethalCost);
   space.Update(grid, std::vector<Cell>{{1, 1}});

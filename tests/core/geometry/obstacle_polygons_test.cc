@@ -8,28 +8,17 @@
 
 #include "core/geometry/structure.h"
 #include "gtest/gtest.h"
+#include "tests/testing/test_grids.h"
 
 namespace pathd {
 namespace {
-
-Grid GridFrom(const std::vector<std::string>& rows) {
-  Grid grid = *Grid::Create(static_cast<int32_t>(rows[0].size()),
-                            static_cast<int32_t>(rows.size()));
-  for (size_t y = 0; y < rows.size(); ++y) {
-    for (size_t x = 0; x < rows[y].size(); ++x) {
-      grid.set_cost(static_cast<int32_t>(x), static_cast<int32_t>(y),
-                    rows[y][x] == '#' ? kLethalCost : kFreeCost);
-    }
-  }
-  return grid;
-}
 
 std::shared_ptr<const ObstaclePolygons> Build(const Grid& grid) {
   return ObstaclePolygons::Build(FreeSpace(grid, false));
 }
 
 TEST(ObstaclePolygonsTest, AnOpenMapIsOneCounterClockwiseRing) {
-  auto p = Build(GridFrom({"...", "...", "..."}));
+  auto p = Build(MakeGrid({"...", "...", "..."}));
   ASSERT_EQ(p->rings().size(), 1u);
   const BoundaryRing& ring = p->rings()[0];
   EXPECT_EQ(ring.twice_area, 2 * 3 * 3);
@@ -38,7 +27,7 @@ TEST(ObstaclePolygonsTest, AnOpenMapIsOneCounterClockwiseRing) {
 }
 
 TEST(ObstaclePolygonsTest, AnObstacleIsAClockwiseHole) {
-  auto p = Build(GridFrom({"....", ".##.", "...."}));
+  auto p = Build(MakeGrid({"....", ".##.", "...."}));
   ASSERT_EQ(p->rings().size(), 2u);
   EXPECT_EQ(p->hole_count(), 1);
   for (const BoundaryRing& ring : p->rings()) {
@@ -52,7 +41,7 @@ TEST(ObstaclePolygonsTest, AnObstacleIsAClockwiseHole) {
 }
 
 TEST(ObstaclePolygonsTest, ObstaclesTouchingAtAPinchShareOneRingThatTouchesItTwice) {
-  auto p = Build(GridFrom({"....", ".#..", "..#.", "...."}));
+  auto p = Build(MakeGrid({"....", ".#..", "..#.", "...."}));
   ASSERT_EQ(p->rings().size(), 2u);
   for (const BoundaryRing& ring : p->rings()) {
     if (!ring.is_hole()) continue;
@@ -64,21 +53,21 @@ TEST(ObstaclePolygonsTest, ObstaclesTouchingAtAPinchShareOneRingThatTouchesItTwi
 }
 
 TEST(ObstaclePolygonsTest, AWallAcrossTheMapMakesTwoRegions) {
-  auto p = Build(GridFrom({"..#..", "..#..", "..#.."}));
+  auto p = Build(MakeGrid({"..#..", "..#..", "..#.."}));
   ASSERT_EQ(p->rings().size(), 2u);
   EXPECT_EQ(p->hole_count(), 0);
 }
 
 TEST(ObstaclePolygonsTest, TheDescriptionCountsRegionsHolesAndVertices) {
   const absl::StatusOr<GeometricStructure> s =
-      DescribeStructure("polygons", GridFrom({"....", ".##.", "...."}), false);
+      DescribeStructure("polygons", MakeGrid({"....", ".##.", "...."}), false);
   ASSERT_TRUE(s.ok()) << s.status();
   ASSERT_EQ(s->counts.size(), 3u);
   EXPECT_EQ(s->counts[0].second, 1);
   EXPECT_EQ(s->counts[1].second, 1);
   EXPECT_EQ(s->counts[2].second, 8);
   EXPECT_EQ(s->segments.size(), 8u);
-  EXPECT_FALSE(DescribeStructure("no_such", GridFrom({"."}), false).ok());
+  EXPECT_FALSE(DescribeStructure("no_such", MakeGrid({"."}), false).ok());
 }
 
 // Random maps, random batches of changed cells: the advanced rings equal a

@@ -338,7 +338,7 @@ TEST(VisibilityPlannersTest, DerivedValuesAreBuiltOncePerKey) {
       }
     }
   }
-  EXPECT_EQ(store.builds["visibility_free_space unknown_is_free=0"], 1);
+  EXPECT_EQ(store.builds["free_space unknown_is_free=0"], 1);
   EXPECT_EQ(store.builds["visibility_graph unknown_is_free=0"], 1);
   EXPECT_EQ(store.builds["obstacle_corners unknown_is_free=0"], 1);
   EXPECT_EQ(store.builds["euclidean_spm goal=7,0 unknown_is_free=0"], 1);
