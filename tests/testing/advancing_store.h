@@ -6,7 +6,7 @@
 // comparing them, as the server's cache does when it has no recorded
 // changes). So a test can run a planner through random update sequences on
 // an advanced structure and compare every answer with a fresh build (a null
-// store).
+// store), and a benchmark can time builds and advances (events()).
 #ifndef PATHD_TESTS_TESTING_ADVANCING_STORE_H_
 #define PATHD_TESTS_TESTING_ADVANCING_STORE_H_
 
@@ -20,6 +20,8 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
 #include "absl/types/span.h"
 #include "core/map/grid.h"
 #include "core/search/derived.h"
@@ -35,6 +37,18 @@ class AdvancingStore : public DerivedStore {
     // cells), as a batch update that rewrites cells with their own value
     // would: advance must not depend on every listed cell having changed.
     bool pad_with_unchanged = false;
+  };
+  // One Get that built or advanced a value (hits are only counted).
+  struct Event {
+    std::string key;
+    // Advanced (else built: first time, or advance missing or declined).
+    bool advanced = false;
+    // Cells passed to advance (0 for builds).
+    size_t changed = 0;
+    // Time in recipe.advance (and recipe.build after a declined advance).
+    absl::Duration time;
+    // recipe.bytes of the new value.
+    size_t bytes = 0;
   };
   struct Stats {
     int64_t builds = 0;
@@ -79,6 +93,7 @@ class AdvancingStore : public DerivedStore {
     std::shared_ptr<const void> value;
     bool advanced = false, rebuilt = false;
     size_t changed_count = 0;
+    const absl::Time started = absl::Now();
     if (previous.value != nullptr && previous.grid->width() == grid->width() &&
         previous.grid->height() == grid->height()) {
       const std::vector<Cell> changed = ChangedCells(*previous.grid, *grid);
@@ -88,7 +103,10 @@ class AdvancingStore : public DerivedStore {
       rebuilt = !advanced;
     }
     if (value == nullptr) value = recipe.build(*grid);
+    const absl::Duration took = absl::Now() - started;
+    const size_t bytes = recipe.bytes ? recipe.bytes(value.get()) : 0;
     absl::MutexLock lock(&mu_);
+    events_.push_back(Event{key, advanced, advanced ? changed_count : 0, took, bytes});
     if (advanced) {
       ++stats_.advances;
       stats_.last_changed = changed_count;
@@ -103,6 +121,12 @@ class AdvancingStore : public DerivedStore {
   Stats stats() const ABSL_LOCKS_EXCLUDED(mu_) {
     absl::MutexLock lock(&mu_);
     return stats_;
+  }
+
+  // Every build and advance so far, in order.
+  std::vector<Event> events() const ABSL_LOCKS_EXCLUDED(mu_) {
+    absl::MutexLock lock(&mu_);
+    return events_;
   }
 
   // Forgets every value (the next Get builds).
@@ -151,6 +175,7 @@ class AdvancingStore : public DerivedStore {
   std::shared_ptr<const Grid> grid_ ABSL_GUARDED_BY(mu_);
   std::map<std::string, Entry> entries_ ABSL_GUARDED_BY(mu_);
   Stats stats_ ABSL_GUARDED_BY(mu_);
+  std::vector<Event> events_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace pathd::testing

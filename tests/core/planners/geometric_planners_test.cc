@@ -784,6 +784,15 @@ TEST(AdvancingStoreTest, AdvancesWithTheChangedCells) {
   EXPECT_EQ(st.rebuilds, 1);
   EXPECT_EQ(st.advances, 1);
   EXPECT_EQ(st.hits, 1);
+  // Builds and advances are logged in order, hits are not.
+  const std::vector<AdvancingStore::Event> events = store.events();
+  ASSERT_EQ(events.size(), 4u);
+  EXPECT_FALSE(events[0].advanced);
+  EXPECT_TRUE(events[1].advanced);
+  EXPECT_EQ(events[1].changed, 2u);
+  EXPECT_EQ(events[2].key, "other");
+  EXPECT_FALSE(events[3].advanced);
+  EXPECT_EQ(events[3].bytes, 1u);
 
   AdvancingStore padded(AdvancingStore::Options{true});
   decline = false;
