@@ -17,7 +17,9 @@
 //    reference);
 //  - voronoi's paths are legal grid moves, its min_clearance is that of its
 //    path, never below A*'s path's clearance, and equal to a brute-force
-//    maximum-bottleneck search over the distance field;
+//    maximum-bottleneck search over a brute-force clearance field (octile
+//    distance to the nearest blocked or outside cell centre, the voronoi
+//    planner's definition; the core's Euclidean transform brackets it);
 //  - incremental vs rebuild: through random map-update sequences, every
 //    geometric planner answers on structures advanced by
 //    tests/testing/advancing_store.h exactly as on fresh builds.
@@ -187,35 +189,52 @@ class ReferencePaths {
   std::vector<int8_t> clear_;
 };
 
-// Distance sources of the clearance: every cell a robot centre may not be
-// on, and the map's outside.
-DistanceSources BlockedSources(bool unknown_is_free) {
-  DistanceSources sources;
-  for (int c = 0; c < 256; ++c) {
-    sources.by_cost[c] = !Traversable(static_cast<uint8_t>(c), unknown_is_free);
+// The clearance field of the voronoi planner (core/geometry/voronoi.h): per
+// cell, the octile distance (straight steps 1, diagonal sqrt(2)) from its
+// centre to the nearest centre of a blocked cell or of the ring of cells
+// around the map, by brute force over every such cell; 0 on blocked cells.
+std::vector<double> ClearanceField(const Grid& grid, bool unknown_is_free) {
+  std::vector<Cell> obstacles;
+  for (int y = -1; y <= grid.height(); ++y) {
+    for (int x = -1; x <= grid.width(); ++x) {
+      if (!grid.InBounds(x, y) || !Traversable(grid.cost(x, y), unknown_is_free)) {
+        obstacles.push_back({x, y});
+      }
+    }
   }
-  sources.border = true;
-  return sources;
+  std::vector<double> field(grid.size(), 0.0);
+  for (int y = 0; y < grid.height(); ++y) {
+    for (int x = 0; x < grid.width(); ++x) {
+      if (!Traversable(grid.cost(x, y), unknown_is_free)) continue;
+      double best = kInf;
+      for (Cell o : obstacles) {
+        const int dx = std::abs(o.x - x), dy = std::abs(o.y - y);
+        best = std::min(best, std::max(dx, dy) - std::min(dx, dy) +
+                                  std::min(dx, dy) * std::sqrt(2.0));
+      }
+      field[grid.Index(x, y)] = best;
+    }
+  }
+  return field;
 }
 
-// Clearance of a cell path: the smallest distance field value (cell centre
-// to the nearest blocked or outside cell centre) over its cells.
-double PathClearance(const std::vector<double>& squared, const Grid& grid,
+// Clearance of a cell path: the smallest field value over its cells.
+double PathClearance(const std::vector<double>& field, const Grid& grid,
                      const std::vector<Cell>& path) {
   double worst = kInf;
-  for (Cell c : path) worst = std::min(worst, squared[grid.Index(c)]);
-  return std::sqrt(worst);
+  for (Cell c : path) worst = std::min(worst, field[grid.Index(c)]);
+  return worst;
 }
 
 // The largest clearance any legal 8-connected grid path from s to g can
 // keep, by brute force: for each distinct field value, highest first, a BFS
 // over the cells with at least that value; the first that reaches g.
 // -1 when g is unreachable.
-double MaxBottleneck(const std::vector<double>& squared, const Grid& grid,
+double MaxBottleneck(const std::vector<double>& field, const Grid& grid,
                      bool unknown_is_free, Cell s, Cell g) {
   std::vector<double> levels;
   for (size_t i = 0; i < grid.size(); ++i) {
-    if (Traversable(grid.cells()[i], unknown_is_free)) levels.push_back(squared[i]);
+    if (Traversable(grid.cells()[i], unknown_is_free)) levels.push_back(field[i]);
   }
   std::sort(levels.begin(), levels.end(), std::greater<>());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
@@ -223,13 +242,13 @@ double MaxBottleneck(const std::vector<double>& squared, const Grid& grid,
     return grid.InBounds(x, y) && Traversable(grid.cost(x, y), unknown_is_free);
   };
   for (double level : levels) {
-    if (squared[grid.Index(s)] < level || squared[grid.Index(g)] < level) continue;
+    if (field[grid.Index(s)] < level || field[grid.Index(g)] < level) continue;
     std::vector<uint8_t> seen(grid.size(), 0);
     std::vector<Cell> queue{s};
     seen[grid.Index(s)] = 1;
     for (size_t head = 0; head < queue.size(); ++head) {
       const Cell c = queue[head];
-      if (c == g) return std::sqrt(level);
+      if (c == g) return level;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           const int nx = c.x + dx, ny = c.y + dy;
@@ -238,7 +257,7 @@ double MaxBottleneck(const std::vector<double>& squared, const Grid& grid,
             continue;
           }
           const size_t i = grid.Index(nx, ny);
-          if (seen[i] || squared[i] < level) continue;
+          if (seen[i] || field[i] < level) continue;
           seen[i] = 1;
           queue.push_back({nx, ny});
         }
@@ -520,6 +539,28 @@ TEST(GeometricReference, AgreesWithReachability) {
   EXPECT_GT(reachable, 5000);
 }
 
+// The brute-force octile clearance against the core's exact Euclidean
+// distance transform (core/map/euclidean_distance.h, blocked cells and the
+// outside as sources): never below it and at most 8.3% above it
+// (octile / Euclidean <= sqrt(4 - 2 sqrt(2))), on every cell of every case.
+TEST(GeometricReference, OctileClearanceBracketsTheEuclideanField) {
+  EuclideanDistanceField edt;
+  for (const Case& c : Cases()) {
+    DistanceSources sources;
+    for (int v = 0; v < 256; ++v) {
+      sources.by_cost[v] = !Traversable(static_cast<uint8_t>(v), c.unknown_is_free);
+    }
+    sources.border = true;
+    const std::vector<int64_t>& squared = edt.Compute(c.grid, sources);
+    const std::vector<double> field = ClearanceField(c.grid, c.unknown_is_free);
+    for (size_t i = 0; i < c.grid.size(); ++i) {
+      const double euclidean = std::sqrt(static_cast<double>(squared[i]));
+      ASSERT_GE(field[i], euclidean - 1e-12) << c.name << " cell " << i;
+      ASSERT_LE(field[i], euclidean * 1.0824 + 1e-12) << c.name << " cell " << i;
+    }
+  }
+}
+
 class GeometricPlanner : public ::testing::TestWithParam<std::string> {};
 
 #define PLANNER_OR_SKIP(var, name)                                                 \
@@ -539,15 +580,11 @@ TEST_P(GeometricPlanner, RandomAndDesignedMaps) {
   const bool is_voronoi = name == "voronoi";
   ASSERT_TRUE(planner->traits().geometric || is_voronoi) << name;
   SearchScratch scratch;
-  EuclideanDistanceField field;
   int found = 0, checked = 0;
   for (const Case& c : Cases()) {
     const SegmentChecker checker(c.grid, c.unknown_is_free);
-    std::vector<double> squared;
-    if (is_voronoi) {
-      const auto& d = field.Compute(c.grid, BlockedSources(c.unknown_is_free));
-      squared.assign(d.begin(), d.end());
-    }
+    std::vector<double> field;
+    if (is_voronoi) field = ClearanceField(c.grid, c.unknown_is_free);
     for (size_t qi = 0; qi < c.queries.size(); ++qi) {
       const Query& q = c.queries[qi];
       const std::string where = Where(name, c, qi, q);
@@ -569,16 +606,16 @@ TEST_P(GeometricPlanner, RandomAndDesignedMaps) {
         ASSERT_EQ(bad, -1) << where << "illegal step at path index " << bad;
         ASSERT_EQ(r->path.front(), q.start) << where;
         ASSERT_EQ(r->path.back(), q.goal) << where;
-        const double clearance = PathClearance(squared, c.grid, r->path);
+        const double clearance = PathClearance(field, c.grid, r->path);
         EXPECT_NEAR(r->min_clearance, clearance, 1e-9)
             << where << "reported min_clearance vs its path's";
         const double best =
-            MaxBottleneck(squared, c.grid, c.unknown_is_free, q.start, q.goal);
+            MaxBottleneck(field, c.grid, c.unknown_is_free, q.start, q.goal);
         EXPECT_NEAR(r->min_clearance, best, 1e-9)
             << where << "min_clearance vs the brute-force maximum bottleneck";
         auto a = astar->Plan(c.grid, request, StopCondition::None(), scratch);
         ASSERT_TRUE(a.ok() && a->found()) << where;
-        EXPECT_GE(r->min_clearance, PathClearance(squared, c.grid, a->path) - 1e-9)
+        EXPECT_GE(r->min_clearance, PathClearance(field, c.grid, a->path) - 1e-9)
             << where << "voronoi's clearance below A*'s path's";
         if (!r->polyline.empty()) {
           const auto defect = PolylineChecker(checker).FirstDefect(r->polyline);
