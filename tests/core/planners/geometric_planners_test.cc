@@ -56,6 +56,8 @@ using testing::SegmentChecker;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kRandomMaps = 5000;
+// Besides, larger maps (16 to 28 cells a side): long segments, many corners.
+constexpr int kLargerMaps = 100;
 
 // The planners whose answers are exact Euclidean shortest paths.
 const std::vector<std::string>& ExactPlanners() {
@@ -309,8 +311,8 @@ void Block(Grid& grid, int x, int y) {
   if (grid.InBounds(x, y)) grid.set_cost(x, y, kLethalCost);
 }
 
-Grid RandomGrid(std::mt19937_64& rng, int index) {
-  std::uniform_int_distribution<int> dim(2, 11);
+Grid RandomGrid(std::mt19937_64& rng, int index, int min_side = 2, int max_side = 11) {
+  std::uniform_int_distribution<int> dim(min_side, max_side);
   const int w = dim(rng), h = dim(rng);
   Grid grid = *Grid::Create(w, h);
   const double density = std::uniform_real_distribution<double>(0.0, 0.4)(rng);
@@ -432,13 +434,20 @@ std::vector<Case> DesignedCases() {
   return cases;
 }
 
-// The designed cases, then kRandomMaps random maps; references filled.
+// The designed cases, then kRandomMaps small random maps and kLargerMaps
+// larger ones; references filled.
 const std::vector<Case>& Cases() {
   static const std::vector<Case>* const cases = [] {
     auto* out = new std::vector<Case>(DesignedCases());
     std::mt19937_64 rng(20261201);
     for (int i = 0; i < kRandomMaps; ++i) {
       Case c{absl::StrFormat("random map %d", i), RandomGrid(rng, i), rng() % 4 == 0, {}};
+      AddQueries(rng, c, 3);
+      out->push_back(std::move(c));
+    }
+    for (int i = 0; i < kLargerMaps; ++i) {
+      Case c{absl::StrFormat("larger map %d", i), RandomGrid(rng, i, 16, 28), rng() % 4 == 0,
+             {}};
       AddQueries(rng, c, 3);
       out->push_back(std::move(c));
     }
