@@ -152,6 +152,7 @@ void DerivedCache::EvictLocked() {
     }
     if (victim == entries_.end()) break;
     drop(victim);
+    ++evictions_;
   }
 }
 
@@ -161,6 +162,8 @@ DerivedCache::Stats DerivedCache::stats() const {
   s.hits = hits_;
   s.builds = builds_;
   s.advances = advances_;
+  s.evictions = evictions_;
+  s.budget_bytes = max_bytes_;
   s.entries = entries_.size();
   s.bytes = bytes_;
   return s;

@@ -42,8 +42,12 @@ class DerivedCache {
     int64_t hits = 0;
     int64_t builds = 0;
     int64_t advances = 0;
+    // Dropped beyond the byte budget (entries of freed versions are not
+    // counted).
+    int64_t evictions = 0;
     size_t entries = 0;
     size_t bytes = 0;
+    size_t budget_bytes = 0;
   };
   // One cached value, for `pathctl maps stats`.
   struct EntryInfo {
@@ -108,6 +112,7 @@ class DerivedCache {
   int64_t hits_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t builds_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t advances_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t evictions_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
 }  // namespace pathd::server

@@ -167,6 +167,21 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
     as_incremental.hits = inflation.hits;
     as_incremental.misses = inflation.misses;
     rows.push_back({"inflation", as_incremental, false});
+    if (s_.derived != nullptr) {
+      // Structures derived from map versions: a miss is a build or an
+      // advance; an advance counts as a repair, a build as a rebuild.
+      const DerivedCache::Stats derived = s_.derived->stats();
+      IncrementalCache::Stats d;
+      d.entries = static_cast<int64_t>(derived.entries);
+      d.bytes = static_cast<int64_t>(derived.bytes);
+      d.budget_bytes = static_cast<int64_t>(derived.budget_bytes);
+      d.hits = derived.hits;
+      d.misses = derived.builds + derived.advances;
+      d.evictions = derived.evictions;
+      d.repairs = derived.advances;
+      d.rebuilds = derived.builds;
+      rows.push_back({"derived", d, true});
+    }
 
     struct Column {
       const char* name;

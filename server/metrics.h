@@ -17,6 +17,7 @@
 #include "prometheus/histogram.h"
 #include "prometheus/registry.h"
 #include "server/incremental_cache.h"
+#include "server/derived_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
@@ -33,6 +34,8 @@ struct MetricsSources {
   const WorkerPool* pool = nullptr;
   const InflationCache* inflation = nullptr;
   const IncrementalCache* cache = nullptr;
+  // Null = no "derived" cache series.
+  const DerivedCache* derived = nullptr;
   const NavigationSessions* sessions = nullptr;
   const MapWatchers* watchers = nullptr;
   // Null = no memory budget series.

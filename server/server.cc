@@ -194,8 +194,14 @@ absl::Status PathdServer::Start() {
     // Before the gRPC port opens, so a bad metrics address fails start-up
     // without a window in which the daemon serves unobserved.
     metrics_ = std::make_shared<ServerMetrics>(
-        MetricsSources{&store_, pool_.get(), &inflation_, &cache_, sessions_.get(),
-                       &map_service_->watchers(), budget_.get()});
+        MetricsSources{.store = &store_,
+                       .pool = pool_.get(),
+                       .inflation = &inflation_,
+                       .cache = &cache_,
+                       .derived = &derived_,
+                       .sessions = sessions_.get(),
+                       .watchers = &map_service_->watchers(),
+                       .budget = budget_.get()});
     if (absl::Status listening = metrics_->Listen(options_.metrics_address);
         !listening.ok()) {
       metrics_.reset();

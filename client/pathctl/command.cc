@@ -21,6 +21,7 @@ const Command* const kCommands[] = {
     &kMapsCreateCommand, &kMapsListCommand,   &kMapsGetCommand,
     &kMapsDeleteCommand, &kMapsSetCommand,    &kMapsRectCommand,
     &kMapsWatchCommand,  &kMapsImportCommand, &kMapsExportCommand,
+    &kMapsStatsCommand,
     &kPlanCommand,       &kBatchCommand,      &kNavigateCommand,
     &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand,
     &kHealthCommand,     &kMetricsCommand,    &kBenchCommand,

@@ -98,6 +98,7 @@ extern const Command kMapsRectCommand;
 extern const Command kMapsWatchCommand;
 extern const Command kMapsImportCommand;
 extern const Command kMapsExportCommand;
+extern const Command kMapsStatsCommand;
 extern const Command kPlanCommand;
 extern const Command kBatchCommand;
 extern const Command kNavigateCommand;

@@ -113,6 +113,9 @@ ABSL_FLAG(std::string, o, "", "render: the same as --out");
 ABSL_FLAG(bool, ascii, false, "render: print the picture as text");
 ABSL_FLAG(int, scale, 0, "render: pixels per cell, 1..64 (0: automatic)");
 ABSL_FLAG(bool, y_up, false, "render: draw row 0 at the bottom (world y up)");
+ABSL_FLAG(std::string, overlay, "",
+          "render: draw what a geometric planner builds from the map under the "
+          "plan: polygons, visibility, mesh, decomposition or voronoi");
 ABSL_FLAG(std::optional<double>, occupied_thresh, std::nullopt,
           "maps import of a .png: occupied above this (default 0.65)");
 ABSL_FLAG(std::optional<double>, free_thresh, std::nullopt,
@@ -258,6 +261,7 @@ int main(int argc, char** argv) {
   render.ascii = absl::GetFlag(FLAGS_ascii);
   render.scale = absl::GetFlag(FLAGS_scale);
   render.y_up = absl::GetFlag(FLAGS_y_up);
+  render.overlay = absl::GetFlag(FLAGS_overlay);
 
   return pathctl::Run(
       options,

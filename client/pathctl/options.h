@@ -142,6 +142,8 @@ struct RenderFlags {
   bool ascii = false;
   int scale = 0;
   bool y_up = false;
+  // A structure kind to draw under the plan (core/geometry/structure.h).
+  std::string overlay;
 };
 
 // Everything main.cc parsed. `given_flags` names the flags on the command

@@ -81,10 +81,21 @@ absl::StatusOr<v1::PlanResponse> PlanWithProgress(CommandEnv& env,
 
 // One position from two arguments (`names` word the errors): a cell, or
 
-// A plan's path as CSV, one row per cell (vertex when any-angle) with its
-// world point; only the header when there is no path.
+// A plan's path as CSV, one row per cell (vertex when any-angle; polyline
+// vertex in cell coordinates for the geometric planners) with its world
+// point; only the header when there is no path.
 Table PlanPathCsv(const v1::PlanResponse& response) {
   Table table({"x", "y", "world_x", "world_y"});
+  if (response.polyline_size() > 0) {
+    const bool has_world = response.world_polyline_size() == response.polyline_size();
+    for (int i = 0; i < response.polyline_size(); ++i) {
+      table.AddRow({FormatNumber(response.polyline(i).x()),
+                    FormatNumber(response.polyline(i).y()),
+                    has_world ? FormatNumber(response.world_polyline(i).x()) : "",
+                    has_world ? FormatNumber(response.world_polyline(i).y()) : ""});
+    }
+    return table;
+  }
   const bool has_world = response.world_path_size() == response.path_size();
   for (int i = 0; i < response.path_size(); ++i) {
     const v1::Cell& cell = response.path(i);
@@ -258,21 +269,38 @@ int Plan(CommandEnv& env, Args args) {
   if (!response->trajectory().empty()) {
     out << "trajectory (" << response->trajectory().size() << " points)\n";
   }
+  if (response->has_clearance()) {
+    out << absl::StrFormat("clearance:   %g cells (%g m) at the narrowest point\n",
+                           response->min_clearance_cells(), response->min_clearance_m());
+  }
   if (!response->cost_to_go().empty() && !options.cost_to_go_file.empty()) {
     out << "cost-to-go:  " << response->cost_to_go().size() << " cells written to "
         << options.cost_to_go_file << "\n";
   }
   out << absl::StrFormat("time:        %d us\n", response->planning_time_us());
   if (has_path) {
+    if (response->polyline_size() > 0) {
+      std::vector<std::string> points;
+      for (const v1::CellPoint& p : response->polyline()) {
+        points.push_back(absl::StrFormat("(%g,%g)", p.x(), p.y()));
+      }
+      out << "polyline (" << response->polyline_size()
+          << " vertices, cell coordinates): " << absl::StrJoin(points, " ") << "\n";
+    }
     out << "path (" << response->path_size()
-        << (response->any_angle() ? " vertices, any-angle" : " cells")
+        << (response->any_angle()            ? " vertices, any-angle"
+            : response->polyline_size() > 0 ? " cells crossed"
+                                             : " cells")
         << "): " << FormatPath(response->path()) << "\n";
     if (options.world) {
       std::vector<std::string> points;
-      for (const v1::WorldPoint& p : response->world_path()) {
+      const bool polyline = response->world_polyline_size() > 0;
+      for (const v1::WorldPoint& p :
+           polyline ? response->world_polyline() : response->world_path()) {
         points.push_back(absl::StrFormat("(%g,%g)", p.x(), p.y()));
       }
-      out << "world path (m): " << absl::StrJoin(points, " ") << "\n";
+      out << (polyline ? "world polyline (m): " : "world path (m): ")
+          << absl::StrJoin(points, " ") << "\n";
     }
   }
   return code;

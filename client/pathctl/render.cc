@@ -169,11 +169,36 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
     canvas.FillRect(x - half_width, y - half_width, 2 * half_width + 1,
                     kPathColour);
   };
-  for (size_t i = 0; i < overlay.path.size(); ++i) {
-    const Cell& a = overlay.path[i];
-    const Cell& b = i + 1 < overlay.path.size() ? overlay.path[i + 1] : a;
-    if (!grid.InBounds(a) || !grid.InBounds(b)) continue;
-    ForEachLinePoint(centre_x(a), centre_y(a), centre_x(b), centre_y(b), stamp);
+  // Pixel coordinates of a point in cell coordinates, clamped to the
+  // picture (points on the map's far edges map to its last pixel).
+  const auto point_x = [&](const CellPoint& p) {
+    return std::clamp<int64_t>(std::llround(p.x * scale), 0, width - 1);
+  };
+  const auto point_y = [&](const CellPoint& p) {
+    const double row = options.y_up ? grid.height() - p.y : p.y;
+    return std::clamp<int64_t>(std::llround(row * scale), 0, height - 1);
+  };
+  for (const std::array<CellPoint, 2>& s : overlay.structure_segments) {
+    ForEachLinePoint(point_x(s[0]), point_y(s[0]), point_x(s[1]), point_y(s[1]),
+                     [&](int64_t x, int64_t y) { canvas.FillRect(x, y, 1, kStructureColour); });
+  }
+  const int64_t dot = std::max(1, scale / 4);
+  for (const CellPoint& p : overlay.structure_points) {
+    canvas.FillRect(point_x(p) - dot / 2, point_y(p) - dot / 2, dot, kStructureColour);
+  }
+  if (!overlay.polyline.empty()) {
+    for (size_t i = 0; i < overlay.polyline.size(); ++i) {
+      const CellPoint& a = overlay.polyline[i];
+      const CellPoint& b = i + 1 < overlay.polyline.size() ? overlay.polyline[i + 1] : a;
+      ForEachLinePoint(point_x(a), point_y(a), point_x(b), point_y(b), stamp);
+    }
+  } else {
+    for (size_t i = 0; i < overlay.path.size(); ++i) {
+      const Cell& a = overlay.path[i];
+      const Cell& b = i + 1 < overlay.path.size() ? overlay.path[i + 1] : a;
+      if (!grid.InBounds(a) || !grid.InBounds(b)) continue;
+      ForEachLinePoint(centre_x(a), centre_y(a), centre_x(b), centre_y(b), stamp);
+    }
   }
 
   // Markers stay visible at one pixel per cell: a few pixels across at least.

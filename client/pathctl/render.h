@@ -5,6 +5,7 @@
 #ifndef PATHD_CLIENT_PATHCTL_RENDER_H_
 #define PATHD_CLIENT_PATHCTL_RENDER_H_
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -34,6 +35,8 @@ inline constexpr Rgb kGoalColour = {30, 90, 255};       // blue
 inline constexpr Rgb kMarkerOutlineColour = {0, 0, 0};
 // Expanded cells are their cost's colour blended half-way towards this.
 inline constexpr Rgb kExpandedTint = {255, 170, 0};  // amber
+// Planner structures (mesh, visibility graph, Voronoi, decomposition).
+inline constexpr Rgb kStructureColour = {150, 60, 200};  // purple
 
 // Text glyphs drawn over pathctl's cell glyphs (CellGlyph).
 inline constexpr char kPathGlyph = '*';
@@ -56,7 +59,14 @@ struct PlanOverlay {
   // Path vertices; consecutive ones are joined by straight lines, so grid
   // paths (neighbouring cells) and any-angle paths (turning points) both work.
   std::vector<Cell> path;
+  // A geometric plan's exact polyline (cell coordinates), drawn instead of
+  // `path` when not empty.
+  std::vector<CellPoint> polyline;
   std::vector<Cell> expanded;
+  // What a planner built from the map (core/geometry/structure.h), drawn in
+  // thin lines and dots under the path.
+  std::vector<std::array<CellPoint, 2>> structure_segments;
+  std::vector<CellPoint> structure_points;
   std::optional<Cell> start;
   std::optional<Cell> goal;
 };
@@ -79,7 +89,8 @@ Rgb CostColour(uint8_t cost);
 // pixels: 16 for tiny maps, 1 for maps of 1024 cells or more.
 int DefaultScale(int32_t width, int32_t height);
 
-// Draws the grid, the expanded cells (tinted), the path (lines through cell
+// Draws the grid, the expanded cells (tinted), the structure (one-pixel
+// lines and dots), the path (lines through cell
 // centres, about a third of a cell wide and at least 3 pixels from 3 pixels
 // per cell on) and the start and goal (discs with a black outline, about a
 // cell across and never less than 9 pixels). Overlay cells

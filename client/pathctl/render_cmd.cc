@@ -9,8 +9,10 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "client/pathctl/command.h"
+#include "client/pathctl/maps_stats_cmd.h"
 #include "client/pathctl/png_io.h"
 #include "client/pathctl/render.h"
+#include "core/geometry/structure.h"
 #include "core/status_macros.h"
 
 namespace pathd::pathctl {
@@ -104,6 +106,8 @@ int Render(CommandEnv& env, Args args) {
     if (!response.ok()) return env.Fail(response.status());
     for (const v1::Cell& c : response->path())
       overlay.path.push_back(CoreCell(c));
+    for (const v1::CellPoint& p : response->polyline())
+      overlay.polyline.push_back(CellPoint{p.x(), p.y()});
     for (const v1::Cell& c : response->expanded())
       overlay.expanded.push_back(CoreCell(c));
     overlay.start = CoreCell(response->start());
@@ -113,8 +117,12 @@ int Render(CommandEnv& env, Args args) {
         response->path_size() > 0
             ? absl::StrFormat(
                   "path (%s): %d %s, cost %.6f, length %.6f, %d expansions",
-                  response->planner(), response->path_size(),
-                  response->any_angle() ? "vertices" : "cells",
+                  response->planner(),
+                  response->polyline_size() > 0 ? response->polyline_size()
+                                                : response->path_size(),
+                  response->polyline_size() > 0 ? "polyline vertices"
+                  : response->any_angle()       ? "vertices"
+                                                : "cells",
                   response->cost(), response->length(), response->expansions())
             : absl::StrFormat("no path (%s): %s: %s", response->planner(),
                               OutcomeName(response->outcome()),
@@ -126,6 +134,15 @@ int Render(CommandEnv& env, Args args) {
               ? " (truncated: the server's --max_returned_expansions)"
               : "");
     }
+  }
+  if (!options.overlay.empty()) {
+    absl::StatusOr<GeometricStructure> structure =
+        DescribeStructure(options.overlay, *grid, env.options().cost.unknown_is_free);
+    if (!structure.ok()) return env.Usage(structure.status().message());
+    overlay.structure_segments = std::move(structure->segments);
+    overlay.structure_points = std::move(structure->points);
+    absl::StrAppend(&summary, summary.empty() ? "" : "\n",
+                    StructureSummary(*structure));
   }
   pathctl::RenderOptions render_options;
   render_options.scale = options.scale;
@@ -150,7 +167,7 @@ int Render(CommandEnv& env, Args args) {
 }
 
 constexpr absl::string_view kRenderFlags[] = {
-    "plan", "out", "o", "ascii", "scale", "y_up", "planner", "world", "via",
+    "plan", "out", "o", "ascii", "scale", "y_up", "overlay", "planner", "world", "via",
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells"};
@@ -161,11 +178,13 @@ const Command kRenderCommand = {
     .name = "render",
     .synopsis = "NAME [--plan SX SY GX GY [--planner P] [--expansions]\n"
                 " [plan and cost options]]\n"
-                " (-o FILE.png [--scale N] | --ascii) [--y_up]",
+                " (-o FILE.png [--scale N] | --ascii) [--y_up] [--overlay KIND]",
     .help = "Draws map NAME as a PNG (-o) or as text (--ascii), and with --plan the\n"
             "path from (SX, SY) to (GX, GY), its start and goal, and with\n"
-            "--expansions the cells the search expanded. Exit code 3 when the plan\n"
-            "found no path (the map is still drawn).",
+            "--expansions the cells the search expanded. --overlay KIND draws what a\n"
+            "geometric planner builds from the map under it (polygons, visibility,\n"
+            "mesh, decomposition, voronoi), built here by the planners' own code.\n"
+            "Exit code 3 when the plan found no path (the map is still drawn).",
     .flags = kRenderFlags,
     .run = Render,
     .map_arg = MapArg::kExisting,

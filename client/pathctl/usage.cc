@@ -202,6 +202,8 @@ a usage error naming the flag (e.g. plan ... -o x.png):
   --y_up               render: draw row 0 at the bottom (world y up), as a ROS
                        map's image shows it; default row 0 on top, as in a
                        .map file and maps get --cells
+  --overlay KIND       render: draw a geometric planner's structure under the
+                       plan: polygons, visibility, mesh, decomposition, voronoi
   --occupied_thresh T, --free_thresh T, --negate
                        maps import of a .png: map_server's thresholds (default
                        0.65 and 0.196) and colour inversion; see below

@@ -19,6 +19,9 @@ struct Kind {
 // One line per kind.
 const std::vector<Kind>& Kinds() {
   static const std::vector<Kind>* const kKinds = new std::vector<Kind>{
+      {"polygons", &DescribeObstaclePolygons},
+      {"decomposition", &DescribeDecomposition},
+      {"voronoi", &DescribeVoronoi},
   };
   return *kKinds;
 }

@@ -27,6 +27,8 @@ std::unique_ptr<Planner> MakeJpsPlanner();
 std::unique_ptr<Planner> MakeLpaStarPlanner();
 std::unique_ptr<Planner> MakeDStarLitePlanner();
 std::unique_ptr<Planner> MakeShortestPathMapPlanner();
+std::unique_ptr<Planner> MakeTrapezoidalPlanner();
+std::unique_ptr<Planner> MakeVoronoiPlanner();
 
 }  // namespace pathd
 

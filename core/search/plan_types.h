@@ -142,10 +142,11 @@ struct PlanResult {
   // a corner and need not be legal moves), any_angle is false, and length
   // and cost are the polyline's. Empty for every other planner.
   std::vector<CellPoint> polyline;
-  // Planners that keep clear of obstacles (voronoi): the smallest distance,
-  // in cells, from a point of the path to the nearest blocked cell or the
-  // map's outside (the Euclidean distance field, core/map/euclidean_distance.h,
-  // at the path's cells). Negative when not computed.
+  // Planners that keep clear of obstacles (voronoi): the smallest clearance,
+  // in cells, of the path's cells: the octile distance (steps of 1 and
+  // sqrt(2)) from a cell's centre to the nearest blocked or off-map cell's
+  // centre (core/geometry/voronoi.h says why octile; it reads up to 8.3%
+  // above the Euclidean distance). Negative when not computed.
   double min_clearance = -1.0;
   // Cost under the cost model: sum of step costs, or of SegmentCost() for
   // any-angle paths.

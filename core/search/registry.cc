@@ -34,6 +34,8 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeLpaStarPlanner),
              PlannerRegistry::Factory(&MakeDStarLitePlanner),
              PlannerRegistry::Factory(&MakeShortestPathMapPlanner),
+             PlannerRegistry::Factory(&MakeTrapezoidalPlanner),
+             PlannerRegistry::Factory(&MakeVoronoiPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

@@ -91,11 +91,11 @@ Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
   std::optional<CachedSearch> cached;
   if (call.cached.has_value()) cached.emplace(cache, *call.cached, call);
   const std::shared_ptr<const MapSnapshot>& shared_snapshot = call.decoded.snapshot;
-  PlanEngine engine{
-      .planner = call.planner,
-      .stateful = cached.has_value() ? &*cached : nullptr,
-      .inflate = [&inflation](const std::shared_ptr<const Grid>& stored,
-                              double radius) { return inflation.Get(stored, radius); }};
+  PlanEngine engine;
+  engine.planner = call.planner;
+  engine.stateful = cached.has_value() ? &*cached : nullptr;
+  engine.inflate = [&inflation](const std::shared_ptr<const Grid>& stored,
+                                double radius) { return inflation.Get(stored, radius); };
   if (derived != nullptr) {
     engine.derived = [derived, &shared_snapshot](const std::shared_ptr<const Grid>& grid,
                                                  double radius) {

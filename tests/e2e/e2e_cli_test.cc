@@ -48,7 +48,7 @@ TEST_F(E2eTest, BashCompletionCompletesCommandsFlagsPlannersAndMapNames) {
             "maps plan batch navigate cost-to-go check cache-stats health metrics "
             "bench render completion help");
   EXPECT_EQ(lines[1], "maps");
-  EXPECT_EQ(lines[2], "create list get delete set rect watch import export");
+  EXPECT_EQ(lines[2], "create list get delete set rect watch import export stats");
   EXPECT_EQ(lines[3], "--planner");
   EXPECT_EQ(lines[4], "dstar_lite");
   EXPECT_EQ(lines[5], "csv");

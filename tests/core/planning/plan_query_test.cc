@@ -349,5 +349,64 @@ TEST(PlanQueryTest, StatefulEngineGetsTheSettledGoalAndReportsItsSource) {
             absl::StatusCode::kInternal);
 }
 
+// A derived store that only says which store a planner was handed.
+class TaggedStore final : public DerivedStore {
+ public:
+  std::shared_ptr<const void> Get(const std::string&, const DerivedRecipe&) override {
+    return nullptr;
+  }
+};
+
+// Plans with A* and remembers the store and grid of its last query.
+class StoreRecordingPlanner final : public Planner {
+ public:
+  std::string_view name() const override { return "recording"; }
+  const PlannerTraits& traits() const override { return Get("astar").traits(); }
+  absl::StatusOr<PlanResult> Plan(const Grid& grid, const PlanRequest& request,
+                                  const StopCondition& stop,
+                                  SearchScratch& scratch) const override {
+    seen_store = request.derived;
+    seen_grid = &grid;
+    return Get("astar").Plan(grid, request, stop, scratch);
+  }
+  mutable DerivedStore* seen_store = nullptr;
+  mutable const Grid* seen_grid = nullptr;
+};
+
+TEST(PlanQueryTest, PlannersGetTheDerivedStoreOfThePlanningGrid) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      "......",
+      "......",
+      "...#..",
+      "......",
+  }));
+  StoreRecordingPlanner planner;
+  std::shared_ptr<const Grid> store_grid;
+  double store_radius = -1.0;
+  TaggedStore* handed = nullptr;
+  PlanEngine engine;
+  engine.planner = &planner;
+  engine.derived = [&](const std::shared_ptr<const Grid>& grid, double radius) {
+    store_grid = grid;
+    store_radius = radius;
+    auto store = std::make_unique<TaggedStore>();
+    handed = store.get();
+    return std::unique_ptr<DerivedStore>(std::move(store));
+  };
+  ASSERT_TRUE(Plan(Query({0, 0}, {5, 3}), snapshot, engine).ok());
+  EXPECT_EQ(store_grid, snapshot.grid);
+  EXPECT_EQ(store_radius, 0.0);
+  EXPECT_EQ(planner.seen_store, handed);
+
+  // With a robot radius the store belongs to the inflated grid.
+  PlanQuery query = Query({0, 0}, {5, 0});
+  query.robot_radius_cells = 1.0;
+  ASSERT_TRUE(Plan(query, snapshot, engine).ok());
+  EXPECT_NE(store_grid, snapshot.grid);
+  EXPECT_EQ(store_grid.get(), planner.seen_grid);
+  EXPECT_EQ(store_radius, 1.0);
+  EXPECT_EQ(planner.seen_store, handed);
+}
+
 }  // namespace
 }  // namespace pathd

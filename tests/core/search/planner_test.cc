@@ -329,7 +329,7 @@ TEST_P(EveryPlanner, FourAndEightConnectivity) {
   if (traits().optimal) {
     EXPECT_NEAR(r8->length, 9 * kSqrt2, 1e-9);
   }
-  if (traits().any_angle || traits().geometric) {
+  if (traits().any_angle || (traits().geometric && traits().optimal)) {
     EXPECT_LE(r8->length, 9 * kSqrt2 + 1e-9);
   }
 }
@@ -355,10 +355,11 @@ TEST_P(EveryPlanner, SearchScratchIsReusedAcrossMapSizes) {
 // results) and its reported cost and length match a re-measurement; what else
 // is checked follows the traits: optimal planners match an independent
 // Bellman-Ford, fewest-move planners a reference BFS in moves, bounded ones
-// stay within heuristic_weight times the optimum, any-angle and geometric
-// ones are never longer than the optimum on uniform-cost grids (geometric
-// ones never shorter than the straight line; their exactness is checked in
-// geometric_planners_test), complete ones find a path
+// stay within heuristic_weight times the optimum, any-angle and exact
+// geometric ones are never longer than the optimum on uniform-cost grids
+// (geometric ones never shorter than the straight line; their exactness is
+// checked in geometric_planners_test; a channel-refined trapezoidal path can
+// be slightly longer than the grid optimum), complete ones find a path
 // exactly when one exists, and cost-to-go fields match Bellman-Ford from the
 // goal's side.
 TEST_P(EveryPlanner, RandomWeightedGridsAgreeWithReferences) {
@@ -449,7 +450,7 @@ TEST_P(EveryPlanner, RandomWeightedGridsAgreeWithReferences) {
       EXPECT_LE(r->cost, request.heuristic_weight * optimum + 1e-9 * (1 + optimum))
           << "trial " << trial;
     }
-    if ((t.any_angle || t.geometric) && params.cost_weight == 0.0) {
+    if ((t.any_angle || (t.geometric && t.optimal)) && params.cost_weight == 0.0) {
       EXPECT_LE(r->length, optimum + 1e-9 * (1 + optimum)) << "trial " << trial;
     }
   }

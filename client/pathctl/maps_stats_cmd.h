@@ -1,0 +1,17 @@
+// The one-line description of a geometric structure that maps stats and
+// render --overlay print.
+#ifndef PATHD_CLIENT_PATHCTL_MAPS_STATS_CMD_H_
+#define PATHD_CLIENT_PATHCTL_MAPS_STATS_CMD_H_
+
+#include <string>
+
+#include "core/geometry/structure.h"
+
+namespace pathd::pathctl {
+
+// "mesh: 1204 vertices, 2300 triangles; 96.0 KiB; built in 3.412 ms".
+std::string StructureSummary(const GeometricStructure& structure);
+
+}  // namespace pathd::pathctl
+
+#endif  // PATHD_CLIENT_PATHCTL_MAPS_STATS_CMD_H_

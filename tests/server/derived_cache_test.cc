@@ -1,0 +1,177 @@
+// The derived-representation cache: one value per (grid, key), built once
+// under concurrency, advanced from an older version of the same map with
+// the cells that changed, evicted by bytes.
+#include "server/derived_cache.h"
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "gtest/gtest.h"
+
+namespace pathd::server {
+namespace {
+
+// A derived value that remembers how it was made.
+struct Made {
+  int generation = 0;
+  std::vector<Cell> changed;
+};
+
+struct Counters {
+  std::atomic<int> builds{0};
+  std::atomic<int> advances{0};
+};
+
+DerivedRecipe Recipe(Counters* counters, size_t bytes = 100) {
+  DerivedRecipe recipe;
+  recipe.build = [counters](const Grid&) -> std::shared_ptr<const void> {
+    ++counters->builds;
+    return std::make_shared<const Made>();
+  };
+  recipe.advance = [counters](const void* previous, const Grid&,
+                              absl::Span<const Cell> changed)
+      -> std::shared_ptr<const void> {
+    ++counters->advances;
+    auto made = std::make_shared<Made>();
+    made->generation = static_cast<const Made*>(previous)->generation + 1;
+    made->changed.assign(changed.begin(), changed.end());
+    return made;
+  };
+  recipe.bytes = [bytes](const void*) { return bytes; };
+  return recipe;
+}
+
+std::shared_ptr<const MapSnapshot> Snapshot(uint64_t map_id, uint64_t version,
+                                            std::shared_ptr<const Grid> grid,
+                                            std::vector<Cell> changed = {}) {
+  auto s = std::make_shared<MapSnapshot>();
+  s->name = "m";
+  s->map_id = map_id;
+  s->version = version;
+  s->grid = std::move(grid);
+  s->changes_known = !changed.empty();
+  s->changed_cells = std::move(changed);
+  return s;
+}
+
+std::shared_ptr<const Made> Get(DerivedCache& cache,
+                                const std::shared_ptr<const MapSnapshot>& s,
+                                const std::string& key, const DerivedRecipe& recipe) {
+  return std::static_pointer_cast<const Made>(
+      cache.For(s, s->grid, 0.0)->Get(key, recipe));
+}
+
+TEST(DerivedCacheTest, OneValuePerGridAndKey) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  auto a = Get(cache, v1, "k", recipe);
+  auto b = Get(cache, v1, "k", recipe);
+  EXPECT_EQ(a, b);
+  Get(cache, v1, "other", recipe);
+  EXPECT_EQ(counters.builds, 2);
+  EXPECT_EQ(cache.stats().hits, 1);
+  EXPECT_EQ(cache.stats().entries, 2u);
+}
+
+TEST(DerivedCacheTest, ConcurrentMissesBuildOnce) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  std::vector<std::thread> threads;
+  std::vector<std::shared_ptr<const Made>> got(8);
+  for (int i = 0; i < 8; ++i) {
+    threads.emplace_back([&, i] { got[i] = Get(cache, v1, "k", recipe); });
+  }
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(counters.builds, 1);
+  for (const auto& g : got) EXPECT_EQ(g, got[0]);
+}
+
+TEST(DerivedCacheTest, ANewVersionAdvancesWithItsChangedCells) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  Grid grid = *Grid::Create(4, 4);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(grid));
+  Get(cache, v1, "k", recipe);
+  grid.set_cost(2, 1, kLethalCost);
+  auto v2 = Snapshot(1, 2, std::make_shared<const Grid>(grid), {{2, 1}});
+  auto advanced = Get(cache, v2, "k", recipe);
+  EXPECT_EQ(counters.builds, 1);
+  EXPECT_EQ(counters.advances, 1);
+  EXPECT_EQ(advanced->generation, 1);
+  ASSERT_EQ(advanced->changed.size(), 1u);
+  EXPECT_EQ(advanced->changed[0], (Cell{2, 1}));
+  // With v2's grid gone, v3's recorded changes still describe the step.
+  grid.set_cost(0, 3, kLethalCost);
+  auto v3 = Snapshot(1, 3, std::make_shared<const Grid>(grid), {{0, 3}});
+  v2.reset();
+  advanced.reset();
+  auto third = Get(cache, v3, "k", recipe);
+  EXPECT_EQ(counters.advances, 2);
+  EXPECT_EQ(third->generation, 2);
+  EXPECT_EQ(third->changed.size(), 1u);
+  // Changes not recorded (a large update): v3's grid and v4's are compared.
+  grid.set_cost(3, 3, kLethalCost);
+  grid.set_cost(1, 0, kLethalCost);
+  auto v4 = Snapshot(1, 4, std::make_shared<const Grid>(grid));
+  auto fourth = Get(cache, v4, "k", recipe);
+  EXPECT_EQ(fourth->generation, 3);
+  EXPECT_EQ(fourth->changed.size(), 2u);
+  const std::vector<DerivedCache::EntryInfo> entries = cache.Entries("m");
+  ASSERT_FALSE(entries.empty());
+  EXPECT_EQ(entries[0].version, 4u);
+  EXPECT_TRUE(entries[0].advanced);
+  EXPECT_EQ(entries[0].changed_cells, 2);
+}
+
+TEST(DerivedCacheTest, AnotherMapIdOrRadiusBuildsAfresh) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  Get(cache, v1, "k", recipe);
+  // Re-created under the same name: a new id, version 1 again.
+  auto recreated = Snapshot(2, 2, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  Get(cache, recreated, "k", recipe);
+  // An inflated grid of the first map: not advanced from the stored grid's.
+  auto inflated = std::make_shared<const Grid>(*Grid::Create(4, 4));
+  cache.For(v1, inflated, 1.5)->Get("k", recipe);
+  EXPECT_EQ(counters.builds, 3);
+  EXPECT_EQ(counters.advances, 0);
+}
+
+TEST(DerivedCacheTest, EvictsLeastRecentlyUsedBeyondItsBytes) {
+  DerivedCache cache(250);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters, 100);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  Get(cache, v1, "a", recipe);
+  Get(cache, v1, "b", recipe);
+  Get(cache, v1, "c", recipe);
+  EXPECT_LE(cache.stats().bytes, 250u);
+  EXPECT_EQ(cache.stats().entries, 2u);
+  Get(cache, v1, "a", recipe);  // evicted: built again
+  EXPECT_EQ(counters.builds, 4);
+}
+
+TEST(DerivedCacheTest, EntriesOfFreedVersionsAreDropped) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  Get(cache, v1, "k", recipe);
+  v1.reset();
+  auto v2 = Snapshot(3, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  Get(cache, v2, "k", recipe);
+  EXPECT_EQ(cache.stats().entries, 1u);
+}
+
+}  // namespace
+}  // namespace pathd::server
