@@ -708,7 +708,7 @@ TEST_P(GeometricPlanner, AdvancedStructuresAnswerLikeFreshBuilds) {
   SearchScratch scratch;
   AdvancingStore::Stats total;
   int compared = 0;
-  for (int sequence = 0; sequence < 150; ++sequence) {
+  for (int sequence = 0; sequence < 400; ++sequence) {
     Grid grid = RandomGrid(rng, sequence);
     const bool unknown_is_free = sequence % 5 == 0;
     AdvancingStore store(AdvancingStore::Options{sequence % 2 == 1});
