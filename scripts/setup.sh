@@ -21,6 +21,9 @@ SERVE_PACKAGES=(
   # libssl-dev: pathd's token hashing and PEM checks; openssl: the tool that
   # makes the TLS certificates and auth tokens docs/security.md describes.
   openssl libssl-dev
+  # libcgal-dev: the navigation mesh's constrained Delaunay triangulation
+  # (core/geometry/navmesh.cc; header-only, brings GMP and MPFR).
+  libcgal-dev
 )
 
 TEST_PACKAGES=(

@@ -22,6 +22,8 @@ const std::vector<Kind>& Kinds() {
       {"polygons", &DescribeObstaclePolygons},
       {"decomposition", &DescribeDecomposition},
       {"voronoi", &DescribeVoronoi},
+      {"visibility", &DescribeVisibilityGraph},
+      {"mesh", &DescribeNavMesh},
   };
   return *kKinds;
 }

@@ -72,7 +72,7 @@ TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
       while (j < current.size() && current[j].y1 <= left.y0) ++j;
       for (size_t k = j; k < current.size() && current[k].y0 < left.y1; ++k) {
         if (current[k].id == left.id) continue;
-        portals_.push_back(Portal{x, std::max(left.y0, current[k].y0),
+        portals_.push_back(CellBoundary{x, std::max(left.y0, current[k].y0),
                                   std::min(left.y1, current[k].y1), left.id,
                                   current[k].id});
       }
@@ -82,7 +82,7 @@ TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
   // CSR lists of each trapezoid's portals.
   const size_t n = trapezoids_.size();
   portal_begin_.assign(n + 1, 0);
-  for (const Portal& p : portals_) {
+  for (const CellBoundary& p : portals_) {
     ++portal_begin_[p.left + 1];
     ++portal_begin_[p.right + 1];
   }
@@ -98,13 +98,13 @@ TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
 size_t TrapezoidalDecomposition::bytes() const {
   return sizeof(*this) + space_.bytes() +
          trapezoids_.capacity() * sizeof(Trapezoid) +
-         portals_.capacity() * sizeof(Portal) +
+         portals_.capacity() * sizeof(CellBoundary) +
          (portal_begin_.capacity() + portal_ids_.capacity() +
           cell_trapezoid_.capacity()) *
              sizeof(int32_t);
 }
 
-Gate GateOf(const Portal& portal, bool left_to_right) {
+Gate GateOf(const CellBoundary& portal, bool left_to_right) {
   // Walking towards +x with y up, the right-hand end has the smaller y.
   const LatticePoint low = CornerAt(portal.x, portal.y0);
   const LatticePoint high = CornerAt(portal.x, portal.y1);

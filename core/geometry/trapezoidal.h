@@ -38,13 +38,13 @@ struct Trapezoid {
 
 // The boundary two trapezoids share: the segment x = `x`, y in [y0, y1]
 // (y1 > y0), between `left` (which ends at x) and `right` (which starts at x).
-struct Portal {
+struct CellBoundary {
   int32_t x = 0;
   int32_t y0 = 0;
   int32_t y1 = 0;
   int32_t left = 0;
   int32_t right = 0;
-  friend bool operator==(const Portal&, const Portal&) = default;
+  friend bool operator==(const CellBoundary&, const CellBoundary&) = default;
 
   // The midpoint, a lattice point (2x, y0 + y1).
   LatticePoint Midpoint() const {
@@ -66,7 +66,7 @@ class TrapezoidalDecomposition {
   // Trapezoids in sweep order: by x0, then y0.
   const std::vector<Trapezoid>& trapezoids() const { return trapezoids_; }
   // Portals by x, then y0.
-  const std::vector<Portal>& portals() const { return portals_; }
+  const std::vector<CellBoundary>& portals() const { return portals_; }
   // Ids of the portals on trapezoid t's boundary.
   absl::Span<const int32_t> PortalsOf(int32_t t) const {
     return absl::MakeConstSpan(portal_ids_.data() + portal_begin_[t],
@@ -83,7 +83,7 @@ class TrapezoidalDecomposition {
  private:
   FreeSpace space_;
   std::vector<Trapezoid> trapezoids_;
-  std::vector<Portal> portals_;
+  std::vector<CellBoundary> portals_;
   // CSR adjacency: portal ids of trapezoid t at portal_ids_[portal_begin_[t]
   // .. portal_begin_[t + 1]).
   std::vector<int32_t> portal_begin_;
@@ -99,7 +99,7 @@ struct Gate {
 };
 // `portal` crossed from its left trapezoid to its right one (towards +x) or
 // back.
-Gate GateOf(const Portal& portal, bool left_to_right);
+Gate GateOf(const CellBoundary& portal, bool left_to_right);
 
 // The shortest polyline from `start` to `goal` (lattice points) inside a
 // channel of convex cells joined by `gates`, in crossing order: the simple

@@ -29,6 +29,10 @@ std::unique_ptr<Planner> MakeDStarLitePlanner();
 std::unique_ptr<Planner> MakeShortestPathMapPlanner();
 std::unique_ptr<Planner> MakeTrapezoidalPlanner();
 std::unique_ptr<Planner> MakeVoronoiPlanner();
+std::unique_ptr<Planner> MakeVisibilityGraphPlanner();
+std::unique_ptr<Planner> MakeMinimalConstructPlanner();
+std::unique_ptr<Planner> MakeEuclideanSpmPlanner();
+std::unique_ptr<Planner> MakeNavMeshPlanner();
 
 }  // namespace pathd
 

@@ -36,6 +36,10 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeShortestPathMapPlanner),
              PlannerRegistry::Factory(&MakeTrapezoidalPlanner),
              PlannerRegistry::Factory(&MakeVoronoiPlanner),
+             PlannerRegistry::Factory(&MakeVisibilityGraphPlanner),
+             PlannerRegistry::Factory(&MakeMinimalConstructPlanner),
+             PlannerRegistry::Factory(&MakeEuclideanSpmPlanner),
+             PlannerRegistry::Factory(&MakeNavMeshPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

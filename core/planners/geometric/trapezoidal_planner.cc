@@ -76,7 +76,7 @@ class BoundarySearch {
         parent_(goal_node_ + 1, -1),
         closed_(goal_node_ + 1, false) {
     points_.reserve(goal_node_ + 1);
-    for (const Portal& p : d.portals()) {
+    for (const CellBoundary& p : d.portals()) {
       points_.push_back(p.Midpoint());
       points_.push_back(CornerAt(p.x, p.y0));
       points_.push_back(CornerAt(p.x, p.y1));
@@ -122,7 +122,7 @@ class BoundarySearch {
     std::vector<Gate> gates;
     int32_t at = start_trapezoid_;
     for (size_t i = 0; i < portals.size(); ++i) {
-      const Portal& p = d_.portals()[portals[i]];
+      const CellBoundary& p = d_.portals()[portals[i]];
       const int32_t other = p.left == at ? p.right : p.left;
       const bool next_beyond =
           i + 1 < portals.size()

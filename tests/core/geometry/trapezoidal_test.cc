@@ -132,7 +132,7 @@ TEST(TrapezoidalDecomposition, MatchesTheVerticalExtensionsOnRandomMaps) {
     }
     ASSERT_EQ(d.portals().size(), pairs.size()) << "trial " << trial;
     for (size_t p = 0; p < d.portals().size(); ++p) {
-      const Portal& portal = d.portals()[p];
+      const CellBoundary& portal = d.portals()[p];
       ASSERT_TRUE(pairs.count({portal.x, portal.left, portal.right}))
           << "trial " << trial;
       ASSERT_LT(portal.y0, portal.y1);
@@ -324,7 +324,7 @@ TEST(PullString, IsTheShortestPathInItsChannel) {
     for (size_t head = 0; head < queue.size(); ++head) {
       const int t = queue[head];
       for (int32_t p : d.PortalsOf(t)) {
-        const Portal& portal = d.portals()[p];
+        const CellBoundary& portal = d.portals()[p];
         const int next = portal.left == t ? portal.right : portal.left;
         if (via[next] != -2) continue;
         via[next] = p;
@@ -335,7 +335,7 @@ TEST(PullString, IsTheShortestPathInItsChannel) {
     std::vector<Gate> gates;
     std::vector<Trapezoid> cells{d.trapezoids()[tg]};
     for (int t = tg; t != ts;) {
-      const Portal& portal = d.portals()[via[t]];
+      const CellBoundary& portal = d.portals()[via[t]];
       const int prev = portal.left == t ? portal.right : portal.left;
       gates.push_back(GateOf(portal, portal.left == prev));
       cells.push_back(d.trapezoids()[prev]);

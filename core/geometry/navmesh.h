@@ -1,0 +1,160 @@
+// A navigation mesh of a grid's free space: a constrained Delaunay
+// triangulation (CGAL) of every 32 x 32 tile, free triangles only, with the
+// lookups Polyanya (core/planners/geometric/polyanya.h) and the funnel need.
+// Derived per (map version, unknown_is_free) and advanced tile by tile: an
+// update re-triangulates only the tiles its cells touch and shares the rest
+// with the previous version.
+//
+// The constraints are the obstacle boundary of core/geometry/free_space.h
+// (grid edges between a blocked and a free cell, the map border) in maximal
+// collinear runs, split wherever boundary edges of the other orientation
+// meet them, plus each tile's border, split at the same points on both of
+// its sides, so neighbouring tiles meet edge to edge. Every mesh vertex is a
+// grid corner: the input is integers and no constraints cross, so the
+// triangulation needs exact predicates only. A pinch corner (two diagonally
+// opposite blocked cells) is a vertex whose two free fans share no edge, so
+// no walk from triangle to triangle passes it.
+#ifndef PATHD_CORE_GEOMETRY_NAVMESH_H_
+#define PATHD_CORE_GEOMETRY_NAVMESH_H_
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "absl/time/time.h"
+#include "absl/types/span.h"
+#include "core/geometry/free_space.h"
+#include "core/map/grid.h"
+
+namespace pathd {
+
+// A free triangle of one tile: its corners counter-clockwise (y down is
+// still "counter-clockwise" in the sense of a positive cross product) and,
+// for each edge i from corner i to corner i + 1, what lies across it.
+struct NavTriangle {
+  // Across an edge: another triangle of the tile (>= 0), an obstacle or the
+  // map's outside, or the tile's border (the neighbour tile decides).
+  static constexpr int32_t kWall = -1;
+  static constexpr int32_t kTileBorder = -2;
+  std::array<LatticePoint, 3> corners;
+  std::array<int32_t, 3> across;
+};
+
+// The mesh of one tile: cells [x0, x1) x [y0, y1). Immutable once built.
+struct NavTile {
+  int32_t x0 = 0;
+  int32_t y0 = 0;
+  int32_t x1 = 0;
+  int32_t y1 = 0;
+  std::vector<NavTriangle> triangles;
+  // Row-major over the tile's cells: the triangle containing the cell's
+  // centre, kNoTriangle for blocked cells.
+  static constexpr uint16_t kNoTriangle = 0xffff;
+  std::vector<uint16_t> cell_triangle;
+  // Edges on the tile's border, per side (0: y = y0, 1: x = x1, 2: y = y1,
+  // 3: x = x0), sorted by their lower coordinate along the side: (lower
+  // coordinate, triangle).
+  std::array<std::vector<std::pair<int32_t, int32_t>>, 4> border;
+  // Mesh vertices of the tile (grid corners), for descriptions.
+  int32_t vertex_count = 0;
+  // Bit v set when a traversable cell of the tile costs v (unknown cells
+  // traversed as free count as 0), so planners that need uniform cost can
+  // check a whole map in a few words per tile.
+  std::array<uint64_t, 4> traversable_costs{};
+
+  size_t bytes() const;
+};
+
+// A triangle of the mesh: tile index and triangle within the tile.
+struct NavRef {
+  int32_t tile = -1;
+  int32_t triangle = -1;
+  bool valid() const { return tile >= 0; }
+  friend bool operator==(const NavRef&, const NavRef&) = default;
+};
+
+// The navigation mesh of one map version. Immutable and thread-safe once
+// built; versions share unchanged tiles.
+class NavMesh {
+ public:
+  // Tile side in cells. 32 searches as fast as 64 (tile borders add few
+  // triangles) and builds faster; 100 scattered changed cells re-mesh 9x
+  // cheaper than a rebuild on a 1024^2 map (64: 2x, 16: 27x, at 20-70%
+  // more search nodes). navmesh_bench --tile_size measures the trade.
+  static constexpr int32_t kDefaultTileSize = 32;
+  // A tile's triangles are numbered in 16 bits: at most 2 (s + 1)^2.
+  static constexpr int32_t kMaxTileSize = 128;
+
+  // The mesh of `grid`'s free space (cells Traversable under
+  // unknown_is_free), in tiles of tile_size x tile_size cells (small tiles
+  // let tests cross many tile borders on small maps). The grid must not be
+  // empty; tile_size is clamped to 1..kMaxTileSize.
+  static std::shared_ptr<const NavMesh> Build(const Grid& grid,
+                                              bool unknown_is_free,
+                                              int32_t tile_size = kDefaultTileSize);
+  // The mesh of `grid`, whose cells differ from the grid `previous` was
+  // built from exactly in `changed`: the tiles those cells touch are
+  // triangulated again, the others shared. Null when the grid's size
+  // differs (the caller rebuilds).
+  static std::shared_ptr<const NavMesh> Advance(const NavMesh& previous,
+                                                const Grid& grid,
+                                                absl::Span<const Cell> changed);
+
+  int32_t width() const { return width_; }
+  int32_t height() const { return height_; }
+  bool unknown_is_free() const { return unknown_is_free_; }
+  int32_t tile_size() const { return tile_size_; }
+  int32_t tiles_x() const { return tiles_x_; }
+  int32_t tiles_y() const { return tiles_y_; }
+  const std::vector<std::shared_ptr<const NavTile>>& tiles() const { return tiles_; }
+  const NavTile& tile(int32_t index) const { return *tiles_[index]; }
+  const NavTriangle& triangle(NavRef ref) const {
+    return tiles_[ref.tile]->triangles[ref.triangle];
+  }
+
+  // The triangle across edge `edge` of `ref`; invalid when an obstacle or
+  // the map's outside is there.
+  NavRef Across(NavRef ref, int edge) const;
+  // The free triangles whose closure holds the centre of `cell` (one, or
+  // two when it lies on their shared edge); empty for a blocked cell.
+  std::vector<NavRef> Locate(Cell cell) const;
+
+  // Every traversable cell costs the same (at most one cost value over all
+  // tiles). O(tiles).
+  bool UniformCost() const;
+
+  // Totals over the tiles.
+  int64_t triangle_count() const;
+  int64_t vertex_count() const;
+  size_t bytes() const;
+  // How long Build or Advance took.
+  absl::Duration build_time() const { return build_time_; }
+  // Tiles Advance triangulated again (all of them for Build).
+  int32_t rebuilt_tiles() const { return rebuilt_tiles_; }
+
+ private:
+  NavMesh() = default;
+
+  int32_t width_ = 0;
+  int32_t height_ = 0;
+  bool unknown_is_free_ = false;
+  int32_t tile_size_ = kDefaultTileSize;
+  int32_t tiles_x_ = 0;
+  int32_t tiles_y_ = 0;
+  std::vector<std::shared_ptr<const NavTile>> tiles_;
+  absl::Duration build_time_;
+  int32_t rebuilt_tiles_ = 0;
+};
+
+// Twice the signed area of triangle a, b, c: > 0 counter-clockwise (c left
+// of a -> b), 0 collinear. Exact for lattice points.
+inline int64_t Orient(LatticePoint a, LatticePoint b, LatticePoint c) {
+  return (b.x2 - a.x2) * (c.y2 - a.y2) - (b.y2 - a.y2) * (c.x2 - a.x2);
+}
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_GEOMETRY_NAVMESH_H_

@@ -1,0 +1,692 @@
+// Polyanya on the tiled constrained Delaunay mesh, and the `navmesh` planner.
+//
+// Exactness: roots are the start centre or mesh vertices (grid corners), so
+// they are lattice points, and an interval is stored not by its end points
+// but by the two rays from its root that bound it, each through a lattice
+// point (an interval end is either a mesh vertex or where the ray from the
+// root through an earlier vertex meets the edge). Every decision (which
+// edge a ray leaves a triangle through, whether an end is a vertex, whether
+// the goal is in view) is then an integer cross product; floating point
+// only enters the heuristic. A turn is taken only at a bend corner (exactly
+// one of the four cells blocked) whose blocked cell lies inside the bend: a
+// taut path bends nowhere else.
+//
+// Pruning: the paper's root-level (a node whose root was reached more
+// cheaply is dropped, when queued and again when taken), dead-end (no node
+// into a triangle with one open edge) and intermediate (a lone successor
+// with the same root is expanded at once); and duplicates: on a grid map
+// many rays graze vertices exactly, so equal intervals from equal roots are
+// reached in several ways, and left alone they multiply at every corner
+// (exponentially along a serpentine), so nodes that start a new root or
+// sweep a root's fan are queued once per g.
+#include "core/planners/geometric/polyanya.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <numeric>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/geometry/free_space.h"
+#include "core/map/cost_model.h"
+#include "core/planners/planners.h"
+#include "core/search/derived.h"
+#include "core/search/grid_planner.h"
+
+namespace pathd {
+namespace {
+
+// A direction in doubled cell coordinates.
+struct Vec {
+  int64_t x = 0;
+  int64_t y = 0;
+};
+Vec Sub(LatticePoint a, LatticePoint b) { return Vec{a.x2 - b.x2, a.y2 - b.y2}; }
+int64_t Cross(Vec a, Vec b) { return a.x * b.y - a.y * b.x; }
+// The same direction with coprime components (zero stays zero).
+Vec Reduced(Vec v) {
+  const int64_t d = std::gcd(v.x < 0 ? -v.x : v.x, v.y < 0 ? -v.y : v.y);
+  return d == 0 ? v : Vec{v.x / d, v.y / d};
+}
+
+// A search node: the polygon to expand next, the edge it is entered
+// through, and the interval of that edge seen from `root`, bounded by the
+// rays root + t * left and root + t * right (left and right as seen from
+// the root looking into the polygon). When the root lies on the entry
+// edge's line (it is then one of the edge's ends), the whole polygon is in
+// view and the rays are not used.
+struct Node {
+  LatticePoint root;
+  Vec left;
+  Vec right;
+  NavRef polygon;
+  // Entry edge index in `polygon`; kFinal for a node that reached the goal.
+  int8_t edge = 0;
+  double g = 0.0;
+  double f = 0.0;
+  // The root's entry in PolyanyaScratch::records.
+  int32_t record = 0;
+};
+constexpr int8_t kFinal = -1;
+
+// A turning point of the path and the one before it.
+struct Record {
+  LatticePoint point;
+  int32_t parent = -1;
+};
+
+// A node's identity: the same interval from the same root into the same
+// polygon, however it was reached. Duplicates arise wherever the mesh offers
+// two equally short ways to one interval (a ray grazing a vertex continues
+// on both sides of it; two turns at one corner sweep the same fan), and
+// left alone they multiply at every corner after.
+struct NodeKey {
+  int64_t root_x2, root_y2;
+  int64_t lx, ly, rx, ry;
+  int32_t tile, triangle;
+  int32_t edge;
+  friend bool operator==(const NodeKey&, const NodeKey&) = default;
+  size_t Hash() const {
+    uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (const int64_t v : {root_x2, root_y2, lx, ly, rx, ry,
+                            static_cast<int64_t>(tile), static_cast<int64_t>(triangle),
+                            static_cast<int64_t>(edge)}) {
+      // splitmix64 over the running value.
+      h += static_cast<uint64_t>(v) + 0x9e3779b97f4a7c15ull;
+      h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+      h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+      h ^= h >> 31;
+    }
+    return static_cast<size_t>(h);
+  }
+};
+
+// The smallest g each node was queued with: open addressing whose slots
+// are emptied between searches by a stamp, so a search costs nothing for
+// the table's size and its memory is kept.
+class QueuedTable {
+ public:
+  // Starts a new search: every slot empty.
+  void Clear() {
+    size_ = 0;
+    if (++stamp_ == 0) {
+      for (Slot& s : slots_) s.stamp = 0;
+      stamp_ = 1;
+    }
+  }
+  // The g recorded for `key`, inserting `g` when absent (then returns
+  // nullptr).
+  double* FindOrInsert(const NodeKey& key, double g) {
+    if (2 * (size_ + 1) > slots_.size()) Grow();
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
+      Slot& s = slots_[i];
+      if (s.stamp != stamp_) {
+        s = Slot{key, g, stamp_};
+        ++size_;
+        return nullptr;
+      }
+      if (s.key == key) return &s.g;
+    }
+  }
+  const double* Find(const NodeKey& key) const {
+    if (slots_.empty()) return nullptr;
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
+      const Slot& s = slots_[i];
+      if (s.stamp != stamp_) return nullptr;
+      if (s.key == key) return &s.g;
+    }
+  }
+  size_t bytes() const { return slots_.capacity() * sizeof(Slot); }
+
+ private:
+  struct Slot {
+    NodeKey key;
+    double g = 0.0;
+    uint32_t stamp = 0;
+  };
+  void Grow() {
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(std::max<size_t>(1024, 2 * old.size()), Slot{});
+    const uint32_t live = stamp_;
+    stamp_ = 1;
+    size_ = 0;
+    for (const Slot& s : old) {
+      if (s.stamp == live) FindOrInsert(s.key, s.g);
+    }
+  }
+
+  std::vector<Slot> slots_;
+  size_t size_ = 0;
+  uint32_t stamp_ = 1;
+};
+
+struct HeapEntry {
+  double f;
+  double g;
+  int32_t node;
+};
+// Smallest f first, larger g among equal f (deeper nodes, as the grid
+// searches break ties).
+bool operator<(const HeapEntry& a, const HeapEntry& b) {
+  return a.f != b.f ? a.f > b.f : a.g < b.g;
+}
+
+// What the search keeps in a SearchScratch between queries.
+struct PolyanyaScratch final : public SearchScratch::Extension {
+  std::vector<Node> nodes;
+  std::vector<Record> records;
+  std::vector<HeapEntry> open;
+  std::vector<Node> pending;
+  // The smallest g each node was queued with.
+  QueuedTable queued;
+  // Root-level pruning: the best g a vertex (grid corner) was reached with,
+  // valid where stamp == search.
+  std::vector<double> best_g;
+  std::vector<uint32_t> stamp;
+  uint32_t search = 0;
+
+  size_t MemoryBytes() const override {
+    return nodes.capacity() * sizeof(Node) + records.capacity() * sizeof(Record) +
+           open.capacity() * sizeof(HeapEntry) + pending.capacity() * sizeof(Node) +
+           queued.bytes() +
+           best_g.capacity() * sizeof(double) +
+           stamp.capacity() * sizeof(uint32_t);
+  }
+};
+
+struct Pt {
+  double x;
+  double y;
+};
+Pt ToPt(LatticePoint p) {
+  return Pt{static_cast<double>(p.x2), static_cast<double>(p.y2)};
+}
+double Dist(Pt a, Pt b) {
+  const double dx = b.x - a.x;
+  const double dy = b.y - a.y;
+  return std::sqrt(dx * dx + dy * dy);
+}
+double CrossD(Pt o, Pt a, Pt b) {
+  return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+}
+
+// Where the ray root + t * dir meets the line through a and b, as a point
+// of the segment; exactly a or b when the ray passes through them.
+Pt RayHit(LatticePoint root, Vec dir, LatticePoint a, LatticePoint b) {
+  if (Cross(dir, Sub(a, root)) == 0) return ToPt(a);
+  if (Cross(dir, Sub(b, root)) == 0) return ToPt(b);
+  const Vec ab = Sub(b, a);
+  const double denom = static_cast<double>(Cross(ab, dir));
+  if (denom == 0.0) return ToPt(a);
+  // a + s * ab on the ray: Cross(a + s ab - root, dir) = 0.
+  const double s = std::clamp(
+      static_cast<double>(Cross(Sub(root, a), dir)) / denom, 0.0, 1.0);
+  return Pt{static_cast<double>(a.x2) + s * static_cast<double>(ab.x),
+            static_cast<double>(a.y2) + s * static_cast<double>(ab.y)};
+}
+
+// A lower bound, in doubled units, on a path from `root` through the
+// interval l-r to `goal`: the goal is mirrored across the interval's line
+// when it lies on the root's side (a path must cross the line and come
+// back), then the straight line if it passes the interval, else the bend
+// at the nearer end (Polyanya's h).
+double IntervalHeuristic(Pt root, Pt l, Pt r, Pt goal) {
+  if ((root.x == l.x && root.y == l.y) || (root.x == r.x && root.y == r.y)) {
+    return Dist(root, goal);
+  }
+  if (l.x == r.x && l.y == r.y) return Dist(root, l) + Dist(l, goal);
+  const double side_root = CrossD(l, r, root);
+  const double side_goal = CrossD(l, r, goal);
+  if ((side_root > 0) == (side_goal > 0)) {
+    const double dx = r.x - l.x;
+    const double dy = r.y - l.y;
+    const double t = ((goal.x - l.x) * dx + (goal.y - l.y) * dy) / (dx * dx + dy * dy);
+    goal = Pt{2 * (l.x + t * dx) - goal.x, 2 * (l.y + t * dy) - goal.y};
+  }
+  const double ol = CrossD(root, goal, l);
+  const double orr = CrossD(root, goal, r);
+  if ((ol <= 0 && orr >= 0) || (ol >= 0 && orr <= 0)) return Dist(root, goal);
+  return std::min(Dist(root, l) + Dist(l, goal), Dist(root, r) + Dist(r, goal));
+}
+
+class Search {
+ public:
+  Search(const NavMesh& mesh, const Grid& grid, Cell start, Cell goal,
+         const StopCondition& stop, PolyanyaScratch& s)
+      : mesh_(mesh),
+        grid_(grid),
+        start_(CentreOf(start)),
+        goal_(CentreOf(goal)),
+        goal_polygons_(mesh.Locate(goal)),
+        stop_(stop),
+        s_(s) {}
+
+  PolyanyaPath Run(Cell start_cell) {
+    PolyanyaPath out;
+    const std::vector<NavRef> start_polygons = mesh_.Locate(start_cell);
+    if (start_polygons.empty() || goal_polygons_.empty()) return out;
+    for (const NavRef& p : start_polygons) {
+      if (IsGoalPolygon(p)) {
+        // Both points in one convex triangle: the straight segment.
+        out.outcome = PlanOutcome::kFound;
+        out.polyline = {start_};
+        if (!(goal_ == start_)) out.polyline.push_back(goal_);
+        return out;
+      }
+    }
+    Reset();
+    s_.records.push_back(Record{start_, -1});
+    for (const NavRef& p : start_polygons) {
+      const NavTriangle& t = mesh_.triangle(p);
+      for (int i = 0; i < 3; ++i) {
+        const LatticePoint u = t.corners[i];
+        const LatticePoint w = t.corners[(i + 1) % 3];
+        // An edge through the start belongs to the other start polygon.
+        if (Orient(u, w, start_) == 0) continue;
+        Push(start_, Sub(w, start_), Sub(u, start_), p, i, 0.0, 0);
+      }
+    }
+    FlushPending();
+    while (!s_.open.empty()) {
+      const HeapEntry top = s_.open.front();
+      const PlanOutcome o = stop_.Check(out.expansions, top.f);
+      if (o != PlanOutcome::kFound) {
+        out.outcome = o;
+        return out;
+      }
+      std::pop_heap(s_.open.begin(), s_.open.end());
+      s_.open.pop_back();
+      Node node = s_.nodes[static_cast<size_t>(top.node)];
+      if (Superseded(node)) continue;
+      ++out.expansions;
+      if (node.edge == kFinal) {
+        out.outcome = PlanOutcome::kFound;
+        out.polyline = Trace(node.record);
+        return out;
+      }
+      Expand(node);
+      // Intermediate pruning (the paper's): a lone successor with the same
+      // root is expanded at once instead of through the open list.
+      while (s_.pending.size() == 1 && s_.pending[0].edge != kFinal &&
+             s_.pending[0].record == node.record) {
+        const PlanOutcome o2 = stop_.Check(out.expansions, s_.pending[0].f);
+        if (o2 != PlanOutcome::kFound) {
+          out.outcome = o2;
+          return out;
+        }
+        node = s_.pending[0];
+        s_.pending.clear();
+        ++out.expansions;
+        Expand(node);
+      }
+      FlushPending();
+    }
+    out.outcome = PlanOutcome::kNoPath;
+    return out;
+  }
+
+ private:
+  void Reset() {
+    const size_t corners = static_cast<size_t>(grid_.width() + 1) * (grid_.height() + 1);
+    if (s_.stamp.size() != corners) {
+      s_.stamp.assign(corners, 0);
+      s_.best_g.assign(corners, 0.0);
+      s_.search = 0;
+    }
+    if (++s_.search == 0) {
+      std::fill(s_.stamp.begin(), s_.stamp.end(), 0);
+      s_.search = 1;
+    }
+    s_.nodes.clear();
+    s_.records.clear();
+    s_.open.clear();
+    s_.pending.clear();
+    s_.queued.Clear();
+  }
+
+  bool IsGoalPolygon(NavRef p) const {
+    return std::find(goal_polygons_.begin(), goal_polygons_.end(), p) !=
+           goal_polygons_.end();
+  }
+
+  bool Blocked(int64_t x, int64_t y) const {
+    return x < 0 || y < 0 || x >= grid_.width() || y >= grid_.height() ||
+           !Traversable(grid_.cost(static_cast<int32_t>(x), static_cast<int32_t>(y)),
+                        mesh_.unknown_is_free());
+  }
+  // Whether a path from `from` may bend at vertex v, turning left (or
+  // right): v must be a bend corner (exactly one of its four cells
+  // blocked) with that cell reaching into the open half-plane the path
+  // turns towards. A taut path bends round an obstacle inside the bend;
+  // elsewhere the mesh merely ends an interval at v, and a turn there could
+  // be cut short.
+  bool CanTurn(LatticePoint from, LatticePoint v, bool left) const {
+    const int64_t x = v.x2 / 2;
+    const int64_t y = v.y2 / 2;
+    int blocked = 0;
+    Vec quadrant;
+    for (const int dy : {-1, 1}) {
+      for (const int dx : {-1, 1}) {
+        if (Blocked(dx < 0 ? x - 1 : x, dy < 0 ? y - 1 : y)) {
+          ++blocked;
+          quadrant = Vec{dx, dy};
+        }
+      }
+    }
+    if (blocked != 1) return false;
+    const Vec d = Sub(v, from);
+    const int64_t sign = left ? 1 : -1;
+    // The blocked cell's corners other than v, relative to v.
+    return sign * Cross(d, Vec{2 * quadrant.x, 0}) > 0 ||
+           sign * Cross(d, Vec{0, 2 * quadrant.y}) > 0 ||
+           sign * Cross(d, Vec{2 * quadrant.x, 2 * quadrant.y}) > 0;
+  }
+
+  size_t CornerId(LatticePoint corner) const {
+    return static_cast<size_t>(corner.y2 / 2) * (grid_.width() + 1) +
+           static_cast<size_t>(corner.x2 / 2);
+  }
+
+  // Root-level pruning (the paper's): a node whose root, a vertex, was
+  // already reached more cheaply is dominated. False when pruned.
+  bool RecordRootG(LatticePoint root, double g) {
+    if (root == start_) return true;
+    const size_t id = CornerId(root);
+    if (s_.stamp[id] != s_.search) {
+      s_.stamp[id] = s_.search;
+      s_.best_g[id] = g;
+      return true;
+    }
+    if (g > s_.best_g[id] + 1e-9) return false;
+    s_.best_g[id] = std::min(s_.best_g[id], g);
+    return true;
+  }
+
+  int32_t Turn(LatticePoint at, int32_t parent) {
+    s_.records.push_back(Record{at, parent});
+    return static_cast<int32_t>(s_.records.size() - 1);
+  }
+
+  // Successors wait in `pending` until their parent's expansion is done.
+  void PushEntry(const Node& n) { s_.pending.push_back(n); }
+  void FlushPending() {
+    for (const Node& n : s_.pending) {
+      s_.nodes.push_back(n);
+      s_.open.push_back(HeapEntry{n.f, n.g, static_cast<int32_t>(s_.nodes.size() - 1)});
+      std::push_heap(s_.open.begin(), s_.open.end());
+    }
+    s_.pending.clear();
+  }
+
+  // Queues the interval of edge `edge` of `from` bounded by the rays
+  // `left`, `right` from `root`, as a node of the polygon across it.
+  void Push(LatticePoint root, Vec left, Vec right, NavRef from, int edge,
+            double g, int32_t record) {
+    const NavRef next = mesh_.Across(from, edge);
+    if (!next.valid() || (DeadEnd(next) && !IsGoalPolygon(next))) return;
+    const NavTriangle& ft = mesh_.triangle(from);
+    // The next polygon's entry edge runs a -> b.
+    const LatticePoint a = ft.corners[(edge + 1) % 3];
+    const LatticePoint b = ft.corners[edge];
+    const bool on_line = Orient(a, b, root) == 0;
+    // On the edge's line only an end of the edge may be the root.
+    if (on_line && !(root == a) && !(root == b)) return;
+    if (!RecordRootG(root, g)) return;
+    const NavTriangle& nt = mesh_.triangle(next);
+    int8_t entry = 0;
+    while (!(nt.corners[entry] == a)) ++entry;
+    Node node{root, left, right, next, entry, g, 0.0, record};
+    // Only a turn (a root new to this branch) or a sweep round a root's fan
+    // can meet a node queued before; the cone of one root splits without
+    // overlap.
+    if (record != expanding_record_ || on_line) {
+      if (double* queued = s_.queued.FindOrInsert(KeyOf(node), g)) {
+        if (*queued <= g + 1e-9) return;
+        *queued = g;
+      }
+    }
+    const Pt l = on_line ? ToPt(a) : RayHit(root, left, a, b);
+    const Pt r = on_line ? ToPt(b) : RayHit(root, right, a, b);
+    node.f = g + 0.5 * IntervalHeuristic(ToPt(root), l, r, ToPt(goal_));
+    PushEntry(node);
+  }
+
+  // A triangle with one open edge: whatever enters it can only leave the
+  // way it came (dead-end pruning, from the paper).
+  bool DeadEnd(NavRef p) const {
+    const NavTriangle& t = mesh_.triangle(p);
+    int open = 0;
+    for (const int32_t a : t.across) open += a == NavTriangle::kWall ? 0 : 1;
+    return open <= 1;
+  }
+
+  NodeKey KeyOf(const Node& n) const {
+    // Rays only matter off the entry edge's line.
+    const NavTriangle& t = mesh_.triangle(n.polygon);
+    const bool on_line =
+        Orient(t.corners[n.edge], t.corners[(n.edge + 1) % 3], n.root) == 0;
+    const Vec l = on_line ? Vec{} : Reduced(n.left);
+    const Vec r = on_line ? Vec{} : Reduced(n.right);
+    return NodeKey{n.root.x2, n.root.y2, l.x, l.y, r.x, r.y,
+                   n.polygon.tile, n.polygon.triangle, n.edge};
+  }
+  // A node queued again later with a smaller g, or whose root has been
+  // reached more cheaply since it was queued (root-level pruning applied
+  // again when it leaves the open list).
+  bool Superseded(const Node& n) const {
+    if (n.edge == kFinal) return false;
+    if (!(n.root == start_)) {
+      const size_t id = CornerId(n.root);
+      if (s_.stamp[id] == s_.search && s_.best_g[id] < n.g - 1e-9) return true;
+    }
+    const double* queued = s_.queued.Find(KeyOf(n));
+    return queued != nullptr && *queued < n.g - 1e-9;
+  }
+
+  void PushFinal(double g, int32_t record) {
+    Node n;
+    n.edge = kFinal;
+    n.g = g;
+    n.f = g;
+    n.record = record;
+    PushEntry(n);
+  }
+
+  void Expand(const Node& node) {
+    expanding_record_ = node.record;
+    const NavTriangle& t = mesh_.triangle(node.polygon);
+    const int e = node.edge;
+    const LatticePoint a = t.corners[e];
+    const LatticePoint b = t.corners[(e + 1) % 3];
+    const LatticePoint c = t.corners[(e + 2) % 3];
+    const LatticePoint s = node.root;
+    const int bc = (e + 1) % 3;
+    const int ca = (e + 2) % 3;
+    if (Orient(a, b, s) == 0) {
+      ExpandFromVertex(node, t, e);
+      return;
+    }
+    const Vec sc = Sub(c, s);
+    const int64_t op = Cross(node.left, sc);   // > 0: c left of the left ray
+    const int64_t oq = Cross(node.right, sc);  // < 0: c right of the right ray
+    const bool left_at_a = Cross(node.left, Sub(a, s)) == 0;
+    const bool right_at_b = Cross(node.right, Sub(b, s)) == 0;
+
+    if (IsGoalPolygon(node.polygon)) {
+      const Vec sg = Sub(goal_, s);
+      const int64_t gl = Cross(node.left, sg);
+      const int64_t gr = Cross(node.right, sg);
+      if (gl <= 0 && gr >= 0) {
+        PushFinal(node.g + Distance(s, goal_), node.record);
+      } else if (gl > 0 && left_at_a && CanTurn(s, a, /*left=*/true)) {
+        PushFinal(node.g + Distance(s, a) + Distance(a, goal_), Turn(a, node.record));
+      } else if (gr < 0 && right_at_b && CanTurn(s, b, /*left=*/false)) {
+        PushFinal(node.g + Distance(s, b) + Distance(b, goal_), Turn(b, node.record));
+      }
+    }
+
+    // Observable successors: the cone beyond the entry interval.
+    if (op > 0) {
+      Push(s, node.left, node.right, node.polygon, bc, node.g, node.record);
+    } else if (oq < 0) {
+      Push(s, node.left, node.right, node.polygon, ca, node.g, node.record);
+    } else {
+      // c in the closed cone: [c, right end] on b-c and [left end, c] on
+      // c-a; c ends both, so either side may turn there. A ray through c
+      // exactly gives a one-point interval on both edges: beyond c the
+      // point walks round c's fan both ways, so a path going straight on
+      // past c finds the side an obstacle at c leaves open.
+      Push(s, sc, node.right, node.polygon, bc, node.g, node.record);
+      Push(s, node.left, sc, node.polygon, ca, node.g, node.record);
+    }
+
+    // Non-observable successors: around an end of the interval that is an
+    // obstacle corner, with that corner as the new root.
+    if (left_at_a && CanTurn(s, a, /*left=*/true)) {
+      const double g = node.g + Distance(s, a);
+      if (RecordRootG(a, g)) {
+        const int32_t rec = Turn(a, node.record);
+        const Vec d = Sub(a, s);
+        if (op > 0) Push(a, Sub(c, a), d, node.polygon, bc, g, rec);
+        Push(a, Sub(a, a), Sub(c, a), node.polygon, ca, g, rec);
+      }
+    }
+    if (right_at_b && CanTurn(s, b, /*left=*/false)) {
+      const double g = node.g + Distance(s, b);
+      if (RecordRootG(b, g)) {
+        const int32_t rec = Turn(b, node.record);
+        const Vec d = Sub(b, s);
+        if (oq < 0) Push(b, d, Sub(c, b), node.polygon, ca, g, rec);
+        Push(b, Sub(c, b), Sub(b, b), node.polygon, bc, g, rec);
+      }
+    }
+  }
+
+  // The root is an end of the entry edge (a vertex of the triangle), so the
+  // whole triangle is in view: both other edges, whole.
+  void ExpandFromVertex(const Node& node, const NavTriangle& t, int e) {
+    const LatticePoint a = t.corners[e];
+    const LatticePoint b = t.corners[(e + 1) % 3];
+    const LatticePoint c = t.corners[(e + 2) % 3];
+    const LatticePoint s = node.root;
+    if (!(s == a) && !(s == b)) return;
+    if (IsGoalPolygon(node.polygon)) {
+      PushFinal(node.g + Distance(s, goal_), node.record);
+    }
+    Push(s, Sub(c, s), Sub(b, s), node.polygon, (e + 1) % 3, node.g, node.record);
+    Push(s, Sub(a, s), Sub(c, s), node.polygon, (e + 2) % 3, node.g, node.record);
+  }
+
+  std::vector<LatticePoint> Trace(int32_t record) const {
+    std::vector<LatticePoint> polyline{goal_};
+    for (int32_t r = record; r >= 0; r = s_.records[static_cast<size_t>(r)].parent) {
+      polyline.push_back(s_.records[static_cast<size_t>(r)].point);
+    }
+    std::reverse(polyline.begin(), polyline.end());
+    return polyline;
+  }
+
+  const NavMesh& mesh_;
+  const Grid& grid_;
+  const LatticePoint start_;
+  const LatticePoint goal_;
+  const std::vector<NavRef> goal_polygons_;
+  const StopCondition& stop_;
+  PolyanyaScratch& s_;
+  // The root record of the node being expanded (the start's while seeding).
+  int32_t expanding_record_ = 0;
+};
+
+class NavMeshPlanner final : public GridPlanner {
+ public:
+  NavMeshPlanner()
+      : GridPlanner("navmesh",
+                    PlannerTraits{
+                        .optimal = true,
+                        .needs_uniform_cost = true,
+                        .needs_eight_connected = true,
+                        .geometric = true,
+                        .description =
+                            "Polyanya on a tiled constrained Delaunay navigation "
+                            "mesh: Euclidean shortest paths bending at obstacle "
+                            "corners; uniform-cost 8-connected maps only; "
+                            "expansions count search nodes (edge intervals)"}) {}
+
+ protected:
+  // Uniform cost needs every cell read: the mesh keeps the cost values of
+  // each tile, so Search() checks it in O(tiles) and runs the full
+  // ValidateRequest only to word the error when it fails (as jps does).
+  absl::Status Validate(const Grid& grid,
+                        const PlanRequest& request) const override {
+    PlannerTraits endpoint_traits = traits();
+    endpoint_traits.needs_uniform_cost = false;
+    return ValidateRequest(grid, request, name(), endpoint_traits);
+  }
+
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const Grid& grid = q.grid;
+    const PlanRequest& request = q.request;
+    const bool unknown_is_free = request.cost.unknown_is_free;
+    const std::shared_ptr<const NavMesh> mesh = GetDerived<NavMesh>(
+        request.derived, grid,
+        std::string("navmesh unknown_is_free=") + (unknown_is_free ? "1" : "0"),
+        [unknown_is_free](const Grid& g) { return NavMesh::Build(g, unknown_is_free); },
+        [](const NavMesh& previous, const Grid& g, absl::Span<const Cell> changed) {
+          return NavMesh::Advance(previous, g, changed);
+        },
+        [](const NavMesh& m) { return m.bytes(); });
+    if (request.cost.cost_weight != 0.0 && !mesh->UniformCost()) {
+      return ValidateRequest(grid, request, name(), traits());
+    }
+    PolyanyaPath path = PolyanyaSearch(*mesh, grid, request.start, request.goal,
+                                       q.stop, q.scratch);
+    PlanResult result;
+    result.outcome = path.outcome;
+    result.expansions = path.expansions;
+    if (!result.found()) return result;
+    // The free-space bitmap is derived per version too: building it here
+    // would cost a pass over the map on every query.
+    const std::shared_ptr<const FreeSpace> space = GetDerived<FreeSpace>(
+        request.derived, grid,
+        std::string("free_space unknown_is_free=") + (unknown_is_free ? "1" : "0"),
+        [unknown_is_free](const Grid& g) {
+          return std::make_shared<const FreeSpace>(g, unknown_is_free);
+        },
+        [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed) {
+          auto next = std::make_shared<FreeSpace>(previous);
+          next->Update(g, changed);
+          return std::shared_ptr<const FreeSpace>(std::move(next));
+        },
+        [](const FreeSpace& f) { return f.bytes(); });
+    result.path = CellsAlongPolyline(*space, path.polyline);
+    result.polyline.reserve(path.polyline.size());
+    for (const LatticePoint& p : path.polyline) result.polyline.push_back(ToCellPoint(p));
+    result.length = PolylineLength(path.polyline);
+    // Every traversable cell costs what the start cell costs.
+    result.cost = result.length * CellFactor(grid.cost(request.start),
+                                             request.cost.cost_weight);
+    return result;
+  }
+};
+
+}  // namespace
+
+PolyanyaPath PolyanyaSearch(const NavMesh& mesh, const Grid& grid, Cell start,
+                            Cell goal, const StopCondition& stop,
+                            SearchScratch& scratch) {
+  PolyanyaScratch& s = scratch.extension<PolyanyaScratch>();
+  return Search(mesh, grid, start, goal, stop, s).Run(start);
+}
+
+std::unique_ptr<Planner> MakeNavMeshPlanner() {
+  return std::make_unique<NavMeshPlanner>();
+}
+
+}  // namespace pathd
