@@ -1,0 +1,393 @@
+// geometric_bench: the geometric planners against the grid ones on the
+// Moving AI maps, printed as markdown tables (figures, not assertions;
+// docs/performance.md records them with the command that produced them):
+//  1. per map and planner, on a sample of scenarios spread over the whole
+//     scenario file: queries, paths found, mean and p95 microseconds per
+//     query with the planner's structure already built (each planner gets
+//     an AdvancingStore per map, as the server's cache would be; the first
+//     query, which builds it, is timed apart), mean length over the grid
+//     optimum stored in the .scen file;
+//  2. per map, every structure kind DescribeStructure knows
+//     (core/geometry/structure.h): its counts, memory and build time;
+//  3. on a map scaled to --advance_size cells square, each geometric
+//     planner's derived structures rebuilt against advanced (through the
+//     planner's own recipe, tests/testing/advancing_store.h) after 1, 10 and
+//     100 random changed cells.
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+#include "core/geometry/structure.h"
+#include "core/map_io/map_io.h"
+#include "core/search/planner.h"
+#include "core/search/registry.h"
+#include "tests/bench/movingai_maps.h"
+#include "tests/testing/advancing_store.h"
+
+ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
+          "folder holding <set>/<map>.map and <map>.map.scen files");
+ABSL_FLAG(std::string, maps, "",
+          "comma-separated map paths relative to --movingai_dir; empty = every map");
+ABSL_FLAG(std::string, planners,
+          "astar,theta_star,navmesh,minimal_construct,visibility_graph",
+          "comma-separated planner names for the query table");
+ABSL_FLAG(int, sample, 1000,
+          "scenarios per map, spread evenly over the whole scenario file");
+ABSL_FLAG(double, query_budget_s, 30.0,
+          "stop a planner's queries on a map after this many seconds (the row "
+          "then says how many ran)");
+ABSL_FLAG(std::string, skip, "",
+          "comma-separated planner@map pairs to leave out (structures too slow to "
+          "build), e.g. visibility_graph@maze/maze512-1-0.map");
+ABSL_FLAG(bool, structures, true, "print the structure table (section 2)");
+ABSL_FLAG(std::string, advance_map, "street/Berlin_0_512.map",
+          "map for section 3, scaled up (each cell repeated) to --advance_size; "
+          "empty = skip section 3");
+ABSL_FLAG(int, advance_size, 1024, "side of the section-3 map, cells");
+// euclidean_spm is left out by default: its per-goal map has no advance and
+// takes over a minute to build on a 1024 x 1024 map (84 s measured), so its
+// row costs 10 such builds; its visibility graph is visibility_graph's.
+ABSL_FLAG(std::string, advance_planners,
+          "navmesh,minimal_construct,visibility_graph,trapezoidal,voronoi",
+          "planners whose structures section 3 advances (euclidean_spm: see the comment)");
+ABSL_FLAG(int, advance_repeats, 5, "advances measured per changed-cell count (median)");
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using pathd::testing::AdvancingStore;
+
+struct QueryFigures {
+  int queries = 0;
+  int found = 0;
+  double mean_us = 0;
+  double p95_us = 0;
+  double length_ratio = 0;
+  double first_ms = 0;
+  bool budget_hit = false;
+};
+
+pathd::PlanRequest GeometricRequest(pathd::Cell s, pathd::Cell g) {
+  pathd::CostParams cost;
+  cost.cost_weight = 0.0;  // the geometric planners' uniform cost
+  return pathd::PlanRequest::Between(s, g, cost);
+}
+
+QueryFigures RunQueries(const pathd::Planner& planner, const pathd::Grid& grid,
+                        const std::vector<pathd::Scenario>& scenarios,
+                        pathd::SearchScratch& scratch) {
+  QueryFigures f;
+  AdvancingStore store;
+  store.SetGrid(grid);
+  // The first query builds the structure.
+  {
+    pathd::PlanRequest request = GeometricRequest(scenarios[0].start, scenarios[0].goal);
+    request.derived = &store;
+    const absl::Time t0 = absl::Now();
+    auto r = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
+    f.first_ms = absl::ToDoubleMilliseconds(absl::Now() - t0);
+    if (!r.ok()) {
+      std::fprintf(stderr, "%s: %s\n", std::string(planner.name()).c_str(),
+                   std::string(r.status().message()).c_str());
+      return QueryFigures{};
+    }
+  }
+  const absl::Duration budget = absl::Seconds(absl::GetFlag(FLAGS_query_budget_s));
+  std::vector<double> micros;
+  double ratio = 0;
+  const absl::Time started = absl::Now();
+  for (const pathd::Scenario& s : scenarios) {
+    if (absl::Now() - started > budget) {
+      f.budget_hit = true;
+      break;
+    }
+    pathd::PlanRequest request = GeometricRequest(s.start, s.goal);
+    request.derived = &store;
+    const absl::Time t0 = absl::Now();
+    auto r = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
+    micros.push_back(absl::ToDoubleMicroseconds(absl::Now() - t0));
+    if (r.ok() && r->found()) {
+      ++f.found;
+      ratio += s.optimal_length > 0 ? r->length / s.optimal_length : 1.0;
+    }
+  }
+  f.queries = static_cast<int>(micros.size());
+  if (micros.empty()) return f;
+  double sum = 0;
+  for (double m : micros) sum += m;
+  f.mean_us = sum / micros.size();
+  std::sort(micros.begin(), micros.end());
+  f.p95_us = micros[std::min(micros.size() - 1, micros.size() * 95 / 100)];
+  f.length_ratio = f.found > 0 ? ratio / f.found : 0;
+  return f;
+}
+
+std::vector<pathd::Scenario> Spread(const std::vector<pathd::Scenario>& all, int n) {
+  if (n <= 0 || static_cast<int>(all.size()) <= n) return all;
+  std::vector<pathd::Scenario> out;
+  const double stride = static_cast<double>(all.size()) / n;
+  for (int i = 0; i < n; ++i) out.push_back(all[static_cast<size_t>(i * stride + stride / 2)]);
+  return out;
+}
+
+// Each cell repeated k x k, k = size / max(width, height) (at least 1).
+pathd::Grid ScaleUp(const pathd::Grid& grid, int size) {
+  const int k = std::max(1, size / std::max(grid.width(), grid.height()));
+  pathd::Grid out = *pathd::Grid::Create(grid.width() * k, grid.height() * k);
+  for (int y = 0; y < out.height(); ++y) {
+    for (int x = 0; x < out.width(); ++x) out.set_cost(x, y, grid.cost(x / k, y / k));
+  }
+  return out;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return -1;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+std::string Ms(double ms) {
+  if (ms < 0) return "-";
+  if (ms < 10) return absl::StrFormat("%.3f", ms);
+  return absl::StrFormat("%.1f", ms);
+}
+
+// Section 3 for one planner: builds on `base`, then chains
+// advance_repeats updates of n random changed cells for n = 1, 10, 100
+// (never the query's endpoints), timing every structure the planner asks
+// for. Prints one row per structure key.
+void AdvanceRows(const pathd::Planner& planner, const pathd::Grid& base, pathd::Cell start,
+                 pathd::Cell goal, pathd::SearchScratch& scratch) {
+  AdvancingStore store;
+  pathd::Grid grid = base;
+  store.SetGrid(grid);
+  pathd::PlanRequest request = GeometricRequest(start, goal);
+  request.derived = &store;
+  auto r = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
+  if (!r.ok()) {
+    std::printf("| %s | - | %s | | | | | |\n", std::string(planner.name()).c_str(),
+                std::string(r.status().message()).c_str());
+    return;
+  }
+  struct Row {
+    double build_ms = -1;
+    size_t bytes = 0;
+    std::map<int, std::vector<double>> advance_ms;
+    std::map<int, int> declined;
+  };
+  std::map<std::string, Row> rows;
+  std::vector<std::string> order;
+  size_t seen = 0;
+  auto collect = [&](int n) {
+    const std::vector<AdvancingStore::Event> events = store.events();
+    for (; seen < events.size(); ++seen) {
+      const AdvancingStore::Event& e = events[seen];
+      if (!rows.contains(e.key)) order.push_back(e.key);
+      Row& row = rows[e.key];
+      const double ms = absl::ToDoubleMilliseconds(e.time);
+      if (n == 0) {
+        row.build_ms = ms;
+        row.bytes = e.bytes;
+      } else {
+        row.advance_ms[n].push_back(ms);
+        if (!e.advanced) row.declined[n]++;
+      }
+    }
+  };
+  collect(0);
+  std::mt19937_64 rng(42);
+  const int repeats = std::max(1, absl::GetFlag(FLAGS_advance_repeats));
+  for (int n : {1, 10, 100}) {
+    for (int rep = 0; rep < repeats; ++rep) {
+      for (int k = 0; k < n; ++k) {
+        pathd::Cell c{static_cast<int32_t>(rng() % grid.width()),
+                      static_cast<int32_t>(rng() % grid.height())};
+        if (c == start || c == goal) continue;
+        grid.set_cost(c, grid.cost(c) == pathd::kFreeCost ? pathd::kLethalCost
+                                                          : pathd::kFreeCost);
+      }
+      store.SetGrid(grid);
+      auto again = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
+      if (!again.ok()) {
+        std::fprintf(stderr, "%s: %s\n", std::string(planner.name()).c_str(),
+                     std::string(again.status().message()).c_str());
+      }
+      collect(n);
+    }
+  }
+  if (order.empty()) {
+    std::printf("| %s | (asks for no derived structure) | | | | | |\n",
+                std::string(planner.name()).c_str());
+  }
+  for (const std::string& key : order) {
+    const Row& row = rows[key];
+    std::string cells[3];
+    int i = 0;
+    for (int n : {1, 10, 100}) {
+      auto it = row.advance_ms.find(n);
+      std::string text = it == row.advance_ms.end() ? "-" : Ms(Median(it->second));
+      if (row.declined.contains(n)) {
+        text += absl::StrFormat(" (rebuilt %d/%d)", row.declined.at(n),
+                                static_cast<int>(it->second.size()));
+      }
+      cells[i++] = text;
+    }
+    std::printf("| %s | `%s` | %.1f | %s | %s | %s | %s |\n",
+                std::string(planner.name()).c_str(), key.c_str(),
+                static_cast<double>(row.bytes) / (1 << 20), Ms(row.build_ms).c_str(),
+                cells[0].c_str(), cells[1].c_str(), cells[2].c_str());
+    std::fflush(stdout);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "geometric_bench [--movingai_dir DIR] [--maps a.map,...] [--planners ...] "
+      "[--sample N] [--query_budget_s S] [--skip planner@map,...] [--structures] "
+      "[--advance_map MAP] [--advance_size N] [--advance_planners ...]\n"
+      "Prints markdown tables: geometric vs grid planners per Moving AI map, "
+      "structure sizes and build times, advance vs rebuild.");
+  absl::ParseCommandLine(argc, argv);
+  const fs::path root = absl::GetFlag(FLAGS_movingai_dir);
+  if (!fs::is_directory(root)) {
+    std::printf("Moving AI benchmarks not found at %s; nothing to measure\n", root.c_str());
+    return 0;
+  }
+  const pathd::PlannerRegistry& registry = pathd::PlannerRegistry::Default();
+  const std::vector<std::string> maps =
+      pathd::bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps));
+  std::vector<std::string> planners;
+  const std::vector<std::string> listed =
+      absl::StrSplit(absl::GetFlag(FLAGS_planners), ',', absl::SkipEmpty());
+  for (const std::string& name : listed) {
+    if (registry.Get(name) == nullptr) {
+      std::printf("(planner %s is not registered; left out)\n", name.c_str());
+    } else {
+      planners.push_back(name);
+    }
+  }
+  const std::vector<std::string> skip =
+      absl::StrSplit(absl::GetFlag(FLAGS_skip), ',', absl::SkipEmpty());
+  std::printf("geometric_bench: %u hardware threads, single-threaded queries, sample %d, "
+              "query budget %.0f s per planner and map\n\n",
+              std::thread::hardware_concurrency(), absl::GetFlag(FLAGS_sample),
+              absl::GetFlag(FLAGS_query_budget_s));
+
+  std::vector<std::pair<std::string, pathd::Grid>> grids;
+  std::printf("### Queries (structure built by the first query, timed apart)\n\n");
+  std::printf("| map | planner | queries | found | mean µs | p95 µs | length / grid optimum "
+              "| first query (build) ms |\n");
+  std::printf("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  pathd::SearchScratch scratch;
+  for (const std::string& name : maps) {
+    const fs::path map_path = root / name;
+    auto grid = pathd::ReadMovingAiMapFile(map_path.string());
+    auto file = pathd::ReadMovingAiScenarioFileWithVersion(map_path.string() + ".scen");
+    if (!grid.ok() || !file.ok()) {
+      std::fprintf(stderr, "%s: cannot read the map or its scenarios\n", name.c_str());
+      return 1;
+    }
+    const std::vector<pathd::Scenario> scenarios =
+        Spread(file->scenarios, absl::GetFlag(FLAGS_sample));
+    for (const std::string& planner_name : planners) {
+      if (std::find(skip.begin(), skip.end(), planner_name + "@" + name) != skip.end()) {
+        std::printf("| %s | %s | skipped (--skip) | | | | | |\n", name.c_str(),
+                    planner_name.c_str());
+        continue;
+      }
+      const QueryFigures f = RunQueries(*registry.Get(planner_name), *grid, scenarios, scratch);
+      std::printf("| %s | %s | %d%s | %d | %.1f | %.1f | %.4f | %s |\n", name.c_str(),
+                  planner_name.c_str(), f.queries, f.budget_hit ? " (budget)" : "", f.found,
+                  f.mean_us, f.p95_us, f.length_ratio, Ms(f.first_ms).c_str());
+      std::fflush(stdout);
+    }
+    grids.emplace_back(name, *std::move(grid));
+  }
+
+  if (absl::GetFlag(FLAGS_structures)) {
+    std::printf("\n### Structures (DescribeStructure, unknown blocked)\n\n");
+    std::printf("| map | kind | counts | MiB | build ms |\n| --- | --- | --- | ---: | ---: |\n");
+    for (const auto& [name, grid] : grids) {
+      for (std::string_view kind : pathd::StructureKinds()) {
+        const std::string kind_name(kind);
+        if (std::find(skip.begin(), skip.end(), kind_name + "@" + name) != skip.end()) {
+          std::printf("| %s | %s | skipped (--skip) | | |\n", name.c_str(), kind_name.c_str());
+          continue;
+        }
+        auto s = pathd::DescribeStructure(kind, grid, false);
+        if (!s.ok()) continue;
+        std::vector<std::string> counts;
+        for (const auto& [what, n] : s->counts) {
+          counts.push_back(absl::StrFormat("%d %s", n, what));
+        }
+        std::printf("| %s | %s | %s | %.2f | %s |\n", name.c_str(), kind_name.c_str(),
+                    absl::StrJoin(counts, ", ").c_str(),
+                    static_cast<double>(s->bytes) / (1 << 20),
+                    Ms(absl::ToDoubleMilliseconds(s->build_time)).c_str());
+        std::fflush(stdout);
+      }
+    }
+  }
+
+  const std::string advance_map = absl::GetFlag(FLAGS_advance_map);
+  if (!advance_map.empty()) {
+    auto small = pathd::ReadMovingAiMapFile((root / advance_map).string());
+    if (!small.ok()) {
+      std::fprintf(stderr, "%s: %s\n", advance_map.c_str(),
+                   std::string(small.status().message()).c_str());
+      return 1;
+    }
+    const pathd::Grid big = ScaleUp(*small, absl::GetFlag(FLAGS_advance_size));
+    // Two far-apart free cells as the query (the structures do not depend
+    // on it, except euclidean_spm's, which is per goal).
+    std::optional<pathd::Cell> start, goal;
+    for (int y = 0; y < big.height() && !start; ++y) {
+      for (int x = 0; x < big.width() && !start; ++x) {
+        if (big.cost(x, y) == pathd::kFreeCost) start = pathd::Cell{x, y};
+      }
+    }
+    for (int y = big.height() - 1; y >= 0 && !goal; --y) {
+      for (int x = big.width() - 1; x >= 0 && !goal; --x) {
+        if (big.cost(x, y) == pathd::kFreeCost) goal = pathd::Cell{x, y};
+      }
+    }
+    std::printf("\n### Advance vs rebuild: %s scaled to %d x %d, random changed cells "
+                "(median of %d)\n\n",
+                advance_map.c_str(), big.width(), big.height(),
+                absl::GetFlag(FLAGS_advance_repeats));
+    std::printf("| planner | structure key | MiB | build ms | advance 1 cell ms | "
+                "advance 10 ms | advance 100 ms |\n");
+    std::printf("| --- | --- | ---: | ---: | ---: | ---: | ---: |\n");
+    const std::vector<std::string> advanced =
+        absl::StrSplit(absl::GetFlag(FLAGS_advance_planners), ',', absl::SkipEmpty());
+    for (const std::string& name : advanced) {
+      const pathd::Planner* planner = registry.Get(name);
+      if (planner == nullptr) {
+        std::printf("| %s | not registered | | | | | |\n", name.c_str());
+        continue;
+      }
+      AdvanceRows(*planner, big, *start, *goal, scratch);
+    }
+  }
+  return 0;
+}
