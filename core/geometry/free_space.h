@@ -8,8 +8,10 @@
 // it lies
 //  - in the open interior of a blocked cell,
 //  - on an edge between two blocked cells, or
-//  - on a grid corner whose four cells include two diagonally opposite
-//    blocked cells (a pinch: two obstacles touching at a point), or four.
+//  - on a grid corner whose four cells are blocked, or of which exactly two,
+//    diagonally opposite, are blocked (a pinch: two obstacles touching at a
+//    point). With three blocked, the corner is on the boundary of the free
+//    one (a map corner is such a point).
 // So a path may touch obstacle boundaries (run along a wall, turn at an
 // obstacle corner), which is what makes Euclidean shortest paths polylines
 // through obstacle corners, but never squeezes between two blocked cells

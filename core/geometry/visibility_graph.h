@@ -100,6 +100,12 @@ class VisibilityGraph {
       const VisibilityGraph& previous, std::shared_ptr<const FreeSpace> space,
       absl::Span<const Cell> changed);
   static constexpr size_t kMaxAdvanceCells = 256;
+  // Null (rebuild) too when the changed cells' bounding box covers more than
+  // 1/kMaxAdvanceBoxShare of a map of at least kBoxRuleMinCells cells (on
+  // smaller maps either is cheap, and the tests' random maps keep the
+  // advance exercised).
+  static constexpr int64_t kMaxAdvanceBoxShare = 64;
+  static constexpr int64_t kBoxRuleMinCells = 256 * 256;
 
   const FreeSpace& space() const { return *space_; }
   size_t vertex_count() const { return vertices_.size(); }
