@@ -88,13 +88,18 @@ test-tsan: setup-test
 # ASAN_CONFORMANCE_STRIDE-th scenario of every map (each planner still runs
 # on the first scenario of each map and every stride*own-stride-th after it):
 # in full it takes 40 minutes uninstrumented, and the planners' code paths do
-# not change from one scenario to the next.
+# not change from one scenario to the next. The geometric sweep likewise runs
+# 10 scenarios a map and leaves out the structures whose builds dominate it
+# (the visibility graph, 13 s on one maze uninstrumented, and the per-goal
+# shortest path maps); geometric_planners_test runs every geometric planner
+# under the sanitizers on its thousands of small maps.
 ASAN_BUILD_DIR ?= build-asan
 ASAN_CONFORMANCE_STRIDE ?= 50
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1:abort_on_error=1 \
   LSAN_OPTIONS=suppressions=$(CURDIR)/tests/asan/lsan.supp:print_suppressions=0 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE)
+  PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE) \
+  PATHD_GEOMETRIC_SCENARIOS=10 PATHD_GEOMETRIC_PLANNERS=navmesh,minimal_construct
 
 test-asan: setup-test
 	@$(CMAKE_CONFIGURE) -B $(ASAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_ASAN=ON >/dev/null
