@@ -16,6 +16,7 @@
 #include "core/map/grid.h"
 #include "core/map/inflation.h"
 #include "core/search/endpoints.h"
+#include "core/search/path_measure.h"
 #include "core/search/registry.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -347,6 +348,59 @@ TEST(PlanQueryTest, StatefulEngineGetsTheSettledGoalAndReportsItsSource) {
   // Exactly one engine.
   EXPECT_EQ(Plan(Query({0, 0}, {1, 0}), snapshot, PlanEngine{}).status().code(),
             absl::StatusCode::kInternal);
+}
+
+TEST(PlanQueryTest, GeometricViaPlansJoinTheirPolylinesAtTheViaCentres) {
+  const PlanSnapshot snapshot = Snapshot(MakeGrid({
+      ".......",
+      ".#####.",
+      ".......",
+      "##.####",
+      ".......",
+  }));
+  for (const char* planner : {"navmesh", "visibility_graph", "trapezoidal"}) {
+    SCOPED_TRACE(planner);
+    PlanQuery query = Query({0, 0}, {6, 4});
+    query.planner = planner;
+    query.via = {Cell{6, 0}, Cell{0, 2}};
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine(planner));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found());
+    const PlanResult& r = answer->result;
+    ASSERT_GE(r.polyline.size(), 4u);
+    EXPECT_DOUBLE_EQ(r.polyline.front().x, 0.5);
+    EXPECT_DOUBLE_EQ(r.polyline.back().x, 6.5);
+    EXPECT_DOUBLE_EQ(r.polyline.back().y, 4.5);
+    // Each via centre appears once, in order.
+    size_t at = 0;
+    for (const CellPoint via : {CellPoint{6.5, 0.5}, CellPoint{0.5, 2.5}}) {
+      size_t seen = 0;
+      for (size_t i = 0; i < r.polyline.size(); ++i) {
+        if (r.polyline[i].x == via.x && r.polyline[i].y == via.y) {
+          ++seen;
+          EXPECT_GT(i, at);
+          at = i;
+        }
+      }
+      EXPECT_EQ(seen, 1u);
+    }
+    const PathMeasure m = MeasurePolyline(*snapshot.grid, r.polyline, {});
+    ASSERT_TRUE(m.valid) << m.first_invalid;
+    EXPECT_NEAR(r.length, m.length, 1e-9);
+    double legs = 0.0;
+    const Cell stops[] = {{0, 0}, {6, 0}, {0, 2}, {6, 4}};
+    for (int leg = 0; leg < 3; ++leg) {
+      absl::StatusOr<PlanAnswer> one =
+          Plan(Query(stops[leg], stops[leg + 1]), snapshot, Engine(planner));
+      ASSERT_TRUE(one.ok() && one->result.found());
+      legs += one->result.length;
+    }
+    EXPECT_NEAR(r.length, legs, 1e-9);
+    ASSERT_EQ(answer->leg_end_indices.size(), 3u);
+    EXPECT_EQ(r.path[answer->leg_end_indices[0]], (Cell{6, 0}));
+    EXPECT_EQ(r.path[answer->leg_end_indices[1]], (Cell{0, 2}));
+    EXPECT_EQ(r.path.back(), (Cell{6, 4}));
+  }
 }
 
 // A derived store that only says which store a planner was handed.
