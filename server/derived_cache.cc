@@ -89,10 +89,29 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
     }
   }
   if (!make) {
-    absl::MutexLock lock(&mu_);
-    mu_.Await(absl::Condition(+[](Entry* e) { return e->done; }, entry.get()));
-    return entry->value;
+    std::shared_ptr<const void> value;
+    {
+      absl::MutexLock lock(&mu_);
+      mu_.Await(absl::Condition(+[](Entry* e) { return e->done; }, entry.get()));
+      value = entry->value;
+    }
+    // The maker failed (threw) and dropped the entry: make it here.
+    if (value == nullptr) return Get(snapshot, grid, key, recipe);
+    return value;
   }
+  // A build that throws (out of memory) must not leave waiters waiting on an
+  // entry that never completes: drop it, wake them, and let the job report
+  // the failure.
+  struct DropUnlessDone {
+    DerivedCache* cache;
+    std::shared_ptr<Entry> entry;
+    ~DropUnlessDone() {
+      absl::MutexLock lock(&cache->mu_);
+      if (entry->done) return;
+      cache->entries_.remove(entry);
+      entry->done = true;
+    }
+  } drop_unless_done{this, entry};
 
   const absl::Time start = absl::Now();
   std::shared_ptr<const void> value;

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <memory>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
@@ -159,6 +160,22 @@ TEST(DerivedCacheTest, EvictsLeastRecentlyUsedBeyondItsBytes) {
   EXPECT_EQ(cache.stats().entries, 2u);
   Get(cache, v1, "a", recipe);  // evicted: built again
   EXPECT_EQ(counters.builds, 4);
+}
+
+TEST(DerivedCacheTest, ABuildThatThrowsLeavesNoEntryBehind) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  DerivedRecipe recipe = Recipe(&counters);
+  DerivedRecipe failing = recipe;
+  failing.build = [](const Grid&) -> std::shared_ptr<const void> {
+    throw std::bad_alloc();
+  };
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  EXPECT_THROW(Get(cache, v1, "k", failing), std::bad_alloc);
+  EXPECT_EQ(cache.stats().entries, 0u);
+  // The next request builds (it would wait forever on a half-made entry).
+  EXPECT_NE(Get(cache, v1, "k", recipe), nullptr);
+  EXPECT_EQ(counters.builds, 1);
 }
 
 TEST(DerivedCacheTest, EntriesOfFreedVersionsAreDropped) {
