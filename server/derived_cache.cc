@@ -155,13 +155,15 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
   return value;
 }
 
+std::list<std::shared_ptr<DerivedCache::Entry>>::iterator DerivedCache::DropLocked(
+    std::list<std::shared_ptr<Entry>>::iterator it) {
+  bytes_ -= (*it)->bytes;
+  return entries_.erase(it);
+}
+
 void DerivedCache::EvictLocked() {
-  auto drop = [this](std::list<std::shared_ptr<Entry>>::iterator it) {
-    bytes_ -= (*it)->bytes;
-    return entries_.erase(it);
-  };
   for (auto it = entries_.begin(); it != entries_.end();) {
-    it = (*it)->done && (*it)->grid.expired() ? drop(it) : std::next(it);
+    it = (*it)->done && (*it)->grid.expired() ? DropLocked(it) : std::next(it);
   }
   // Least recently used first, never one being made, never the newest.
   while (bytes_ > max_bytes_ && entries_.size() > 1) {
@@ -170,7 +172,7 @@ void DerivedCache::EvictLocked() {
       if ((*it)->done) victim = it;
     }
     if (victim == entries_.end()) break;
-    drop(victim);
+    DropLocked(victim);
     ++evictions_;
   }
 }

@@ -103,6 +103,9 @@ class DerivedCache {
                                   const DerivedRecipe& recipe)
       ABSL_LOCKS_EXCLUDED(mu_);
   void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Removes one entry and its bytes; returns the next.
+  std::list<std::shared_ptr<Entry>>::iterator DropLocked(
+      std::list<std::shared_ptr<Entry>>::iterator it) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const size_t max_bytes_;
   mutable absl::Mutex mu_;

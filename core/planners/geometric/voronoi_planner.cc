@@ -117,7 +117,12 @@ class VoronoiSearch {
     g_[start] = 0.0;
     open.emplace(cap, -Octile(request_.start, request_.goal), 0.0, start);
     while (!open.empty()) {
-      const auto [b, neg_f, neg_g, i] = open.top();
+      // Named copies, not a structured binding: clang 14 (the thread-safety
+      // check) cannot capture bindings in the lambda below.
+      const double b = std::get<0>(open.top());
+      const double neg_f = std::get<1>(open.top());
+      const double neg_g = std::get<2>(open.top());
+      const size_t i = std::get<3>(open.top());
       open.pop();
       if (closed_[i]) continue;
       if (const PlanOutcome o = Expand(i, -neg_f); o != PlanOutcome::kFound)
@@ -153,7 +158,8 @@ class VoronoiSearch {
     g_[start] = 0.0;
     open.emplace(Octile(request_.start, request_.goal), start);
     while (!open.empty()) {
-      const auto [f, i] = open.top();
+      const double f = open.top().first;
+      const size_t i = open.top().second;
       open.pop();
       if (closed_[i]) continue;
       if (const PlanOutcome o = Expand(i, f); o != PlanOutcome::kFound)
