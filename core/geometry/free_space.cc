@@ -143,6 +143,18 @@ bool FreeSpace::PolylineClear(absl::Span<const LatticePoint> polyline) const {
   return true;
 }
 
+void FillPolylineResult(const FreeSpace& space,
+                        absl::Span<const LatticePoint> polyline,
+                        double cell_factor, PlanResult& result) {
+  result.outcome = PlanOutcome::kFound;
+  result.polyline.clear();
+  for (LatticePoint p : polyline) result.polyline.push_back(ToCellPoint(p));
+  result.path = CellsAlongPolyline(space, polyline);
+  result.any_angle = false;
+  result.length = PolylineLength(polyline);
+  result.cost = result.length * cell_factor;
+}
+
 std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
                                                  bool unknown_is_free) {
   return GetDerived<FreeSpace>(

@@ -39,6 +39,7 @@
 #include "absl/types/span.h"
 #include "core/map/grid.h"
 #include "core/search/derived.h"
+#include "core/search/plan_types.h"
 
 namespace pathd {
 
@@ -160,6 +161,14 @@ std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid
 // previous cell: the `path` of a geometric plan (PlanResult::polyline).
 std::vector<Cell> CellsAlongPolyline(const FreeSpace& space,
                                      absl::Span<const LatticePoint> polyline);
+
+// Fills `result` for a found geometric plan along `polyline` (start centre to
+// goal centre): polyline, the cells it crosses, length, and cost = length x
+// `cell_factor`, the one factor of every traversable cell (the geometric
+// planners refuse maps with more than one).
+void FillPolylineResult(const FreeSpace& space,
+                        absl::Span<const LatticePoint> polyline,
+                        double cell_factor, PlanResult& result);
 
 // ---- implementation of the template ----
 

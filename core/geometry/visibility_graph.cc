@@ -339,18 +339,6 @@ std::shared_ptr<const ObstacleCorners> GetObstacleCorners(DerivedStore* store,
       [](const ObstacleCorners& corners) { return corners.bytes(); });
 }
 
-void FillPolylineResult(const FreeSpace& space,
-                        absl::Span<const LatticePoint> polyline,
-                        double cell_factor, PlanResult& result) {
-  result.outcome = PlanOutcome::kFound;
-  result.polyline.clear();
-  for (LatticePoint p : polyline) result.polyline.push_back(ToCellPoint(p));
-  result.path = CellsAlongPolyline(space, polyline);
-  result.any_angle = false;
-  result.length = PolylineLength(polyline);
-  result.cost = result.length * cell_factor;
-}
-
 GeometricStructure DescribeVisibilityGraph(const Grid& grid, bool unknown_is_free) {
   // Drawing more segments than this helps nobody and costs megabytes.
   constexpr int64_t kMaxSegments = 200000;

@@ -205,14 +205,6 @@ std::shared_ptr<const ObstacleCorners> GetObstacleCorners(DerivedStore* store,
                                                           const Grid& grid,
                                                           bool unknown_is_free);
 
-// Fills `result` for a found geometric plan along `polyline` (start centre to
-// goal centre): polyline, the cells it crosses, length, and cost = length x
-// `cell_factor`, the one factor of every traversable cell (the geometric
-// planners refuse maps with more than one).
-void FillPolylineResult(const FreeSpace& space,
-                        absl::Span<const LatticePoint> polyline,
-                        double cell_factor, PlanResult& result);
-
 }  // namespace pathd
 
 #endif  // PATHD_CORE_GEOMETRY_VISIBILITY_GRAPH_H_

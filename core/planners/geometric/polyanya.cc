@@ -655,13 +655,10 @@ class NavMeshPlanner final : public GridPlanner {
     // would cost a pass over the map on every query.
     const std::shared_ptr<const FreeSpace> space =
         SharedFreeSpace(request.derived, grid, unknown_is_free);
-    result.path = CellsAlongPolyline(*space, path.polyline);
-    result.polyline.reserve(path.polyline.size());
-    for (const LatticePoint& p : path.polyline) result.polyline.push_back(ToCellPoint(p));
-    result.length = PolylineLength(path.polyline);
     // Every traversable cell costs what the start cell costs.
-    result.cost = result.length * CellFactor(grid.cost(request.start),
-                                             request.cost.cost_weight);
+    FillPolylineResult(*space, path.polyline,
+                       CellFactor(grid.cost(request.start), request.cost.cost_weight),
+                       result);
     return result;
   }
 };

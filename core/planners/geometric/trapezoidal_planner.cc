@@ -207,13 +207,10 @@ class TrapezoidalPlanner final : public GridPlanner {
     } else if (start == goal) {
       polyline.pop_back();
     }
-    result.outcome = PlanOutcome::kFound;
-    for (LatticePoint p : polyline) result.polyline.push_back(ToCellPoint(p));
-    result.path = CellsAlongPolyline(d->space(), polyline);
-    result.length = PolylineLength(polyline);
     // The map is uniform (needs_uniform_cost): every cell costs the start's.
-    result.cost = result.length * CellFactor(grid.cost(request.start),
-                                             request.cost.cost_weight);
+    FillPolylineResult(d->space(), polyline,
+                       CellFactor(grid.cost(request.start), request.cost.cost_weight),
+                       result);
     return result;
   }
 };
