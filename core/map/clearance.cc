@@ -37,7 +37,7 @@ double NearestObstacle(const Grid& grid, Cell c, bool unknown_is_free, double bo
   int64_t best2 = static_cast<int64_t>(to_border) * to_border;
   // A ring at Chebyshev distance r holds no centre nearer than r.
   for (int32_t r = 1; static_cast<int64_t>(r) * r < best2; ++r) {
-    if (r >= bound) return std::min(std::sqrt(static_cast<double>(best2)), double{r});
+    if (r >= bound) return std::min(std::sqrt(static_cast<double>(best2)), static_cast<double>(r));
     auto visit = [&](int32_t x, int32_t y) {
       if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height()) return;
       if (Traversable(grid.cost(Cell{x, y}), unknown_is_free)) return;
