@@ -1,6 +1,7 @@
 // A navigation mesh of a grid's free space: a constrained Delaunay
-// triangulation (CGAL) of every 32 x 32 tile, free triangles only, with the
-// lookups Polyanya (core/planners/geometric/polyanya.h) and the funnel need.
+// triangulation (CGAL) of every tile, free triangles only, merged into
+// convex polygons, with the lookups Polyanya
+// (core/planners/geometric/polyanya.h) and the funnel need.
 // Derived per (map version, unknown_is_free) and advanced tile by tile: an
 // update re-triangulates only the tiles its cells touch and shares the rest
 // with the previous version.
@@ -31,47 +32,73 @@
 
 namespace pathd {
 
-// A free triangle of one tile: its corners counter-clockwise (y down is
-// still "counter-clockwise" in the sense of a positive cross product) and,
-// for each edge i from corner i to corner i + 1, what lies across it.
-struct NavTriangle {
-  // Across an edge: another triangle of the tile (>= 0), an obstacle or the
-  // map's outside, or the tile's border (the neighbour tile decides).
-  static constexpr int32_t kWall = -1;
-  static constexpr int32_t kTileBorder = -2;
-  std::array<LatticePoint, 3> corners;
-  std::array<int32_t, 3> across;
+// A free convex polygon of one tile, as a range of the tile's edge arrays:
+// corners counter-clockwise (y down is still "counter-clockwise" in the
+// sense of a positive cross product), edge i running from corner i to
+// corner i + 1 (mod size). Corners may be collinear (an angle of exactly
+// 180 degrees) but never coincide.
+struct NavPolygon {
+  int32_t first = 0;
+  int32_t size = 0;
+};
+
+// One polygon's edges, read through the tile that stores them.
+struct NavPolygonView {
+  const LatticePoint* corners = nullptr;
+  const int32_t* across = nullptr;
+  int32_t size = 0;
+  // Corner i, for any i in [0, 2 * size).
+  LatticePoint corner(int32_t i) const { return corners[i < size ? i : i - size]; }
 };
 
 // The mesh of one tile: cells [x0, x1) x [y0, y1). Immutable once built.
+// The tile's constrained Delaunay triangles are merged into maximal convex
+// polygons (Hertel & Mehlhorn, "Fast triangulation of simple polygons",
+// 1983: drop a non-constraint diagonal while both angles it ends in stay
+// convex), because Polyanya splits an interval at every vertex it sees:
+// fewer, larger polygons mean fewer search nodes.
 struct NavTile {
+  // Across an edge: another polygon of the tile (>= 0), an obstacle or the
+  // map's outside, or the tile's border (the neighbour tile decides).
+  static constexpr int32_t kWall = -1;
+  static constexpr int32_t kTileBorder = -2;
   int32_t x0 = 0;
   int32_t y0 = 0;
   int32_t x1 = 0;
   int32_t y1 = 0;
-  std::vector<NavTriangle> triangles;
-  // Row-major over the tile's cells: the triangle containing the cell's
-  // centre, kNoTriangle for blocked cells.
-  static constexpr uint16_t kNoTriangle = 0xffff;
-  std::vector<uint16_t> cell_triangle;
+  std::vector<NavPolygon> polygons;
+  // Per polygon edge, indexed by NavPolygon::first + i: the edge's first
+  // corner and what lies across it.
+  std::vector<LatticePoint> corners;
+  std::vector<int32_t> across;
+  // Row-major over the tile's cells: the polygon containing the cell's
+  // centre, kNoPolygon for blocked cells.
+  static constexpr uint16_t kNoPolygon = 0xffff;
+  std::vector<uint16_t> cell_polygon;
   // Edges on the tile's border, per side (0: y = y0, 1: x = x1, 2: y = y1,
   // 3: x = x0), sorted by their lower coordinate along the side: (lower
-  // coordinate, triangle).
+  // coordinate, polygon).
   std::array<std::vector<std::pair<int32_t, int32_t>>, 4> border;
   // Mesh vertices of the tile (grid corners), for descriptions.
   int32_t vertex_count = 0;
+  // Triangles of the tile before merging, for descriptions.
+  int32_t triangle_count = 0;
   // Bit v set when a traversable cell of the tile costs v (unknown cells
   // traversed as free count as 0), so planners that need uniform cost can
   // check a whole map in a few words per tile.
   std::array<uint64_t, 4> traversable_costs{};
 
+  NavPolygonView polygon(int32_t index) const {
+    const NavPolygon& p = polygons[static_cast<size_t>(index)];
+    return NavPolygonView{corners.data() + p.first, across.data() + p.first, p.size};
+  }
   size_t bytes() const;
 };
 
-// A triangle of the mesh: tile index and triangle within the tile.
+// A polygon of the mesh: tile index and polygon within the tile.
 struct NavRef {
   int32_t tile = -1;
-  int32_t triangle = -1;
+  int32_t polygon = -1;
   bool valid() const { return tile >= 0; }
   friend bool operator==(const NavRef&, const NavRef&) = default;
 };
@@ -85,7 +112,7 @@ class NavMesh {
   // cheaper than a rebuild on a 1024^2 map (64: 2x, 16: 27x, at 20-70%
   // more search nodes). navmesh_bench --tile_size measures the trade.
   static constexpr int32_t kDefaultTileSize = 32;
-  // A tile's triangles are numbered in 16 bits: at most 2 (s + 1)^2.
+  // A tile's polygons are numbered in 16 bits: at most 2 (s + 1)^2.
   static constexpr int32_t kMaxTileSize = 128;
 
   // The mesh of `grid`'s free space (cells Traversable under
@@ -111,14 +138,14 @@ class NavMesh {
   int32_t tiles_y() const { return tiles_y_; }
   const std::vector<std::shared_ptr<const NavTile>>& tiles() const { return tiles_; }
   const NavTile& tile(int32_t index) const { return *tiles_[index]; }
-  const NavTriangle& triangle(NavRef ref) const {
-    return tiles_[ref.tile]->triangles[ref.triangle];
+  NavPolygonView polygon(NavRef ref) const {
+    return tiles_[ref.tile]->polygon(ref.polygon);
   }
 
-  // The triangle across edge `edge` of `ref`; invalid when an obstacle or
+  // The polygon across edge `edge` of `ref`; invalid when an obstacle or
   // the map's outside is there.
   NavRef Across(NavRef ref, int edge) const;
-  // The free triangles whose closure holds the centre of `cell` (one, or
+  // The free polygons whose closure holds the centre of `cell` (one, or
   // two when it lies on their shared edge); empty for a blocked cell.
   std::vector<NavRef> Locate(Cell cell) const;
 
@@ -126,7 +153,8 @@ class NavMesh {
   // tiles). O(tiles).
   bool UniformCost() const;
 
-  // Totals over the tiles.
+  // Totals over the tiles (triangles: before merging into polygons).
+  int64_t polygon_count() const;
   int64_t triangle_count() const;
   int64_t vertex_count() const;
   size_t bytes() const;

@@ -1,11 +1,11 @@
-// Polyanya on the tiled constrained Delaunay mesh, and the `navmesh` planner.
+// Polyanya on the tiled mesh of convex polygons, and the `navmesh` planner.
 //
 // Exactness: roots are the start centre or mesh vertices (grid corners), so
 // they are lattice points, and an interval is stored not by its end points
 // but by the two rays from its root that bound it, each through a lattice
 // point (an interval end is either a mesh vertex or where the ray from the
 // root through an earlier vertex meets the edge). Every decision (which
-// edge a ray leaves a triangle through, whether an end is a vertex, whether
+// edge a ray leaves a polygon through, whether an end is a vertex, whether
 // the goal is in view) is then an integer cross product; floating point
 // only enters the heuristic. A turn is taken only at a bend corner (exactly
 // one of the four cells blocked) whose blocked cell lies inside the bend: a
@@ -13,7 +13,7 @@
 //
 // Pruning: the paper's root-level (a node whose root was reached more
 // cheaply is dropped, when queued and again when taken), dead-end (no node
-// into a triangle with one open edge) and intermediate (a lone successor
+// into a polygon with one open edge) and intermediate (a lone successor
 // with the same root is expanded at once); and duplicates: on a grid map
 // many rays graze vertices exactly, so equal intervals from equal roots are
 // reached in several ways, and left alone they multiply at every corner
@@ -65,13 +65,13 @@ struct Node {
   Vec right;
   NavRef polygon;
   // Entry edge index in `polygon`; kFinal for a node that reached the goal.
-  int8_t edge = 0;
+  int32_t edge = 0;
   double g = 0.0;
   double f = 0.0;
   // The root's entry in PolyanyaScratch::records.
   int32_t record = 0;
 };
-constexpr int8_t kFinal = -1;
+constexpr int32_t kFinal = -1;
 
 // A turning point of the path and the one before it.
 struct Record {
@@ -87,13 +87,13 @@ struct Record {
 struct NodeKey {
   int64_t root_x2, root_y2;
   int64_t lx, ly, rx, ry;
-  int32_t tile, triangle;
+  int32_t tile, polygon;
   int32_t edge;
   friend bool operator==(const NodeKey&, const NodeKey&) = default;
   size_t Hash() const {
     uint64_t h = 0x9e3779b97f4a7c15ull;
     for (const int64_t v : {root_x2, root_y2, lx, ly, rx, ry,
-                            static_cast<int64_t>(tile), static_cast<int64_t>(triangle),
+                            static_cast<int64_t>(tile), static_cast<int64_t>(polygon),
                             static_cast<int64_t>(edge)}) {
       // splitmix64 over the running value.
       h += static_cast<uint64_t>(v) + 0x9e3779b97f4a7c15ull;
@@ -274,7 +274,7 @@ class Search {
     if (start_polygons.empty() || goal_polygons_.empty()) return out;
     for (const NavRef& p : start_polygons) {
       if (IsGoalPolygon(p)) {
-        // Both points in one convex triangle: the straight segment.
+        // Both points in one convex polygon: the straight segment.
         out.outcome = PlanOutcome::kFound;
         out.polyline = {start_};
         if (!(goal_ == start_)) out.polyline.push_back(goal_);
@@ -284,10 +284,10 @@ class Search {
     Reset();
     s_.records.push_back(Record{start_, -1});
     for (const NavRef& p : start_polygons) {
-      const NavTriangle& t = mesh_.triangle(p);
-      for (int i = 0; i < 3; ++i) {
-        const LatticePoint u = t.corners[i];
-        const LatticePoint w = t.corners[(i + 1) % 3];
+      const NavPolygonView poly = mesh_.polygon(p);
+      for (int32_t i = 0; i < poly.size; ++i) {
+        const LatticePoint u = poly.corner(i);
+        const LatticePoint w = poly.corner(i + 1);
         // An edge through the start belongs to the other start polygon.
         if (Orient(u, w, start_) == 0) continue;
         Push(start_, Sub(w, start_), Sub(u, start_), p, i, 0.0, 0);
@@ -431,17 +431,17 @@ class Search {
             double g, int32_t record) {
     const NavRef next = mesh_.Across(from, edge);
     if (!next.valid() || (DeadEnd(next) && !IsGoalPolygon(next))) return;
-    const NavTriangle& ft = mesh_.triangle(from);
+    const NavPolygonView fp = mesh_.polygon(from);
     // The next polygon's entry edge runs a -> b.
-    const LatticePoint a = ft.corners[(edge + 1) % 3];
-    const LatticePoint b = ft.corners[edge];
+    const LatticePoint a = fp.corner(edge + 1);
+    const LatticePoint b = fp.corner(edge);
     const bool on_line = Orient(a, b, root) == 0;
     // On the edge's line only an end of the edge may be the root.
     if (on_line && !(root == a) && !(root == b)) return;
     if (!RecordRootG(root, g)) return;
-    const NavTriangle& nt = mesh_.triangle(next);
-    int8_t entry = 0;
-    while (!(nt.corners[entry] == a)) ++entry;
+    const NavPolygonView np = mesh_.polygon(next);
+    int32_t entry = 0;
+    while (!(np.corners[entry] == a)) ++entry;
     Node node{root, left, right, next, entry, g, 0.0, record};
     // Only a turn (a root new to this branch) or a sweep round a root's fan
     // can meet a node queued before; the cone of one root splits without
@@ -458,24 +458,25 @@ class Search {
     PushEntry(node);
   }
 
-  // A triangle with one open edge: whatever enters it can only leave the
+  // A polygon with one open edge: whatever enters it can only leave the
   // way it came (dead-end pruning, from the paper).
   bool DeadEnd(NavRef p) const {
-    const NavTriangle& t = mesh_.triangle(p);
+    const NavPolygonView poly = mesh_.polygon(p);
     int open = 0;
-    for (const int32_t a : t.across) open += a == NavTriangle::kWall ? 0 : 1;
+    for (int32_t i = 0; i < poly.size && open <= 1; ++i) {
+      open += poly.across[i] == NavTile::kWall ? 0 : 1;
+    }
     return open <= 1;
   }
 
   NodeKey KeyOf(const Node& n) const {
     // Rays only matter off the entry edge's line.
-    const NavTriangle& t = mesh_.triangle(n.polygon);
-    const bool on_line =
-        Orient(t.corners[n.edge], t.corners[(n.edge + 1) % 3], n.root) == 0;
+    const NavPolygonView p = mesh_.polygon(n.polygon);
+    const bool on_line = Orient(p.corner(n.edge), p.corner(n.edge + 1), n.root) == 0;
     const Vec l = on_line ? Vec{} : Reduced(n.left);
     const Vec r = on_line ? Vec{} : Reduced(n.right);
     return NodeKey{n.root.x2, n.root.y2, l.x, l.y, r.x, r.y,
-                   n.polygon.tile, n.polygon.triangle, n.edge};
+                   n.polygon.tile, n.polygon.polygon, n.edge};
   }
   // A node queued again later with a smaller g, or whose root has been
   // reached more cheaply since it was queued (root-level pruning applied
@@ -499,23 +500,39 @@ class Search {
     PushEntry(n);
   }
 
+  // The polygon's boundary beyond the entry edge a -> b, as seen from the
+  // root: the far chain w_0 = b, w_1, ..., w_m = a (counter-clockwise, so
+  // from the right of the cone to its left), edge j running w_j -> w_j+1.
+  struct FarChain {
+    NavPolygonView polygon;
+    int32_t entry;
+    int32_t m() const { return polygon.size - 1; }
+    LatticePoint w(int32_t j) const { return polygon.corner(entry + 1 + j); }
+    int32_t edge(int32_t j) const {
+      const int32_t i = entry + 1 + j;
+      return i < polygon.size ? i : i - polygon.size;
+    }
+  };
+
   void Expand(const Node& node) {
     expanding_record_ = node.record;
-    const NavTriangle& t = mesh_.triangle(node.polygon);
-    const int e = node.edge;
-    const LatticePoint a = t.corners[e];
-    const LatticePoint b = t.corners[(e + 1) % 3];
-    const LatticePoint c = t.corners[(e + 2) % 3];
+    const FarChain chain{mesh_.polygon(node.polygon), node.edge};
+    const int32_t m = chain.m();
+    const LatticePoint a = chain.w(m);
+    const LatticePoint b = chain.w(0);
     const LatticePoint s = node.root;
-    const int bc = (e + 1) % 3;
-    const int ca = (e + 2) % 3;
     if (Orient(a, b, s) == 0) {
-      ExpandFromVertex(node, t, e);
+      ExpandFromVertex(node, chain);
       return;
     }
-    const Vec sc = Sub(c, s);
-    const int64_t op = Cross(node.left, sc);   // > 0: c left of the left ray
-    const int64_t oq = Cross(node.right, sc);  // < 0: c right of the right ray
+    // The far corners strictly right of the right ray are w_1 .. w_r, those
+    // strictly left of the left ray w_l .. w_m-1 (the chain is in angular
+    // order as seen from the root, as far as the cone reaches); the cone
+    // leaves through edges r .. l - 1, cut at the far corners between.
+    int32_t r = 0;
+    while (r + 1 < m && Cross(node.right, Sub(chain.w(r + 1), s)) < 0) ++r;
+    int32_t l = m;
+    while (l - 1 > r && Cross(node.left, Sub(chain.w(l - 1), s)) > 0) --l;
     const bool left_at_a = Cross(node.left, Sub(a, s)) == 0;
     const bool right_at_b = Cross(node.right, Sub(b, s)) == 0;
 
@@ -532,64 +549,86 @@ class Search {
       }
     }
 
-    // Observable successors: the cone beyond the entry interval.
-    if (op > 0) {
-      Push(s, node.left, node.right, node.polygon, bc, node.g, node.record);
-    } else if (oq < 0) {
-      Push(s, node.left, node.right, node.polygon, ca, node.g, node.record);
-    } else {
-      // c in the closed cone: [c, right end] on b-c and [left end, c] on
-      // c-a; c ends both, so either side may turn there. A ray through c
-      // exactly gives a one-point interval on both edges: beyond c the
-      // point walks round c's fan both ways, so a path going straight on
-      // past c finds the side an obstacle at c leaves open.
-      Push(s, sc, node.right, node.polygon, bc, node.g, node.record);
-      Push(s, node.left, sc, node.polygon, ca, node.g, node.record);
+    // Observable successors: the cone beyond the entry interval, one node
+    // per edge it leaves through. A ray through a far corner exactly gives
+    // a one-point interval on the edge beyond it: past the corner the
+    // point walks round the corner's fan, so a path going straight on past
+    // it finds the side an obstacle there leaves open.
+    for (int32_t j = r; j < l; ++j) {
+      const Vec right = j == r ? node.right : Sub(chain.w(j), s);
+      const Vec left = j + 1 == l ? node.left : Sub(chain.w(j + 1), s);
+      Push(s, left, right, node.polygon, chain.edge(j), node.g, node.record);
     }
 
     // Non-observable successors: around an end of the interval that is an
-    // obstacle corner, with that corner as the new root.
+    // obstacle corner, with that corner as the new root: the edges beyond
+    // the cone on that side, the one the cone's ray crosses from the ray's
+    // continuation past the corner.
     if (left_at_a && CanTurn(s, a, /*left=*/true)) {
       const double g = node.g + Distance(s, a);
       if (RecordRootG(a, g)) {
         const int32_t rec = Turn(a, node.record);
-        const Vec d = Sub(a, s);
-        if (op > 0) Push(a, Sub(c, a), d, node.polygon, bc, g, rec);
-        Push(a, Sub(a, a), Sub(c, a), node.polygon, ca, g, rec);
+        if (l < m) {
+          Push(a, Sub(chain.w(l), a), Sub(a, s), node.polygon, chain.edge(l - 1), g, rec);
+        }
+        for (int32_t j = l; j + 1 < m; ++j) {
+          Push(a, Sub(chain.w(j + 1), a), Sub(chain.w(j), a), node.polygon, chain.edge(j),
+               g, rec);
+        }
+        Push(a, Vec{}, Sub(chain.w(m - 1), a), node.polygon, chain.edge(m - 1), g, rec);
       }
     }
     if (right_at_b && CanTurn(s, b, /*left=*/false)) {
       const double g = node.g + Distance(s, b);
       if (RecordRootG(b, g)) {
         const int32_t rec = Turn(b, node.record);
-        const Vec d = Sub(b, s);
-        if (oq < 0) Push(b, d, Sub(c, b), node.polygon, ca, g, rec);
-        Push(b, Sub(c, b), Sub(b, b), node.polygon, bc, g, rec);
+        if (r > 0) {
+          Push(b, Sub(b, s), Sub(chain.w(r), b), node.polygon, chain.edge(r), g, rec);
+        }
+        for (int32_t j = 1; j < r; ++j) {
+          Push(b, Sub(chain.w(j + 1), b), Sub(chain.w(j), b), node.polygon, chain.edge(j),
+               g, rec);
+        }
+        Push(b, Sub(chain.w(1), b), Vec{}, node.polygon, chain.edge(0), g, rec);
       }
     }
   }
 
-  // The root is an end of the entry edge (a vertex of the triangle), so the
-  // whole triangle is in view: both other edges, whole.
-  void ExpandFromVertex(const Node& node, const NavTriangle& t, int e) {
-    const LatticePoint a = t.corners[e];
-    const LatticePoint b = t.corners[(e + 1) % 3];
-    const LatticePoint c = t.corners[(e + 2) % 3];
+  // The root is an end of the entry edge (a vertex of the polygon), so the
+  // whole polygon is in view: every other edge, whole.
+  void ExpandFromVertex(const Node& node, const FarChain& chain) {
     const LatticePoint s = node.root;
-    if (!(s == a) && !(s == b)) return;
+    if (!(s == chain.w(chain.m())) && !(s == chain.w(0))) return;
     if (IsGoalPolygon(node.polygon)) {
       PushFinal(node.g + Distance(s, goal_), node.record);
     }
-    Push(s, Sub(c, s), Sub(b, s), node.polygon, (e + 1) % 3, node.g, node.record);
-    Push(s, Sub(a, s), Sub(c, s), node.polygon, (e + 2) % 3, node.g, node.record);
+    for (int32_t j = 0; j < chain.m(); ++j) {
+      Push(s, Sub(chain.w(j + 1), s), Sub(chain.w(j), s), node.polygon, chain.edge(j),
+           node.g, node.record);
+    }
   }
 
+  // The turning points from the start to the goal. A turn can be recorded
+  // at a corner the path only grazes (it continues straight on, at the
+  // same g as the path that never turned), so points on the straight
+  // segment between their neighbours are dropped.
   std::vector<LatticePoint> Trace(int32_t record) const {
-    std::vector<LatticePoint> polyline{goal_};
+    std::vector<LatticePoint> reversed{goal_};
     for (int32_t r = record; r >= 0; r = s_.records[static_cast<size_t>(r)].parent) {
-      polyline.push_back(s_.records[static_cast<size_t>(r)].point);
+      reversed.push_back(s_.records[static_cast<size_t>(r)].point);
     }
-    std::reverse(polyline.begin(), polyline.end());
+    std::vector<LatticePoint> polyline;
+    for (auto it = reversed.rbegin(); it != reversed.rend(); ++it) {
+      const LatticePoint p = *it;
+      if (polyline.size() >= 2) {
+        const LatticePoint a = polyline[polyline.size() - 2];
+        const LatticePoint m = polyline.back();
+        const Vec am = Sub(m, a);
+        const Vec mp = Sub(p, m);
+        if (Cross(am, mp) == 0 && am.x * mp.x + am.y * mp.y > 0) polyline.pop_back();
+      }
+      polyline.push_back(p);
+    }
     return polyline;
   }
 
@@ -614,8 +653,8 @@ class NavMeshPlanner final : public GridPlanner {
                         .needs_eight_connected = true,
                         .geometric = true,
                         .description =
-                            "Polyanya on a tiled constrained Delaunay navigation "
-                            "mesh: Euclidean shortest paths bending at obstacle "
+                            "Polyanya on a tiled navigation mesh of convex "
+                            "polygons: Euclidean shortest paths bending at obstacle "
                             "corners; uniform-cost 8-connected maps only; "
                             "expansions count search nodes (edge intervals)"}) {}
 

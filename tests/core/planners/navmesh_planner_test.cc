@@ -190,8 +190,8 @@ TEST(Polyanya, MatchesTheVisibilityGraphOnRandomMaps) {
 
 // Maps whose obstacles all reach the border through 8-connected chains, so
 // the free space has no holes. Meshed as one tile, every vertex is then on
-// the boundary, so between two triangles there is exactly one channel (the
-// dual graph of a triangulated simple polygon is a tree) and the funnel
+// the boundary, so between two polygons there is exactly one channel (the
+// dual graph of a convex partition of a simple polygon is a tree) and the funnel
 // through it is the shortest path.
 Grid HoleFreeMap(std::mt19937& rng) {
   const int w = 3 + static_cast<int>(rng() % 14);
@@ -236,16 +236,16 @@ std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
     if (std::find(to.begin(), to.end(), steps[i].at) != to.end()) {
       std::vector<Portal> portals;
       for (int k = static_cast<int>(i); steps[k].parent >= 0; k = steps[k].parent) {
-        const NavTriangle& t = mesh.triangle(steps[steps[k].parent].at);
-        // Leaving a counter-clockwise triangle through corner e -> e + 1:
+        const NavPolygonView t = mesh.polygon(steps[steps[k].parent].at);
+        // Leaving a counter-clockwise polygon through corner e -> e + 1:
         // the far end is on the left.
-        portals.push_back(Portal{ToCellPoint(t.corners[(steps[k].edge + 1) % 3]),
-                                 ToCellPoint(t.corners[steps[k].edge])});
+        portals.push_back(Portal{ToCellPoint(t.corner(steps[k].edge + 1)),
+                                 ToCellPoint(t.corner(steps[k].edge))});
       }
       std::reverse(portals.begin(), portals.end());
       return portals;
     }
-    for (int e = 0; e < 3; ++e) {
+    for (int e = 0; e < mesh.polygon(steps[i].at).size; ++e) {
       const NavRef n = mesh.Across(steps[i].at, e);
       if (n.valid() && !seen(n)) steps.push_back({n, static_cast<int>(i), e});
     }
