@@ -70,6 +70,9 @@ struct Node {
   double f = 0.0;
   // The root's entry in PolyanyaScratch::records.
   int32_t record = 0;
+  // The node's number in PolyanyaScratch::queued, -1 when it was not
+  // checked for duplicates.
+  int32_t key = -1;
 };
 constexpr int32_t kFinal = -1;
 
@@ -105,9 +108,12 @@ struct NodeKey {
   }
 };
 
-// The smallest g each node was queued with: open addressing whose slots
-// are emptied between searches by a stamp, so a search costs nothing for
-// the table's size and its memory is kept.
+// Node identities seen by the search, each numbered (0, 1, ... in order of
+// insertion) so that the smallest g it was queued with lives in a plain
+// array the node can index when it leaves the open list, without hashing
+// its key again: open addressing whose slots are emptied between searches
+// by a stamp, so a search costs nothing for the table's size and its
+// memory is kept.
 class QueuedTable {
  public:
   // Starts a new search: every slot empty.
@@ -118,28 +124,23 @@ class QueuedTable {
       stamp_ = 1;
     }
   }
-  // The g recorded for `key`, inserting `g` when absent (then returns
-  // nullptr).
-  double* FindOrInsert(const NodeKey& key, double g) {
+  // The number of `key`; `inserted` says whether it is new (then it is the
+  // number of keys inserted before it).
+  int32_t FindOrInsert(const NodeKey& key, bool& inserted) {
     if (2 * (size_ + 1) > slots_.size()) Grow();
     const size_t mask = slots_.size() - 1;
     for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
       Slot& s = slots_[i];
       if (s.stamp != stamp_) {
-        s = Slot{key, g, stamp_};
+        s = Slot{key, static_cast<int32_t>(size_), stamp_};
         ++size_;
-        return nullptr;
+        inserted = true;
+        return s.id;
       }
-      if (s.key == key) return &s.g;
-    }
-  }
-  const double* Find(const NodeKey& key) const {
-    if (slots_.empty()) return nullptr;
-    const size_t mask = slots_.size() - 1;
-    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
-      const Slot& s = slots_[i];
-      if (s.stamp != stamp_) return nullptr;
-      if (s.key == key) return &s.g;
+      if (s.key == key) {
+        inserted = false;
+        return s.id;
+      }
     }
   }
   size_t bytes() const { return slots_.capacity() * sizeof(Slot); }
@@ -147,7 +148,7 @@ class QueuedTable {
  private:
   struct Slot {
     NodeKey key;
-    double g = 0.0;
+    int32_t id = 0;
     uint32_t stamp = 0;
   };
   void Grow() {
@@ -156,9 +157,12 @@ class QueuedTable {
     slots_.assign(std::max<size_t>(1024, 2 * old.size()), Slot{});
     const uint32_t live = stamp_;
     stamp_ = 1;
-    size_ = 0;
+    const size_t mask = slots_.size() - 1;
     for (const Slot& s : old) {
-      if (s.stamp == live) FindOrInsert(s.key, s.g);
+      if (s.stamp != live) continue;
+      size_t i = s.key.Hash() & mask;
+      while (slots_[i].stamp == stamp_) i = (i + 1) & mask;
+      slots_[i] = Slot{s.key, s.id, stamp_};
     }
   }
 
@@ -184,8 +188,9 @@ struct PolyanyaScratch final : public SearchScratch::Extension {
   std::vector<Record> records;
   std::vector<HeapEntry> open;
   std::vector<Node> pending;
-  // The smallest g each node was queued with.
+  // The node identities queued, and the smallest g each was queued with.
   QueuedTable queued;
+  std::vector<double> queued_g;
   // Root-level pruning: the best g a vertex (grid corner) was reached with,
   // valid where stamp == search.
   std::vector<double> best_g;
@@ -195,7 +200,7 @@ struct PolyanyaScratch final : public SearchScratch::Extension {
   size_t MemoryBytes() const override {
     return nodes.capacity() * sizeof(Node) + records.capacity() * sizeof(Record) +
            open.capacity() * sizeof(HeapEntry) + pending.capacity() * sizeof(Node) +
-           queued.bytes() +
+           queued.bytes() + queued_g.capacity() * sizeof(double) +
            best_g.capacity() * sizeof(double) +
            stamp.capacity() * sizeof(uint32_t);
   }
@@ -349,6 +354,7 @@ class Search {
     s_.open.clear();
     s_.pending.clear();
     s_.queued.Clear();
+    s_.queued_g.clear();
   }
 
   bool IsGoalPolygon(NavRef p) const {
@@ -447,9 +453,14 @@ class Search {
     // can meet a node queued before; the cone of one root splits without
     // overlap.
     if (record != expanding_record_ || on_line) {
-      if (double* queued = s_.queued.FindOrInsert(KeyOf(node), g)) {
-        if (*queued <= g + 1e-9) return;
-        *queued = g;
+      bool inserted = false;
+      node.key = s_.queued.FindOrInsert(KeyOf(node), inserted);
+      if (inserted) {
+        s_.queued_g.push_back(g);
+      } else {
+        double& queued = s_.queued_g[static_cast<size_t>(node.key)];
+        if (queued <= g + 1e-9) return;
+        queued = g;
       }
     }
     const Pt l = on_line ? ToPt(a) : RayHit(root, left, a, b);
@@ -487,8 +498,7 @@ class Search {
       const size_t id = CornerId(n.root);
       if (s_.stamp[id] == s_.search && s_.best_g[id] < n.g - 1e-9) return true;
     }
-    const double* queued = s_.queued.Find(KeyOf(n));
-    return queued != nullptr && *queued < n.g - 1e-9;
+    return n.key >= 0 && s_.queued_g[static_cast<size_t>(n.key)] < n.g - 1e-9;
   }
 
   void PushFinal(double g, int32_t record) {
