@@ -40,16 +40,24 @@
 namespace pathd {
 namespace {
 
-// A direction in doubled cell coordinates.
+// A direction in doubled cell coordinates: a difference of two points of a
+// grid (sides at most kMaxGridDimension = 2^16 cells), so 32 bits hold it
+// and 64 its products.
+// Search nodes and their keys are what the search moves through memory,
+// so they are kept small.
 struct Vec {
-  int64_t x = 0;
-  int64_t y = 0;
+  int32_t x = 0;
+  int32_t y = 0;
 };
-Vec Sub(LatticePoint a, LatticePoint b) { return Vec{a.x2 - b.x2, a.y2 - b.y2}; }
-int64_t Cross(Vec a, Vec b) { return a.x * b.y - a.y * b.x; }
+Vec Sub(LatticePoint a, LatticePoint b) {
+  return Vec{static_cast<int32_t>(a.x2 - b.x2), static_cast<int32_t>(a.y2 - b.y2)};
+}
+int64_t Cross(Vec a, Vec b) {
+  return static_cast<int64_t>(a.x) * b.y - static_cast<int64_t>(a.y) * b.x;
+}
 // The same direction with coprime components (zero stays zero).
 Vec Reduced(Vec v) {
-  const int64_t d = std::gcd(v.x < 0 ? -v.x : v.x, v.y < 0 ? -v.y : v.y);
+  const int32_t d = std::gcd(v.x < 0 ? -v.x : v.x, v.y < 0 ? -v.y : v.y);
   return d == 0 ? v : Vec{v.x / d, v.y / d};
 }
 
@@ -66,10 +74,10 @@ struct Node {
   NavRef polygon;
   // Entry edge index in `polygon`; kFinal for a node that reached the goal.
   int32_t edge = 0;
-  double g = 0.0;
-  double f = 0.0;
   // The root's entry in PolyanyaScratch::records.
   int32_t record = 0;
+  double g = 0.0;
+  double f = 0.0;
   // The node's number in PolyanyaScratch::queued, -1 when it was not
   // checked for duplicates.
   int32_t key = -1;
@@ -88,16 +96,14 @@ struct Record {
 // on both sides of it; two turns at one corner sweep the same fan), and
 // left alone they multiply at every corner after.
 struct NodeKey {
-  int64_t root_x2, root_y2;
-  int64_t lx, ly, rx, ry;
+  int32_t root_x2, root_y2;
+  int32_t lx, ly, rx, ry;
   int32_t tile, polygon;
   int32_t edge;
   friend bool operator==(const NodeKey&, const NodeKey&) = default;
   size_t Hash() const {
     uint64_t h = 0x9e3779b97f4a7c15ull;
-    for (const int64_t v : {root_x2, root_y2, lx, ly, rx, ry,
-                            static_cast<int64_t>(tile), static_cast<int64_t>(polygon),
-                            static_cast<int64_t>(edge)}) {
+    for (const int32_t v : {root_x2, root_y2, lx, ly, rx, ry, tile, polygon, edge}) {
       // splitmix64 over the running value.
       h += static_cast<uint64_t>(v) + 0x9e3779b97f4a7c15ull;
       h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -171,38 +177,36 @@ class QueuedTable {
   uint32_t stamp_ = 1;
 };
 
-struct HeapEntry {
-  double f;
-  double g;
-  int32_t node;
-};
+// The open list holds the nodes themselves: taking one then reads the
+// heap's top, where an index into a node array would cost a cache miss.
 // Smallest f first, larger g among equal f (deeper nodes, as the grid
 // searches break ties).
-bool operator<(const HeapEntry& a, const HeapEntry& b) {
+bool OpenBefore(const Node& a, const Node& b) {
   return a.f != b.f ? a.f > b.f : a.g < b.g;
 }
 
+// Root-level pruning: the best g a vertex (grid corner) was reached with,
+// valid where stamp == the search's.
+struct CornerG {
+  double g = 0.0;
+  uint32_t stamp = 0;
+};
+
 // What the search keeps in a SearchScratch between queries.
 struct PolyanyaScratch final : public SearchScratch::Extension {
-  std::vector<Node> nodes;
   std::vector<Record> records;
-  std::vector<HeapEntry> open;
+  std::vector<Node> open;
   std::vector<Node> pending;
   // The node identities queued, and the smallest g each was queued with.
   QueuedTable queued;
   std::vector<double> queued_g;
-  // Root-level pruning: the best g a vertex (grid corner) was reached with,
-  // valid where stamp == search.
-  std::vector<double> best_g;
-  std::vector<uint32_t> stamp;
+  std::vector<CornerG> corner_g;
   uint32_t search = 0;
 
   size_t MemoryBytes() const override {
-    return nodes.capacity() * sizeof(Node) + records.capacity() * sizeof(Record) +
-           open.capacity() * sizeof(HeapEntry) + pending.capacity() * sizeof(Node) +
-           queued.bytes() + queued_g.capacity() * sizeof(double) +
-           best_g.capacity() * sizeof(double) +
-           stamp.capacity() * sizeof(uint32_t);
+    return records.capacity() * sizeof(Record) + open.capacity() * sizeof(Node) +
+           pending.capacity() * sizeof(Node) + queued.bytes() +
+           queued_g.capacity() * sizeof(double) + corner_g.capacity() * sizeof(CornerG);
   }
 };
 
@@ -300,15 +304,14 @@ class Search {
     }
     FlushPending();
     while (!s_.open.empty()) {
-      const HeapEntry top = s_.open.front();
-      const PlanOutcome o = stop_.Check(out.expansions, top.f);
+      const PlanOutcome o = stop_.Check(out.expansions, s_.open.front().f);
       if (o != PlanOutcome::kFound) {
         out.outcome = o;
         return out;
       }
-      std::pop_heap(s_.open.begin(), s_.open.end());
+      std::pop_heap(s_.open.begin(), s_.open.end(), OpenBefore);
+      Node node = s_.open.back();
       s_.open.pop_back();
-      Node node = s_.nodes[static_cast<size_t>(top.node)];
       if (Superseded(node)) continue;
       ++out.expansions;
       if (node.edge == kFinal) {
@@ -340,16 +343,14 @@ class Search {
  private:
   void Reset() {
     const size_t corners = static_cast<size_t>(grid_.width() + 1) * (grid_.height() + 1);
-    if (s_.stamp.size() != corners) {
-      s_.stamp.assign(corners, 0);
-      s_.best_g.assign(corners, 0.0);
+    if (s_.corner_g.size() != corners) {
+      s_.corner_g.assign(corners, CornerG{});
       s_.search = 0;
     }
     if (++s_.search == 0) {
-      std::fill(s_.stamp.begin(), s_.stamp.end(), 0);
+      std::fill(s_.corner_g.begin(), s_.corner_g.end(), CornerG{});
       s_.search = 1;
     }
-    s_.nodes.clear();
     s_.records.clear();
     s_.open.clear();
     s_.pending.clear();
@@ -405,13 +406,13 @@ class Search {
   bool RecordRootG(LatticePoint root, double g) {
     if (root == start_) return true;
     const size_t id = CornerId(root);
-    if (s_.stamp[id] != s_.search) {
-      s_.stamp[id] = s_.search;
-      s_.best_g[id] = g;
+    CornerG& c = s_.corner_g[id];
+    if (c.stamp != s_.search) {
+      c = CornerG{g, s_.search};
       return true;
     }
-    if (g > s_.best_g[id] + 1e-9) return false;
-    s_.best_g[id] = std::min(s_.best_g[id], g);
+    if (g > c.g + 1e-9) return false;
+    c.g = std::min(c.g, g);
     return true;
   }
 
@@ -424,9 +425,8 @@ class Search {
   void PushEntry(const Node& n) { s_.pending.push_back(n); }
   void FlushPending() {
     for (const Node& n : s_.pending) {
-      s_.nodes.push_back(n);
-      s_.open.push_back(HeapEntry{n.f, n.g, static_cast<int32_t>(s_.nodes.size() - 1)});
-      std::push_heap(s_.open.begin(), s_.open.end());
+      s_.open.push_back(n);
+      std::push_heap(s_.open.begin(), s_.open.end(), OpenBefore);
     }
     s_.pending.clear();
   }
@@ -448,7 +448,7 @@ class Search {
     const NavPolygonView np = mesh_.polygon(next);
     int32_t entry = 0;
     while (!(np.corners[entry] == a)) ++entry;
-    Node node{root, left, right, next, entry, g, 0.0, record};
+    Node node{root, left, right, next, entry, record, g, 0.0};
     // Only a turn (a root new to this branch) or a sweep round a root's fan
     // can meet a node queued before; the cone of one root splits without
     // overlap.
@@ -486,7 +486,8 @@ class Search {
     const bool on_line = Orient(p.corner(n.edge), p.corner(n.edge + 1), n.root) == 0;
     const Vec l = on_line ? Vec{} : Reduced(n.left);
     const Vec r = on_line ? Vec{} : Reduced(n.right);
-    return NodeKey{n.root.x2, n.root.y2, l.x, l.y, r.x, r.y,
+    return NodeKey{static_cast<int32_t>(n.root.x2), static_cast<int32_t>(n.root.y2),
+                   l.x, l.y, r.x, r.y,
                    n.polygon.tile, n.polygon.polygon, n.edge};
   }
   // A node queued again later with a smaller g, or whose root has been
@@ -496,7 +497,8 @@ class Search {
     if (n.edge == kFinal) return false;
     if (!(n.root == start_)) {
       const size_t id = CornerId(n.root);
-      if (s_.stamp[id] == s_.search && s_.best_g[id] < n.g - 1e-9) return true;
+      const CornerG& c = s_.corner_g[id];
+      if (c.stamp == s_.search && c.g < n.g - 1e-9) return true;
     }
     return n.key >= 0 && s_.queued_g[static_cast<size_t>(n.key)] < n.g - 1e-9;
   }
