@@ -344,24 +344,45 @@ class TileBuilder {
       qr.shrink_to_fit();
       parent[q] = p;
     }
-    // Number the polygons in order of their first triangle.
-    std::vector<int32_t> id(n, -1);
-    int32_t count = 0;
+    // Number the polygons row by row (by their top-left corner, then their
+    // first triangle), so that neighbours tend to lie close in memory.
+    struct Order {
+      int64_t y2;
+      int64_t x2;
+      int32_t t;
+    };
+    std::vector<Order> order;
     for (size_t t = 0; t < n; ++t) {
-      if (find(static_cast<int32_t>(t)) == static_cast<int32_t>(t)) id[t] = count++;
+      if (find(static_cast<int32_t>(t)) != static_cast<int32_t>(t)) continue;
+      Order o{INT64_MAX, INT64_MAX, static_cast<int32_t>(t)};
+      for (const Edge& e : rings[t]) {
+        if (e.corner.y2 < o.y2 || (e.corner.y2 == o.y2 && e.corner.x2 < o.x2)) {
+          o.y2 = e.corner.y2;
+          o.x2 = e.corner.x2;
+        }
+      }
+      order.push_back(o);
     }
+    std::sort(order.begin(), order.end(), [](const Order& a, const Order& b) {
+      if (a.y2 != b.y2) return a.y2 < b.y2;
+      return a.x2 != b.x2 ? a.x2 < b.x2 : a.t < b.t;
+    });
+    std::vector<int32_t> id(n, -1);
+    for (size_t k = 0; k < order.size(); ++k) id[order[k].t] = static_cast<int32_t>(k);
     std::vector<int32_t> polygon_of(n);
     for (size_t t = 0; t < n; ++t) polygon_of[t] = id[find(static_cast<int32_t>(t))];
-    tile.polygons.reserve(static_cast<size_t>(count));
-    for (size_t t = 0; t < n; ++t) {
-      if (id[t] < 0) continue;
-      const std::vector<Edge>& ring = rings[t];
-      tile.polygons.push_back(NavPolygon{static_cast<int32_t>(tile.corners.size()),
-                                         static_cast<int32_t>(ring.size())});
+    tile.polygons.reserve(order.size());
+    for (const Order& o : order) {
+      const std::vector<Edge>& ring = rings[o.t];
+      NavPolygon polygon{static_cast<int32_t>(tile.corners.size()),
+                         static_cast<uint16_t>(ring.size()), 0};
       for (const Edge& e : ring) {
-        tile.corners.push_back(e.corner);
+        tile.corners.push_back(NavPoint{static_cast<int32_t>(e.corner.x2),
+                                        static_cast<int32_t>(e.corner.y2)});
         tile.across.push_back(e.across >= 0 ? polygon_of[e.across] : e.across);
+        if (e.across != NavTile::kWall) ++polygon.open;
       }
+      tile.polygons.push_back(polygon);
     }
     tile.corners.shrink_to_fit();
     tile.across.shrink_to_fit();
@@ -459,7 +480,7 @@ std::pair<int32_t, int32_t> TilesAtLine(int32_t line, int32_t tile_size,
 
 size_t NavTile::bytes() const {
   size_t b = sizeof(NavTile) + polygons.capacity() * sizeof(NavPolygon) +
-             corners.capacity() * sizeof(LatticePoint) +
+             corners.capacity() * sizeof(NavPoint) +
              across.capacity() * sizeof(int32_t) +
              cell_polygon.capacity() * sizeof(uint16_t);
   for (const auto& side : border) b += side.capacity() * sizeof(side[0]);

@@ -39,16 +39,31 @@ namespace pathd {
 // 180 degrees) but never coincide.
 struct NavPolygon {
   int32_t first = 0;
-  int32_t size = 0;
+  uint16_t size = 0;
+  // Edges with no wall across (another polygon or the tile border): a
+  // polygon with one is a dead end.
+  uint16_t open = 0;
+};
+
+// A mesh corner in doubled cell coordinates (a LatticePoint in half the
+// bytes: the search reads corners far more than anything else).
+struct NavPoint {
+  int32_t x2 = 0;
+  int32_t y2 = 0;
+  friend bool operator==(const NavPoint&, const NavPoint&) = default;
 };
 
 // One polygon's edges, read through the tile that stores them.
 struct NavPolygonView {
-  const LatticePoint* corners = nullptr;
+  const NavPoint* corners = nullptr;
   const int32_t* across = nullptr;
   int32_t size = 0;
+  int32_t open = 0;
   // Corner i, for any i in [0, 2 * size).
-  LatticePoint corner(int32_t i) const { return corners[i < size ? i : i - size]; }
+  LatticePoint corner(int32_t i) const {
+    const NavPoint& p = corners[i < size ? i : i - size];
+    return LatticePoint{p.x2, p.y2};
+  }
 };
 
 // The mesh of one tile: cells [x0, x1) x [y0, y1). Immutable once built.
@@ -69,7 +84,7 @@ struct NavTile {
   std::vector<NavPolygon> polygons;
   // Per polygon edge, indexed by NavPolygon::first + i: the edge's first
   // corner and what lies across it.
-  std::vector<LatticePoint> corners;
+  std::vector<NavPoint> corners;
   std::vector<int32_t> across;
   // Row-major over the tile's cells: the polygon containing the cell's
   // centre, kNoPolygon for blocked cells.
@@ -90,7 +105,7 @@ struct NavTile {
 
   NavPolygonView polygon(int32_t index) const {
     const NavPolygon& p = polygons[static_cast<size_t>(index)];
-    return NavPolygonView{corners.data() + p.first, across.data() + p.first, p.size};
+    return NavPolygonView{corners.data() + p.first, across.data() + p.first, p.size, p.open};
   }
   size_t bytes() const;
 };

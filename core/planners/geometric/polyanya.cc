@@ -447,7 +447,7 @@ class Search {
     if (!RecordRootG(root, g)) return;
     const NavPolygonView np = mesh_.polygon(next);
     int32_t entry = 0;
-    while (!(np.corners[entry] == a)) ++entry;
+    while (!(np.corner(entry) == a)) ++entry;
     Node node{root, left, right, next, entry, record, g, 0.0};
     // Only a turn (a root new to this branch) or a sweep round a root's fan
     // can meet a node queued before; the cone of one root splits without
@@ -472,12 +472,7 @@ class Search {
   // A polygon with one open edge: whatever enters it can only leave the
   // way it came (dead-end pruning, from the paper).
   bool DeadEnd(NavRef p) const {
-    const NavPolygonView poly = mesh_.polygon(p);
-    int open = 0;
-    for (int32_t i = 0; i < poly.size && open <= 1; ++i) {
-      open += poly.across[i] == NavTile::kWall ? 0 : 1;
-    }
-    return open <= 1;
+    return mesh_.polygon(p).open <= 1;
   }
 
   NodeKey KeyOf(const Node& n) const {
