@@ -122,11 +122,14 @@ struct NavRef {
 // built; versions share unchanged tiles.
 class NavMesh {
  public:
-  // Tile side in cells. 32 searches as fast as 64 (tile borders add few
-  // triangles) and builds faster; 100 scattered changed cells re-mesh 9x
-  // cheaper than a rebuild on a 1024^2 map (64: 2x, 16: 27x, at 20-70%
-  // more search nodes). navmesh_bench --tile_size measures the trade.
-  static constexpr int32_t kDefaultTileSize = 32;
+  // Tile side in cells. An update re-meshes every tile a changed cell
+  // touches, so 100 scattered cells on a 1024^2 map touch ~120 of 4096
+  // tiles at 16 (re-meshed ~20x cheaper than a rebuild) but ~105 of 1024
+  // at 32 (under 10x whatever a tile costs). With convex polygons, 16 costs
+  // 6-9% more search nodes than 32 where obstacles are dense (random,
+  // maze512-1), up to 3x on open maps, whose searches take well under a
+  // millisecond. navmesh_bench --tile_size measures the trade.
+  static constexpr int32_t kDefaultTileSize = 16;
   // A tile's polygons are numbered in 16 bits: at most 2 (s + 1)^2.
   static constexpr int32_t kMaxTileSize = 128;
 
