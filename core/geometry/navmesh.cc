@@ -550,12 +550,9 @@ std::shared_ptr<const NavMesh> NavMesh::Advance(const NavMesh& previous,
   return mesh;
 }
 
-NavRef NavMesh::Across(NavRef ref, int edge) const {
+NavRef NavMesh::AcrossBorder(NavRef ref, int edge) const {
   const NavTile& tile = *tiles_[ref.tile];
   const NavPolygonView p = tile.polygon(ref.polygon);
-  const int32_t across = p.across[edge];
-  if (across >= 0) return NavRef{ref.tile, across};
-  if (across == NavTile::kWall) return NavRef{};
   const LatticePoint a = p.corner(edge);
   const LatticePoint b = p.corner(edge + 1);
   const int32_t tx = ref.tile % tiles_x_;

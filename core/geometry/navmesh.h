@@ -161,8 +161,15 @@ class NavMesh {
   }
 
   // The polygon across edge `edge` of `ref`; invalid when an obstacle or
-  // the map's outside is there.
-  NavRef Across(NavRef ref, int edge) const;
+  // the map's outside is there. Inline for the search's inner loop; a tile
+  // border is looked up in the neighbour tile.
+  NavRef Across(NavRef ref, int edge) const {
+    const NavTile& tile = *tiles_[ref.tile];
+    const int32_t across = tile.across[tile.polygons[ref.polygon].first + edge];
+    if (across >= 0) return NavRef{ref.tile, across};
+    if (across == NavTile::kWall) return NavRef{};
+    return AcrossBorder(ref, edge);
+  }
   // The free polygons whose closure holds the centre of `cell` (one, or
   // two when it lies on their shared edge); empty for a blocked cell.
   std::vector<NavRef> Locate(Cell cell) const;
@@ -183,6 +190,7 @@ class NavMesh {
 
  private:
   NavMesh() = default;
+  NavRef AcrossBorder(NavRef ref, int edge) const;
 
   int32_t width_ = 0;
   int32_t height_ = 0;

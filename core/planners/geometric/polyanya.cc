@@ -311,6 +311,8 @@ class Search {
       }
       std::pop_heap(s_.open.begin(), s_.open.end(), OpenBefore);
       Node node = s_.open.back();
+      // A lower bound on the f of the lone successors expanded below.
+      const double f = node.f;
       s_.open.pop_back();
       if (Superseded(node)) continue;
       ++out.expansions;
@@ -324,7 +326,7 @@ class Search {
       // root is expanded at once instead of through the open list.
       while (s_.pending.size() == 1 && s_.pending[0].edge != kFinal &&
              s_.pending[0].record == node.record) {
-        const PlanOutcome o2 = stop_.Check(out.expansions, s_.pending[0].f);
+        const PlanOutcome o2 = stop_.Check(out.expansions, f);
         if (o2 != PlanOutcome::kFound) {
           out.outcome = o2;
           return out;
@@ -424,7 +426,8 @@ class Search {
   // Successors wait in `pending` until their parent's expansion is done.
   void PushEntry(const Node& n) { s_.pending.push_back(n); }
   void FlushPending() {
-    for (const Node& n : s_.pending) {
+    for (Node& n : s_.pending) {
+      SetF(n);
       s_.open.push_back(n);
       std::push_heap(s_.open.begin(), s_.open.end(), OpenBefore);
     }
@@ -463,10 +466,21 @@ class Search {
         queued = g;
       }
     }
-    const Pt l = on_line ? ToPt(a) : RayHit(root, left, a, b);
-    const Pt r = on_line ? ToPt(b) : RayHit(root, right, a, b);
-    node.f = g + 0.5 * IntervalHeuristic(ToPt(root), l, r, ToPt(goal_));
     PushEntry(node);
+  }
+
+  // f = g + h of a node entering the open list. Left until then because a
+  // lone successor with its parent's root is expanded at once (intermediate
+  // pruning) and never needs it.
+  void SetF(Node& n) const {
+    if (n.edge == kFinal) return;
+    const NavPolygonView p = mesh_.polygon(n.polygon);
+    const LatticePoint a = p.corner(n.edge);
+    const LatticePoint b = p.corner(n.edge + 1);
+    const bool on_line = Orient(a, b, n.root) == 0;
+    const Pt l = on_line ? ToPt(a) : RayHit(n.root, n.left, a, b);
+    const Pt r = on_line ? ToPt(b) : RayHit(n.root, n.right, a, b);
+    n.f = n.g + 0.5 * IntervalHeuristic(ToPt(n.root), l, r, ToPt(goal_));
   }
 
   // A polygon with one open edge: whatever enters it can only leave the
