@@ -374,18 +374,17 @@ class TileBuilder {
     tile.polygons.reserve(order.size());
     for (const Order& o : order) {
       const std::vector<Edge>& ring = rings[o.t];
-      NavPolygon polygon{static_cast<int32_t>(tile.corners.size()),
+      NavPolygon polygon{static_cast<int32_t>(tile.edges.size()),
                          static_cast<uint16_t>(ring.size()), 0};
       for (const Edge& e : ring) {
-        tile.corners.push_back(NavPoint{static_cast<int32_t>(e.corner.x2),
-                                        static_cast<int32_t>(e.corner.y2)});
-        tile.across.push_back(e.across >= 0 ? polygon_of[e.across] : e.across);
+        tile.edges.push_back(NavEdge{static_cast<int32_t>(e.corner.x2),
+                                     static_cast<int32_t>(e.corner.y2),
+                                     e.across >= 0 ? polygon_of[e.across] : e.across});
         if (e.across != NavTile::kWall) ++polygon.open;
       }
       tile.polygons.push_back(polygon);
     }
-    tile.corners.shrink_to_fit();
-    tile.across.shrink_to_fit();
+    tile.edges.shrink_to_fit();
     return polygon_of;
   }
 
@@ -434,7 +433,7 @@ class TileBuilder {
     for (size_t pi = 0; pi < tile.polygons.size(); ++pi) {
       const NavPolygonView p = tile.polygon(static_cast<int32_t>(pi));
       for (int32_t i = 0; i < p.size; ++i) {
-        if (p.across[i] != NavTile::kTileBorder) continue;
+        if (p.across(i) != NavTile::kTileBorder) continue;
         const LatticePoint a = p.corner(i);
         const LatticePoint b = p.corner(i + 1);
         int side;
@@ -480,8 +479,7 @@ std::pair<int32_t, int32_t> TilesAtLine(int32_t line, int32_t tile_size,
 
 size_t NavTile::bytes() const {
   size_t b = sizeof(NavTile) + polygons.capacity() * sizeof(NavPolygon) +
-             corners.capacity() * sizeof(NavPoint) +
-             across.capacity() * sizeof(int32_t) +
+             edges.capacity() * sizeof(NavEdge) +
              cell_polygon.capacity() * sizeof(uint16_t);
   for (const auto& side : border) b += side.capacity() * sizeof(side[0]);
   return b;

@@ -45,25 +45,30 @@ struct NavPolygon {
   uint16_t open = 0;
 };
 
-// A mesh corner in doubled cell coordinates (a LatticePoint in half the
-// bytes: the search reads corners far more than anything else).
-struct NavPoint {
+// A polygon edge: its first corner, in doubled cell coordinates (a
+// LatticePoint in half the bytes), and what lies across it: another
+// polygon of the tile (>= 0), NavTile::kWall or NavTile::kTileBorder. One
+// record, because the search reads both of an edge together and far more
+// often than anything else.
+struct NavEdge {
   int32_t x2 = 0;
   int32_t y2 = 0;
-  friend bool operator==(const NavPoint&, const NavPoint&) = default;
+  int32_t across = 0;
+  friend bool operator==(const NavEdge&, const NavEdge&) = default;
 };
 
 // One polygon's edges, read through the tile that stores them.
 struct NavPolygonView {
-  const NavPoint* corners = nullptr;
-  const int32_t* across = nullptr;
+  const NavEdge* edges = nullptr;
   int32_t size = 0;
   int32_t open = 0;
   // Corner i, for any i in [0, 2 * size).
   LatticePoint corner(int32_t i) const {
-    const NavPoint& p = corners[i < size ? i : i - size];
-    return LatticePoint{p.x2, p.y2};
+    const NavEdge& e = edges[i < size ? i : i - size];
+    return LatticePoint{e.x2, e.y2};
   }
+  // What lies across edge i, for i in [0, size).
+  int32_t across(int32_t i) const { return edges[i].across; }
 };
 
 // The mesh of one tile: cells [x0, x1) x [y0, y1). Immutable once built.
@@ -82,10 +87,8 @@ struct NavTile {
   int32_t x1 = 0;
   int32_t y1 = 0;
   std::vector<NavPolygon> polygons;
-  // Per polygon edge, indexed by NavPolygon::first + i: the edge's first
-  // corner and what lies across it.
-  std::vector<NavPoint> corners;
-  std::vector<int32_t> across;
+  // Per polygon edge, indexed by NavPolygon::first + i.
+  std::vector<NavEdge> edges;
   // Row-major over the tile's cells: the polygon containing the cell's
   // centre, kNoPolygon for blocked cells.
   static constexpr uint16_t kNoPolygon = 0xffff;
@@ -105,7 +108,7 @@ struct NavTile {
 
   NavPolygonView polygon(int32_t index) const {
     const NavPolygon& p = polygons[static_cast<size_t>(index)];
-    return NavPolygonView{corners.data() + p.first, across.data() + p.first, p.size, p.open};
+    return NavPolygonView{edges.data() + p.first, p.size, p.open};
   }
   size_t bytes() const;
 };
@@ -165,7 +168,7 @@ class NavMesh {
   // border is looked up in the neighbour tile.
   NavRef Across(NavRef ref, int edge) const {
     const NavTile& tile = *tiles_[ref.tile];
-    const int32_t across = tile.across[tile.polygons[ref.polygon].first + edge];
+    const int32_t across = tile.edges[tile.polygons[ref.polygon].first + edge].across;
     if (across >= 0) return NavRef{ref.tile, across};
     if (across == NavTile::kWall) return NavRef{};
     return AcrossBorder(ref, edge);

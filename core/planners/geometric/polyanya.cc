@@ -117,14 +117,16 @@ struct NodeKey {
 // Node identities seen by the search, each numbered (0, 1, ... in order of
 // insertion) so that the smallest g it was queued with lives in a plain
 // array the node can index when it leaves the open list, without hashing
-// its key again: open addressing whose slots are emptied between searches
-// by a stamp, so a search costs nothing for the table's size and its
-// memory is kept.
+// its key again. Open addressing over small slots (a fingerprint of the
+// key and its number; the keys themselves in insertion order), since a
+// probe is usually a cache miss; slots are emptied between searches by a
+// stamp, so a search costs nothing for the table's size and its memory is
+// kept.
 class QueuedTable {
  public:
   // Starts a new search: every slot empty.
   void Clear() {
-    size_ = 0;
+    keys_.clear();
     if (++stamp_ == 0) {
       for (Slot& s : slots_) s.stamp = 0;
       stamp_ = 1;
@@ -133,47 +135,48 @@ class QueuedTable {
   // The number of `key`; `inserted` says whether it is new (then it is the
   // number of keys inserted before it).
   int32_t FindOrInsert(const NodeKey& key, bool& inserted) {
-    if (2 * (size_ + 1) > slots_.size()) Grow();
+    if (2 * (keys_.size() + 1) > slots_.size()) Grow();
+    const size_t hash = key.Hash();
+    const uint32_t fingerprint = static_cast<uint32_t>(hash >> 32);
     const size_t mask = slots_.size() - 1;
-    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
+    for (size_t i = hash & mask;; i = (i + 1) & mask) {
       Slot& s = slots_[i];
       if (s.stamp != stamp_) {
-        s = Slot{key, static_cast<int32_t>(size_), stamp_};
-        ++size_;
+        s = Slot{stamp_, fingerprint, static_cast<int32_t>(keys_.size())};
+        keys_.push_back(key);
         inserted = true;
         return s.id;
       }
-      if (s.key == key) {
+      if (s.fingerprint == fingerprint && keys_[static_cast<size_t>(s.id)] == key) {
         inserted = false;
         return s.id;
       }
     }
   }
-  size_t bytes() const { return slots_.capacity() * sizeof(Slot); }
+  size_t bytes() const {
+    return slots_.capacity() * sizeof(Slot) + keys_.capacity() * sizeof(NodeKey);
+  }
 
  private:
   struct Slot {
-    NodeKey key;
-    int32_t id = 0;
     uint32_t stamp = 0;
+    uint32_t fingerprint = 0;
+    int32_t id = 0;
   };
   void Grow() {
-    std::vector<Slot> old;
-    old.swap(slots_);
-    slots_.assign(std::max<size_t>(1024, 2 * old.size()), Slot{});
-    const uint32_t live = stamp_;
+    slots_.assign(std::max<size_t>(1024, 2 * slots_.size()), Slot{});
     stamp_ = 1;
     const size_t mask = slots_.size() - 1;
-    for (const Slot& s : old) {
-      if (s.stamp != live) continue;
-      size_t i = s.key.Hash() & mask;
+    for (size_t id = 0; id < keys_.size(); ++id) {
+      const size_t hash = keys_[id].Hash();
+      size_t i = hash & mask;
       while (slots_[i].stamp == stamp_) i = (i + 1) & mask;
-      slots_[i] = Slot{s.key, s.id, stamp_};
+      slots_[i] = Slot{stamp_, static_cast<uint32_t>(hash >> 32), static_cast<int32_t>(id)};
     }
   }
 
   std::vector<Slot> slots_;
-  size_t size_ = 0;
+  std::vector<NodeKey> keys_;
   uint32_t stamp_ = 1;
 };
 

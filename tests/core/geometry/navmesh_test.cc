@@ -165,7 +165,7 @@ TEST(NavMesh, PinchCornerJoinsNoTriangles) {
 
 bool SameTile(const NavTile& a, const NavTile& b) {
   if (a.polygons.size() != b.polygons.size() || a.cell_polygon != b.cell_polygon ||
-      a.border != b.border || a.corners != b.corners || a.across != b.across) {
+      a.border != b.border || a.edges != b.edges) {
     return false;
   }
   for (size_t i = 0; i < a.polygons.size(); ++i) {
