@@ -142,6 +142,9 @@ void ExpectMatchesBruteForce(const NavMesh& mesh, const Grid& grid,
     const LatticePoint p = path.polyline[i];
     EXPECT_TRUE(p.x2 % 2 == 0 && p.y2 % 2 == 0 && space.IsBendCorner(p.x2 / 2, p.y2 / 2))
         << what << " bends off a bend corner at " << p.x2 / 2.0 << "," << p.y2 / 2.0;
+    // A grazed corner on a straight run is no vertex of the polyline.
+    EXPECT_NE(Orient(path.polyline[i - 1], p, path.polyline[i + 1]), 0)
+        << what << " collinear vertex at " << p.x2 / 2.0 << "," << p.y2 / 2.0;
   }
   EXPECT_NEAR(PolylineLength(path.polyline), expected, 1e-9 * (1 + expected)) << what;
 }
@@ -310,6 +313,8 @@ TEST(Polyanya, GrazesCornersOnAStraightLine) {
   ASSERT_EQ(path.outcome, PlanOutcome::kFound);
   EXPECT_NEAR(PolylineLength(path.polyline), 5 * kSqrt2, 1e-12);
   EXPECT_TRUE(FreeSpace(grid, false).PolylineClear(path.polyline));
+  // One segment: the corners it grazes are not vertices of the polyline.
+  EXPECT_EQ(path.polyline.size(), 2u);
 }
 
 TEST(NavMeshPlanner, AnswersWithAnExactPolylineAndItsCells) {
