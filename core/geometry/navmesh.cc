@@ -274,19 +274,24 @@ class TileBuilder {
   // its polygon.
   std::vector<int32_t> MergeTriangles(const std::vector<Triangle>& triangles,
                                       NavTile& tile) const {
-    struct Edge {
-      LatticePoint corner;
-      int32_t across;  // a triangle (resolve with Find), kWall or kTileBorder
-    };
+    // Every polygon is a ring of the triangles' edges, linked both ways in
+    // flat arrays (edge 3t + i is edge i of triangle t), so a merge relinks
+    // four edges and allocates nothing.
     const size_t n = triangles.size();
-    std::vector<std::vector<Edge>> rings(n);
+    std::vector<int32_t> next(3 * n);
+    std::vector<int32_t> prev(3 * n);
     std::vector<int32_t> parent(n);
+    std::vector<int32_t> head(n);  // an edge of the ring, for roots
+    std::vector<int32_t> size(n, 3);
     for (size_t t = 0; t < n; ++t) {
       parent[t] = static_cast<int32_t>(t);
+      head[t] = static_cast<int32_t>(3 * t);
       for (int i = 0; i < 3; ++i) {
-        rings[t].push_back(Edge{triangles[t].corners[i], triangles[t].across[i]});
+        next[3 * t + i] = static_cast<int32_t>(3 * t + (i + 1) % 3);
+        prev[3 * t + i] = static_cast<int32_t>(3 * t + (i + 2) % 3);
       }
     }
+    auto corner = [&](int32_t e) { return triangles[e / 3].corners[e % 3]; };
     auto find = [&](int32_t t) {
       while (parent[t] != t) {
         parent[t] = parent[parent[t]];
@@ -316,33 +321,43 @@ class TileBuilder {
       return x.t != y.t ? x.t < y.t : x.i < y.i;
     });
     for (const Diagonal& d : diagonals) {
-      const LatticePoint u = triangles[d.t].corners[d.i];
-      const LatticePoint v = triangles[d.t].corners[(d.i + 1) % 3];
+      // Edge i runs u -> v in p's ring, its twin j v -> u in q's.
+      const int32_t i = 3 * d.t + d.i;
+      const int32_t other = triangles[d.t].across[d.i];
+      const LatticePoint u = corner(i);
+      int32_t j = 3 * other;
+      while (!(corner(j) == corner(next[i]) && corner(next[j]) == u)) ++j;
       const int32_t p = find(d.t);
-      const int32_t q = find(triangles[d.t].across[d.i]);
+      const int32_t q = find(other);
       if (p == q) continue;
-      std::vector<Edge>& pr = rings[p];
-      std::vector<Edge>& qr = rings[q];
-      const int32_t ps = static_cast<int32_t>(pr.size());
-      const int32_t qs = static_cast<int32_t>(qr.size());
-      // Edge u -> v in p, v -> u in q.
-      int32_t i = 0;
-      while (!(pr[i].corner == u && pr[(i + 1) % ps].corner == v)) ++i;
-      int32_t j = 0;
-      while (!(qr[j].corner == v && qr[(j + 1) % qs].corner == u)) ++j;
-      if (!ConvexAt(pr[(i + ps - 1) % ps].corner, u, qr[(j + 2) % qs].corner) ||
-          !ConvexAt(qr[(j + qs - 1) % qs].corner, v, pr[(i + 2) % ps].corner)) {
+      const LatticePoint v = corner(next[i]);
+      if (!ConvexAt(corner(prev[i]), u, corner(next[next[j]])) ||
+          !ConvexAt(corner(prev[j]), v, corner(next[next[i]]))) {
         continue;
       }
       // p's edges from v round to u, then q's from u round to v.
-      std::vector<Edge> merged;
-      merged.reserve(static_cast<size_t>(ps + qs - 2));
-      for (int32_t k = 1; k < ps; ++k) merged.push_back(pr[(i + k) % ps]);
-      for (int32_t k = 1; k < qs; ++k) merged.push_back(qr[(j + k) % qs]);
-      pr = std::move(merged);
-      qr.clear();
-      qr.shrink_to_fit();
+      next[prev[i]] = next[j];
+      prev[next[j]] = prev[i];
+      next[prev[j]] = next[i];
+      prev[next[i]] = prev[j];
+      head[p] = next[i];
+      size[p] += size[q] - 2;
       parent[q] = p;
+    }
+    // The polygons' rings, as (corner, what lies across) from their heads.
+    struct Edge {
+      LatticePoint corner;
+      int32_t across;  // a triangle, kWall or kTileBorder
+    };
+    std::vector<std::vector<Edge>> rings(n);
+    for (size_t t = 0; t < n; ++t) {
+      if (find(static_cast<int32_t>(t)) != static_cast<int32_t>(t)) continue;
+      rings[t].reserve(static_cast<size_t>(size[t]));
+      int32_t e = head[t];
+      do {
+        rings[t].push_back(Edge{corner(e), triangles[e / 3].across[e % 3]});
+        e = next[e];
+      } while (e != head[t]);
     }
     // Number the polygons row by row (by their top-left corner, then their
     // first triangle), so that neighbours tend to lie close in memory.
