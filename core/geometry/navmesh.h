@@ -32,7 +32,7 @@
 
 namespace pathd {
 
-// A free convex polygon of one tile, as a range of the tile's edge arrays:
+// A free convex polygon of one tile, as a range of the tile's edge array:
 // corners counter-clockwise (y down is still "counter-clockwise" in the
 // sense of a positive cross product), edge i running from corner i to
 // corner i + 1 (mod size). Corners may be collinear (an angle of exactly
