@@ -139,7 +139,7 @@ TEST(NavMesh, MergesTrianglesIntoFewerPolygons) {
   ExpectValidMesh(*mesh, grid, false, "pillars");
 }
 
-TEST(NavMesh, PinchCornerJoinsNoTriangles) {
+TEST(NavMesh, PinchCornerJoinsNoPolygons) {
   // Cells (1, 0) and (0, 1) blocked: the free cells (0, 0) and (1, 1) touch
   // only at the pinch corner (1, 1).
   const Grid grid = MakeGrid({".#", "#."});
@@ -148,7 +148,7 @@ TEST(NavMesh, PinchCornerJoinsNoTriangles) {
   const std::vector<NavRef> b = mesh->Locate({1, 1});
   ASSERT_FALSE(a.empty());
   ASSERT_FALSE(b.empty());
-  // Walk everything reachable from (0, 0)'s triangles.
+  // Walk everything reachable from (0, 0)'s polygons.
   std::vector<NavRef> seen = a;
   for (size_t i = 0; i < seen.size(); ++i) {
     for (int e = 0; e < mesh->polygon(seen[i]).size; ++e) {

@@ -220,7 +220,7 @@ Grid HoleFreeMap(std::mt19937& rng) {
   return grid;
 }
 
-// The portals from a start triangle to a goal triangle (breadth-first over
+// The portals from a start polygon to a goal polygon (breadth-first over
 // the mesh), each seen walking towards the goal; nullopt when none joins.
 std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
                                            const std::vector<NavRef>& from,
@@ -228,7 +228,7 @@ std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
   struct Step {
     NavRef at;
     int parent;
-    int edge;  // of the parent's triangle, crossed to get here
+    int edge;  // of the parent's polygon, crossed to get here
   };
   std::vector<Step> steps;
   for (const NavRef& r : from) steps.push_back({r, -1, -1});
