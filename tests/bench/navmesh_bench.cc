@@ -1,10 +1,10 @@
 // navmesh_bench: the navigation mesh and Polyanya, in figures.
-//  - Per Moving AI map: mesh build time, triangles and the convex polygons merged from them, bytes; then a spread of
-//    its scenarios (every k-th, across all buckets) planned by `navmesh`
-//    (mesh cached, as the server's derived store keeps it), `astar` and
-//    `theta_star`, with the mean time per query of each, and the checks
-//    that every navmesh polyline is clear and never longer than Theta*'s
-//    path.
+//  - Per Moving AI map: mesh build time, triangles and the convex polygons
+//    merged from them, bytes; then a spread of its scenarios (every k-th,
+//    across all buckets) planned by `navmesh` (mesh cached, as the
+//    server's derived store keeps it), `astar` and `theta_star`, with the
+//    mean time per query of each, and the checks that every navmesh
+//    polyline is clear and never longer than Theta*'s path.
 //  - Advance: on a random 1024 x 1024 map, re-meshing after 1, 10 and 100
 //    changed cells against a rebuild (medians over trials).
 // Figures, not assertions.
