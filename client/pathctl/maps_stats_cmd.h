@@ -9,7 +9,8 @@
 
 namespace pathd::pathctl {
 
-// "mesh: 1204 vertices, 2300 triangles; 96.0 KiB; built in 3.412 ms".
+// "mesh: 250 tiles, 1204 vertices, 1378 triangles, 823 polygons; 96.0 KiB;
+// built in 3.412 ms".
 std::string StructureSummary(const GeometricStructure& structure);
 
 }  // namespace pathd::pathctl
