@@ -28,13 +28,13 @@ struct Counters {
 
 DerivedRecipe Recipe(Counters* counters, size_t bytes = 100) {
   DerivedRecipe recipe;
-  recipe.build = [counters](const Grid&) -> std::shared_ptr<const void> {
+  recipe.build = [counters](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
     ++counters->builds;
     return std::make_shared<const Made>();
   };
   recipe.advance = [counters](const void* previous, const Grid&,
-                              absl::Span<const Cell> changed)
-      -> std::shared_ptr<const void> {
+                              absl::Span<const Cell> changed,
+                              DerivedStop&) -> std::shared_ptr<const void> {
     ++counters->advances;
     auto made = std::make_shared<Made>();
     made->generation = static_cast<const Made*>(previous)->generation + 1;
@@ -58,11 +58,14 @@ std::shared_ptr<const MapSnapshot> Snapshot(uint64_t map_id, uint64_t version,
   return s;
 }
 
+// Under `stop` when given, else never stopping.
 std::shared_ptr<const Made> Get(DerivedCache& cache,
                                 const std::shared_ptr<const MapSnapshot>& s,
-                                const std::string& key, const DerivedRecipe& recipe) {
+                                const std::string& key, const DerivedRecipe& recipe,
+                                DerivedStop* stop = nullptr) {
+  DerivedStop never;
   return std::static_pointer_cast<const Made>(
-      cache.For(s, s->grid, 0.0)->Get(key, recipe));
+      cache.For(s, s->grid, 0.0)->Get(key, recipe, stop != nullptr ? *stop : never));
 }
 
 TEST(DerivedCacheTest, OneValuePerGridAndKey) {
@@ -143,7 +146,8 @@ TEST(DerivedCacheTest, AnotherMapIdOrRadiusBuildsAfresh) {
   Get(cache, recreated, "k", recipe);
   // An inflated grid of the first map: not advanced from the stored grid's.
   auto inflated = std::make_shared<const Grid>(*Grid::Create(4, 4));
-  cache.For(v1, inflated, 1.5)->Get("k", recipe);
+  DerivedStop never;
+  cache.For(v1, inflated, 1.5)->Get("k", recipe, never);
   EXPECT_EQ(counters.builds, 3);
   EXPECT_EQ(counters.advances, 0);
 }
@@ -167,7 +171,7 @@ TEST(DerivedCacheTest, ABuildThatThrowsLeavesNoEntryBehind) {
   Counters counters;
   DerivedRecipe recipe = Recipe(&counters);
   DerivedRecipe failing = recipe;
-  failing.build = [](const Grid&) -> std::shared_ptr<const void> {
+  failing.build = [](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
     throw std::bad_alloc();
   };
   auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
