@@ -48,8 +48,9 @@ class DerivedStop {
   // `condition` must outlive this.
   explicit DerivedStop(const StopCondition& condition) : condition_(&condition) {}
 
-  // The condition fired: give up. Reads the clock, so a build calls it every
-  // so many units of work (a millisecond or less of them), not every unit.
+  // The condition fired: give up. Reads the clock, so a build calls it after
+  // a few milliseconds of work at most (a visibility graph: once per
+  // vertex), not after every unit of it.
   bool Stopped() const;
   // kTimeout or kCancelled when the condition fired, else kFound.
   PlanOutcome Outcome() const;
