@@ -52,9 +52,9 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // factors make detours along long GVD branches worth little shortcuts.
 constexpr double kOffDiagramFactor = 4.0;
 
-// The field of `grid`; null when `stop` fired first. The brushfire is
-// O(cells) (and an advance O(cells whose nearest obstacle changed)), so it
-// does not poll; `stop` bounds the wait for another query's build.
+// The field of `grid`; null when `stop` fired first, building it or
+// waiting for another query's build. An advance (O(cells whose nearest
+// obstacle changed)) does not poll.
 std::shared_ptr<const VoronoiField> Field(const Grid& grid, const PlanRequest& request,
                                           DerivedStop& stop) {
   const bool unknown_is_free = request.cost.unknown_is_free;
@@ -62,8 +62,8 @@ std::shared_ptr<const VoronoiField> Field(const Grid& grid, const PlanRequest& r
       request.derived, grid,
       std::string("voronoi:unknown_is_free=") + (unknown_is_free ? "1" : "0"),
       "the Voronoi field of this map version", stop,
-      [unknown_is_free](const Grid& g, DerivedStop&) {
-        return std::make_shared<const VoronoiField>(g, unknown_is_free);
+      [unknown_is_free](const Grid& g, DerivedStop& s) {
+        return VoronoiField::Build(g, unknown_is_free, s);
       },
       [](const VoronoiField& previous, const Grid& g,
          absl::Span<const Cell> changed, DerivedStop&)
