@@ -37,9 +37,8 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-// The decomposition of `grid`; null when `stop` fired first. The sweep is
-// O(cells), so it does not poll; `stop` bounds the wait for another query's
-// build.
+// The decomposition of `grid`; null when `stop` fired first, building it
+// or waiting for another query's build.
 std::shared_ptr<const TrapezoidalDecomposition> Decomposition(
     const Grid& grid, const PlanRequest& request, DerivedStop& stop) {
   const bool unknown_is_free = request.cost.unknown_is_free;
@@ -48,9 +47,8 @@ std::shared_ptr<const TrapezoidalDecomposition> Decomposition(
       std::string("trapezoidal:unknown_is_free=") +
           (unknown_is_free ? "1" : "0"),
       "the trapezoidal decomposition of this map version", stop,
-      [unknown_is_free](const Grid& g, DerivedStop&) {
-        return std::make_shared<const TrapezoidalDecomposition>(
-            g, unknown_is_free);
+      [unknown_is_free](const Grid& g, DerivedStop& s) {
+        return TrapezoidalDecomposition::Build(g, unknown_is_free, s);
       },
       // A change can merge or split trapezoids of any length across its
       // column; rebuilding is one sweep, O(cells).
