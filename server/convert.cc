@@ -145,6 +145,35 @@ absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
   return radius;
 }
 
+absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
+                                         const Grid& grid) {
+  double clearance = 0.0;
+  std::string_view field;
+  switch (options.min_clearance_case()) {
+    case v1::PlanOptions::kMinClearanceM:
+      field = "min_clearance_m";
+      clearance = options.min_clearance_m();
+      break;
+    case v1::PlanOptions::kMinClearanceCells:
+      field = "min_clearance_cells";
+      clearance = options.min_clearance_cells();
+      break;
+    case v1::PlanOptions::MIN_CLEARANCE_NOT_SET:
+      return 0.0;
+  }
+  if (!std::isfinite(clearance) || clearance < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.%s %s must be finite and >= 0", field, Num(clearance)));
+  }
+  if (options.min_clearance_case() == v1::PlanOptions::kMinClearanceM) {
+    clearance /= grid.resolution();
+  }
+  // No cell is further than the diagonal from the map's outside.
+  const double diagonal = std::hypot(grid.width(), grid.height());
+  if (clearance > diagonal) clearance = diagonal;
+  return clearance;
+}
+
 absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
                                           const Grid& grid) {
   double tolerance = 0.0;
@@ -291,6 +320,7 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
     PATHD_ASSIGN_OR_RETURN(request.cost, CostParamsFromOptions(options));
   }
   PATHD_ASSIGN_OR_RETURN(query.robot_radius_cells, RobotRadiusCells(options, grid));
+  PATHD_ASSIGN_OR_RETURN(query.min_clearance_cells, MinClearanceCells(options, grid));
   // A whole field is 8 bytes per cell in a Plan message.
   if (limits.max_cost_to_go_cells.has_value() && request.want_cost_to_go &&
       grid.size() > static_cast<size_t>(*limits.max_cost_to_go_cells)) {

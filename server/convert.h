@@ -61,6 +61,12 @@ absl::Status PlanOptionsToRequest(const v1::PlanOptions& options, PlanRequest* r
 absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
                                         const Grid& grid);
 
+// The minimum clearance in cells (0 when unset): min_clearance_cells as
+// given, or min_clearance_m / resolution, capped at the map's diagonal.
+// INVALID_ARGUMENT naming the field when negative or not finite.
+absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
+                                         const Grid& grid);
+
 // Largest goal tolerance a request may ask for: the search for a substitute
 // goal runs on the gRPC thread and visits up to (2 * 1024 + 1)^2 cells.
 inline constexpr double kMaxGoalToleranceCells = 1024.0;

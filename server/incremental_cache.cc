@@ -49,9 +49,9 @@ std::string_view IncrementalCache::KindName(Kind kind) {
 
 bool IncrementalCache::KeyLess::operator()(const Key& a, const Key& b) const {
   return std::tie(a.map, a.goal.x, a.goal.y, a.cost.connectivity, a.cost.cost_weight,
-                  a.cost.unknown_is_free, a.robot_radius_cells) <
+                  a.cost.unknown_is_free, a.robot_radius_cells, a.min_clearance_cells) <
          std::tie(b.map, b.goal.x, b.goal.y, b.cost.connectivity, b.cost.cost_weight,
-                  b.cost.unknown_is_free, b.robot_radius_cells);
+                  b.cost.unknown_is_free, b.robot_radius_cells, b.min_clearance_cells);
 }
 
 IncrementalCache::IncrementalCache(InflationCache& inflation, size_t budget_bytes)
@@ -132,8 +132,10 @@ void IncrementalCache::EvictLocked(Shard& shard) {
 
 absl::StatusOr<std::shared_ptr<const Grid>> IncrementalCache::PlanningGrid(
     const Key& key, const MapSnapshot& snapshot) {
-  if (key.robot_radius_cells <= 0.0) return snapshot.grid;
-  return inflation_.Get(snapshot.grid, key.robot_radius_cells);
+  const GridShape shape = GridShape::Of(key.robot_radius_cells, key.min_clearance_cells,
+                                        key.cost.unknown_is_free);
+  if (!shape.shaped()) return snapshot.grid;
+  return inflation_.Get(snapshot.grid, shape);
 }
 
 absl::StatusOr<IncrementalCache::Advance> IncrementalCache::AdvanceSlot(

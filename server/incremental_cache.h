@@ -74,8 +74,10 @@ class IncrementalCache {
     std::string map;
     Cell goal;
     CostParams cost;
-    // 0: the map as stored; otherwise the InflationCache copy.
+    // Both 0: the map as stored; otherwise the InflationCache copy shaped
+    // by them (GridShape).
     double robot_radius_cells = 0.0;
+    double min_clearance_cells = 0.0;
   };
 
   struct Stats {

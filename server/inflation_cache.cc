@@ -8,17 +8,16 @@ InflationCache::InflationCache(InflateFn inflate, size_t max_entries)
     : inflate_(std::move(inflate)), max_entries_(max_entries == 0 ? 1 : max_entries) {}
 
 absl::StatusOr<std::shared_ptr<const Grid>> InflationCache::Get(
-    const std::shared_ptr<const Grid>& source, double radius_cells) {
+    const std::shared_ptr<const Grid>& source, const GridShape& shape) {
   std::shared_ptr<Entry> entry;
   bool compute = false;
   {
     absl::MutexLock lock(&mu_);
     for (auto it = entries_.begin(); it != entries_.end(); ++it) {
       Entry& e = **it;
-      // Same live grid object and same radius (exact: the radius comes from
-      // one conversion of the request's value, so equal requests compare
-      // equal).
-      if (e.source_address == source.get() && e.radius_cells == radius_cells &&
+      // Same live grid object and same shape (exact: its values come from
+      // one conversion of the request's, so equal requests compare equal).
+      if (e.source_address == source.get() && e.shape == shape &&
           e.source.lock() == source) {
         entry = *it;
         entries_.splice(entries_.begin(), entries_, it);
@@ -29,7 +28,7 @@ absl::StatusOr<std::shared_ptr<const Grid>> InflationCache::Get(
       entry = std::make_shared<Entry>();
       entry->source = source;
       entry->source_address = source.get();
-      entry->radius_cells = radius_cells;
+      entry->shape = shape;
       entries_.push_front(entry);
       compute = true;
       ++misses_;
@@ -39,7 +38,7 @@ absl::StatusOr<std::shared_ptr<const Grid>> InflationCache::Get(
     }
   }
   if (compute) {
-    absl::StatusOr<Grid> inflated = inflate_(*source, radius_cells);
+    absl::StatusOr<Grid> inflated = inflate_(*source, shape);
     absl::MutexLock lock(&mu_);
     if (inflated.ok()) {
       entry->inflated = std::make_shared<const Grid>(*std::move(inflated));

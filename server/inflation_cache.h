@@ -1,5 +1,6 @@
-// Inflated copies of map versions, computed once per (map version, robot
-// radius) and shared by every request that asks for that radius.
+// Shaped copies of map versions (core/map/inflation.h, GridShape: inflated
+// by a robot radius, with clearance costs), computed once per (map version,
+// shape) and shared by every request that asks for that shape.
 #ifndef PATHD_SERVER_INFLATION_CACHE_H_
 #define PATHD_SERVER_INFLATION_CACHE_H_
 
@@ -13,6 +14,7 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "core/map/grid.h"
+#include "core/map/inflation.h"
 
 namespace pathd::server {
 
@@ -23,7 +25,7 @@ namespace pathd::server {
 // a missing entry compute it once: the first computes, the others wait.
 class InflationCache {
  public:
-  using InflateFn = std::function<absl::StatusOr<Grid>(const Grid&, double radius_cells)>;
+  using InflateFn = std::function<absl::StatusOr<Grid>(const Grid&, const GridShape&)>;
 
   struct Stats {
     int64_t hits = 0;
@@ -32,14 +34,20 @@ class InflationCache {
     size_t bytes = 0;
   };
 
-  // Keeps at most `max_entries` inflated grids (at least 1).
+  // Keeps at most `max_entries` shaped grids (at least 1).
   InflationCache(InflateFn inflate, size_t max_entries);
 
-  // The inflation of `source` by `radius_cells` (> 0), computing it on a miss.
+  // `source` shaped by `shape` (shape.shaped()), computing it on a miss.
   // Errors from the inflate function are returned and not cached.
   absl::StatusOr<std::shared_ptr<const Grid>> Get(
-      const std::shared_ptr<const Grid>& source, double radius_cells)
+      const std::shared_ptr<const Grid>& source, const GridShape& shape)
       ABSL_LOCKS_EXCLUDED(mu_);
+  // Only inflated by a robot radius.
+  absl::StatusOr<std::shared_ptr<const Grid>> Get(
+      const std::shared_ptr<const Grid>& source, double radius_cells)
+      ABSL_LOCKS_EXCLUDED(mu_) {
+    return Get(source, GridShape{.robot_radius_cells = radius_cells});
+  }
 
   Stats stats() const ABSL_LOCKS_EXCLUDED(mu_);
 
@@ -47,7 +55,7 @@ class InflationCache {
   struct Entry {
     std::weak_ptr<const Grid> source;
     const Grid* source_address = nullptr;
-    double radius_cells = 0.0;
+    GridShape shape;
     // Read and written under the cache's mu_ (a nested struct cannot name it
     // in ABSL_GUARDED_BY); the computing thread sets `done` with the two
     // fields below, and waiters Await it.

@@ -250,7 +250,8 @@ absl::StatusOr<std::vector<BatchItem>> ParseBatchFile(absl::string_view text,
 constexpr absl::string_view kBatchFlags[] = {
     "planner", "world", "max_expansions", "heuristic_weight", "simplify", "lookahead",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
-    "robot_radius_cells"};
+    "robot_radius_cells", "min_clearance",
+    "min_clearance_cells"};
 
 const Command kBatchCommand = {
     .name = "batch",

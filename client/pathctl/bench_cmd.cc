@@ -386,7 +386,8 @@ int Bench(CommandEnv& env, Args args) {
 constexpr absl::string_view kBenchFlags[] = {
     "concurrency", "duration", "warmup", "requests", "channels", "movingai", "seed",
     "planner", "max_expansions", "heuristic_weight", "connectivity", "cost_weight",
-    "unknown_is_free", "robot_radius", "robot_radius_cells"};
+    "unknown_is_free", "robot_radius", "robot_radius_cells", "min_clearance",
+    "min_clearance_cells"};
 
 }  // namespace
 

@@ -128,6 +128,16 @@ absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_op
   if (options.robot_radius_cells.has_value()) {
     plan_options->set_robot_radius_cells(*options.robot_radius_cells);
   }
+  if (options.min_clearance_m.has_value() && options.min_clearance_cells.has_value()) {
+    return absl::InvalidArgumentError(
+        "give --min_clearance (metres) or --min_clearance_cells, not both");
+  }
+  if (options.min_clearance_m.has_value()) {
+    plan_options->set_min_clearance_m(*options.min_clearance_m);
+  }
+  if (options.min_clearance_cells.has_value()) {
+    plan_options->set_min_clearance_cells(*options.min_clearance_cells);
+  }
   return absl::OkStatus();
 }
 

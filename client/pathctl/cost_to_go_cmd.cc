@@ -195,7 +195,8 @@ namespace {
 
 constexpr absl::string_view kCostToGoFlags[] = {
     "world", "window", "cost_to_go_file", "connectivity", "cost_weight",
-    "unknown_is_free", "robot_radius", "robot_radius_cells"};
+    "unknown_is_free", "robot_radius", "robot_radius_cells", "min_clearance",
+    "min_clearance_cells"};
 
 }  // namespace
 

@@ -62,6 +62,11 @@ ABSL_FLAG(std::optional<double>, robot_radius, std::nullopt,
           "plan, navigate, cost-to-go: robot radius in metres");
 ABSL_FLAG(std::optional<double>, robot_radius_cells, std::nullopt,
           "plan, navigate, cost-to-go: robot radius in cells");
+ABSL_FLAG(std::optional<double>, min_clearance, std::nullopt,
+          "plan, navigate, cost-to-go: keep this many metres from obstacles "
+          "where the map allows (a cost, not a rule)");
+ABSL_FLAG(std::optional<double>, min_clearance_cells, std::nullopt,
+          "plan, navigate, cost-to-go: the minimum clearance in cells");
 ABSL_FLAG(std::optional<double>, goal_tolerance, std::nullopt,
           "plan: substitute the nearest free cell within this many cells for a "
           "blocked goal");
@@ -198,6 +203,8 @@ int main(int argc, char** argv) {
   cost.unknown_is_free = absl::GetFlag(FLAGS_unknown_is_free);
   cost.robot_radius_m = absl::GetFlag(FLAGS_robot_radius);
   cost.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
+  cost.min_clearance_m = absl::GetFlag(FLAGS_min_clearance);
+  cost.min_clearance_cells = absl::GetFlag(FLAGS_min_clearance_cells);
 
   pathctl::MapsOptions& maps = options.maps;
   maps.from = absl::GetFlag(FLAGS_from);

@@ -46,6 +46,8 @@ struct CostOptions {
   bool unknown_is_free = false;
   std::optional<double> robot_radius_m;
   std::optional<double> robot_radius_cells;
+  std::optional<double> min_clearance_m;
+  std::optional<double> min_clearance_cells;
 };
 
 // maps create / import / get / set / rect / watch.

@@ -312,7 +312,8 @@ constexpr absl::string_view kPlanFlagNames[] = {
     "cost_to_go_file", "pf_attractive", "pf_attractive_gain", "pf_switch_distance",
     "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "progress",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
-    "robot_radius_cells"};
+    "robot_radius_cells", "min_clearance",
+    "min_clearance_cells"};
 
 }  // namespace
 
@@ -322,6 +323,7 @@ const Command kPlanCommand = {
                 " [--cost_weight W] [--unknown_is_free]\n"
                 " [--max_expansions N] [--world] [--simplify]\n"
                 " [--robot_radius M | --robot_radius_cells C]\n"
+                " [--min_clearance M | --min_clearance_cells C]\n"
                 " [--heuristic_weight W] [--lookahead N]\n"
                 " [--cost_to_go_file F] [--pf_* ...]\n"
                 " [--goal_tolerance C | --goal_tolerance_m M]\n"

@@ -170,7 +170,8 @@ constexpr absl::string_view kRenderFlags[] = {
     "plan", "out", "o", "ascii", "scale", "y_up", "overlay", "planner", "world", "via",
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
-    "robot_radius_cells"};
+    "robot_radius_cells", "min_clearance",
+    "min_clearance_cells"};
 
 }  // namespace
 

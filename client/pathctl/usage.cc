@@ -214,6 +214,9 @@ cost options (plan, navigate, cost-to-go, check):
   --unknown_is_free    treat unknown cells (255) as free
   --robot_radius M     inflate lethal cells by the robot radius in metres
   --robot_radius_cells C  the same in cells
+  --min_clearance M    prefer keeping M metres from obstacles: nearer cells
+                       cost up to 252 (a preference, not a rule; not check)
+  --min_clearance_cells C  the same in cells
 
 maps watch prints one line per map version: "version V updated: N cells in
 R rects: (x0,y0)-(x1,y1) ...", "version V resync: whole map WxH", "version V

@@ -7,7 +7,9 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/map/clearance.h"
 #include "core/map/euclidean_distance.h"
+#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -56,6 +58,15 @@ absl::StatusOr<Grid> InflateObstacles(const Grid& grid, double radius_cells) {
         }
       });
   return inflated;
+}
+
+absl::StatusOr<Grid> ShapeGrid(const Grid& grid, const GridShape& shape) {
+  PATHD_ASSIGN_OR_RETURN(Grid shaped, InflateObstacles(grid, shape.robot_radius_cells));
+  if (shape.min_clearance_cells > 0.0) {
+    PATHD_RETURN_IF_ERROR(ApplyClearanceCost(shape.min_clearance_cells,
+                                             shape.unknown_is_free, &shaped));
+  }
+  return shaped;
 }
 
 }  // namespace pathd

@@ -7,26 +7,34 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/map/clearance.h"
 #include "core/map/cost_model.h"
 #include "core/map/inflation.h"
 #include "core/postprocess/path_simplify.h"
 #include "core/postprocess/plan_through.h"
 #include "core/search/endpoints.h"
+#include "core/search/registry.h"
 #include "core/status_macros.h"
 
 namespace pathd {
 namespace {
 
-// The planning grid: the stored one, or its inflation by the query's radius.
+GridShape ShapeOf(const PlanQuery& query) {
+  return GridShape::Of(query.robot_radius_cells, query.min_clearance_cells,
+                       query.request.cost.unknown_is_free);
+}
+
+// The planning grid: the stored one, or the one shaped for the robot.
 absl::StatusOr<std::shared_ptr<const Grid>> PlanningGrid(const PlanQuery& query,
                                                          const PlanSnapshot& snapshot,
                                                          const PlanEngine& engine) {
-  if (query.robot_radius_cells <= 0.0) return snapshot.grid;
-  if (engine.inflate) return engine.inflate(snapshot.grid, query.robot_radius_cells);
-  PATHD_ASSIGN_OR_RETURN(Grid inflated,
-                         InflateObstacles(*snapshot.grid, query.robot_radius_cells));
-  return std::make_shared<const Grid>(std::move(inflated));
+  const GridShape shape = ShapeOf(query);
+  if (!shape.shaped()) return snapshot.grid;
+  if (engine.inflate) return engine.inflate(snapshot.grid, shape);
+  PATHD_ASSIGN_OR_RETURN(Grid shaped, ShapeGrid(*snapshot.grid, shape));
+  return std::make_shared<const Grid>(std::move(shaped));
 }
+
 
 // The goal on the inflated map. Inflation only blocks cells, so the stored
 // map's choice, when still free, is also the nearest free cell of the
@@ -58,6 +66,14 @@ absl::Status CheckInscribed(const PlanQuery& query, Cell goal, const Grid& store
   return absl::OkStatus();
 }
 
+// With a minimum clearance the answer says how close the path came.
+void ReportClearance(const PlanQuery& query, PlanAnswer* answer) {
+  if (query.min_clearance_cells <= 0.0 || answer->result.path.empty()) return;
+  answer->result.min_clearance =
+      PathClearance(*answer->source.grid, answer->result.path,
+                    query.request.cost.unknown_is_free);
+}
+
 }  // namespace
 
 void SetSingleLeg(PlanAnswer* answer) {
@@ -69,6 +85,25 @@ void SetSingleLeg(PlanAnswer* answer) {
   }
 }
 
+absl::Status CheckMinClearance(const PlanQuery& query) {
+  if (query.min_clearance_cells <= 0.0) return absl::OkStatus();
+  if (const Planner* planner = PlannerRegistry::Default().Get(query.planner);
+      planner != nullptr && planner->traits().needs_uniform_cost) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.min_clearance_m/_cells: planner %s plans on uniform-cost maps "
+        "and a minimum clearance works through cell costs; use a grid planner "
+        "(astar, theta_star, ...), voronoi to stay as far from obstacles as "
+        "the map allows, or robot_radius for a hard limit",
+        query.planner));
+  }
+  if (query.request.cost.cost_weight == 0.0) {
+    return absl::InvalidArgumentError(
+        "options.min_clearance_m/_cells: a minimum clearance works through "
+        "cell costs, and cost_weight 0 ignores them");
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query) {
   PlanRequest& request = query->request;
   // Substituted before anything keys on the goal, so every planner (and a
@@ -78,6 +113,7 @@ absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query)
                                         query->goal_tolerance_cells, request.cost,
                                         /*radius_cells=*/0.0));
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, request));
+  PATHD_RETURN_IF_ERROR(CheckMinClearance(*query));
   if (query->via.empty()) return absl::OkStatus();
   if (stateful) {
     return absl::InvalidArgumentError(absl::StrFormat(
@@ -105,8 +141,9 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
   PlanAnswer answer;
   answer.goal = query.request.goal;
   answer.source = PlanSource{snapshot.grid, snapshot.version};
+  PATHD_ASSIGN_OR_RETURN(answer.source.grid, PlanningGrid(query, snapshot, engine));
+  // Clearance costs block nothing: only the radius moves or refuses endpoints.
   if (query.robot_radius_cells > 0.0) {
-    PATHD_ASSIGN_OR_RETURN(answer.source.grid, PlanningGrid(query, snapshot, engine));
     PATHD_ASSIGN_OR_RETURN(answer.goal, GoalOnInflated(query, *answer.source.grid));
     PATHD_RETURN_IF_ERROR(
         CheckInscribed(query, answer.goal, *snapshot.grid, *answer.source.grid));
@@ -142,6 +179,7 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
     answer.reached_goal_index = through.reached_goal_index;
     answer.leg_end_indices = std::move(through.leg_end_indices);
     answer.failed_leg = through.failed_leg;
+    ReportClearance(query, &answer);
     return answer;
   }
   if (engine.stateful != nullptr) {
@@ -155,6 +193,7 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
     SimplifyPath(*answer.source.grid, settled->request.cost, &answer.result);
   }
   SetSingleLeg(&answer);
+  ReportClearance(query, &answer);
   return answer;
 }
 

@@ -17,6 +17,7 @@
 #include "absl/status/statusor.h"
 #include "core/incremental/incremental_search.h"
 #include "core/map/grid.h"
+#include "core/map/inflation.h"
 #include "core/search/plan_types.h"
 #include "core/search/planner.h"
 #include "core/search/search_scratch.h"
@@ -46,6 +47,10 @@ struct PlanQuery {
   // 0: plan on the map as stored; otherwise on the map with obstacles
   // inflated by this radius (cells).
   double robot_radius_cells = 0.0;
+  // > 0: cells closer than this (cells) to an obstacle of the (inflated) map
+  // cost more (core/map/clearance.h), and the answer reports the path's
+  // clearance. Grid planners only (CheckPlanQuery).
+  double min_clearance_cells = 0.0;
   // Simplify the path (each leg's, for via plans).
   bool simplify = false;
   // Expansion budget of the whole query (every leg); 0 = none. The caller
@@ -114,10 +119,10 @@ class StatefulSearch {
 struct PlanEngine {
   const Planner* planner = nullptr;
   StatefulSearch* stateful = nullptr;
-  // The snapshot's grid inflated by a radius: a cache's copy, or null to
-  // compute it (InflateObstacles).
+  // The snapshot's grid shaped for the robot (inflated by its radius, with
+  // clearance costs): a cache's copy, or empty to compute it (ShapeGrid).
   std::function<absl::StatusOr<std::shared_ptr<const Grid>>(
-      const std::shared_ptr<const Grid>& stored, double radius_cells)>
+      const std::shared_ptr<const Grid>& stored, const GridShape& shape)>
       inflate;
   // Derived representations of the planning grid (core/search/derived.h):
   // the store for `grid`, the snapshot's grid or its inflation by
@@ -127,22 +132,30 @@ struct PlanEngine {
       derived;
 };
 
+// INVALID_ARGUMENT when the query's minimum clearance cannot act: it works
+// through cell costs, which planners that need uniform cost (the geometric
+// ones) refuse and cost_weight 0 ignores. OK without a clearance.
+absl::Status CheckMinClearance(const PlanQuery& query);
+
 // The rules a query must pass on the stored map before it is worth queueing,
 // in this order: the goal tolerance (substitutes query->request.goal, or
 // INVALID_ARGUMENT kGoalBlocked naming the tolerance), ValidateEndpoints
 // (once per query), then via points: refused for a stateful engine (naming
-// the planner) and with want_cost_to_go, ValidateVia. Cheap: O(tolerance^2 +
-// via points); never inflates.
+// the planner) and with want_cost_to_go, ValidateVia; a minimum clearance is
+// refused for planners that need uniform cost (the geometric ones) and with
+// cost_weight 0, which would ignore it. Cheap: O(tolerance^2 + via points);
+// never inflates.
 absl::Status CheckPlanQuery(const Grid& stored, bool stateful,
                             PlanQuery* query);
 
-// Plans a query that passed CheckPlanQuery on `snapshot`: inflates for a
-// robot radius (engine.inflate), re-chooses the goal on the inflated map only
+// Plans a query that passed CheckPlanQuery on `snapshot`: shapes the grid
+// for a robot radius and a minimum clearance (engine.inflate), re-chooses the goal on the inflated map only
 // when the radius made the stored map's choice inscribed, checks that no
 // endpoint became inscribed (INVALID_ARGUMENT "... within the robot radius
 // ..."), then plans through the via points (PlanThrough, one grid for every
-// leg) or once, and simplifies. A stop is an answer (result.outcome), not an
-// error.
+// leg) or once, simplifies, and with a minimum clearance sets
+// result.min_clearance (PathClearance on the inflated map). A stop is an
+// answer (result.outcome), not an error.
 absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
                                         const PlanSnapshot& snapshot,
                                         const PlanEngine& engine,

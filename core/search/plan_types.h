@@ -143,10 +143,12 @@ struct PlanResult {
   // a corner and need not be legal moves), any_angle is false, and length
   // and cost are the polyline's. Empty for every other planner.
   std::vector<CellPoint> polyline;
-  // Planners that keep clear of obstacles (voronoi): the smallest clearance,
-  // in cells, of the path's cells: the octile distance (steps of 1 and
-  // sqrt(2)) from a cell's centre to the nearest blocked or off-map cell's
-  // centre (core/geometry/voronoi.h says why octile; it reads up to 8.3%
+  // The smallest clearance, in cells, of the path's cells. Plans with a
+  // minimum clearance (PlanQuery::min_clearance_cells): the Euclidean
+  // distance from a cell's centre to the nearest blocked or off-map cell's
+  // centre (core/map/clearance.h, PathClearance). The voronoi planner
+  // otherwise: the octile distance (steps of 1 and sqrt(2)) its distance map
+  // keeps (core/geometry/voronoi.h says why octile; it reads up to 8.3%
   // above the Euclidean distance). Negative when not computed.
   double min_clearance = -1.0;
   // Cost under the cost model: sum of step costs, or of SegmentCost() for

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "absl/strings/str_format.h"
+#include "core/planning/plan_query.h"
 #include "core/search/endpoints.h"
 #include "core/status_macros.h"
 #include "server/convert.h"
@@ -71,10 +72,12 @@ absl::Status PrepareCostToGo(const PlanDeps& deps, CostToGoCall& call) {
   const Grid& grid = *call.snapshot->grid;
   PATHD_RETURN_IF_ERROR(
       ValidateEndpoint(grid, query.request.goal, "goal", query.request.cost));
+  PATHD_RETURN_IF_ERROR(CheckMinClearance(query));
   call.key = IncrementalCache::Key{.map = request.map(),
                                    .goal = query.request.goal,
                                    .cost = query.request.cost,
-                                   .robot_radius_cells = query.robot_radius_cells};
+                                   .robot_radius_cells = query.robot_radius_cells,
+                                   .min_clearance_cells = query.min_clearance_cells};
   call.x = 0;
   call.y = 0;
   call.width = grid.width();

@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/time.h"
+#include "core/map/clearance.h"
 #include "core/map/inflation.h"
 #include "core/planning/plan_query.h"
 #include "core/search/endpoints.h"
@@ -91,6 +92,7 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
   goal_ = decoded.query.request.goal;
   cost_ = decoded.query.request.cost;
   radius_cells_ = decoded.query.robot_radius_cells;
+  min_clearance_cells_ = decoded.query.min_clearance_cells;
   max_expansions_ = decoded.query.max_expansions;
   PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
   PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
@@ -151,20 +153,22 @@ absl::StatusOr<uint64_t> NavigationSearch::Observe(
 }
 
 // The grid the search runs on: the stored version, with this session's
-// private cells over it, inflated by the robot radius (shared inflations
-// come from the cache; private ones are computed here).
+// private cells over it, shaped for the robot (radius, clearance costs;
+// shared shapes come from the cache, private ones are computed here).
 absl::StatusOr<std::shared_ptr<const Grid>> NavigationSearch::EffectiveGrid(
     const MapSnapshot& snapshot) {
+  const GridShape shape =
+      GridShape::Of(radius_cells_, min_clearance_cells_, cost_.unknown_is_free);
   if (overlay_.empty()) {
-    if (radius_cells_ <= 0.0) return snapshot.grid;
-    return deps_.inflation.Get(snapshot.grid, radius_cells_);
+    if (!shape.shaped()) return snapshot.grid;
+    return deps_.inflation.Get(snapshot.grid, shape);
   }
   Grid merged = *snapshot.grid;
   for (const auto& [index, cost] : overlay_) {
     merged.mutable_cells()[index] = cost;
   }
-  if (radius_cells_ > 0.0) {
-    PATHD_ASSIGN_OR_RETURN(merged, InflateObstacles(merged, radius_cells_));
+  if (shape.shaped()) {
+    PATHD_ASSIGN_OR_RETURN(merged, ShapeGrid(merged, shape));
   }
   return std::make_shared<const Grid>(std::move(merged));
 }
@@ -225,12 +229,17 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
   query.request = PlanRequest::Between(start_, goal_, cost_);
   query.requested_goal = goal_;
   query.robot_radius_cells = radius_cells_;
+  query.min_clearance_cells = min_clearance_cells_;
   query.max_expansions = max_expansions_;
   PlanAnswer answer;
   answer.goal = goal_;
   answer.source =
       PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
   if (result.ok()) answer.result = *std::move(result);
+  if (min_clearance_cells_ > 0.0 && !answer.result.path.empty()) {
+    answer.result.min_clearance =
+        PathClearance(*grid_, answer.result.path, cost_.unknown_is_free);
+  }
   SetSingleLeg(&answer);
   BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
   if (!result.ok()) plan->set_reason(std::string(result.status().message()));

@@ -90,6 +90,7 @@ class NavigationSearch {
   Cell goal_;
   CostParams cost_;
   double radius_cells_ = 0.0;
+  double min_clearance_cells_ = 0.0;
   int64_t max_expansions_ = 0;
   int64_t repaired_cells_ = 0;
   int64_t plans_ = 0;

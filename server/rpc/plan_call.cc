@@ -45,7 +45,8 @@ class CachedSearch final : public StatefulSearch {
     const IncrementalCache::Key key{.map = call_.request->map(),
                                     .goal = request.goal,
                                     .cost = request.cost,
-                                    .robot_radius_cells = query.robot_radius_cells};
+                                    .robot_radius_cells = query.robot_radius_cells,
+                                    .min_clearance_cells = query.min_clearance_cells};
     const std::shared_ptr<const MapSnapshot>& snapshot = call_.decoded.snapshot;
     PlanResult& result = answer->result;
     if (kind_ == IncrementalCache::Kind::kDStarLite) {
@@ -95,7 +96,9 @@ Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
   engine.planner = call.planner;
   engine.stateful = cached.has_value() ? &*cached : nullptr;
   engine.inflate = [&inflation](const std::shared_ptr<const Grid>& stored,
-                                double radius) { return inflation.Get(stored, radius); };
+                                const GridShape& shape) {
+    return inflation.Get(stored, shape);
+  };
   if (derived != nullptr) {
     engine.derived = [derived, &shared_snapshot](const std::shared_ptr<const Grid>& grid,
                                                  double radius) {

@@ -32,6 +32,8 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
+#include "absl/strings/match.h"
+#include "absl/strings/strip.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "core/geometry/structure.h"
@@ -47,7 +49,10 @@ ABSL_FLAG(std::string, maps, "",
           "comma-separated map paths relative to --movingai_dir; empty = every map");
 ABSL_FLAG(std::string, planners,
           "astar,theta_star,navmesh,minimal_construct,visibility_graph",
-          "comma-separated planner names for the query table");
+          "comma-separated planner names for the query table; NAME/nostore "
+          "runs NAME without a derived store (each query builds what it "
+          "needs, as a robot linking core would), so a planner's shared "
+          "per-version structure can be compared with none in one run");
 ABSL_FLAG(int, sample, 1000,
           "scenarios per map, spread evenly over the whole scenario file");
 ABSL_FLAG(double, query_budget_s, 30.0,
@@ -92,15 +97,16 @@ pathd::PlanRequest GeometricRequest(pathd::Cell s, pathd::Cell g) {
 }
 
 QueryFigures RunQueries(const pathd::Planner& planner, const pathd::Grid& grid,
-                        const std::vector<pathd::Scenario>& scenarios,
+                        const std::vector<pathd::Scenario>& scenarios, bool use_store,
                         pathd::SearchScratch& scratch) {
   QueryFigures f;
   AdvancingStore store;
   store.SetGrid(grid);
+  pathd::DerivedStore* const derived = use_store ? &store : nullptr;
   // The first query builds the structure.
   {
     pathd::PlanRequest request = GeometricRequest(scenarios[0].start, scenarios[0].goal);
-    request.derived = &store;
+    request.derived = derived;
     const absl::Time t0 = absl::Now();
     auto r = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
     f.first_ms = absl::ToDoubleMilliseconds(absl::Now() - t0);
@@ -120,7 +126,7 @@ QueryFigures RunQueries(const pathd::Planner& planner, const pathd::Grid& grid,
       break;
     }
     pathd::PlanRequest request = GeometricRequest(s.start, s.goal);
-    request.derived = &store;
+    request.derived = derived;
     const absl::Time t0 = absl::Now();
     auto r = planner.Plan(grid, request, pathd::StopCondition::None(), scratch);
     micros.push_back(absl::ToDoubleMicroseconds(absl::Now() - t0));
@@ -280,7 +286,7 @@ int main(int argc, char** argv) {
   const std::vector<std::string> listed =
       absl::StrSplit(absl::GetFlag(FLAGS_planners), ',', absl::SkipEmpty());
   for (const std::string& name : listed) {
-    if (registry.Get(name) == nullptr) {
+    if (registry.Get(std::string(absl::StripSuffix(name, "/nostore"))) == nullptr) {
       std::printf("(planner %s is not registered; left out)\n", name.c_str());
     } else {
       planners.push_back(name);
@@ -315,7 +321,10 @@ int main(int argc, char** argv) {
                     planner_name.c_str());
         continue;
       }
-      const QueryFigures f = RunQueries(*registry.Get(planner_name), *grid, scenarios, scratch);
+      const bool use_store = !absl::EndsWith(planner_name, "/nostore");
+      const QueryFigures f =
+          RunQueries(*registry.Get(std::string(absl::StripSuffix(planner_name, "/nostore"))),
+                     *grid, scenarios, use_store, scratch);
       std::printf("| %s | %s | %d%s | %d | %.1f | %.1f | %.4f | %s |\n", name.c_str(),
                   planner_name.c_str(), f.queries, f.budget_hit ? " (budget)" : "", f.found,
                   f.mean_us, f.p95_us, f.length_ratio, Ms(f.first_ms).c_str());

@@ -184,6 +184,20 @@ class RealServerTest(unittest.TestCase, PathChecks):
         self.assertEqual(cut.outcome, "NO_PATH")
         self.assertEqual(cut.path, [])
 
+    def test_min_clearance_is_sent_and_reported(self):
+        self.make_map("clear")
+        start, goal = Cell(1, 3), Cell(12, 4)
+        plain = self.client.plan("clear", start, goal)
+        options = pathd_client.plan_options(min_clearance_m=2.0)
+        self.assertEqual(options.min_clearance_m, 2.0)
+        wide = self.client.plan("clear", start, goal, options=options)
+        self.assertTrue(wide.found)
+        self.assertTrue(wide.raw.has_clearance)
+        self.assertFalse(plain.raw.has_clearance)
+        self.assertGreaterEqual(wide.cost, plain.cost)
+        with self.assertRaisesRegex(ValueError, "not both"):
+            pathd_client.plan_options(robot_radius_cells=1, robot_radius_m=1)
+
     def test_errors_carry_the_status(self):
         self.make_map("errors")
         with self.assertRaises(PathdError) as missing:

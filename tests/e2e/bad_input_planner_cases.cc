@@ -104,6 +104,14 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
       [](P& r) { r.mutable_options()->set_robot_radius_cells(kInf); },
       StatusCode::INVALID_ARGUMENT, "options.robot_radius_cells");
   plan_case(
+      "NaN min_clearance_m",
+      [](P& r) { r.mutable_options()->set_min_clearance_m(kNaN); },
+      StatusCode::INVALID_ARGUMENT, "options.min_clearance_m");
+  plan_case(
+      "negative min_clearance_cells",
+      [](P& r) { r.mutable_options()->set_min_clearance_cells(-3); },
+      StatusCode::INVALID_ARGUMENT, "options.min_clearance_cells");
+  plan_case(
       "goal_tolerance_cells 1e9",
       [](P& r) { r.mutable_options()->set_goal_tolerance_cells(1e9); },
       StatusCode::INVALID_ARGUMENT, "the limit is 1024 cells");

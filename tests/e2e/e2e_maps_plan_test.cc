@@ -199,6 +199,46 @@ TEST_F(E2eTest, RobotRadiusKeepsThePathAwayFromWalls) {
   EXPECT_EQ(both.exit_code, 2) << both;
 }
 
+// --min_clearance in metres: the path pays for passing near walls, keeps
+// the clearance where the room allows, and says how close it came.
+TEST_F(E2eTest, MinimumClearanceCostsNearWallsAndIsReported) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap(), {"--resolution=0.5"}));
+  const v1::PlanResponse plain = PlanJson({"walled", "2", "2", "17", "3"});
+  const v1::PlanResponse wide =
+      PlanJson({"walled", "2", "2", "17", "3", "--min_clearance=1.5"});
+  ASSERT_EQ(wide.outcome(), v1::PLAN_OUTCOME_FOUND);
+  EXPECT_FALSE(plain.has_clearance());
+  ASSERT_TRUE(wide.has_clearance());
+  // Through the two-row gap in column 10, one cell from the wall ends.
+  EXPECT_DOUBLE_EQ(wide.min_clearance_cells(), 1.0);
+  EXPECT_DOUBLE_EQ(wide.min_clearance_m(), 0.5);
+  EXPECT_GT(wide.cost(), plain.cost());
+  // The cached shortest path map and D* Lite plan on the same shaped grid
+  // (the clearance is part of their cache key: the plain field is not used).
+  for (const char* planner : {"--planner=spm", "--planner=dstar_lite", "--planner=spm"}) {
+    const v1::PlanResponse cached =
+        PlanJson({"walled", "2", "2", "17", "3", "--min_clearance=1.5", planner});
+    EXPECT_NEAR(cached.cost(), wide.cost(), 1e-6) << planner;
+    EXPECT_DOUBLE_EQ(cached.min_clearance_cells(), 1.0) << planner;
+    EXPECT_NEAR(PlanJson({"walled", "2", "2", "17", "3", planner}).cost(), plain.cost(),
+                1e-6)
+        << planner;
+  }
+  const ProcessResult text =
+      Ctl({"plan", "walled", "2", "2", "17", "3", "--min_clearance_cells=3"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "clearance:   1 cells (0.5 m)")) << text;
+  ExpectRpcError({"plan", "walled", "2", "2", "17", "3", "--planner=navmesh",
+                  "--min_clearance=1"},
+                 "INVALID_ARGUMENT", {"min_clearance", "navmesh"});
+  ExpectRpcError({"plan", "walled", "2", "2", "17", "3", "--cost_weight=0",
+                  "--min_clearance=1"},
+                 "INVALID_ARGUMENT", {"min_clearance", "cost_weight 0"});
+  const ProcessResult both = Ctl({"plan", "walled", "2", "2", "17", "3",
+                                  "--min_clearance=1", "--min_clearance_cells=1"});
+  EXPECT_EQ(both.exit_code, 2) << both;
+}
+
 TEST_F(E2eTest, SimplifyKeepsOnlyTheTurns) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
   const v1::PlanResponse plain = PlanJson({"walled", "2", "2", "17", "3"});

@@ -1,4 +1,4 @@
-// InflationCache: one computation per (map version, radius), shared by
+// InflationCache: one computation per (map version, shape), shared by
 // concurrent requests, never matched to a different or freed version.
 #include "server/inflation_cache.h"
 
@@ -14,17 +14,19 @@
 namespace pathd::server {
 namespace {
 
-// Marks cell (0,0) with the radius so tests can tell results apart, and
-// counts calls.
+// Marks cell (0,0) with the radius and cell (1,0) with the clearance so
+// tests can tell results apart, and counts calls.
 struct FakeInflate {
   std::atomic<int>* calls;
   absl::Duration delay = absl::ZeroDuration();
-  absl::StatusOr<Grid> operator()(const Grid& grid, double radius) const {
+  absl::StatusOr<Grid> operator()(const Grid& grid, const GridShape& shape) const {
     calls->fetch_add(1);
     absl::SleepFor(delay);
+    const double radius = shape.robot_radius_cells;
     if (radius > 100) return absl::InvalidArgumentError("radius too large");
     Grid copy = grid;
     copy.set_cost(0, 0, static_cast<uint8_t>(radius));
+    copy.set_cost(1, 0, static_cast<uint8_t>(shape.min_clearance_cells));
     return copy;
   }
 };
@@ -55,6 +57,30 @@ TEST(InflationCache, ComputesOncePerVersionAndRadius) {
   EXPECT_EQ(stats.hits, 1);
   EXPECT_EQ(stats.misses, 3);
   EXPECT_EQ(stats.entries, 3u);
+}
+
+// The clearance is part of the key: the same radius with and without it, or
+// with another clearance, is another grid; unknown_is_free only counts with
+// a clearance (GridShape::Of).
+TEST(InflationCache, ClearanceIsPartOfTheShape) {
+  std::atomic<int> calls{0};
+  InflationCache cache(FakeInflate{&calls}, 8);
+  auto v1 = MakeSource();
+  auto plain = cache.Get(v1, 3.0);
+  auto clear = cache.Get(v1, GridShape::Of(3.0, 7.0, false));
+  auto clear_unknown = cache.Get(v1, GridShape::Of(3.0, 7.0, true));
+  auto wider = cache.Get(v1, GridShape::Of(3.0, 9.0, false));
+  ASSERT_TRUE(plain.ok() && clear.ok() && clear_unknown.ok() && wider.ok());
+  EXPECT_EQ((*plain)->cost(1, 0), 0);
+  EXPECT_EQ((*clear)->cost(1, 0), 7);
+  EXPECT_EQ((*wider)->cost(1, 0), 9);
+  EXPECT_NE(clear->get(), clear_unknown->get());
+  EXPECT_EQ(calls.load(), 4);
+  // Without a clearance unknown_is_free does not split the radius's entry.
+  auto again = cache.Get(v1, GridShape::Of(3.0, 0.0, true));
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->get(), plain->get());
+  EXPECT_EQ(calls.load(), 4);
 }
 
 TEST(InflationCache, FreedVersionsAreNeverMatched) {

@@ -235,8 +235,17 @@ def _planner(name: str | None) -> int:
 def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  unknown_is_free: bool = False,
                  robot_radius_cells: float | None = None,
+                 robot_radius_m: float | None = None,
+                 min_clearance_m: float | None = None,
                  simplify: bool = False) -> planner_service_pb2.PlanOptions:
-    """The common PlanOptions; build the message yourself for the rest."""
+    """The common PlanOptions; build the message yourself for the rest.
+
+    min_clearance_m: grid planners prefer keeping this far from obstacles
+    (cells nearer cost more; the response's min_clearance_m says how close
+    the path came).
+    """
+    if robot_radius_cells is not None and robot_radius_m is not None:
+        raise ValueError("give robot_radius_cells or robot_radius_m, not both")
     if connectivity not in (4, 8):
         raise ValueError(f"connectivity must be 4 or 8, not {connectivity}")
     options = planner_service_pb2.PlanOptions(
@@ -246,4 +255,8 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
         options.cost_weight = cost_weight
     if robot_radius_cells is not None:
         options.robot_radius_cells = robot_radius_cells
+    if robot_radius_m is not None:
+        options.robot_radius_m = robot_radius_m
+    if min_clearance_m is not None:
+        options.min_clearance_m = min_clearance_m
     return options

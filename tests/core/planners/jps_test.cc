@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "core/search/registry.h"
 #include "core/search/path_measure.h"
@@ -18,6 +19,7 @@
 #include "core/search/planner.h"
 #include "core/planners/jps/bit_grid.h"
 #include "gtest/gtest.h"
+#include "tests/testing/advancing_store.h"
 #include "tests/testing/test_grids.h"
 
 namespace pathd {
@@ -435,6 +437,57 @@ TEST_F(JpsTest, RandomSmallGridsMatchDijkstra) {
 
 TEST_F(JpsTest, RandomGridsAcrossWordBoundariesMatchDijkstra) {
   CheckRandomGrids(300, 140, 77, scratch_);
+}
+
+// Through a derived store, as the server plans: the version's packed map is
+// advanced from the previous version's after random updates (words and
+// tiles across 64-cell boundaries, costs breaking and restoring uniformity)
+// and every answer equals Dijkstra's and JPS's without a store; a map that
+// stopped being uniform is refused exactly as without one.
+TEST_F(JpsTest, DerivedStoreAdvancedAcrossUpdatesMatchesDijkstra) {
+  const Planner& jps = *PlannerRegistry::Default().Get("jps");
+  const Planner& dijkstra = *PlannerRegistry::Default().Get("dijkstra");
+  std::mt19937 rng(424242);
+  for (int map = 0; map < 12; ++map) {
+    const int w = 60 + static_cast<int>(rng() % 90);
+    const int h = 60 + static_cast<int>(rng() % 90);
+    Grid grid = Grid::Create(w, h).value();
+    for (uint8_t& v : grid.mutable_cells()) v = rng() % 100 < 25 ? kLethalCost : kFreeCost;
+    CostParams params;
+    params.unknown_is_free = map % 3 == 0;
+    testing::AdvancingStore store;
+    for (int step = 0; step < 30; ++step) {
+      const int changes = 1 + static_cast<int>(rng() % 40);
+      for (int i = 0; i < changes; ++i) {
+        const uint32_t r = rng() % 100;
+        const uint8_t cost = r < 45 ? kLethalCost : r < 90 ? kFreeCost
+                             : r < 96 ? kUnknownCost : 77;
+        grid.set_cost(static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h), cost);
+      }
+      store.SetGrid(grid);
+      const Cell s{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+      const Cell g{static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+      PlanRequest request = PlanRequest::Between(s, g, params);
+      auto plain = jps.Plan(grid, request, StopCondition::None(), scratch_);
+      request.derived = &store;
+      auto shared = jps.Plan(grid, request, StopCondition::None(), scratch_);
+      const std::string where = absl::StrCat("map ", map, " step ", step);
+      ASSERT_EQ(shared.status().code(), plain.status().code())
+          << where << ": " << shared.status() << " vs " << plain.status();
+      if (!plain.ok()) {
+        EXPECT_EQ(shared.status().message(), plain.status().message()) << where;
+        continue;
+      }
+      auto d = dijkstra.Plan(grid, PlanRequest::Between(s, g, params),
+                             StopCondition::None(), scratch_);
+      ASSERT_TRUE(d.ok()) << d.status();
+      ASSERT_EQ(shared->found(), d->found()) << where;
+      if (!d->found()) continue;
+      ASSERT_NEAR(shared->cost, d->cost, 1e-9 * (1 + d->cost)) << where;
+      ASSERT_EQ(shared->path, plain->path) << where;
+    }
+    EXPECT_GT(store.stats().advances, 0);
+  }
 }
 
 struct CountingExtension final : SearchScratch::Extension {

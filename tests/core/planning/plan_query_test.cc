@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "core/map/clearance.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/map/inflation.h"
@@ -111,6 +112,67 @@ TEST(PlanQueryTest, PlainPlanCostsWhatDijkstraSaysAndIsOneLeg) {
             std::vector<int32_t>{static_cast<int32_t>(answer->result.path.size()) - 1});
   EXPECT_EQ(answer->source.grid, snapshot.grid);
   EXPECT_EQ(answer->source.map_version, 7u);
+}
+
+// A minimum clearance: the plan is optimal on the shaped grid (Dijkstra's
+// cost there), keeps further from the pillar than the plain plan, reports
+// its clearance, and the stored grid is untouched.
+TEST(PlanQueryTest, MinimumClearanceKeepsAwayFromObstaclesAtTheShapedCost) {
+  std::vector<std::string> rows(21, std::string(41, '.'));
+  for (int y = 8; y <= 12; ++y) rows[y].replace(18, 5, "#####");
+  const PlanSnapshot snapshot = Snapshot(MakeGrid(rows));
+  PlanQuery plain = Query({2, 9}, {38, 11});
+  absl::StatusOr<PlanAnswer> hugging = Plan(plain, snapshot, Engine());
+  ASSERT_TRUE(hugging.ok()) << hugging.status();
+  EXPECT_LT(hugging->result.min_clearance, 0.0);  // not asked for
+  const double plain_clearance =
+      PathClearance(*snapshot.grid, hugging->result.path, false);
+
+  PlanQuery query = plain;
+  query.min_clearance_cells = 5.0;
+  absl::StatusOr<PlanAnswer> wide = Plan(query, snapshot, Engine());
+  ASSERT_TRUE(wide.ok()) << wide.status();
+  ASSERT_TRUE(wide->result.found());
+  EXPECT_NE(wide->source.grid, snapshot.grid);
+  const Grid shaped = ShapeGrid(*snapshot.grid, GridShape::Of(0.0, 5.0, false)).value();
+  EXPECT_EQ(wide->source.grid->cells(), shaped.cells());
+  EXPECT_NEAR(wide->result.cost, *DijkstraCost(shaped, {2, 9}, {38, 11}), 1e-9);
+  EXPECT_DOUBLE_EQ(wide->result.min_clearance,
+                   PathClearance(shaped, wide->result.path, false));
+  EXPECT_GT(wide->result.min_clearance, plain_clearance);
+  EXPECT_GT(wide->result.length, hugging->result.length);
+  EXPECT_EQ(snapshot.grid->cost(17, 9), 0);
+
+  // The same through a via point: every leg on the shaped grid.
+  query.via = {{20, 3}};
+  ASSERT_TRUE(CheckPlanQuery(*snapshot.grid, false, &query).ok());
+  SearchScratch scratch;
+  absl::StatusOr<PlanAnswer> through =
+      RunPlanQuery(query, snapshot, Engine(), StopCondition::None(), scratch);
+  ASSERT_TRUE(through.ok()) << through.status();
+  EXPECT_NEAR(through->result.cost,
+              *DijkstraCost(shaped, {2, 9}, {20, 3}) + *DijkstraCost(shaped, {20, 3}, {38, 11}),
+              1e-9);
+  EXPECT_GE(through->result.min_clearance, 0.0);
+}
+
+// A clearance that cannot act is refused, naming the option.
+TEST(PlanQueryTest, MinimumClearanceIsRefusedWhereCostsDoNotCount) {
+  const Grid grid = MakeGrid({"....", "....", "...."});
+  PlanQuery query = Query({0, 0}, {3, 2});
+  query.min_clearance_cells = 2.0;
+  query.planner = "navmesh";
+  absl::Status s = CheckPlanQuery(grid, false, &query);
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), HasSubstr("min_clearance"));
+  EXPECT_THAT(s.message(), HasSubstr("navmesh"));
+  query.planner = "astar";
+  query.request.cost.cost_weight = 0.0;
+  s = CheckPlanQuery(grid, false, &query);
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), HasSubstr("cost_weight 0"));
+  query.request.cost.cost_weight = 1.0;
+  EXPECT_TRUE(CheckPlanQuery(grid, false, &query).ok());
 }
 
 TEST(PlanQueryTest, GoalToleranceSubstitutesTheNearestFreeCell) {
