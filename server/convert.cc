@@ -2,6 +2,7 @@
 // options, the one DecodePlanQuery and the one PlanResponse builder.
 #include "server/convert.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <utility>
@@ -107,6 +108,24 @@ absl::Status SetPositive(double value, std::string_view field, double* out) {
   return absl::OkStatus();
 }
 
+// A distance option given as NAME_m or NAME_cells (a oneof: `metres` and
+// `cells` say which, at most one set), in cells, capped at the map's
+// diagonal: beyond it every cell is that close to any obstacle and the
+// map's outside, so a larger value means nothing more and would only slow
+// the transform. 0 when neither is set.
+absl::StatusOr<double> DistanceCells(std::string_view name, std::optional<double> metres,
+                                     std::optional<double> cells, const Grid& grid) {
+  if (!metres.has_value() && !cells.has_value()) return 0.0;
+  double value = metres.has_value() ? *metres : *cells;
+  if (!std::isfinite(value) || value < 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("options.%s_%s %s must be finite and >= 0", name,
+                        metres.has_value() ? "m" : "cells", Num(value)));
+  }
+  if (metres.has_value()) value /= grid.resolution();
+  return std::min(value, std::hypot(grid.width(), grid.height()));
+}
+
 }  // namespace
 
 absl::StatusOr<std::string_view> PlannerName(int planner) {
@@ -117,61 +136,26 @@ absl::StatusOr<std::string_view> PlannerName(int planner) {
 
 absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
                                         const Grid& grid) {
-  double radius = 0.0;
-  std::string_view field;
-  switch (options.robot_radius_case()) {
-    case v1::PlanOptions::kRobotRadiusM:
-      field = "robot_radius_m";
-      radius = options.robot_radius_m();
-      break;
-    case v1::PlanOptions::kRobotRadiusCells:
-      field = "robot_radius_cells";
-      radius = options.robot_radius_cells();
-      break;
-    case v1::PlanOptions::ROBOT_RADIUS_NOT_SET:
-      return 0.0;
-  }
-  if (!std::isfinite(radius) || radius < 0.0) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "options.%s %s must be finite and >= 0", field, Num(radius)));
-  }
-  if (options.robot_radius_case() == v1::PlanOptions::kRobotRadiusM) {
-    radius /= grid.resolution();
-  }
-  // Beyond the map's diagonal every cell is within the radius of any obstacle;
-  // a bigger value means nothing more and would only slow the transform.
-  const double diagonal = std::hypot(grid.width(), grid.height());
-  if (radius > diagonal) radius = diagonal;
-  return radius;
+  using Case = v1::PlanOptions::RobotRadiusCase;
+  const Case c = options.robot_radius_case();
+  return DistanceCells(
+      "robot_radius",
+      c == Case::kRobotRadiusM ? std::optional(options.robot_radius_m()) : std::nullopt,
+      c == Case::kRobotRadiusCells ? std::optional(options.robot_radius_cells())
+                                   : std::nullopt,
+      grid);
 }
 
 absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
                                          const Grid& grid) {
-  double clearance = 0.0;
-  std::string_view field;
-  switch (options.min_clearance_case()) {
-    case v1::PlanOptions::kMinClearanceM:
-      field = "min_clearance_m";
-      clearance = options.min_clearance_m();
-      break;
-    case v1::PlanOptions::kMinClearanceCells:
-      field = "min_clearance_cells";
-      clearance = options.min_clearance_cells();
-      break;
-    case v1::PlanOptions::MIN_CLEARANCE_NOT_SET:
-      return 0.0;
-  }
-  if (!std::isfinite(clearance) || clearance < 0.0) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "options.%s %s must be finite and >= 0", field, Num(clearance)));
-  }
-  if (options.min_clearance_case() == v1::PlanOptions::kMinClearanceM) {
-    clearance /= grid.resolution();
-  }
-  // No cell is further than the diagonal from the map's outside.
-  const double diagonal = std::hypot(grid.width(), grid.height());
-  if (clearance > diagonal) clearance = diagonal;
-  return clearance;
+  using Case = v1::PlanOptions::MinClearanceCase;
+  const Case c = options.min_clearance_case();
+  return DistanceCells(
+      "min_clearance",
+      c == Case::kMinClearanceM ? std::optional(options.min_clearance_m()) : std::nullopt,
+      c == Case::kMinClearanceCells ? std::optional(options.min_clearance_cells())
+                                    : std::nullopt,
+      grid);
 }
 
 absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,

@@ -1,6 +1,8 @@
 // Implementation of the command environment and the shared request helpers.
 #include "client/pathctl/command_env.h"
 
+#include <optional>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -100,6 +102,24 @@ absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name) {
       "--planner: unknown planner '", name, "'; valid planners: ", PlannerNames()));
 }
 
+namespace {
+
+// A distance flag pair: --NAME in metres or --NAME_cells, not both.
+template <typename SetMetres, typename SetCells>
+absl::Status SetDistance(std::string_view name, std::optional<double> metres,
+                         std::optional<double> cells, SetMetres set_metres,
+                         SetCells set_cells) {
+  if (metres.has_value() && cells.has_value()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "give --%s (metres) or --%s_cells, not both", name, name));
+  }
+  if (metres.has_value()) set_metres(*metres);
+  if (cells.has_value()) set_cells(*cells);
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_options) {
   switch (options.connectivity) {
     case 0:
@@ -118,26 +138,14 @@ absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_op
     plan_options->set_cost_weight(*options.cost_weight);
   }
   plan_options->set_unknown_is_free(options.unknown_is_free);
-  if (options.robot_radius_m.has_value() && options.robot_radius_cells.has_value()) {
-    return absl::InvalidArgumentError(
-        "give --robot_radius (metres) or --robot_radius_cells, not both");
-  }
-  if (options.robot_radius_m.has_value()) {
-    plan_options->set_robot_radius_m(*options.robot_radius_m);
-  }
-  if (options.robot_radius_cells.has_value()) {
-    plan_options->set_robot_radius_cells(*options.robot_radius_cells);
-  }
-  if (options.min_clearance_m.has_value() && options.min_clearance_cells.has_value()) {
-    return absl::InvalidArgumentError(
-        "give --min_clearance (metres) or --min_clearance_cells, not both");
-  }
-  if (options.min_clearance_m.has_value()) {
-    plan_options->set_min_clearance_m(*options.min_clearance_m);
-  }
-  if (options.min_clearance_cells.has_value()) {
-    plan_options->set_min_clearance_cells(*options.min_clearance_cells);
-  }
+  PATHD_RETURN_IF_ERROR(SetDistance(
+      "robot_radius", options.robot_radius_m, options.robot_radius_cells,
+      [&](double m) { plan_options->set_robot_radius_m(m); },
+      [&](double c) { plan_options->set_robot_radius_cells(c); }));
+  PATHD_RETURN_IF_ERROR(SetDistance(
+      "min_clearance", options.min_clearance_m, options.min_clearance_cells,
+      [&](double m) { plan_options->set_min_clearance_m(m); },
+      [&](double c) { plan_options->set_min_clearance_cells(c); }));
   return absl::OkStatus();
 }
 

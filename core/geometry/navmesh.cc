@@ -104,8 +104,10 @@ class TileBuilder {
     tile->y1 = y1_;
     tile->vertex_count = static_cast<int32_t>(cdt_.number_of_vertices());
     tile->traversable_costs = blocked_.CostsIn(x0_, y0_, x1_, y1_);
-    ExtractTriangles(*tile);
-    IndexCells(*tile);
+    const std::vector<Triangle> triangles = ExtractTriangles();
+    tile->triangle_count = static_cast<int32_t>(triangles.size());
+    const std::vector<int32_t> polygon_of = MergeTriangles(triangles, *tile);
+    IndexCells(triangles, polygon_of, *tile);
     IndexBorder(*tile);
     return tile;
   }
@@ -193,11 +195,18 @@ class TileBuilder {
            (a.y2 == b.y2 && (a.y2 == 2 * y0_ || a.y2 == 2 * y1_));
   }
 
+  // A free triangle before merging: corners counter-clockwise, across edge
+  // i (corner i to i + 1) another triangle, NavTile::kWall or kTileBorder.
+  struct Triangle {
+    std::array<LatticePoint, 3> corners;
+    std::array<int32_t, 3> across;
+  };
+
   // Keeps the free faces: no constraint crosses a face, so its interior
   // lies in one cell class, read at its centroid (inside the face, hence
   // not on a boundary edge, so either cell beside a grid line it may lie on
   // has the face's class).
-  void ExtractTriangles(NavTile& tile) {
+  std::vector<Triangle> ExtractTriangles() {
     int32_t next = 0;
     for (Cdt::Face_handle f : cdt_.finite_face_handles()) {
       int64_t sx = 0;
@@ -210,10 +219,10 @@ class TileBuilder {
                                   static_cast<int32_t>(sy / 3));
       f->info() = free ? next++ : -1;
     }
-    tile.triangles.resize(static_cast<size_t>(next));
+    std::vector<Triangle> triangles(static_cast<size_t>(next));
     for (Cdt::Face_handle f : cdt_.finite_face_handles()) {
       if (f->info() < 0) continue;
-      NavTriangle& t = tile.triangles[static_cast<size_t>(f->info())];
+      Triangle& t = triangles[static_cast<size_t>(f->info())];
       for (int i = 0; i < 3; ++i) {
         const Cdt::Point& p = f->vertex(i)->point();
         t.corners[i] = CornerAt(static_cast<int64_t>(p.x()), static_cast<int64_t>(p.y()));
@@ -224,23 +233,185 @@ class TileBuilder {
         if (!cdt_.is_infinite(n) && n->info() >= 0) {
           t.across[i] = n->info();
         } else if (OnBorder(t.corners[i], t.corners[(i + 1) % 3])) {
-          t.across[i] = NavTriangle::kTileBorder;
+          t.across[i] = NavTile::kTileBorder;
         } else {
-          t.across[i] = NavTriangle::kWall;
+          t.across[i] = NavTile::kWall;
         }
       }
     }
+    return triangles;
+  }
+
+  // Grid corner `p` is a bend corner: exactly one of its four cells is
+  // blocked (free_space.h), the only kind of point a shortest path turns at.
+  bool IsBend(LatticePoint p) const {
+    const int32_t x = static_cast<int32_t>(p.x2 / 2);
+    const int32_t y = static_cast<int32_t>(p.y2 / 2);
+    return blocked_(x - 1, y - 1) + blocked_(x, y - 1) + blocked_(x - 1, y) +
+               blocked_(x, y) ==
+           1;
+  }
+
+  // The corner `at` of a merged polygon may join `prev` to `next`: a convex
+  // turn, or straight on (collinear but not doubling back, which two
+  // polygons sharing two collinear edges would otherwise produce) where no
+  // path turns. A straight angle at a bend corner would hide it: a root on
+  // the polygon's side sees the edge beyond the corner edge-on, so no
+  // interval would end there and the path could not turn round it.
+  bool ConvexAt(LatticePoint prev, LatticePoint at, LatticePoint next) const {
+    const int64_t o = Orient(prev, at, next);
+    if (o != 0) return o > 0;
+    return (at.x2 - prev.x2) * (next.x2 - at.x2) + (at.y2 - prev.y2) * (next.y2 - at.y2) > 0 &&
+           !IsBend(at);
+  }
+
+  // Hertel-Mehlhorn: each diagonal between two free triangles (never a
+  // constraint: those have a wall or the tile border on one side) is
+  // dropped when both corners it ends in stay convex, longest diagonals
+  // first so that merged polygons come out fat rather than long slivers.
+  // Deterministic in the triangles, so a re-built tile equals the tile an
+  // advance builds. Fills the tile's polygons and returns, per triangle,
+  // its polygon.
+  std::vector<int32_t> MergeTriangles(const std::vector<Triangle>& triangles,
+                                      NavTile& tile) const {
+    // Every polygon is a ring of the triangles' edges, linked both ways in
+    // flat arrays (edge 3t + i is edge i of triangle t), so a merge relinks
+    // four edges and allocates nothing.
+    const size_t n = triangles.size();
+    std::vector<int32_t> next(3 * n);
+    std::vector<int32_t> prev(3 * n);
+    std::vector<int32_t> parent(n);
+    std::vector<int32_t> head(n);  // an edge of the ring, for roots
+    std::vector<int32_t> size(n, 3);
+    for (size_t t = 0; t < n; ++t) {
+      parent[t] = static_cast<int32_t>(t);
+      head[t] = static_cast<int32_t>(3 * t);
+      for (int i = 0; i < 3; ++i) {
+        next[3 * t + i] = static_cast<int32_t>(3 * t + (i + 1) % 3);
+        prev[3 * t + i] = static_cast<int32_t>(3 * t + (i + 2) % 3);
+      }
+    }
+    auto corner = [&](int32_t e) { return triangles[e / 3].corners[e % 3]; };
+    auto find = [&](int32_t t) {
+      while (parent[t] != t) {
+        parent[t] = parent[parent[t]];
+        t = parent[t];
+      }
+      return t;
+    };
+    struct Diagonal {
+      int64_t length2;
+      int32_t t;
+      int32_t i;
+    };
+    std::vector<Diagonal> diagonals;
+    for (size_t t = 0; t < n; ++t) {
+      for (int i = 0; i < 3; ++i) {
+        const int32_t other = triangles[t].across[i];
+        if (other <= static_cast<int32_t>(t)) continue;  // each once; no walls
+        const LatticePoint a = triangles[t].corners[i];
+        const LatticePoint b = triangles[t].corners[(i + 1) % 3];
+        const int64_t dx = b.x2 - a.x2;
+        const int64_t dy = b.y2 - a.y2;
+        diagonals.push_back(Diagonal{dx * dx + dy * dy, static_cast<int32_t>(t), i});
+      }
+    }
+    std::sort(diagonals.begin(), diagonals.end(), [](const Diagonal& x, const Diagonal& y) {
+      if (x.length2 != y.length2) return x.length2 > y.length2;
+      return x.t != y.t ? x.t < y.t : x.i < y.i;
+    });
+    for (const Diagonal& d : diagonals) {
+      // Edge i runs u -> v in p's ring, its twin j v -> u in q's.
+      const int32_t i = 3 * d.t + d.i;
+      const int32_t other = triangles[d.t].across[d.i];
+      const LatticePoint u = corner(i);
+      int32_t j = 3 * other;
+      while (!(corner(j) == corner(next[i]) && corner(next[j]) == u)) ++j;
+      const int32_t p = find(d.t);
+      const int32_t q = find(other);
+      if (p == q) continue;
+      const LatticePoint v = corner(next[i]);
+      if (!ConvexAt(corner(prev[i]), u, corner(next[next[j]])) ||
+          !ConvexAt(corner(prev[j]), v, corner(next[next[i]]))) {
+        continue;
+      }
+      // p's edges from v round to u, then q's from u round to v.
+      next[prev[i]] = next[j];
+      prev[next[j]] = prev[i];
+      next[prev[j]] = next[i];
+      prev[next[i]] = prev[j];
+      head[p] = next[i];
+      size[p] += size[q] - 2;
+      parent[q] = p;
+    }
+    // The polygons' rings, as (corner, what lies across) from their heads.
+    struct Edge {
+      LatticePoint corner;
+      int32_t across;  // a triangle, kWall or kTileBorder
+    };
+    std::vector<std::vector<Edge>> rings(n);
+    for (size_t t = 0; t < n; ++t) {
+      if (find(static_cast<int32_t>(t)) != static_cast<int32_t>(t)) continue;
+      rings[t].reserve(static_cast<size_t>(size[t]));
+      int32_t e = head[t];
+      do {
+        rings[t].push_back(Edge{corner(e), triangles[e / 3].across[e % 3]});
+        e = next[e];
+      } while (e != head[t]);
+    }
+    // Number the polygons row by row (by their top-left corner, then their
+    // first triangle), so that neighbours tend to lie close in memory.
+    struct Order {
+      int64_t y2;
+      int64_t x2;
+      int32_t t;
+    };
+    std::vector<Order> order;
+    for (size_t t = 0; t < n; ++t) {
+      if (find(static_cast<int32_t>(t)) != static_cast<int32_t>(t)) continue;
+      Order o{INT64_MAX, INT64_MAX, static_cast<int32_t>(t)};
+      for (const Edge& e : rings[t]) {
+        if (e.corner.y2 < o.y2 || (e.corner.y2 == o.y2 && e.corner.x2 < o.x2)) {
+          o.y2 = e.corner.y2;
+          o.x2 = e.corner.x2;
+        }
+      }
+      order.push_back(o);
+    }
+    std::sort(order.begin(), order.end(), [](const Order& a, const Order& b) {
+      if (a.y2 != b.y2) return a.y2 < b.y2;
+      return a.x2 != b.x2 ? a.x2 < b.x2 : a.t < b.t;
+    });
+    std::vector<int32_t> id(n, -1);
+    for (size_t k = 0; k < order.size(); ++k) id[order[k].t] = static_cast<int32_t>(k);
+    std::vector<int32_t> polygon_of(n);
+    for (size_t t = 0; t < n; ++t) polygon_of[t] = id[find(static_cast<int32_t>(t))];
+    tile.polygons.reserve(order.size());
+    for (const Order& o : order) {
+      const std::vector<Edge>& ring = rings[o.t];
+      NavPolygon polygon{static_cast<int32_t>(tile.edges.size()),
+                         static_cast<uint16_t>(ring.size()), 0};
+      for (const Edge& e : ring) {
+        tile.edges.push_back(NavEdge{static_cast<int32_t>(e.corner.x2),
+                                     static_cast<int32_t>(e.corner.y2),
+                                     e.across >= 0 ? polygon_of[e.across] : e.across});
+        if (e.across != NavTile::kWall) ++polygon.open;
+      }
+      tile.polygons.push_back(polygon);
+    }
+    tile.edges.shrink_to_fit();
+    return polygon_of;
   }
 
   // For each triangle, the cell centres it holds, row by row: the x range
   // from its edges in floating point, widened by a cell, then each
-  // candidate tested exactly.
-  void IndexCells(NavTile& tile) const {
+  // candidate tested exactly. Recorded as the triangle's polygon.
+  void IndexCells(const std::vector<Triangle>& triangles,
+                  const std::vector<int32_t>& polygon_of, NavTile& tile) const {
     const int32_t w = x1_ - x0_;
-    tile.cell_triangle.assign(static_cast<size_t>(w) * (y1_ - y0_),
-                              NavTile::kNoTriangle);
-    for (size_t ti = 0; ti < tile.triangles.size(); ++ti) {
-      const auto& c = tile.triangles[ti].corners;
+    tile.cell_polygon.assign(static_cast<size_t>(w) * (y1_ - y0_), NavTile::kNoPolygon);
+    for (size_t ti = 0; ti < triangles.size(); ++ti) {
+      const auto& c = triangles[ti].corners;
       const int64_t ymin = std::min({c[0].y2, c[1].y2, c[2].y2});
       const int64_t ymax = std::max({c[0].y2, c[1].y2, c[2].y2});
       for (int64_t row = ymin / 2; 2 * row + 1 < ymax; ++row) {
@@ -266,20 +437,20 @@ class TileBuilder {
               Orient(c[2], c[0], p) < 0) {
             continue;
           }
-          uint16_t& slot = tile.cell_triangle[static_cast<size_t>(row - y0_) * w + (x - x0_)];
-          if (slot == NavTile::kNoTriangle) slot = static_cast<uint16_t>(ti);
+          uint16_t& slot = tile.cell_polygon[static_cast<size_t>(row - y0_) * w + (x - x0_)];
+          if (slot == NavTile::kNoPolygon) slot = static_cast<uint16_t>(polygon_of[ti]);
         }
       }
     }
   }
 
   void IndexBorder(NavTile& tile) const {
-    for (size_t ti = 0; ti < tile.triangles.size(); ++ti) {
-      const NavTriangle& t = tile.triangles[ti];
-      for (int i = 0; i < 3; ++i) {
-        if (t.across[i] != NavTriangle::kTileBorder) continue;
-        const LatticePoint a = t.corners[i];
-        const LatticePoint b = t.corners[(i + 1) % 3];
+    for (size_t pi = 0; pi < tile.polygons.size(); ++pi) {
+      const NavPolygonView p = tile.polygon(static_cast<int32_t>(pi));
+      for (int32_t i = 0; i < p.size; ++i) {
+        if (p.across(i) != NavTile::kTileBorder) continue;
+        const LatticePoint a = p.corner(i);
+        const LatticePoint b = p.corner(i + 1);
         int side;
         int64_t lo;
         if (a.y2 == b.y2) {
@@ -289,7 +460,7 @@ class TileBuilder {
           side = a.x2 == 2 * x1_ ? 1 : 3;
           lo = std::min(a.y2, b.y2) / 2;
         }
-        tile.border[side].emplace_back(static_cast<int32_t>(lo), static_cast<int32_t>(ti));
+        tile.border[side].emplace_back(static_cast<int32_t>(lo), static_cast<int32_t>(pi));
       }
     }
     for (auto& side : tile.border) std::sort(side.begin(), side.end());
@@ -322,8 +493,9 @@ std::pair<int32_t, int32_t> TilesAtLine(int32_t line, int32_t tile_size,
 }  // namespace
 
 size_t NavTile::bytes() const {
-  size_t b = sizeof(NavTile) + triangles.capacity() * sizeof(NavTriangle) +
-             cell_triangle.capacity() * sizeof(uint16_t);
+  size_t b = sizeof(NavTile) + polygons.capacity() * sizeof(NavPolygon) +
+             edges.capacity() * sizeof(NavEdge) +
+             cell_polygon.capacity() * sizeof(uint16_t);
   for (const auto& side : border) b += side.capacity() * sizeof(side[0]);
   return b;
 }
@@ -391,14 +563,11 @@ std::shared_ptr<const NavMesh> NavMesh::Advance(const NavMesh& previous,
   return mesh;
 }
 
-NavRef NavMesh::Across(NavRef ref, int edge) const {
-  const NavTriangle& t = triangle(ref);
-  const int32_t across = t.across[edge];
-  if (across >= 0) return NavRef{ref.tile, across};
-  if (across == NavTriangle::kWall) return NavRef{};
-  const LatticePoint a = t.corners[edge];
-  const LatticePoint b = t.corners[(edge + 1) % 3];
+NavRef NavMesh::AcrossBorder(NavRef ref, int edge) const {
   const NavTile& tile = *tiles_[ref.tile];
+  const NavPolygonView p = tile.polygon(ref.polygon);
+  const LatticePoint a = p.corner(edge);
+  const LatticePoint b = p.corner(edge + 1);
   const int32_t tx = ref.tile % tiles_x_;
   const int32_t ty = ref.tile / tiles_x_;
   int32_t ntx = tx;
@@ -431,15 +600,22 @@ std::vector<NavRef> NavMesh::Locate(Cell cell) const {
   const int32_t ti = ty * tiles_x_ + tx;
   const NavTile& tile = *tiles_[ti];
   const uint16_t local =
-      tile.cell_triangle[static_cast<size_t>(cell.y - tile.y0) * (tile.x1 - tile.x0) +
-                         (cell.x - tile.x0)];
-  if (local == NavTile::kNoTriangle) return found;
+      tile.cell_polygon[static_cast<size_t>(cell.y - tile.y0) * (tile.x1 - tile.x0) +
+                        (cell.x - tile.x0)];
+  if (local == NavTile::kNoPolygon) return found;
   const NavRef ref{ti, local};
   found.push_back(ref);
-  const LatticePoint p = CentreOf(cell);
-  const NavTriangle& t = tile.triangles[local];
-  for (int i = 0; i < 3; ++i) {
-    if (Orient(t.corners[i], t.corners[(i + 1) % 3], p) != 0) continue;
+  const LatticePoint c = CentreOf(cell);
+  const NavPolygonView p = tile.polygon(local);
+  for (int32_t i = 0; i < p.size; ++i) {
+    // On the edge, not merely on its line (a polygon's side may be several
+    // collinear edges).
+    const LatticePoint a = p.corner(i);
+    const LatticePoint b = p.corner(i + 1);
+    if (Orient(a, b, c) != 0 ||
+        (c.x2 - a.x2) * (c.x2 - b.x2) + (c.y2 - a.y2) * (c.y2 - b.y2) > 0) {
+      continue;
+    }
     const NavRef other = Across(ref, i);
     if (other.valid()) found.push_back(other);
   }
@@ -456,9 +632,15 @@ bool NavMesh::UniformCost() const {
   return values <= 1;
 }
 
+int64_t NavMesh::polygon_count() const {
+  int64_t n = 0;
+  for (const auto& t : tiles_) n += static_cast<int64_t>(t->polygons.size());
+  return n;
+}
+
 int64_t NavMesh::triangle_count() const {
   int64_t n = 0;
-  for (const auto& t : tiles_) n += static_cast<int64_t>(t->triangles.size());
+  for (const auto& t : tiles_) n += t->triangle_count;
   return n;
 }
 
@@ -480,20 +662,21 @@ GeometricStructure DescribeNavMesh(const Grid& grid, bool unknown_is_free) {
   s.kind = "mesh";
   s.counts = {{"tiles", static_cast<int64_t>(mesh->tiles().size())},
               {"vertices", mesh->vertex_count()},
-              {"triangles", mesh->triangle_count()}};
+              {"triangles", mesh->triangle_count()},
+              {"polygons", mesh->polygon_count()}};
   s.bytes = mesh->bytes();
   s.build_time = mesh->build_time();
   for (int32_t ti = 0; ti < static_cast<int32_t>(mesh->tiles().size()); ++ti) {
     const NavTile& tile = mesh->tile(ti);
-    for (int32_t k = 0; k < static_cast<int32_t>(tile.triangles.size()); ++k) {
-      const NavTriangle& t = tile.triangles[k];
-      for (int i = 0; i < 3; ++i) {
-        // Each edge once: from the triangle with the smaller reference.
+    for (int32_t k = 0; k < static_cast<int32_t>(tile.polygons.size()); ++k) {
+      const NavPolygonView p = tile.polygon(k);
+      for (int32_t i = 0; i < p.size; ++i) {
+        // Each edge once: from the polygon with the smaller reference.
         const NavRef other = mesh->Across(NavRef{ti, k}, i);
-        if (other.valid() && (other.tile < ti || (other.tile == ti && other.triangle < k))) {
+        if (other.valid() && (other.tile < ti || (other.tile == ti && other.polygon < k))) {
           continue;
         }
-        s.segments.push_back({ToCellPoint(t.corners[i]), ToCellPoint(t.corners[(i + 1) % 3])});
+        s.segments.push_back({ToCellPoint(p.corner(i)), ToCellPoint(p.corner(i + 1))});
       }
     }
   }

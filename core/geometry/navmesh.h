@@ -1,6 +1,7 @@
 // A navigation mesh of a grid's free space: a constrained Delaunay
-// triangulation (CGAL) of every 32 x 32 tile, free triangles only, with the
-// lookups Polyanya (core/planners/geometric/polyanya.h) and the funnel need.
+// triangulation (CGAL) of every tile, free triangles only, merged into
+// convex polygons, with the lookups Polyanya
+// (core/planners/geometric/polyanya.h) and the funnel need.
 // Derived per (map version, unknown_is_free) and advanced tile by tile: an
 // update re-triangulates only the tiles its cells touch and shares the rest
 // with the previous version.
@@ -31,47 +32,91 @@
 
 namespace pathd {
 
-// A free triangle of one tile: its corners counter-clockwise (y down is
-// still "counter-clockwise" in the sense of a positive cross product) and,
-// for each edge i from corner i to corner i + 1, what lies across it.
-struct NavTriangle {
-  // Across an edge: another triangle of the tile (>= 0), an obstacle or the
-  // map's outside, or the tile's border (the neighbour tile decides).
-  static constexpr int32_t kWall = -1;
-  static constexpr int32_t kTileBorder = -2;
-  std::array<LatticePoint, 3> corners;
-  std::array<int32_t, 3> across;
+// A free convex polygon of one tile, as a range of the tile's edge array:
+// corners counter-clockwise (y down is still "counter-clockwise" in the
+// sense of a positive cross product), edge i running from corner i to
+// corner i + 1 (mod size). Corners may be collinear (an angle of exactly
+// 180 degrees) but never coincide.
+struct NavPolygon {
+  int32_t first = 0;
+  uint16_t size = 0;
+  // Edges with no wall across (another polygon or the tile border): a
+  // polygon with one is a dead end.
+  uint16_t open = 0;
+};
+
+// A polygon edge: its first corner, in doubled cell coordinates (a
+// LatticePoint in half the bytes), and what lies across it: another
+// polygon of the tile (>= 0), NavTile::kWall or NavTile::kTileBorder. One
+// record, because the search reads both of an edge together and far more
+// often than anything else.
+struct NavEdge {
+  int32_t x2 = 0;
+  int32_t y2 = 0;
+  int32_t across = 0;
+  friend bool operator==(const NavEdge&, const NavEdge&) = default;
+};
+
+// One polygon's edges, read through the tile that stores them.
+struct NavPolygonView {
+  const NavEdge* edges = nullptr;
+  int32_t size = 0;
+  int32_t open = 0;
+  // Corner i, for any i in [0, 2 * size).
+  LatticePoint corner(int32_t i) const {
+    const NavEdge& e = edges[i < size ? i : i - size];
+    return LatticePoint{e.x2, e.y2};
+  }
+  // What lies across edge i, for i in [0, size).
+  int32_t across(int32_t i) const { return edges[i].across; }
 };
 
 // The mesh of one tile: cells [x0, x1) x [y0, y1). Immutable once built.
+// The tile's constrained Delaunay triangles are merged into maximal convex
+// polygons (Hertel & Mehlhorn, "Fast triangulation of simple polygons",
+// 1983: drop a non-constraint diagonal while both angles it ends in stay
+// convex), because Polyanya splits an interval at every vertex it sees:
+// fewer, larger polygons mean fewer search nodes.
 struct NavTile {
+  // Across an edge: another polygon of the tile (>= 0), an obstacle or the
+  // map's outside, or the tile's border (the neighbour tile decides).
+  static constexpr int32_t kWall = -1;
+  static constexpr int32_t kTileBorder = -2;
   int32_t x0 = 0;
   int32_t y0 = 0;
   int32_t x1 = 0;
   int32_t y1 = 0;
-  std::vector<NavTriangle> triangles;
-  // Row-major over the tile's cells: the triangle containing the cell's
-  // centre, kNoTriangle for blocked cells.
-  static constexpr uint16_t kNoTriangle = 0xffff;
-  std::vector<uint16_t> cell_triangle;
+  std::vector<NavPolygon> polygons;
+  // Per polygon edge, indexed by NavPolygon::first + i.
+  std::vector<NavEdge> edges;
+  // Row-major over the tile's cells: the polygon containing the cell's
+  // centre, kNoPolygon for blocked cells.
+  static constexpr uint16_t kNoPolygon = 0xffff;
+  std::vector<uint16_t> cell_polygon;
   // Edges on the tile's border, per side (0: y = y0, 1: x = x1, 2: y = y1,
   // 3: x = x0), sorted by their lower coordinate along the side: (lower
-  // coordinate, triangle).
+  // coordinate, polygon).
   std::array<std::vector<std::pair<int32_t, int32_t>>, 4> border;
   // Mesh vertices of the tile (grid corners), for descriptions.
   int32_t vertex_count = 0;
+  // Triangles of the tile before merging, for descriptions.
+  int32_t triangle_count = 0;
   // Bit v set when a traversable cell of the tile costs v (unknown cells
   // traversed as free count as 0), so planners that need uniform cost can
   // check a whole map in a few words per tile.
   std::array<uint64_t, 4> traversable_costs{};
 
+  NavPolygonView polygon(int32_t index) const {
+    const NavPolygon& p = polygons[static_cast<size_t>(index)];
+    return NavPolygonView{edges.data() + p.first, p.size, p.open};
+  }
   size_t bytes() const;
 };
 
-// A triangle of the mesh: tile index and triangle within the tile.
+// A polygon of the mesh: tile index and polygon within the tile.
 struct NavRef {
   int32_t tile = -1;
-  int32_t triangle = -1;
+  int32_t polygon = -1;
   bool valid() const { return tile >= 0; }
   friend bool operator==(const NavRef&, const NavRef&) = default;
 };
@@ -80,12 +125,16 @@ struct NavRef {
 // built; versions share unchanged tiles.
 class NavMesh {
  public:
-  // Tile side in cells. 32 searches as fast as 64 (tile borders add few
-  // triangles) and builds faster; 100 scattered changed cells re-mesh 9x
-  // cheaper than a rebuild on a 1024^2 map (64: 2x, 16: 27x, at 20-70%
-  // more search nodes). navmesh_bench --tile_size measures the trade.
-  static constexpr int32_t kDefaultTileSize = 32;
-  // A tile's triangles are numbered in 16 bits: at most 2 (s + 1)^2.
+  // Tile side in cells. An update re-meshes every tile a changed cell
+  // touches, so 100 scattered cells on a 1024^2 map touch ~120 of 4096
+  // tiles at 16 (re-meshed ~20x cheaper than a rebuild) but ~105 of 1024
+  // at 32 (under 10x whatever a tile costs). With convex polygons, 16 costs
+  // 6-9% more search nodes than 32 where obstacles are dense (random,
+  // maze512-1) and up to 3x on open maps (maze512-32, 32room), which stay
+  // 9-28x faster than A* there. navmesh_bench --tile_size measures the
+  // trade.
+  static constexpr int32_t kDefaultTileSize = 16;
+  // A tile's polygons are numbered in 16 bits: at most 2 (s + 1)^2.
   static constexpr int32_t kMaxTileSize = 128;
 
   // The mesh of `grid`'s free space (cells Traversable under
@@ -111,14 +160,21 @@ class NavMesh {
   int32_t tiles_y() const { return tiles_y_; }
   const std::vector<std::shared_ptr<const NavTile>>& tiles() const { return tiles_; }
   const NavTile& tile(int32_t index) const { return *tiles_[index]; }
-  const NavTriangle& triangle(NavRef ref) const {
-    return tiles_[ref.tile]->triangles[ref.triangle];
+  NavPolygonView polygon(NavRef ref) const {
+    return tiles_[ref.tile]->polygon(ref.polygon);
   }
 
-  // The triangle across edge `edge` of `ref`; invalid when an obstacle or
-  // the map's outside is there.
-  NavRef Across(NavRef ref, int edge) const;
-  // The free triangles whose closure holds the centre of `cell` (one, or
+  // The polygon across edge `edge` of `ref`; invalid when an obstacle or
+  // the map's outside is there. Inline for the search's inner loop; a tile
+  // border is looked up in the neighbour tile.
+  NavRef Across(NavRef ref, int edge) const {
+    const NavTile& tile = *tiles_[ref.tile];
+    const int32_t across = tile.edges[tile.polygons[ref.polygon].first + edge].across;
+    if (across >= 0) return NavRef{ref.tile, across};
+    if (across == NavTile::kWall) return NavRef{};
+    return AcrossBorder(ref, edge);
+  }
+  // The free polygons whose closure holds the centre of `cell` (one, or
   // two when it lies on their shared edge); empty for a blocked cell.
   std::vector<NavRef> Locate(Cell cell) const;
 
@@ -126,7 +182,8 @@ class NavMesh {
   // tiles). O(tiles).
   bool UniformCost() const;
 
-  // Totals over the tiles.
+  // Totals over the tiles (triangles: before merging into polygons).
+  int64_t polygon_count() const;
   int64_t triangle_count() const;
   int64_t vertex_count() const;
   size_t bytes() const;
@@ -137,6 +194,7 @@ class NavMesh {
 
  private:
   NavMesh() = default;
+  NavRef AcrossBorder(NavRef ref, int edge) const;
 
   int32_t width_ = 0;
   int32_t height_ = 0;

@@ -118,7 +118,7 @@ class ThetaParentUpdate {
     node.parent = parent;
     entry.g = g;
     const double f = g + h_(at.x, at.y);
-    if (!open.empty() && f > open.Top().f) {
+    if (!open.empty() && OpenList::Key(f) > open.Top().f) {
       open.Push(index, f, g);
       return false;
     }

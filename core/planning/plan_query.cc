@@ -35,7 +35,6 @@ absl::StatusOr<std::shared_ptr<const Grid>> PlanningGrid(const PlanQuery& query,
   return std::make_shared<const Grid>(std::move(shaped));
 }
 
-
 // The goal on the inflated map. Inflation only blocks cells, so the stored
 // map's choice, when still free, is also the nearest free cell of the
 // inflated map (NearestTraversableCell orders by distance, then y, then x):

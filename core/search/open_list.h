@@ -5,6 +5,7 @@
 #ifndef PATHD_CORE_SEARCH_OPEN_LIST_H_
 #define PATHD_CORE_SEARCH_OPEN_LIST_H_
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -23,6 +24,24 @@ class OpenList {
   explicit OpenList(SearchScratch& scratch)
       : scratch_(scratch), heap_(scratch.open()) {}
 
+  // The key an f is ordered by: f with the low kTieBits bits of its
+  // mantissa cleared. Octile costs sum multiples of a full-precision
+  // sqrt(2), so two paths of equal cost (a straight and a diagonal step in
+  // either order) rarely give bit-equal f, and "larger g first" then almost
+  // never fired (warthog, whose costs are integers, expanded 27% fewer nodes
+  // on Denver_0_512). Rounding over a path stays near 1e-13 relative, so
+  // equal f land in one bucket of 2^-32 relative width (unless they straddle
+  // an edge, about one tie in a thousand) and compare by g. Truncation keeps
+  // the order of f (f >= 0 here), so the order stays a strict weak order and
+  // a search ends at most one bucket (2.3e-10 relative) above the optimum,
+  // far inside the 1e-9 every optimality check allows. Compare f with Top()
+  // through Key.
+  static constexpr int kTieBits = 20;
+  static double Key(double f) {
+    return std::bit_cast<double>(std::bit_cast<uint64_t>(f) &
+                                 ~((uint64_t{1} << kTieBits) - 1));
+  }
+
   bool empty() const { return heap_.empty(); }
   size_t size() const { return heap_.size(); }
 
@@ -30,6 +49,7 @@ class OpenList {
   // usually lowers f, but not under every priority (greedy's f = h keeps f and
   // loses the larger-g tie-break), so the entry may have to move either way.
   void Push(uint32_t index, double f, double g) {
+    f = Key(f);
     SearchScratch::Node& node = scratch_.Raw(index);
     if (node.open_pos >= 0) {
       SearchScratch::OpenEntry& entry = heap_[node.open_pos];

@@ -1,10 +1,10 @@
 // navmesh_bench: the navigation mesh and Polyanya, in figures.
-//  - Per Moving AI map: mesh build time, triangles, bytes; then a spread of
-//    its scenarios (every k-th, across all buckets) planned by `navmesh`
-//    (mesh cached, as the server's derived store keeps it), `astar` and
-//    `theta_star`, with the mean time per query of each, and the checks
-//    that every navmesh polyline is clear and never longer than Theta*'s
-//    path.
+//  - Per Moving AI map: mesh build time, triangles and the convex polygons
+//    merged from them, bytes; then a spread of its scenarios (every k-th,
+//    across all buckets) planned by `navmesh` (mesh cached, as the
+//    server's derived store keeps it), `astar` and `theta_star`, with the
+//    mean time per query of each, and the checks that every navmesh
+//    polyline is clear and never longer than Theta*'s path.
 //  - Advance: on a random 1024 x 1024 map, re-meshing after 1, 10 and 100
 //    changed cells against a rebuild (medians over trials).
 // Figures, not assertions.
@@ -109,12 +109,13 @@ void BenchMap(const std::filesystem::path& root, const std::string& name) {
   }
   const double k = static_cast<double>(n);
   std::printf(
-      "%-28s %5dx%-5d build %8.1f ms %7lld tris %7.2f MB | %3zu queries: navmesh %8.1f us "
+      "%-28s %5dx%-5d build %8.1f ms %7lld tris %7lld polys %7.2f MB | %3zu queries: navmesh %8.1f us "
       "(%6.0f exp)  astar %9.1f us  theta* %9.1f us  x%5.1f vs theta*  x%5.1f vs astar | "
       "bad %d longer-than-theta* %d\n",
       name.c_str(), grid->width(), grid->height(),
       absl::ToDoubleMilliseconds(mesh->build_time()),
-      static_cast<long long>(mesh->triangle_count()), mesh->bytes() / 1048576.0, n,
+      static_cast<long long>(mesh->triangle_count()),
+      static_cast<long long>(mesh->polygon_count()), mesh->bytes() / 1048576.0, n,
       Micros(t_mesh) / k, static_cast<double>(expansions) / k, Micros(t_astar) / k,
       Micros(t_theta) / k, Micros(t_theta) / Micros(t_mesh),
       Micros(t_astar) / Micros(t_mesh), bad, longer);
@@ -170,9 +171,10 @@ void BenchAdvance() {
   std::shared_ptr<const NavMesh> mesh =
       NavMesh::Build(grid, false, absl::GetFlag(FLAGS_tile_size));
   const double build_ms = absl::ToDoubleMilliseconds(absl::Now() - t0);
-  std::printf("random %dx%d: build %.1f ms, %lld triangles, %.1f MB, %zu tiles\n", kSide,
-              kSide, build_ms, static_cast<long long>(mesh->triangle_count()),
-              mesh->bytes() / 1048576.0, mesh->tiles().size());
+  std::printf("random %dx%d: build %.1f ms, %lld triangles, %lld polygons, %.1f MB, %zu tiles\n",
+              kSide, kSide, build_ms, static_cast<long long>(mesh->triangle_count()),
+              static_cast<long long>(mesh->polygon_count()), mesh->bytes() / 1048576.0,
+              mesh->tiles().size());
   // Scattered cells are the worst case (each may touch its own tile); a
   // square is what a robot's sensor reports.
   for (const bool clustered : {false, true}) {

@@ -1,11 +1,11 @@
-// Polyanya on the tiled constrained Delaunay mesh, and the `navmesh` planner.
+// Polyanya on the tiled mesh of convex polygons, and the `navmesh` planner.
 //
 // Exactness: roots are the start centre or mesh vertices (grid corners), so
 // they are lattice points, and an interval is stored not by its end points
 // but by the two rays from its root that bound it, each through a lattice
 // point (an interval end is either a mesh vertex or where the ray from the
 // root through an earlier vertex meets the edge). Every decision (which
-// edge a ray leaves a triangle through, whether an end is a vertex, whether
+// edge a ray leaves a polygon through, whether an end is a vertex, whether
 // the goal is in view) is then an integer cross product; floating point
 // only enters the heuristic. A turn is taken only at a bend corner (exactly
 // one of the four cells blocked) whose blocked cell lies inside the bend: a
@@ -13,7 +13,7 @@
 //
 // Pruning: the paper's root-level (a node whose root was reached more
 // cheaply is dropped, when queued and again when taken), dead-end (no node
-// into a triangle with one open edge) and intermediate (a lone successor
+// into a polygon with one open edge) and intermediate (a lone successor
 // with the same root is expanded at once); and duplicates: on a grid map
 // many rays graze vertices exactly, so equal intervals from equal roots are
 // reached in several ways, and left alone they multiply at every corner
@@ -40,16 +40,24 @@
 namespace pathd {
 namespace {
 
-// A direction in doubled cell coordinates.
+// A direction in doubled cell coordinates: a difference of two points of a
+// grid (sides at most kMaxGridDimension = 2^16 cells), so 32 bits hold it
+// and 64 its products.
+// Search nodes and their keys are what the search moves through memory,
+// so they are kept small.
 struct Vec {
-  int64_t x = 0;
-  int64_t y = 0;
+  int32_t x = 0;
+  int32_t y = 0;
 };
-Vec Sub(LatticePoint a, LatticePoint b) { return Vec{a.x2 - b.x2, a.y2 - b.y2}; }
-int64_t Cross(Vec a, Vec b) { return a.x * b.y - a.y * b.x; }
+Vec Sub(LatticePoint a, LatticePoint b) {
+  return Vec{static_cast<int32_t>(a.x2 - b.x2), static_cast<int32_t>(a.y2 - b.y2)};
+}
+int64_t Cross(Vec a, Vec b) {
+  return static_cast<int64_t>(a.x) * b.y - static_cast<int64_t>(a.y) * b.x;
+}
 // The same direction with coprime components (zero stays zero).
 Vec Reduced(Vec v) {
-  const int64_t d = std::gcd(v.x < 0 ? -v.x : v.x, v.y < 0 ? -v.y : v.y);
+  const int32_t d = std::gcd(v.x < 0 ? -v.x : v.x, v.y < 0 ? -v.y : v.y);
   return d == 0 ? v : Vec{v.x / d, v.y / d};
 }
 
@@ -65,13 +73,16 @@ struct Node {
   Vec right;
   NavRef polygon;
   // Entry edge index in `polygon`; kFinal for a node that reached the goal.
-  int8_t edge = 0;
-  double g = 0.0;
-  double f = 0.0;
+  int32_t edge = 0;
   // The root's entry in PolyanyaScratch::records.
   int32_t record = 0;
+  double g = 0.0;
+  double f = 0.0;
+  // The node's number in PolyanyaScratch::queued, -1 when it was not
+  // checked for duplicates.
+  int32_t key = -1;
 };
-constexpr int8_t kFinal = -1;
+constexpr int32_t kFinal = -1;
 
 // A turning point of the path and the one before it.
 struct Record {
@@ -85,16 +96,14 @@ struct Record {
 // on both sides of it; two turns at one corner sweep the same fan), and
 // left alone they multiply at every corner after.
 struct NodeKey {
-  int64_t root_x2, root_y2;
-  int64_t lx, ly, rx, ry;
-  int32_t tile, triangle;
+  int32_t root_x2, root_y2;
+  int32_t lx, ly, rx, ry;
+  int32_t tile, polygon;
   int32_t edge;
   friend bool operator==(const NodeKey&, const NodeKey&) = default;
   size_t Hash() const {
     uint64_t h = 0x9e3779b97f4a7c15ull;
-    for (const int64_t v : {root_x2, root_y2, lx, ly, rx, ry,
-                            static_cast<int64_t>(tile), static_cast<int64_t>(triangle),
-                            static_cast<int64_t>(edge)}) {
+    for (const int32_t v : {root_x2, root_y2, lx, ly, rx, ry, tile, polygon, edge}) {
       // splitmix64 over the running value.
       h += static_cast<uint64_t>(v) + 0x9e3779b97f4a7c15ull;
       h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -105,99 +114,102 @@ struct NodeKey {
   }
 };
 
-// The smallest g each node was queued with: open addressing whose slots
-// are emptied between searches by a stamp, so a search costs nothing for
-// the table's size and its memory is kept.
+// Node identities seen by the search, each numbered (0, 1, ... in order of
+// insertion) so that the smallest g it was queued with lives in a plain
+// array the node can index when it leaves the open list, without hashing
+// its key again. Open addressing over small slots (a fingerprint of the
+// key and its number; the keys themselves in insertion order), since a
+// probe is usually a cache miss; slots are emptied between searches by a
+// stamp, so a search costs nothing for the table's size and its memory is
+// kept.
 class QueuedTable {
  public:
   // Starts a new search: every slot empty.
   void Clear() {
-    size_ = 0;
+    keys_.clear();
     if (++stamp_ == 0) {
       for (Slot& s : slots_) s.stamp = 0;
       stamp_ = 1;
     }
   }
-  // The g recorded for `key`, inserting `g` when absent (then returns
-  // nullptr).
-  double* FindOrInsert(const NodeKey& key, double g) {
-    if (2 * (size_ + 1) > slots_.size()) Grow();
+  // The number of `key`; `inserted` says whether it is new (then it is the
+  // number of keys inserted before it).
+  int32_t FindOrInsert(const NodeKey& key, bool& inserted) {
+    if (2 * (keys_.size() + 1) > slots_.size()) Grow();
+    const size_t hash = key.Hash();
+    const uint32_t fingerprint = static_cast<uint32_t>(hash >> 32);
     const size_t mask = slots_.size() - 1;
-    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
+    for (size_t i = hash & mask;; i = (i + 1) & mask) {
       Slot& s = slots_[i];
       if (s.stamp != stamp_) {
-        s = Slot{key, g, stamp_};
-        ++size_;
-        return nullptr;
+        s = Slot{stamp_, fingerprint, static_cast<int32_t>(keys_.size())};
+        keys_.push_back(key);
+        inserted = true;
+        return s.id;
       }
-      if (s.key == key) return &s.g;
+      if (s.fingerprint == fingerprint && keys_[static_cast<size_t>(s.id)] == key) {
+        inserted = false;
+        return s.id;
+      }
     }
   }
-  const double* Find(const NodeKey& key) const {
-    if (slots_.empty()) return nullptr;
-    const size_t mask = slots_.size() - 1;
-    for (size_t i = key.Hash() & mask;; i = (i + 1) & mask) {
-      const Slot& s = slots_[i];
-      if (s.stamp != stamp_) return nullptr;
-      if (s.key == key) return &s.g;
-    }
+  size_t bytes() const {
+    return slots_.capacity() * sizeof(Slot) + keys_.capacity() * sizeof(NodeKey);
   }
-  size_t bytes() const { return slots_.capacity() * sizeof(Slot); }
 
  private:
   struct Slot {
-    NodeKey key;
-    double g = 0.0;
     uint32_t stamp = 0;
+    uint32_t fingerprint = 0;
+    int32_t id = 0;
   };
   void Grow() {
-    std::vector<Slot> old;
-    old.swap(slots_);
-    slots_.assign(std::max<size_t>(1024, 2 * old.size()), Slot{});
-    const uint32_t live = stamp_;
+    slots_.assign(std::max<size_t>(1024, 2 * slots_.size()), Slot{});
     stamp_ = 1;
-    size_ = 0;
-    for (const Slot& s : old) {
-      if (s.stamp == live) FindOrInsert(s.key, s.g);
+    const size_t mask = slots_.size() - 1;
+    for (size_t id = 0; id < keys_.size(); ++id) {
+      const size_t hash = keys_[id].Hash();
+      size_t i = hash & mask;
+      while (slots_[i].stamp == stamp_) i = (i + 1) & mask;
+      slots_[i] = Slot{stamp_, static_cast<uint32_t>(hash >> 32), static_cast<int32_t>(id)};
     }
   }
 
   std::vector<Slot> slots_;
-  size_t size_ = 0;
+  std::vector<NodeKey> keys_;
   uint32_t stamp_ = 1;
 };
 
-struct HeapEntry {
-  double f;
-  double g;
-  int32_t node;
-};
+// The open list holds the nodes themselves: taking one then reads the
+// heap's top, where an index into a node array would cost a cache miss.
 // Smallest f first, larger g among equal f (deeper nodes, as the grid
 // searches break ties).
-bool operator<(const HeapEntry& a, const HeapEntry& b) {
+bool OpenBefore(const Node& a, const Node& b) {
   return a.f != b.f ? a.f > b.f : a.g < b.g;
 }
 
+// Root-level pruning: the best g a vertex (grid corner) was reached with,
+// valid where stamp == the search's.
+struct CornerG {
+  double g = 0.0;
+  uint32_t stamp = 0;
+};
+
 // What the search keeps in a SearchScratch between queries.
 struct PolyanyaScratch final : public SearchScratch::Extension {
-  std::vector<Node> nodes;
   std::vector<Record> records;
-  std::vector<HeapEntry> open;
+  std::vector<Node> open;
   std::vector<Node> pending;
-  // The smallest g each node was queued with.
+  // The node identities queued, and the smallest g each was queued with.
   QueuedTable queued;
-  // Root-level pruning: the best g a vertex (grid corner) was reached with,
-  // valid where stamp == search.
-  std::vector<double> best_g;
-  std::vector<uint32_t> stamp;
+  std::vector<double> queued_g;
+  std::vector<CornerG> corner_g;
   uint32_t search = 0;
 
   size_t MemoryBytes() const override {
-    return nodes.capacity() * sizeof(Node) + records.capacity() * sizeof(Record) +
-           open.capacity() * sizeof(HeapEntry) + pending.capacity() * sizeof(Node) +
-           queued.bytes() +
-           best_g.capacity() * sizeof(double) +
-           stamp.capacity() * sizeof(uint32_t);
+    return records.capacity() * sizeof(Record) + open.capacity() * sizeof(Node) +
+           pending.capacity() * sizeof(Node) + queued.bytes() +
+           queued_g.capacity() * sizeof(double) + corner_g.capacity() * sizeof(CornerG);
   }
 };
 
@@ -274,7 +286,7 @@ class Search {
     if (start_polygons.empty() || goal_polygons_.empty()) return out;
     for (const NavRef& p : start_polygons) {
       if (IsGoalPolygon(p)) {
-        // Both points in one convex triangle: the straight segment.
+        // Both points in one convex polygon: the straight segment.
         out.outcome = PlanOutcome::kFound;
         out.polyline = {start_};
         if (!(goal_ == start_)) out.polyline.push_back(goal_);
@@ -284,10 +296,10 @@ class Search {
     Reset();
     s_.records.push_back(Record{start_, -1});
     for (const NavRef& p : start_polygons) {
-      const NavTriangle& t = mesh_.triangle(p);
-      for (int i = 0; i < 3; ++i) {
-        const LatticePoint u = t.corners[i];
-        const LatticePoint w = t.corners[(i + 1) % 3];
+      const NavPolygonView poly = mesh_.polygon(p);
+      for (int32_t i = 0; i < poly.size; ++i) {
+        const LatticePoint u = poly.corner(i);
+        const LatticePoint w = poly.corner(i + 1);
         // An edge through the start belongs to the other start polygon.
         if (Orient(u, w, start_) == 0) continue;
         Push(start_, Sub(w, start_), Sub(u, start_), p, i, 0.0, 0);
@@ -295,15 +307,16 @@ class Search {
     }
     FlushPending();
     while (!s_.open.empty()) {
-      const HeapEntry top = s_.open.front();
-      const PlanOutcome o = stop_.Check(out.expansions, top.f);
+      const PlanOutcome o = stop_.Check(out.expansions, s_.open.front().f);
       if (o != PlanOutcome::kFound) {
         out.outcome = o;
         return out;
       }
-      std::pop_heap(s_.open.begin(), s_.open.end());
+      std::pop_heap(s_.open.begin(), s_.open.end(), OpenBefore);
+      Node node = s_.open.back();
+      // A lower bound on the f of the lone successors expanded below.
+      const double f = node.f;
       s_.open.pop_back();
-      Node node = s_.nodes[static_cast<size_t>(top.node)];
       if (Superseded(node)) continue;
       ++out.expansions;
       if (node.edge == kFinal) {
@@ -316,7 +329,7 @@ class Search {
       // root is expanded at once instead of through the open list.
       while (s_.pending.size() == 1 && s_.pending[0].edge != kFinal &&
              s_.pending[0].record == node.record) {
-        const PlanOutcome o2 = stop_.Check(out.expansions, s_.pending[0].f);
+        const PlanOutcome o2 = stop_.Check(out.expansions, f);
         if (o2 != PlanOutcome::kFound) {
           out.outcome = o2;
           return out;
@@ -335,20 +348,19 @@ class Search {
  private:
   void Reset() {
     const size_t corners = static_cast<size_t>(grid_.width() + 1) * (grid_.height() + 1);
-    if (s_.stamp.size() != corners) {
-      s_.stamp.assign(corners, 0);
-      s_.best_g.assign(corners, 0.0);
+    if (s_.corner_g.size() != corners) {
+      s_.corner_g.assign(corners, CornerG{});
       s_.search = 0;
     }
     if (++s_.search == 0) {
-      std::fill(s_.stamp.begin(), s_.stamp.end(), 0);
+      std::fill(s_.corner_g.begin(), s_.corner_g.end(), CornerG{});
       s_.search = 1;
     }
-    s_.nodes.clear();
     s_.records.clear();
     s_.open.clear();
     s_.pending.clear();
     s_.queued.Clear();
+    s_.queued_g.clear();
   }
 
   bool IsGoalPolygon(NavRef p) const {
@@ -399,13 +411,13 @@ class Search {
   bool RecordRootG(LatticePoint root, double g) {
     if (root == start_) return true;
     const size_t id = CornerId(root);
-    if (s_.stamp[id] != s_.search) {
-      s_.stamp[id] = s_.search;
-      s_.best_g[id] = g;
+    CornerG& c = s_.corner_g[id];
+    if (c.stamp != s_.search) {
+      c = CornerG{g, s_.search};
       return true;
     }
-    if (g > s_.best_g[id] + 1e-9) return false;
-    s_.best_g[id] = std::min(s_.best_g[id], g);
+    if (g > c.g + 1e-9) return false;
+    c.g = std::min(c.g, g);
     return true;
   }
 
@@ -417,10 +429,10 @@ class Search {
   // Successors wait in `pending` until their parent's expansion is done.
   void PushEntry(const Node& n) { s_.pending.push_back(n); }
   void FlushPending() {
-    for (const Node& n : s_.pending) {
-      s_.nodes.push_back(n);
-      s_.open.push_back(HeapEntry{n.f, n.g, static_cast<int32_t>(s_.nodes.size() - 1)});
-      std::push_heap(s_.open.begin(), s_.open.end());
+    for (Node& n : s_.pending) {
+      SetF(n);
+      s_.open.push_back(n);
+      std::push_heap(s_.open.begin(), s_.open.end(), OpenBefore);
     }
     s_.pending.clear();
   }
@@ -431,51 +443,64 @@ class Search {
             double g, int32_t record) {
     const NavRef next = mesh_.Across(from, edge);
     if (!next.valid() || (DeadEnd(next) && !IsGoalPolygon(next))) return;
-    const NavTriangle& ft = mesh_.triangle(from);
+    const NavPolygonView fp = mesh_.polygon(from);
     // The next polygon's entry edge runs a -> b.
-    const LatticePoint a = ft.corners[(edge + 1) % 3];
-    const LatticePoint b = ft.corners[edge];
+    const LatticePoint a = fp.corner(edge + 1);
+    const LatticePoint b = fp.corner(edge);
     const bool on_line = Orient(a, b, root) == 0;
     // On the edge's line only an end of the edge may be the root.
     if (on_line && !(root == a) && !(root == b)) return;
     if (!RecordRootG(root, g)) return;
-    const NavTriangle& nt = mesh_.triangle(next);
-    int8_t entry = 0;
-    while (!(nt.corners[entry] == a)) ++entry;
-    Node node{root, left, right, next, entry, g, 0.0, record};
+    const NavPolygonView np = mesh_.polygon(next);
+    int32_t entry = 0;
+    while (!(np.corner(entry) == a)) ++entry;
+    Node node{root, left, right, next, entry, record, g, 0.0};
     // Only a turn (a root new to this branch) or a sweep round a root's fan
     // can meet a node queued before; the cone of one root splits without
     // overlap.
     if (record != expanding_record_ || on_line) {
-      if (double* queued = s_.queued.FindOrInsert(KeyOf(node), g)) {
-        if (*queued <= g + 1e-9) return;
-        *queued = g;
+      bool inserted = false;
+      node.key = s_.queued.FindOrInsert(KeyOf(node), inserted);
+      if (inserted) {
+        s_.queued_g.push_back(g);
+      } else {
+        double& queued = s_.queued_g[static_cast<size_t>(node.key)];
+        if (queued <= g + 1e-9) return;
+        queued = g;
       }
     }
-    const Pt l = on_line ? ToPt(a) : RayHit(root, left, a, b);
-    const Pt r = on_line ? ToPt(b) : RayHit(root, right, a, b);
-    node.f = g + 0.5 * IntervalHeuristic(ToPt(root), l, r, ToPt(goal_));
     PushEntry(node);
   }
 
-  // A triangle with one open edge: whatever enters it can only leave the
+  // f = g + h of a node entering the open list. Left until then because a
+  // lone successor with its parent's root is expanded at once (intermediate
+  // pruning) and never needs it.
+  void SetF(Node& n) const {
+    if (n.edge == kFinal) return;
+    const NavPolygonView p = mesh_.polygon(n.polygon);
+    const LatticePoint a = p.corner(n.edge);
+    const LatticePoint b = p.corner(n.edge + 1);
+    const bool on_line = Orient(a, b, n.root) == 0;
+    const Pt l = on_line ? ToPt(a) : RayHit(n.root, n.left, a, b);
+    const Pt r = on_line ? ToPt(b) : RayHit(n.root, n.right, a, b);
+    n.f = n.g + 0.5 * IntervalHeuristic(ToPt(n.root), l, r, ToPt(goal_));
+  }
+
+  // A polygon with one open edge: whatever enters it can only leave the
   // way it came (dead-end pruning, from the paper).
   bool DeadEnd(NavRef p) const {
-    const NavTriangle& t = mesh_.triangle(p);
-    int open = 0;
-    for (const int32_t a : t.across) open += a == NavTriangle::kWall ? 0 : 1;
-    return open <= 1;
+    return mesh_.polygon(p).open <= 1;
   }
 
   NodeKey KeyOf(const Node& n) const {
     // Rays only matter off the entry edge's line.
-    const NavTriangle& t = mesh_.triangle(n.polygon);
-    const bool on_line =
-        Orient(t.corners[n.edge], t.corners[(n.edge + 1) % 3], n.root) == 0;
+    const NavPolygonView p = mesh_.polygon(n.polygon);
+    const bool on_line = Orient(p.corner(n.edge), p.corner(n.edge + 1), n.root) == 0;
     const Vec l = on_line ? Vec{} : Reduced(n.left);
     const Vec r = on_line ? Vec{} : Reduced(n.right);
-    return NodeKey{n.root.x2, n.root.y2, l.x, l.y, r.x, r.y,
-                   n.polygon.tile, n.polygon.triangle, n.edge};
+    return NodeKey{static_cast<int32_t>(n.root.x2), static_cast<int32_t>(n.root.y2),
+                   l.x, l.y, r.x, r.y,
+                   n.polygon.tile, n.polygon.polygon, n.edge};
   }
   // A node queued again later with a smaller g, or whose root has been
   // reached more cheaply since it was queued (root-level pruning applied
@@ -484,10 +509,10 @@ class Search {
     if (n.edge == kFinal) return false;
     if (!(n.root == start_)) {
       const size_t id = CornerId(n.root);
-      if (s_.stamp[id] == s_.search && s_.best_g[id] < n.g - 1e-9) return true;
+      const CornerG& c = s_.corner_g[id];
+      if (c.stamp == s_.search && c.g < n.g - 1e-9) return true;
     }
-    const double* queued = s_.queued.Find(KeyOf(n));
-    return queued != nullptr && *queued < n.g - 1e-9;
+    return n.key >= 0 && s_.queued_g[static_cast<size_t>(n.key)] < n.g - 1e-9;
   }
 
   void PushFinal(double g, int32_t record) {
@@ -499,23 +524,39 @@ class Search {
     PushEntry(n);
   }
 
+  // The polygon's boundary beyond the entry edge a -> b, as seen from the
+  // root: the far chain w_0 = b, w_1, ..., w_m = a (counter-clockwise, so
+  // from the right of the cone to its left), edge j running w_j -> w_j+1.
+  struct FarChain {
+    NavPolygonView polygon;
+    int32_t entry;
+    int32_t m() const { return polygon.size - 1; }
+    LatticePoint w(int32_t j) const { return polygon.corner(entry + 1 + j); }
+    int32_t edge(int32_t j) const {
+      const int32_t i = entry + 1 + j;
+      return i < polygon.size ? i : i - polygon.size;
+    }
+  };
+
   void Expand(const Node& node) {
     expanding_record_ = node.record;
-    const NavTriangle& t = mesh_.triangle(node.polygon);
-    const int e = node.edge;
-    const LatticePoint a = t.corners[e];
-    const LatticePoint b = t.corners[(e + 1) % 3];
-    const LatticePoint c = t.corners[(e + 2) % 3];
+    const FarChain chain{mesh_.polygon(node.polygon), node.edge};
+    const int32_t m = chain.m();
+    const LatticePoint a = chain.w(m);
+    const LatticePoint b = chain.w(0);
     const LatticePoint s = node.root;
-    const int bc = (e + 1) % 3;
-    const int ca = (e + 2) % 3;
     if (Orient(a, b, s) == 0) {
-      ExpandFromVertex(node, t, e);
+      ExpandFromVertex(node, chain);
       return;
     }
-    const Vec sc = Sub(c, s);
-    const int64_t op = Cross(node.left, sc);   // > 0: c left of the left ray
-    const int64_t oq = Cross(node.right, sc);  // < 0: c right of the right ray
+    // The far corners strictly right of the right ray are w_1 .. w_r, those
+    // strictly left of the left ray w_l .. w_m-1 (the chain is in angular
+    // order as seen from the root, as far as the cone reaches); the cone
+    // leaves through edges r .. l - 1, cut at the far corners between.
+    int32_t r = 0;
+    while (r + 1 < m && Cross(node.right, Sub(chain.w(r + 1), s)) < 0) ++r;
+    int32_t l = m;
+    while (l - 1 > r && Cross(node.left, Sub(chain.w(l - 1), s)) > 0) --l;
     const bool left_at_a = Cross(node.left, Sub(a, s)) == 0;
     const bool right_at_b = Cross(node.right, Sub(b, s)) == 0;
 
@@ -532,64 +573,86 @@ class Search {
       }
     }
 
-    // Observable successors: the cone beyond the entry interval.
-    if (op > 0) {
-      Push(s, node.left, node.right, node.polygon, bc, node.g, node.record);
-    } else if (oq < 0) {
-      Push(s, node.left, node.right, node.polygon, ca, node.g, node.record);
-    } else {
-      // c in the closed cone: [c, right end] on b-c and [left end, c] on
-      // c-a; c ends both, so either side may turn there. A ray through c
-      // exactly gives a one-point interval on both edges: beyond c the
-      // point walks round c's fan both ways, so a path going straight on
-      // past c finds the side an obstacle at c leaves open.
-      Push(s, sc, node.right, node.polygon, bc, node.g, node.record);
-      Push(s, node.left, sc, node.polygon, ca, node.g, node.record);
+    // Observable successors: the cone beyond the entry interval, one node
+    // per edge it leaves through. A ray through a far corner exactly gives
+    // a one-point interval on the edge beyond it: past the corner the
+    // point walks round the corner's fan, so a path going straight on past
+    // it finds the side an obstacle there leaves open.
+    for (int32_t j = r; j < l; ++j) {
+      const Vec right = j == r ? node.right : Sub(chain.w(j), s);
+      const Vec left = j + 1 == l ? node.left : Sub(chain.w(j + 1), s);
+      Push(s, left, right, node.polygon, chain.edge(j), node.g, node.record);
     }
 
     // Non-observable successors: around an end of the interval that is an
-    // obstacle corner, with that corner as the new root.
+    // obstacle corner, with that corner as the new root: the edges beyond
+    // the cone on that side, the one the cone's ray crosses from the ray's
+    // continuation past the corner.
     if (left_at_a && CanTurn(s, a, /*left=*/true)) {
       const double g = node.g + Distance(s, a);
       if (RecordRootG(a, g)) {
         const int32_t rec = Turn(a, node.record);
-        const Vec d = Sub(a, s);
-        if (op > 0) Push(a, Sub(c, a), d, node.polygon, bc, g, rec);
-        Push(a, Sub(a, a), Sub(c, a), node.polygon, ca, g, rec);
+        if (l < m) {
+          Push(a, Sub(chain.w(l), a), Sub(a, s), node.polygon, chain.edge(l - 1), g, rec);
+        }
+        for (int32_t j = l; j + 1 < m; ++j) {
+          Push(a, Sub(chain.w(j + 1), a), Sub(chain.w(j), a), node.polygon, chain.edge(j),
+               g, rec);
+        }
+        Push(a, Vec{}, Sub(chain.w(m - 1), a), node.polygon, chain.edge(m - 1), g, rec);
       }
     }
     if (right_at_b && CanTurn(s, b, /*left=*/false)) {
       const double g = node.g + Distance(s, b);
       if (RecordRootG(b, g)) {
         const int32_t rec = Turn(b, node.record);
-        const Vec d = Sub(b, s);
-        if (oq < 0) Push(b, d, Sub(c, b), node.polygon, ca, g, rec);
-        Push(b, Sub(c, b), Sub(b, b), node.polygon, bc, g, rec);
+        if (r > 0) {
+          Push(b, Sub(b, s), Sub(chain.w(r), b), node.polygon, chain.edge(r), g, rec);
+        }
+        for (int32_t j = 1; j < r; ++j) {
+          Push(b, Sub(chain.w(j + 1), b), Sub(chain.w(j), b), node.polygon, chain.edge(j),
+               g, rec);
+        }
+        Push(b, Sub(chain.w(1), b), Vec{}, node.polygon, chain.edge(0), g, rec);
       }
     }
   }
 
-  // The root is an end of the entry edge (a vertex of the triangle), so the
-  // whole triangle is in view: both other edges, whole.
-  void ExpandFromVertex(const Node& node, const NavTriangle& t, int e) {
-    const LatticePoint a = t.corners[e];
-    const LatticePoint b = t.corners[(e + 1) % 3];
-    const LatticePoint c = t.corners[(e + 2) % 3];
+  // The root is an end of the entry edge (a vertex of the polygon), so the
+  // whole polygon is in view: every other edge, whole.
+  void ExpandFromVertex(const Node& node, const FarChain& chain) {
     const LatticePoint s = node.root;
-    if (!(s == a) && !(s == b)) return;
+    if (!(s == chain.w(chain.m())) && !(s == chain.w(0))) return;
     if (IsGoalPolygon(node.polygon)) {
       PushFinal(node.g + Distance(s, goal_), node.record);
     }
-    Push(s, Sub(c, s), Sub(b, s), node.polygon, (e + 1) % 3, node.g, node.record);
-    Push(s, Sub(a, s), Sub(c, s), node.polygon, (e + 2) % 3, node.g, node.record);
+    for (int32_t j = 0; j < chain.m(); ++j) {
+      Push(s, Sub(chain.w(j + 1), s), Sub(chain.w(j), s), node.polygon, chain.edge(j),
+           node.g, node.record);
+    }
   }
 
+  // The turning points from the start to the goal. A turn can be recorded
+  // at a corner the path only grazes (it continues straight on, at the
+  // same g as the path that never turned), so points on the straight
+  // segment between their neighbours are dropped.
   std::vector<LatticePoint> Trace(int32_t record) const {
-    std::vector<LatticePoint> polyline{goal_};
+    std::vector<LatticePoint> reversed{goal_};
     for (int32_t r = record; r >= 0; r = s_.records[static_cast<size_t>(r)].parent) {
-      polyline.push_back(s_.records[static_cast<size_t>(r)].point);
+      reversed.push_back(s_.records[static_cast<size_t>(r)].point);
     }
-    std::reverse(polyline.begin(), polyline.end());
+    std::vector<LatticePoint> polyline;
+    for (auto it = reversed.rbegin(); it != reversed.rend(); ++it) {
+      const LatticePoint p = *it;
+      if (polyline.size() >= 2) {
+        const LatticePoint a = polyline[polyline.size() - 2];
+        const LatticePoint m = polyline.back();
+        const Vec am = Sub(m, a);
+        const Vec mp = Sub(p, m);
+        if (Cross(am, mp) == 0 && am.x * mp.x + am.y * mp.y > 0) polyline.pop_back();
+      }
+      polyline.push_back(p);
+    }
     return polyline;
   }
 
@@ -614,8 +677,8 @@ class NavMeshPlanner final : public GridPlanner {
                         .needs_eight_connected = true,
                         .geometric = true,
                         .description =
-                            "Polyanya on a tiled constrained Delaunay navigation "
-                            "mesh: Euclidean shortest paths bending at obstacle "
+                            "Polyanya on a tiled navigation mesh of convex "
+                            "polygons: Euclidean shortest paths bending at obstacle "
                             "corners; uniform-cost 8-connected maps only; "
                             "expansions count search nodes (edge intervals)"}) {}
 

@@ -2,7 +2,7 @@
 // Navigation Mesh", IJCAI 2017): optimal any-angle search on a navigation
 // mesh (core/geometry/navmesh.h). A search node is an interval of a mesh
 // edge and a root from which every point of the interval is visible; its
-// successors project the interval through the next triangle, keeping the
+// successors project the interval through the next polygon, keeping the
 // root (observable) or turning at an obstacle corner at one of its ends
 // (non-observable). The answer is a Euclidean shortest path in the free
 // space of core/geometry/free_space.h.

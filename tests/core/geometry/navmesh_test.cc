@@ -1,6 +1,6 @@
-// The navigation mesh: its triangles tile exactly the free cells, meet edge
-// to edge across tile borders, keep pinch corners closed, and an advanced
-// mesh is the rebuilt one tile for tile. And the funnel, on channels whose
+// The navigation mesh: its convex polygons tile exactly the free cells, meet
+// edge to edge across tile borders, keep pinch corners closed, and an
+// advanced mesh is the rebuilt one tile for tile. And the funnel, on channels whose
 // shortest path is known.
 #include "core/geometry/navmesh.h"
 
@@ -46,13 +46,26 @@ void ExpectValidMesh(const NavMesh& mesh, const Grid& grid, bool unknown_is_free
   int64_t doubled_area = 0;  // 8 x area in cells
   for (int32_t ti = 0; ti < static_cast<int32_t>(mesh.tiles().size()); ++ti) {
     const NavTile& tile = mesh.tile(ti);
-    for (int32_t k = 0; k < static_cast<int32_t>(tile.triangles.size()); ++k) {
-      const NavTriangle& t = tile.triangles[k];
-      const int64_t o = Orient(t.corners[0], t.corners[1], t.corners[2]);
-      ASSERT_GT(o, 0) << what << " triangle not counter-clockwise";
+    for (int32_t k = 0; k < static_cast<int32_t>(tile.polygons.size()); ++k) {
+      const NavPolygonView t = tile.polygon(k);
+      ASSERT_GE(t.size, 3) << what;
+      int64_t o = 0;
+      for (int i = 0; i < t.size; ++i) {
+        // Shoelace, and convex at every corner: a left turn or straight on.
+        o += Orient(t.corner(0), t.corner(i), t.corner(i + 1));
+        const LatticePoint prev = t.corner(i + t.size - 1);
+        const LatticePoint at = t.corner(i);
+        const LatticePoint next = t.corner(i + 1);
+        const int64_t turn = Orient(prev, at, next);
+        ASSERT_TRUE(turn > 0 || (turn == 0 && (at.x2 - prev.x2) * (next.x2 - at.x2) +
+                                                      (at.y2 - prev.y2) * (next.y2 - at.y2) >
+                                                  0))
+            << what << " polygon not convex";
+      }
+      ASSERT_GT(o, 0) << what << " polygon not counter-clockwise";
       doubled_area += o;
-      for (int i = 0; i < 3; ++i) {
-        const LatticePoint c = t.corners[i];
+      for (int i = 0; i < t.size; ++i) {
+        const LatticePoint c = t.corner(i);
         ASSERT_TRUE(c.x2 % 2 == 0 && c.y2 % 2 == 0) << what;
         ASSERT_TRUE(c.x2 >= 2 * tile.x0 && c.x2 <= 2 * tile.x1 && c.y2 >= 2 * tile.y0 &&
                     c.y2 <= 2 * tile.y1)
@@ -60,10 +73,10 @@ void ExpectValidMesh(const NavMesh& mesh, const Grid& grid, bool unknown_is_free
         // Neighbours agree on their shared edge, within and across tiles.
         const NavRef other = mesh.Across(NavRef{ti, k}, i);
         if (!other.valid()) continue;
-        const NavTriangle& n = mesh.triangle(other);
+        const NavPolygonView n = mesh.polygon(other);
         bool back = false;
-        for (int j = 0; j < 3; ++j) {
-          if (n.corners[j] == t.corners[(i + 1) % 3] && n.corners[(j + 1) % 3] == c) {
+        for (int j = 0; j < n.size; ++j) {
+          if (n.corner(j) == t.corner(i + 1) && n.corner(j + 1) == c) {
             back = mesh.Across(other, j) == (NavRef{ti, k});
           }
         }
@@ -71,7 +84,7 @@ void ExpectValidMesh(const NavMesh& mesh, const Grid& grid, bool unknown_is_free
       }
     }
   }
-  // Free triangles cover exactly the free cells' area (area of a unit cell
+  // Free polygons cover exactly the free cells' area (area of a unit cell
   // is 8 in doubled coordinates' cross product units)...
   EXPECT_EQ(doubled_area, 8 * FreeCellCount(grid, unknown_is_free)) << what;
   // ... and every free centre is found, no blocked one.
@@ -80,17 +93,17 @@ void ExpectValidMesh(const NavMesh& mesh, const Grid& grid, bool unknown_is_free
       const std::vector<NavRef> at = mesh.Locate({x, y});
       ASSERT_EQ(at.empty(), space.Blocked(x, y)) << what << " cell " << x << "," << y;
       for (const NavRef& r : at) {
-        const auto& c = mesh.triangle(r).corners;
+        const NavPolygonView c = mesh.polygon(r);
         const LatticePoint p = CentreOf({x, y});
-        EXPECT_TRUE(Orient(c[0], c[1], p) >= 0 && Orient(c[1], c[2], p) >= 0 &&
-                    Orient(c[2], c[0], p) >= 0)
-            << what;
+        for (int i = 0; i < c.size; ++i) {
+          EXPECT_GE(Orient(c.corner(i), c.corner(i + 1), p), 0) << what;
+        }
       }
     }
   }
 }
 
-TEST(NavMesh, TrianglesTileTheFreeCellsExactly) {
+TEST(NavMesh, PolygonsTileTheFreeCellsExactly) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 600; ++trial) {
     const Grid grid = RandomGrid(rng, 20);
@@ -103,17 +116,30 @@ TEST(NavMesh, TrianglesTileTheFreeCellsExactly) {
   }
 }
 
-TEST(NavMesh, OpenMapIsTwoTrianglesPerTile) {
+TEST(NavMesh, OpenMapIsOneRectanglePerTile) {
   const Grid grid = Grid::Create(100, 70).value();
   const auto mesh = NavMesh::Build(grid, false, 64);
   EXPECT_EQ(mesh->tiles().size(), 4u);
   EXPECT_EQ(mesh->triangle_count(), 8);
+  EXPECT_EQ(mesh->polygon_count(), 4);
   const auto big = NavMesh::Build(grid, false, 128);
   EXPECT_EQ(big->tiles().size(), 1u);
-  EXPECT_EQ(big->triangle_count(), 2);
+  EXPECT_EQ(big->polygon_count(), 1);
+  EXPECT_EQ(big->polygon(NavRef{0, 0}).size, 4);
 }
 
-TEST(NavMesh, PinchCornerJoinsNoTriangles) {
+TEST(NavMesh, MergesTrianglesIntoFewerPolygons) {
+  // A room with pillars: many triangles, far fewer convex polygons.
+  Grid grid = Grid::Create(40, 40).value();
+  for (int32_t y = 3; y < 40; y += 6) {
+    for (int32_t x = 3; x < 40; x += 6) grid.set_cost(x, y, kLethalCost);
+  }
+  const auto mesh = NavMesh::Build(grid, false, 64);
+  EXPECT_LT(3 * mesh->polygon_count(), 2 * mesh->triangle_count());
+  ExpectValidMesh(*mesh, grid, false, "pillars");
+}
+
+TEST(NavMesh, PinchCornerJoinsNoPolygons) {
   // Cells (1, 0) and (0, 1) blocked: the free cells (0, 0) and (1, 1) touch
   // only at the pinch corner (1, 1).
   const Grid grid = MakeGrid({".#", "#."});
@@ -122,10 +148,10 @@ TEST(NavMesh, PinchCornerJoinsNoTriangles) {
   const std::vector<NavRef> b = mesh->Locate({1, 1});
   ASSERT_FALSE(a.empty());
   ASSERT_FALSE(b.empty());
-  // Walk everything reachable from (0, 0)'s triangles.
+  // Walk everything reachable from (0, 0)'s polygons.
   std::vector<NavRef> seen = a;
   for (size_t i = 0; i < seen.size(); ++i) {
-    for (int e = 0; e < 3; ++e) {
+    for (int e = 0; e < mesh->polygon(seen[i]).size; ++e) {
       const NavRef n = mesh->Across(seen[i], e);
       if (n.valid() && std::find(seen.begin(), seen.end(), n) == seen.end()) {
         seen.push_back(n);
@@ -138,13 +164,13 @@ TEST(NavMesh, PinchCornerJoinsNoTriangles) {
 }
 
 bool SameTile(const NavTile& a, const NavTile& b) {
-  if (a.triangles.size() != b.triangles.size() || a.cell_triangle != b.cell_triangle ||
-      a.border != b.border) {
+  if (a.polygons.size() != b.polygons.size() || a.cell_polygon != b.cell_polygon ||
+      a.border != b.border || a.edges != b.edges) {
     return false;
   }
-  for (size_t i = 0; i < a.triangles.size(); ++i) {
-    if (a.triangles[i].corners != b.triangles[i].corners ||
-        a.triangles[i].across != b.triangles[i].across) {
+  for (size_t i = 0; i < a.polygons.size(); ++i) {
+    if (a.polygons[i].first != b.polygons[i].first ||
+        a.polygons[i].size != b.polygons[i].size) {
       return false;
     }
   }
@@ -196,19 +222,23 @@ TEST(NavMesh, DescribedAsMesh) {
   auto s = DescribeStructure("mesh", grid, false);
   ASSERT_TRUE(s.ok()) << s.status();
   EXPECT_EQ(s->kind, "mesh");
-  ASSERT_EQ(s->counts.size(), 3u);
+  ASSERT_EQ(s->counts.size(), 4u);
   EXPECT_EQ(s->counts[0].first, "tiles");
   EXPECT_EQ(s->counts[0].second, 1);
   EXPECT_EQ(s->counts[2].first, "triangles");
+  EXPECT_EQ(s->counts[3].first, "polygons");
   const auto mesh = NavMesh::Build(grid, false);
   EXPECT_EQ(s->counts[2].second, mesh->triangle_count());
-  // Euler: each triangle has three edges, shared ones drawn once.
+  EXPECT_EQ(s->counts[3].second, mesh->polygon_count());
+  // Each polygon edge once, shared ones drawn once.
+  int64_t edges = 0;
   int64_t walls = 0;
-  for (int32_t k = 0; k < mesh->triangle_count(); ++k) {
-    for (int e = 0; e < 3; ++e) walls += mesh->Across(NavRef{0, k}, e).valid() ? 0 : 1;
+  for (int32_t k = 0; k < mesh->polygon_count(); ++k) {
+    const int32_t size = mesh->polygon(NavRef{0, k}).size;
+    edges += size;
+    for (int e = 0; e < size; ++e) walls += mesh->Across(NavRef{0, k}, e).valid() ? 0 : 1;
   }
-  EXPECT_EQ(static_cast<int64_t>(s->segments.size()),
-            (3 * mesh->triangle_count() + walls) / 2);
+  EXPECT_EQ(static_cast<int64_t>(s->segments.size()), (edges + walls) / 2);
   EXPECT_GT(s->bytes, 0u);
 }
 

@@ -142,6 +142,9 @@ void ExpectMatchesBruteForce(const NavMesh& mesh, const Grid& grid,
     const LatticePoint p = path.polyline[i];
     EXPECT_TRUE(p.x2 % 2 == 0 && p.y2 % 2 == 0 && space.IsBendCorner(p.x2 / 2, p.y2 / 2))
         << what << " bends off a bend corner at " << p.x2 / 2.0 << "," << p.y2 / 2.0;
+    // A grazed corner on a straight run is no vertex of the polyline.
+    EXPECT_NE(Orient(path.polyline[i - 1], p, path.polyline[i + 1]), 0)
+        << what << " collinear vertex at " << p.x2 / 2.0 << "," << p.y2 / 2.0;
   }
   EXPECT_NEAR(PolylineLength(path.polyline), expected, 1e-9 * (1 + expected)) << what;
 }
@@ -190,8 +193,8 @@ TEST(Polyanya, MatchesTheVisibilityGraphOnRandomMaps) {
 
 // Maps whose obstacles all reach the border through 8-connected chains, so
 // the free space has no holes. Meshed as one tile, every vertex is then on
-// the boundary, so between two triangles there is exactly one channel (the
-// dual graph of a triangulated simple polygon is a tree) and the funnel
+// the boundary, so between two polygons there is exactly one channel (the
+// dual graph of a convex partition of a simple polygon is a tree) and the funnel
 // through it is the shortest path.
 Grid HoleFreeMap(std::mt19937& rng) {
   const int w = 3 + static_cast<int>(rng() % 14);
@@ -217,7 +220,7 @@ Grid HoleFreeMap(std::mt19937& rng) {
   return grid;
 }
 
-// The portals from a start triangle to a goal triangle (breadth-first over
+// The portals from a start polygon to a goal polygon (breadth-first over
 // the mesh), each seen walking towards the goal; nullopt when none joins.
 std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
                                            const std::vector<NavRef>& from,
@@ -225,7 +228,7 @@ std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
   struct Step {
     NavRef at;
     int parent;
-    int edge;  // of the parent's triangle, crossed to get here
+    int edge;  // of the parent's polygon, crossed to get here
   };
   std::vector<Step> steps;
   for (const NavRef& r : from) steps.push_back({r, -1, -1});
@@ -236,16 +239,16 @@ std::optional<std::vector<Portal>> Channel(const NavMesh& mesh,
     if (std::find(to.begin(), to.end(), steps[i].at) != to.end()) {
       std::vector<Portal> portals;
       for (int k = static_cast<int>(i); steps[k].parent >= 0; k = steps[k].parent) {
-        const NavTriangle& t = mesh.triangle(steps[steps[k].parent].at);
-        // Leaving a counter-clockwise triangle through corner e -> e + 1:
+        const NavPolygonView t = mesh.polygon(steps[steps[k].parent].at);
+        // Leaving a counter-clockwise polygon through corner e -> e + 1:
         // the far end is on the left.
-        portals.push_back(Portal{ToCellPoint(t.corners[(steps[k].edge + 1) % 3]),
-                                 ToCellPoint(t.corners[steps[k].edge])});
+        portals.push_back(Portal{ToCellPoint(t.corner(steps[k].edge + 1)),
+                                 ToCellPoint(t.corner(steps[k].edge))});
       }
       std::reverse(portals.begin(), portals.end());
       return portals;
     }
-    for (int e = 0; e < 3; ++e) {
+    for (int e = 0; e < mesh.polygon(steps[i].at).size; ++e) {
       const NavRef n = mesh.Across(steps[i].at, e);
       if (n.valid() && !seen(n)) steps.push_back({n, static_cast<int>(i), e});
     }
@@ -310,6 +313,8 @@ TEST(Polyanya, GrazesCornersOnAStraightLine) {
   ASSERT_EQ(path.outcome, PlanOutcome::kFound);
   EXPECT_NEAR(PolylineLength(path.polyline), 5 * kSqrt2, 1e-12);
   EXPECT_TRUE(FreeSpace(grid, false).PolylineClear(path.polyline));
+  // One segment: the corners it grazes are not vertices of the polyline.
+  EXPECT_EQ(path.polyline.size(), 2u);
 }
 
 TEST(NavMeshPlanner, AnswersWithAnExactPolylineAndItsCells) {
