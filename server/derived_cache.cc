@@ -26,9 +26,9 @@ class DerivedCache::Store : public DerivedStore {
                     ? absl::StrFormat("radius=%g ", robot_radius_cells)
                     : std::string()) {}
 
-  std::shared_ptr<const void> Get(const std::string& key,
-                                  const DerivedRecipe& recipe) override {
-    return cache_->Get(*snapshot_, grid_, prefix_ + key, recipe);
+  std::shared_ptr<const void> Get(const std::string& key, const DerivedRecipe& recipe,
+                                  DerivedStop& stop) override {
+    return cache_->Get(*snapshot_, grid_, prefix_ + key, recipe, stop);
   }
 
  private:
@@ -51,13 +51,18 @@ std::unique_ptr<DerivedStore> DerivedCache::For(
 std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
                                               const std::shared_ptr<const Grid>& grid,
                                               const std::string& key,
-                                              const DerivedRecipe& recipe) {
+                                              const DerivedRecipe& recipe,
+                                              DerivedStop& stop) {
+  const std::string& what = recipe.what.empty() ? key : recipe.what;
   std::shared_ptr<Entry> entry;
   // The newest older version's entry to advance from, with its grid.
   std::shared_ptr<Entry> base;
   std::shared_ptr<const Grid> base_grid;
-  bool make = false;
-  {
+  // Until this query has the value, makes it, or stops: a maker that gave up
+  // leaves no entry, and the next pass here finds or makes a new one.
+  while (true) {
+    entry = nullptr;
+    base = nullptr;
     absl::MutexLock lock(&mu_);
     for (auto it = entries_.begin(); it != entries_.end(); ++it) {
       const Entry& e = **it;
@@ -74,6 +79,12 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
       }
     }
     if (entry == nullptr) {
+      // A query already stopped starts no build (and gets no value it would
+      // not use).
+      if (stop.Stopped()) {
+        stop.Note("building " + what);
+        return nullptr;
+      }
       entry = std::make_shared<Entry>();
       entry->map = snapshot.name;
       entry->map_id = snapshot.map_id;
@@ -83,35 +94,31 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
       entry->grid_address = grid.get();
       entry->key = key;
       entries_.push_front(entry);
-      make = true;
-    } else {
+      break;
+    }
+    if (!AwaitLocked(entry.get(), stop)) {
+      ++stopped_waits_;
+      stop.Note("waiting for another query's build of " + what);
+      return nullptr;
+    }
+    if (entry->value != nullptr) {
       ++hits_;
+      return entry->value;
     }
+    // The maker gave up (stopped or threw) and dropped the entry: look again.
   }
-  if (!make) {
-    std::shared_ptr<const void> value;
-    {
-      absl::MutexLock lock(&mu_);
-      mu_.Await(absl::Condition(+[](Entry* e) { return e->done; }, entry.get()));
-      value = entry->value;
-    }
-    // The maker failed (threw) and dropped the entry: make it here.
-    if (value == nullptr) return Get(snapshot, grid, key, recipe);
-    return value;
-  }
-  // A build that throws (out of memory) must not leave waiters waiting on an
-  // entry that never completes: drop it, wake them, and let the job report
-  // the failure.
-  struct DropUnlessDone {
+
+  // A build that gives up or throws (out of memory) must not leave waiters
+  // waiting on an entry that never completes: drop it, wake them, and let
+  // them build it (the job reports the failure or the stop).
+  struct AbandonUnlessDone {
     DerivedCache* cache;
     std::shared_ptr<Entry> entry;
-    ~DropUnlessDone() {
+    ~AbandonUnlessDone() {
       absl::MutexLock lock(&cache->mu_);
-      if (entry->done) return;
-      cache->entries_.remove(entry);
-      entry->done = true;
+      if (!entry->done) cache->AbandonLocked(entry);
     }
-  } drop_unless_done{this, entry};
+  } abandon_unless_done{this, entry};
 
   const absl::Time start = absl::Now();
   std::shared_ptr<const void> value;
@@ -134,12 +141,20 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
       known = true;
     }
     if (known) {
-      value = recipe.advance(base->value.get(), *grid, changed);
+      value = recipe.advance(base->value.get(), *grid, changed, stop);
       advanced = value != nullptr;
       changed_cells = static_cast<int64_t>(changed.size());
     }
   }
-  if (value == nullptr) value = recipe.build(*grid);
+  // An advance that declined may also have been stopped: no build then.
+  if (value == nullptr && !stop.Stopped()) value = recipe.build(*grid, stop);
+  if (value == nullptr) {
+    stop.Note("building " + what);
+    absl::MutexLock lock(&mu_);
+    AbandonLocked(entry);
+    ++stopped_builds_;
+    return nullptr;
+  }
   const size_t bytes = recipe.bytes ? recipe.bytes(value.get()) : 0;
 
   absl::MutexLock lock(&mu_);
@@ -153,6 +168,22 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
   ++(advanced ? advances_ : builds_);
   EvictLocked();
   return value;
+}
+
+bool DerivedCache::AwaitLocked(Entry* entry, const DerivedStop& stop) {
+  const absl::Condition done(+[](Entry* e) { return e->done; }, entry);
+  // The deadline wakes the wait on time; the cancel flag is only read, so
+  // the wait comes up for it every kStopPollInterval.
+  while (!mu_.AwaitWithDeadline(
+      done, std::min(stop.deadline(), absl::Now() + kStopPollInterval))) {
+    if (stop.Stopped()) return false;
+  }
+  return true;
+}
+
+void DerivedCache::AbandonLocked(const std::shared_ptr<Entry>& entry) {
+  entries_.remove(entry);
+  entry->done = true;
 }
 
 std::list<std::shared_ptr<DerivedCache::Entry>>::iterator DerivedCache::DropLocked(
@@ -184,6 +215,8 @@ DerivedCache::Stats DerivedCache::stats() const {
   s.builds = builds_;
   s.advances = advances_;
   s.evictions = evictions_;
+  s.stopped_builds = stopped_builds_;
+  s.stopped_waits = stopped_waits_;
   s.budget_bytes = max_bytes_;
   s.entries = entries_.size();
   s.bytes = bytes_;

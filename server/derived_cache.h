@@ -36,6 +36,14 @@ namespace pathd::server {
 // differ (the version's recorded changes for one step of a stored grid,
 // otherwise a comparison of the two grids), when the recipe can; otherwise
 // the value is built.
+//
+// Stopping: builds run on the requesting query's thread under its stop
+// condition (core/search/derived.h). A build that gives up drops its
+// unfinished entry and wakes the queries waiting on it, which then build it
+// themselves under their own stop conditions, so a patient query is never
+// failed by an impatient one. A waiting query waits only until its own
+// deadline or cancellation (looking at the cancel flag every
+// kStopPollInterval) and then gives up alone; the build goes on.
 class DerivedCache {
  public:
   struct Stats {
@@ -45,6 +53,11 @@ class DerivedCache {
     // Dropped beyond the byte budget (entries of freed versions are not
     // counted).
     int64_t evictions = 0;
+    // Builds and advances that gave up because the requesting query's
+    // deadline passed or it was cancelled (their entries are dropped).
+    int64_t stopped_builds = 0;
+    // Queries that stopped waiting for another query's build.
+    int64_t stopped_waits = 0;
     size_t entries = 0;
     size_t bytes = 0;
     size_t budget_bytes = 0;
@@ -60,6 +73,10 @@ class DerivedCache {
     int64_t changed_cells = 0;
     absl::Duration time;
   };
+
+  // How often a query waiting for another's build looks at its cancel flag
+  // (its deadline wakes it on time).
+  static constexpr absl::Duration kStopPollInterval = absl::Milliseconds(50);
 
   // Keeps at most `max_bytes` of values (the newest value stays even when
   // it alone is larger).
@@ -89,6 +106,8 @@ class DerivedCache {
     const Grid* grid_address = nullptr;
     std::string key;
     // Under the cache's mu_: the maker sets them with done, waiters Await it.
+    // Done with a null value: the maker gave up (stopped or threw) and the
+    // entry left the list.
     bool done = false;
     std::shared_ptr<const void> value;
     size_t bytes = 0;
@@ -100,8 +119,14 @@ class DerivedCache {
   std::shared_ptr<const void> Get(const MapSnapshot& snapshot,
                                   const std::shared_ptr<const Grid>& grid,
                                   const std::string& key,
-                                  const DerivedRecipe& recipe)
+                                  const DerivedRecipe& recipe, DerivedStop& stop)
       ABSL_LOCKS_EXCLUDED(mu_);
+  // Waits until `entry` is done or `stop` fires; returns whether it is done.
+  bool AwaitLocked(Entry* entry, const DerivedStop& stop)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Drops `entry`, which its maker gave up on, and wakes its waiters.
+  void AbandonLocked(const std::shared_ptr<Entry>& entry)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   // Removes one entry and its bytes; returns the next.
   std::list<std::shared_ptr<Entry>>::iterator DropLocked(
@@ -116,6 +141,8 @@ class DerivedCache {
   int64_t builds_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t advances_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t evictions_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t stopped_builds_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t stopped_waits_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
 }  // namespace pathd::server

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 
 namespace pathd {
@@ -26,10 +27,30 @@ struct Entry {
 };
 using MinQueue = std::priority_queue<Entry, std::vector<Entry>, std::greater<>>;
 
+// A build's stop, read every EuclideanSpm::kPollEvery units of work (the
+// first included); once it fired it stays fired.
+class Poller {
+ public:
+  explicit Poller(DerivedStop& stop) : stop_(stop) {}
+  bool Stopped() {
+    if (!stopped_ && calls_++ % EuclideanSpm::kPollEvery == 0) {
+      stopped_ = stop_.Stopped();
+    }
+    return stopped_;
+  }
+
+ private:
+  DerivedStop& stop_;
+  int64_t calls_ = 0;
+  bool stopped_ = false;
+};
+
 // Exact distances to the goal (`goal_point`, id vertex_count()) and the next
 // root towards it, for every vertex: Dijkstra from the goal over the graph.
-void DistancesFromGoal(const VisibilityGraph& vg, LatticePoint goal_point,
-                       std::vector<double>& dist, std::vector<uint32_t>& next) {
+// False when `poll` stopped it.
+bool DistancesFromGoal(const VisibilityGraph& vg, LatticePoint goal_point,
+                       std::vector<double>& dist, std::vector<uint32_t>& next,
+                       Poller& poll) {
   const auto goal_id = static_cast<uint32_t>(vg.vertex_count());
   dist.assign(goal_id + 1, kInfinity);
   next.assign(goal_id + 1, EuclideanSpm::kNoRoot);
@@ -41,6 +62,7 @@ void DistancesFromGoal(const VisibilityGraph& vg, LatticePoint goal_point,
     queue.push({d, v});
   });
   while (!queue.empty()) {
+    if (poll.Stopped()) return false;
     const Entry top = queue.top();
     queue.pop();
     if (top.d != dist[top.id]) continue;
@@ -58,6 +80,7 @@ void DistancesFromGoal(const VisibilityGraph& vg, LatticePoint goal_point,
       }
     }
   }
+  return true;
 }
 
 // The segment a-b crosses the open interior of cell `c`: then it is not
@@ -168,9 +191,11 @@ class RootTiles {
 // the first whose segment is clear (and taut) is the root. Tiles whose
 // vertices are all too far for the bound are skipped whole, and a blocked
 // cell that hid a vertex from a cell usually hides it from the next.
-void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>& dist,
+// False when `poll` stopped it.
+bool SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>& dist,
                  const std::vector<uint32_t>& next_root,
-                 const std::vector<double>& best, std::vector<uint32_t>& roots) {
+                 const std::vector<double>& best, std::vector<uint32_t>& roots,
+                 Poller& poll) {
   const FreeSpace& space = vg.space();
   const int32_t w = space.width();
   const auto n = static_cast<uint32_t>(vg.vertex_count());
@@ -183,6 +208,7 @@ void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>
   std::vector<Cell> hidden_by(n + 1, Cell{-1, -1});
   for (size_t i = 0; i < roots.size(); ++i) {
     if (!region[i]) continue;
+    if (poll.Stopped()) return false;
     const LatticePoint c = CentreOf(Cell{static_cast<int32_t>(i % w),
                                          static_cast<int32_t>(i / w)});
     // Strictly below the propagated value (a tie keeps its root).
@@ -208,12 +234,19 @@ void SettleRoots(const VisibilityGraph& vg, Cell goal, const std::vector<double>
       });
     }
   }
+  return true;
 }
 
 }  // namespace
 
 std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
     std::shared_ptr<const VisibilityGraph> graph, Cell goal) {
+  DerivedStop never;
+  return Build(std::move(graph), goal, never);
+}
+
+std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
+    std::shared_ptr<const VisibilityGraph> graph, Cell goal, DerivedStop& stop) {
   const absl::Time started = absl::Now();
   auto spm = std::shared_ptr<EuclideanSpm>(new EuclideanSpm());
   spm->graph_ = std::move(graph);
@@ -226,7 +259,15 @@ std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
 
   std::vector<double>& dist = spm->distance_;
   std::vector<uint32_t>& next = spm->next_;
-  DistancesFromGoal(vg, goal_point, dist, next);
+  Poller poll(stop);
+  auto stopped = [&] {
+    stop.Note(absl::StrFormat(
+        "building the Euclidean shortest path map of goal (%d, %d) on this map "
+        "version (%d vertices, %d x %d cells)",
+        goal.x, goal.y, n, space.width(), space.height()));
+    return nullptr;
+  };
+  if (!DistancesFromGoal(vg, goal_point, dist, next, poll)) return stopped();
   MinQueue queue;
 
   // Cells: roots propagated in order of distance.
@@ -301,8 +342,12 @@ std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
     }
   };
   offer(goal.x, goal.y, goal_id);
-  for (uint32_t v = 0; v < n; ++v) SeedShadow(v);
+  for (uint32_t v = 0; v < n; ++v) {
+    if (poll.Stopped()) return stopped();
+    SeedShadow(v);
+  }
   while (!queue.empty()) {
+    if (poll.Stopped()) return stopped();
     const Entry top = queue.top();
     queue.pop();
     if (done[top.id] || top.d != best[top.id]) continue;
@@ -326,7 +371,7 @@ std::shared_ptr<const EuclideanSpm> EuclideanSpm::Build(
       }
     }
   }
-  SettleRoots(vg, goal, dist, next, best, roots);
+  if (!SettleRoots(vg, goal, dist, next, best, roots, poll)) return stopped();
   spm->build_time_ = absl::Now() - started;
   return spm;
 }
@@ -344,19 +389,35 @@ size_t EuclideanSpm::bytes() const {
 
 std::shared_ptr<const EuclideanSpm> GetEuclideanSpm(DerivedStore* store,
                                                     const Grid& grid, Cell goal,
-                                                    bool unknown_is_free) {
+                                                    bool unknown_is_free,
+                                                    DerivedStop& stop) {
   const std::string key = absl::StrCat("euclidean_spm goal=", goal.x, ",", goal.y,
                                        " unknown_is_free=", unknown_is_free ? 1 : 0);
   return GetDerived<EuclideanSpm>(
       store, grid, key,
-      [store, goal, unknown_is_free](const Grid& g) {
-        return EuclideanSpm::Build(GetVisibilityGraph(store, g, unknown_is_free), goal);
+      absl::StrFormat("the Euclidean shortest path map of goal (%d, %d) on this "
+                      "map version",
+                      goal.x, goal.y),
+      stop,
+      [store, goal, unknown_is_free](const Grid& g, DerivedStop& s)
+          -> std::shared_ptr<const EuclideanSpm> {
+        std::shared_ptr<const VisibilityGraph> graph =
+            GetVisibilityGraph(store, g, unknown_is_free, s);
+        if (graph == nullptr) return nullptr;
+        return EuclideanSpm::Build(std::move(graph), goal, s);
       },
       // Any changed cell can move roots anywhere: rebuild.
-      [](const EuclideanSpm&, const Grid&, absl::Span<const Cell>) {
+      [](const EuclideanSpm&, const Grid&, absl::Span<const Cell>, DerivedStop&) {
         return std::shared_ptr<const EuclideanSpm>();
       },
       [](const EuclideanSpm& spm) { return spm.bytes(); });
+}
+
+std::shared_ptr<const EuclideanSpm> GetEuclideanSpm(DerivedStore* store,
+                                                    const Grid& grid, Cell goal,
+                                                    bool unknown_is_free) {
+  DerivedStop never;
+  return GetEuclideanSpm(store, grid, goal, unknown_is_free, never);
 }
 
 }  // namespace pathd

@@ -41,8 +41,15 @@ class EuclideanSpm {
   // in increasing order until one is clear. O(cells x vertices) arithmetic
   // at worst, segment tests only for the few vertices that pass the bounds.
   // Precondition: `goal` is a free cell of graph->space().
+  // Seconds to minutes on large maps (84 s on a 1024 x 1024 one), so every
+  // phase polls `stop` every kPollEvery units of work (pops, vertices,
+  // cells) and the build returns null, noting so in `stop`, when it fired.
+  static std::shared_ptr<const EuclideanSpm> Build(
+      std::shared_ptr<const VisibilityGraph> graph, Cell goal, DerivedStop& stop);
+  // Never stops.
   static std::shared_ptr<const EuclideanSpm> Build(
       std::shared_ptr<const VisibilityGraph> graph, Cell goal);
+  static constexpr int64_t kPollEvery = 64;
 
   Cell goal() const { return goal_; }
   const VisibilityGraph& graph() const { return *graph_; }
@@ -84,7 +91,14 @@ class EuclideanSpm {
 
 // The shortest path map of `goal` on `grid` under `unknown_is_free`, from
 // `store` (key "euclidean_spm goal=X,Y unknown_is_free=N", over the shared
-// visibility graph; rebuilt for every map version) or built now.
+// visibility graph; rebuilt for every map version) or built now. Null when
+// `stop` fired first, building it (or the visibility graph under it) or
+// waiting for another query's build (stop.stopped_while() says which).
+std::shared_ptr<const EuclideanSpm> GetEuclideanSpm(DerivedStore* store,
+                                                    const Grid& grid, Cell goal,
+                                                    bool unknown_is_free,
+                                                    DerivedStop& stop);
+// Never stops.
 std::shared_ptr<const EuclideanSpm> GetEuclideanSpm(DerivedStore* store,
                                                     const Grid& grid, Cell goal,
                                                     bool unknown_is_free);

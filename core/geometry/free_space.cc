@@ -156,19 +156,27 @@ void FillPolylineResult(const FreeSpace& space,
 }
 
 std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
-                                                 bool unknown_is_free) {
+                                                 bool unknown_is_free, DerivedStop& stop) {
   return GetDerived<FreeSpace>(
       store, grid,
       std::string("free_space unknown_is_free=") + (unknown_is_free ? "1" : "0"),
-      [unknown_is_free](const Grid& g) {
+      "the free space of this map version", stop,
+      [unknown_is_free](const Grid& g, DerivedStop&) {
         return std::make_shared<const FreeSpace>(g, unknown_is_free);
       },
-      [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed) {
+      [](const FreeSpace& previous, const Grid& g, absl::Span<const Cell> changed,
+         DerivedStop&) {
         auto next = std::make_shared<FreeSpace>(previous);
         next->Update(g, changed);
         return std::shared_ptr<const FreeSpace>(std::move(next));
       },
       [](const FreeSpace& space) { return space.bytes(); });
+}
+
+std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
+                                                 bool unknown_is_free) {
+  DerivedStop never;
+  return SharedFreeSpace(store, grid, unknown_is_free, never);
 }
 
 std::vector<Cell> CellsAlongPolyline(const FreeSpace& space,

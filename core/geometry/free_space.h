@@ -156,6 +156,11 @@ class FreeSpace {
 // FreeSpace::Update), or built now when `store` is null.
 std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
                                                  bool unknown_is_free);
+// The same under the query's `stop`: the build (O(cells)) does not poll it,
+// but a query waits for another's build of it only until `stop` fires. Null
+// then, or when `stop` had fired before the build would start.
+std::shared_ptr<const FreeSpace> SharedFreeSpace(DerivedStore* store, const Grid& grid,
+                                                 bool unknown_is_free, DerivedStop& stop);
 
 // The cells a polyline crosses, start to end, without repeats of the
 // previous cell: the `path` of a geometric plan (PlanResult::polyline).

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "core/geometry/structure.h"
 
@@ -42,12 +44,36 @@ int64_t TriArea2(LatticePoint a, LatticePoint b, LatticePoint c) {
 }  // namespace
 
 TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
+                                                   bool unknown_is_free, Unswept)
+    : space_(grid, unknown_is_free), cell_trapezoid_(grid.size(), kNone) {}
+
+TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
                                                    bool unknown_is_free)
-    : space_(grid, unknown_is_free), cell_trapezoid_(grid.size(), kNone) {
-  const int32_t w = grid.width();
+    : TrapezoidalDecomposition(grid, unknown_is_free, Unswept{}) {
+  Sweep(nullptr);
+}
+
+std::shared_ptr<const TrapezoidalDecomposition> TrapezoidalDecomposition::Build(
+    const Grid& grid, bool unknown_is_free, DerivedStop& stop) {
+  if (stop.Stopped()) return nullptr;
+  std::shared_ptr<TrapezoidalDecomposition> d(
+      new TrapezoidalDecomposition(grid, unknown_is_free, Unswept{}));
+  if (!d->Sweep(&stop)) {
+    stop.Note(absl::StrFormat(
+        "building the trapezoidal decomposition of this map version (%d x %d "
+        "cells)",
+        grid.width(), grid.height()));
+    return nullptr;
+  }
+  return d;
+}
+
+bool TrapezoidalDecomposition::Sweep(DerivedStop* stop) {
+  const int32_t w = space_.width();
   std::vector<Run> previous;
   std::vector<Run> current;
   for (int32_t x = 0; x < w; ++x) {
+    if (stop != nullptr && x % kPollColumns == 0 && stop->Stopped()) return false;
     ColumnRuns(space_, x, current);
     // Runs are sorted and disjoint in both columns: one merge pass pairs a
     // run with the identical run before it (the same trapezoid goes on) and
@@ -93,6 +119,7 @@ TrapezoidalDecomposition::TrapezoidalDecomposition(const Grid& grid,
     portal_ids_[fill[portals_[p].left]++] = static_cast<int32_t>(p);
     portal_ids_[fill[portals_[p].right]++] = static_cast<int32_t>(p);
   }
+  return true;
 }
 
 size_t TrapezoidalDecomposition::bytes() const {

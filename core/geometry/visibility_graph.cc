@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "core/geometry/structure.h"
 
@@ -85,6 +86,13 @@ void VisibilityGraph::Compress(std::vector<std::vector<Edge>>& adjacency) {
 std::shared_ptr<const VisibilityGraph> VisibilityGraph::Advance(
     const VisibilityGraph& previous, std::shared_ptr<const FreeSpace> space,
     absl::Span<const Cell> changed) {
+  DerivedStop never;
+  return Advance(previous, std::move(space), changed, never);
+}
+
+std::shared_ptr<const VisibilityGraph> VisibilityGraph::Advance(
+    const VisibilityGraph& previous, std::shared_ptr<const FreeSpace> space,
+    absl::Span<const Cell> changed, DerivedStop& stop) {
   if (changed.size() > kMaxAdvanceCells) return nullptr;
   // Segments that miss every changed cell's closed square kept their state.
   LatticePoint lo{std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max()};
@@ -140,6 +148,15 @@ std::shared_ptr<const VisibilityGraph> VisibilityGraph::Advance(
   // Per new id: 1 + the old vertex whose edges are marked (stamp).
   std::vector<uint32_t> was_edge(n, 0);
   for (uint32_t i = 0; i < n; ++i) {
+    // Once per vertex: up to V pairs, with segment tests where the box or a
+    // new vertex makes them.
+    if (stop.Stopped()) {
+      stop.Note(absl::StrFormat(
+          "advancing the visibility graph to this map version (%d vertices, "
+          "%d changed cells)",
+          n, changed.size()));
+      return nullptr;
+    }
     if (old_id[i] != kNew) {
       for (const Edge& e : previous.EdgesOf(old_id[i])) {
         if (new_id[e.to] != kNew) was_edge[new_id[e.to]] = i + 1;
@@ -162,6 +179,12 @@ std::shared_ptr<const VisibilityGraph> VisibilityGraph::Advance(
 
 std::shared_ptr<const VisibilityGraph> VisibilityGraph::Build(
     std::shared_ptr<const FreeSpace> space) {
+  DerivedStop never;
+  return Build(std::move(space), never);
+}
+
+std::shared_ptr<const VisibilityGraph> VisibilityGraph::Build(
+    std::shared_ptr<const FreeSpace> space, DerivedStop& stop) {
   const absl::Time started = absl::Now();
   auto graph = std::shared_ptr<VisibilityGraph>(new VisibilityGraph());
   graph->space_ = std::move(space);
@@ -176,6 +199,13 @@ std::shared_ptr<const VisibilityGraph> VisibilityGraph::Build(
   const std::vector<LatticePoint>& vs = graph->vertices_;
   const std::vector<CornerQuadrant>& qs = graph->quadrants_;
   for (uint32_t i = 0; i < n; ++i) {
+    // Once per vertex: V - i pairs, a few milliseconds on the random maps, so
+    // a query stops within about that of its deadline or cancellation.
+    if (stop.Stopped()) {
+      stop.Note(absl::StrFormat(
+          "building the visibility graph of this map version (%d vertices)", n));
+      return nullptr;
+    }
     for (uint32_t j = i + 1; j < n; ++j) {
       // Tangency at both ends rejects about three pairs in four for free.
       if (!Tangent(vs[i], qs[i], vs[j]) || !Tangent(vs[j], qs[j], vs[i])) continue;
@@ -199,19 +229,34 @@ size_t VisibilityGraph::bytes() const {
 
 std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
                                                           const Grid& grid,
-                                                          bool unknown_is_free) {
+                                                          bool unknown_is_free,
+                                                          DerivedStop& stop) {
   return GetDerived<VisibilityGraph>(
       store, grid, FlagKey("visibility_graph", unknown_is_free),
-      [store, unknown_is_free](const Grid& g) {
-        return VisibilityGraph::Build(
-            SharedFreeSpace(store, g, unknown_is_free));
+      "the visibility graph of this map version", stop,
+      [store, unknown_is_free](const Grid& g, DerivedStop& s)
+          -> std::shared_ptr<const VisibilityGraph> {
+        std::shared_ptr<const FreeSpace> space =
+            SharedFreeSpace(store, g, unknown_is_free, s);
+        if (space == nullptr) return nullptr;
+        return VisibilityGraph::Build(std::move(space), s);
       },
       [store, unknown_is_free](const VisibilityGraph& previous, const Grid& g,
-                               absl::Span<const Cell> changed) {
-        return VisibilityGraph::Advance(
-            previous, SharedFreeSpace(store, g, unknown_is_free), changed);
+                               absl::Span<const Cell> changed, DerivedStop& s)
+          -> std::shared_ptr<const VisibilityGraph> {
+        std::shared_ptr<const FreeSpace> space =
+            SharedFreeSpace(store, g, unknown_is_free, s);
+        if (space == nullptr) return nullptr;
+        return VisibilityGraph::Advance(previous, std::move(space), changed, s);
       },
       [](const VisibilityGraph& graph) { return graph.bytes(); });
+}
+
+std::shared_ptr<const VisibilityGraph> GetVisibilityGraph(DerivedStore* store,
+                                                          const Grid& grid,
+                                                          bool unknown_is_free) {
+  DerivedStop never;
+  return GetVisibilityGraph(store, grid, unknown_is_free, never);
 }
 
 std::shared_ptr<const ObstacleCorners> ObstacleCorners::Build(
@@ -325,18 +370,30 @@ size_t ObstacleCorners::bytes() const {
 
 std::shared_ptr<const ObstacleCorners> GetObstacleCorners(DerivedStore* store,
                                                           const Grid& grid,
-                                                          bool unknown_is_free) {
+                                                          bool unknown_is_free,
+                                                          DerivedStop& stop) {
   return GetDerived<ObstacleCorners>(
       store, grid, FlagKey("obstacle_corners", unknown_is_free),
-      [store, unknown_is_free](const Grid& g) {
-        return ObstacleCorners::Build(
-            SharedFreeSpace(store, g, unknown_is_free));
+      "the obstacles of this map version", stop,
+      [store, unknown_is_free](const Grid& g, DerivedStop& s)
+          -> std::shared_ptr<const ObstacleCorners> {
+        std::shared_ptr<const FreeSpace> space =
+            SharedFreeSpace(store, g, unknown_is_free, s);
+        if (space == nullptr) return nullptr;
+        return ObstacleCorners::Build(std::move(space));
       },
       // One changed cell can merge or split obstacles anywhere: rebuild.
-      [](const ObstacleCorners&, const Grid&, absl::Span<const Cell>) {
+      [](const ObstacleCorners&, const Grid&, absl::Span<const Cell>, DerivedStop&) {
         return std::shared_ptr<const ObstacleCorners>();
       },
       [](const ObstacleCorners& corners) { return corners.bytes(); });
+}
+
+std::shared_ptr<const ObstacleCorners> GetObstacleCorners(DerivedStore* store,
+                                                          const Grid& grid,
+                                                          bool unknown_is_free) {
+  DerivedStop never;
+  return GetObstacleCorners(store, grid, unknown_is_free, never);
 }
 
 GeometricStructure DescribeVisibilityGraph(const Grid& grid, bool unknown_is_free) {

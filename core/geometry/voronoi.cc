@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <memory>
 #include <vector>
 
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "core/geometry/structure.h"
 #include "core/map/cost_model.h"
@@ -41,14 +43,41 @@ int Compare(const OctileLength& a, const OctileLength& b) {
   return SignPlusRoot2(a.straight - b.straight, a.diagonal - b.diagonal);
 }
 
-VoronoiField::VoronoiField(const Grid& grid, bool unknown_is_free)
-    : width_(grid.width()),
-      height_(grid.height()),
-      stride_(grid.width() + 2),
+VoronoiField::VoronoiField(int32_t width, int32_t height, bool unknown_is_free)
+    : width_(width),
+      height_(height),
+      stride_(width + 2),
       unknown_is_free_(unknown_is_free),
-      site_(static_cast<size_t>(stride_) * (grid.height() + 2), kCleared),
-      flags_(site_.size(), kBlockedBit) {
+      site_(static_cast<size_t>(stride_) * (height + 2), kCleared),
+      flags_(site_.size(), kBlockedBit) {}
+
+VoronoiField::VoronoiField(const Grid& grid, bool unknown_is_free)
+    : VoronoiField(grid.width(), grid.height(), unknown_is_free) {
+  Fill(grid, nullptr);
+}
+
+std::shared_ptr<const VoronoiField> VoronoiField::Build(const Grid& grid,
+                                                        bool unknown_is_free,
+                                                        DerivedStop& stop) {
+  std::shared_ptr<VoronoiField> field(
+      new VoronoiField(grid.width(), grid.height(), unknown_is_free));
+  if (!field->Fill(grid, &stop)) {
+    stop.Note(absl::StrFormat(
+        "building the Voronoi field of this map version (%d x %d cells)",
+        grid.width(), grid.height()));
+    return nullptr;
+  }
+  return field;
+}
+
+bool VoronoiField::Fill(const Grid& grid, DerivedStop* stop) {
+  // Row by row, a poll per kPollCells cells.
+  const int32_t poll_rows = std::max(1, kPollCells / stride_);
+  auto stopped = [&](int32_t y) {
+    return stop != nullptr && y % poll_rows == 0 && stop->Stopped();
+  };
   for (int32_t y = 0; y < height_; ++y) {
+    if (stopped(y)) return false;
     for (int32_t x = 0; x < width_; ++x) {
       if (Traversable(grid.cost(x, y), unknown_is_free_)) {
         flags_[Index(Cell{x, y})] = 0;
@@ -59,6 +88,7 @@ VoronoiField::VoronoiField(const Grid& grid, bool unknown_is_free)
   // can be anyone else's (a nearest obstacle's neighbour on the way to it is
   // free), so only they start the wave.
   for (int32_t y = -1; y <= height_; ++y) {
+    if (stopped(y + 1)) return false;
     for (int32_t x = -1; x <= width_; ++x) {
       const int32_t i = Index(Cell{x, y});
       if (!BlockedAt(i)) continue;
@@ -73,10 +103,12 @@ VoronoiField::VoronoiField(const Grid& grid, bool unknown_is_free)
       }
     }
   }
-  Lower(nullptr);
+  if (!Lower(nullptr, stop)) return false;
   for (int32_t y = 0; y < height_; ++y) {
+    if (stopped(y)) return false;
     for (int32_t x = 0; x < width_; ++x) SetDiagramBit(Index(Cell{x, y}));
   }
+  return true;
 }
 
 OctileLength VoronoiField::Between(int32_t a, int32_t b) const {
@@ -96,11 +128,12 @@ void VoronoiField::Push(int32_t cell) {
   first_bucket_ = std::min(first_bucket_, bucket);
 }
 
-void VoronoiField::Lower(std::vector<int32_t>* touched) {
+bool VoronoiField::Lower(std::vector<int32_t>* touched, DerivedStop* stop) {
   // Label-correcting: the order (nearest first) only saves work; a cell
   // offered a better site is queued again, so the waves end at the unique
   // fixed point whatever was queued.
-  while (true) {
+  for (int64_t pops = 0;; ++pops) {
+    if (stop != nullptr && pops % kPollCells == 0 && stop->Stopped()) return false;
     while (first_bucket_ < buckets_.size() && buckets_[first_bucket_].empty()) {
       ++first_bucket_;
     }
@@ -125,6 +158,7 @@ void VoronoiField::Lower(std::vector<int32_t>* touched) {
       if (touched != nullptr) touched->push_back(n);
     }
   }
+  return true;
 }
 
 void VoronoiField::SetDiagramBit(int32_t index) {

@@ -85,6 +85,7 @@ absl::StatusOr<ThroughResult> PlanThrough(
     if (!result.found()) {
       plan.outcome = result.outcome;
       plan.stall_point = result.stall_point;
+      plan.stopped_while = result.stopped_while;
       through.failed_leg = static_cast<int32_t>(leg);
       break;
     }

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -168,6 +169,11 @@ struct PlanResult {
   // row-major; +infinity for cells that cannot reach it.
   std::vector<double> cost_to_go;
   absl::Duration planning_time;
+  // kTimeout or kCancelled while the planner was building (or waiting for
+  // another query's build of) a structure derived from the map, not
+  // searching: what it was doing, for the caller's message ("building the
+  // visibility graph of this map version (49154 vertices)"). Empty otherwise.
+  std::string stopped_while;
   bool found() const { return outcome == PlanOutcome::kFound; }
 };
 

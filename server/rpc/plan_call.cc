@@ -114,12 +114,20 @@ Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
   const std::string_view outcome = PlanOutcomeName(result.outcome);
   // The client is gone or past caring in these two cases, so they end the
   // call with the matching status rather than an OK that nobody reads.
+  // stopped_while names a structure derived from the map that was being
+  // built (or waited for) when the query stopped.
   if (result.outcome == PlanOutcome::kCancelled) {
-    return {absl::CancelledError("cancelled while planning"), outcome};
+    return {absl::CancelledError(result.stopped_while.empty()
+                                     ? std::string("cancelled while planning")
+                                     : "cancelled while " + result.stopped_while),
+            outcome};
   }
   if (result.outcome == PlanOutcome::kTimeout) {
-    return {absl::DeadlineExceededError(absl::StrFormat(
-                "deadline passed after %d expansions", result.expansions)),
+    return {absl::DeadlineExceededError(
+                result.stopped_while.empty()
+                    ? absl::StrFormat("deadline passed after %d expansions",
+                                      result.expansions)
+                    : result.stopped_while + " did not finish before the deadline"),
             outcome};
   }
   if (absl::Status s = CheckPathPoints(result, max_path_points); !s.ok()) {

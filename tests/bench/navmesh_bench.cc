@@ -48,13 +48,13 @@ namespace {
 class OneVersionStore final : public DerivedStore {
  public:
   explicit OneVersionStore(const Grid& grid) : grid_(grid) {}
-  std::shared_ptr<const void> Get(const std::string& key,
-                                  const DerivedRecipe& recipe) override {
+  std::shared_ptr<const void> Get(const std::string& key, const DerivedRecipe& recipe,
+                                  DerivedStop& stop) override {
     auto& slot = values_[key];
     if (slot == nullptr) {
       slot = key.rfind("navmesh", 0) == 0
                  ? NavMesh::Build(grid_, false, absl::GetFlag(FLAGS_tile_size))
-                 : recipe.build(grid_);
+                 : recipe.build(grid_, stop);
     }
     return slot;
   }

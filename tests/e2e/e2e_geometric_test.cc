@@ -2,8 +2,10 @@
 // tries them: a navmesh plan is an exact polyline shorter than A*'s grid
 // path, render --overlay draws the mesh under it, maps stats lists the
 // structures, and a map update changes the answer (the server advances its
-// cached structures to the new version).
+// cached structures to the new version). A structure too slow for the
+// query's deadline ends the query, not the daemon.
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -113,6 +115,62 @@ TEST_F(E2eTest, AMapUpdateChangesTheGeometricAnswer) {
       if (exact && p.x() >= 10 && p.x() <= 11) EXPECT_EQ(p.y(), 9.0);
     }
   }
+}
+
+// width x height Moving AI text with a quarter of the cells blocked at
+// random (fixed seed), row 0 and the last column open so a path joins their
+// ends. At 512 x 512 it is like random512-25: about 49,000 obstacle corners,
+// a visibility graph of minutes.
+std::string QuarterBlockedMap(int width, int height) {
+  std::mt19937 rng(25);
+  std::string text = absl::StrCat("type octile\nheight ", height, "\nwidth ", width,
+                                  "\nmap\n");
+  for (int y = 0; y < height; ++y) {
+    std::string row(width, '.');
+    for (int x = 0; y > 0 && x + 1 < width; ++x) {
+      if (rng() % 4 == 0) row[x] = '@';
+    }
+    text += row + "\n";
+  }
+  return text;
+}
+
+TEST_F(E2eTest, AStructureSlowerThanTheDeadlineEndsTheQueryNotTheWorker) {
+  // One worker: the A* plan below runs only once the build let it go.
+  const std::unique_ptr<e2e::PathdProcess> pathd =
+      StartOwnPathd({"--threads=1", "--log_level=debug"});
+  ASSERT_TRUE(pathd->listening());
+  const std::string server = "--server=" + pathd->address();
+  const ProcessResult created =
+      RunPathctl({server, "maps", "create", "random", "--from",
+                  MapFile("random.map", QuarterBlockedMap(512, 512))});
+  ASSERT_EQ(created.exit_code, 0) << created;
+
+  const ProcessResult slow =
+      RunPathctl({server, "--timeout=300ms", "plan", "random", "0", "0", "511", "511",
+                  "--planner", "visibility_graph"});
+  EXPECT_EQ(slow.exit_code,
+            pathctl::ExitCodeForStatus(absl::StatusCode::kDeadlineExceeded))
+      << slow;
+  EXPECT_TRUE(absl::StartsWith(slow.err, "error: DEADLINE_EXCEEDED: ")) << slow;
+
+  // pathctl's default timeout is far below the graph's minutes.
+  const ProcessResult astar = RunPathctl(
+      {server, "plan", "random", "0", "0", "511", "511", "--planner", "astar"});
+  EXPECT_EQ(astar.exit_code, 0) << astar;
+
+  // The client's own timer ends its call at the deadline, so the server's
+  // answer, sent a poll later, reaches only the request log.
+  const ProcessResult log = StopOwnPathd(*pathd);
+  EXPECT_EQ(log.exit_code, 0) << log;
+  EXPECT_TRUE(absl::StrContains(
+      log.err, "planner=visibility_graph outcome=TIMEOUT"))
+      << log.err;
+  EXPECT_TRUE(absl::StrContains(
+      log.err, "error=\"building the visibility graph of this map version ("))
+      << log.err;
+  EXPECT_TRUE(absl::StrContains(log.err, " vertices) did not finish before the deadline\""))
+      << log.err;
 }
 
 }  // namespace

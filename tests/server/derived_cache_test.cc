@@ -4,12 +4,16 @@
 #include "server/derived_cache.h"
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <new>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "absl/synchronization/notification.h"
+#include "absl/time/clock.h"
+#include "core/search/stop_condition.h"
 #include "gtest/gtest.h"
 
 namespace pathd::server {
@@ -28,13 +32,13 @@ struct Counters {
 
 DerivedRecipe Recipe(Counters* counters, size_t bytes = 100) {
   DerivedRecipe recipe;
-  recipe.build = [counters](const Grid&) -> std::shared_ptr<const void> {
+  recipe.build = [counters](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
     ++counters->builds;
     return std::make_shared<const Made>();
   };
   recipe.advance = [counters](const void* previous, const Grid&,
-                              absl::Span<const Cell> changed)
-      -> std::shared_ptr<const void> {
+                              absl::Span<const Cell> changed,
+                              DerivedStop&) -> std::shared_ptr<const void> {
     ++counters->advances;
     auto made = std::make_shared<Made>();
     made->generation = static_cast<const Made*>(previous)->generation + 1;
@@ -58,11 +62,14 @@ std::shared_ptr<const MapSnapshot> Snapshot(uint64_t map_id, uint64_t version,
   return s;
 }
 
+// Under `stop` when given, else never stopping.
 std::shared_ptr<const Made> Get(DerivedCache& cache,
                                 const std::shared_ptr<const MapSnapshot>& s,
-                                const std::string& key, const DerivedRecipe& recipe) {
+                                const std::string& key, const DerivedRecipe& recipe,
+                                DerivedStop* stop = nullptr) {
+  DerivedStop never;
   return std::static_pointer_cast<const Made>(
-      cache.For(s, s->grid, 0.0)->Get(key, recipe));
+      cache.For(s, s->grid, 0.0)->Get(key, recipe, stop != nullptr ? *stop : never));
 }
 
 TEST(DerivedCacheTest, OneValuePerGridAndKey) {
@@ -143,7 +150,8 @@ TEST(DerivedCacheTest, AnotherMapIdOrRadiusBuildsAfresh) {
   Get(cache, recreated, "k", recipe);
   // An inflated grid of the first map: not advanced from the stored grid's.
   auto inflated = std::make_shared<const Grid>(*Grid::Create(4, 4));
-  cache.For(v1, inflated, 1.5)->Get("k", recipe);
+  DerivedStop never;
+  cache.For(v1, inflated, 1.5)->Get("k", recipe, never);
   EXPECT_EQ(counters.builds, 3);
   EXPECT_EQ(counters.advances, 0);
 }
@@ -167,7 +175,7 @@ TEST(DerivedCacheTest, ABuildThatThrowsLeavesNoEntryBehind) {
   Counters counters;
   DerivedRecipe recipe = Recipe(&counters);
   DerivedRecipe failing = recipe;
-  failing.build = [](const Grid&) -> std::shared_ptr<const void> {
+  failing.build = [](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
     throw std::bad_alloc();
   };
   auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
@@ -188,6 +196,191 @@ TEST(DerivedCacheTest, EntriesOfFreedVersionsAreDropped) {
   auto v2 = Snapshot(3, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
   Get(cache, v2, "k", recipe);
   EXPECT_EQ(cache.stats().entries, 1u);
+}
+
+// A build that polls its stop every millisecond until it fires (or, so a
+// store that never passes the stop fails the test instead of hanging it,
+// for at most 20 s), then gives up; `started` is notified when it begins.
+DerivedRecipe PollingRecipe(absl::Notification* started, std::atomic<int>* gave_up) {
+  DerivedRecipe recipe;
+  recipe.build = [started, gave_up](const Grid&,
+                                    DerivedStop& stop) -> std::shared_ptr<const void> {
+    if (started != nullptr && !started->HasBeenNotified()) started->Notify();
+    const absl::Time give_up_anyway = absl::Now() + absl::Seconds(20);
+    while (absl::Now() < give_up_anyway) {
+      if (stop.Stopped()) {
+        stop.Note("building the slow thing");
+        ++*gave_up;
+        return nullptr;
+      }
+      absl::SleepFor(absl::Milliseconds(1));
+    }
+    return std::make_shared<const Made>();
+  };
+  recipe.bytes = [](const void*) { return size_t{100}; };
+  recipe.what = "the slow thing";
+  return recipe;
+}
+
+TEST(DerivedCacheTest, ABuildThatPollsGivesUpAtTheQueryDeadline) {
+  DerivedCache cache(1 << 20);
+  std::atomic<int> gave_up{0};
+  const DerivedRecipe recipe = PollingRecipe(nullptr, &gave_up);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  const StopCondition condition(absl::Now() + absl::Milliseconds(50), nullptr, 0);
+  DerivedStop stop(condition);
+  EXPECT_EQ(Get(cache, v1, "k", recipe, &stop), nullptr);
+  EXPECT_EQ(gave_up, 1);
+  EXPECT_EQ(stop.Outcome(), PlanOutcome::kTimeout);
+  EXPECT_EQ(stop.stopped_while(), "building the slow thing");
+  // The unfinished entry is gone, and the next query builds anew.
+  EXPECT_EQ(cache.stats().entries, 0u);
+  EXPECT_EQ(cache.stats().stopped_builds, 1);
+  EXPECT_EQ(cache.stats().builds, 0);
+  EXPECT_TRUE(cache.Entries("m").empty());
+  Counters counters;
+  EXPECT_NE(Get(cache, v1, "k", Recipe(&counters)), nullptr);
+  EXPECT_EQ(counters.builds, 1);
+  EXPECT_EQ(cache.stats().entries, 1u);
+}
+
+TEST(DerivedCacheTest, ACancelledBuildGivesUp) {
+  DerivedCache cache(1 << 20);
+  std::atomic<int> gave_up{0};
+  const DerivedRecipe recipe = PollingRecipe(nullptr, &gave_up);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  std::atomic<bool> cancelled{false};
+  const StopCondition condition(absl::InfiniteFuture(), &cancelled, 0);
+  DerivedStop stop(condition);
+  std::thread canceller([&] {
+    absl::SleepFor(absl::Milliseconds(30));
+    cancelled = true;
+  });
+  EXPECT_EQ(Get(cache, v1, "k", recipe, &stop), nullptr);
+  canceller.join();
+  EXPECT_EQ(stop.Outcome(), PlanOutcome::kCancelled);
+  EXPECT_EQ(cache.stats().entries, 0u);
+}
+
+TEST(DerivedCacheTest, AQueryAlreadyStoppedStartsNoBuild) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  const StopCondition condition(absl::Now() - absl::Seconds(1), nullptr, 0);
+  DerivedStop stop(condition);
+  DerivedRecipe recipe = Recipe(&counters);
+  recipe.what = "the thing";
+  EXPECT_EQ(Get(cache, v1, "k", recipe, &stop), nullptr);
+  EXPECT_EQ(counters.builds, 0);
+  EXPECT_EQ(stop.stopped_while(), "building the thing");
+  EXPECT_EQ(cache.stats().entries, 0u);
+  // A value already there is still answered.
+  Get(cache, v1, "k", recipe);
+  EXPECT_NE(Get(cache, v1, "k", recipe, &stop), nullptr);
+}
+
+TEST(DerivedCacheTest, AWaiterWithADeadlineReturnsAtItWhileTheBuildGoesOn) {
+  DerivedCache cache(1 << 20);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  // The builder has no deadline and finishes when released.
+  absl::Notification started, release;
+  DerivedRecipe blocking;
+  blocking.build = [&](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
+    started.Notify();
+    release.WaitForNotificationWithTimeout(absl::Seconds(20));
+    return std::make_shared<const Made>();
+  };
+  blocking.bytes = [](const void*) { return size_t{100}; };
+  std::shared_ptr<const Made> built;
+  std::thread builder([&] { built = Get(cache, v1, "k", blocking); });
+  started.WaitForNotification();
+
+  Counters counters;
+  DerivedRecipe waiter_recipe = Recipe(&counters);
+  waiter_recipe.what = "the blocked thing";
+  const StopCondition condition(absl::Now() + absl::Milliseconds(100), nullptr, 0);
+  DerivedStop stop(condition);
+  absl::Notification waiter_done;
+  std::shared_ptr<const Made> waited;
+  std::thread waiter([&] {
+    waited = Get(cache, v1, "k", waiter_recipe, &stop);
+    waiter_done.Notify();
+  });
+  // A waiter that ignored its deadline would still be waiting; release the
+  // builder then, so the test fails instead of hanging.
+  EXPECT_TRUE(waiter_done.WaitForNotificationWithTimeout(absl::Seconds(10)))
+      << "the waiter outlived its deadline by seconds";
+  EXPECT_FALSE(release.HasBeenNotified());
+  release.Notify();
+  waiter.join();
+  builder.join();
+  EXPECT_EQ(waited, nullptr);
+  EXPECT_EQ(stop.Outcome(), PlanOutcome::kTimeout);
+  EXPECT_EQ(stop.stopped_while(), "waiting for another query's build of the blocked thing");
+  EXPECT_EQ(counters.builds, 0) << "the waiter must not build beside the builder";
+  EXPECT_NE(built, nullptr);
+  EXPECT_EQ(cache.stats().stopped_waits, 1);
+  EXPECT_EQ(cache.stats().stopped_builds, 0);
+  EXPECT_EQ(cache.stats().entries, 1u);
+}
+
+TEST(DerivedCacheTest, ACancelledWaiterStopsWaiting) {
+  DerivedCache cache(1 << 20);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  absl::Notification started, release;
+  DerivedRecipe blocking;
+  blocking.build = [&](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
+    started.Notify();
+    release.WaitForNotificationWithTimeout(absl::Seconds(20));
+    return std::make_shared<const Made>();
+  };
+  std::thread builder([&] { Get(cache, v1, "k", blocking); });
+  started.WaitForNotification();
+  std::atomic<bool> cancelled{false};
+  const StopCondition condition(absl::InfiniteFuture(), &cancelled, 0);
+  DerivedStop stop(condition);
+  absl::Notification waiter_done;
+  std::thread waiter([&] {
+    EXPECT_EQ(Get(cache, v1, "k", blocking, &stop), nullptr);
+    waiter_done.Notify();
+  });
+  cancelled = true;
+  EXPECT_TRUE(waiter_done.WaitForNotificationWithTimeout(absl::Seconds(10)))
+      << "the cancelled waiter kept waiting";
+  release.Notify();
+  waiter.join();
+  builder.join();
+  EXPECT_EQ(stop.Outcome(), PlanOutcome::kCancelled);
+}
+
+TEST(DerivedCacheTest, APatientWaiterGetsTheValueAfterAnImpatientBuilderGivesUp) {
+  DerivedCache cache(1 << 20);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
+  // The impatient query builds under a 300 ms deadline and gives up at it.
+  absl::Notification started;
+  std::atomic<int> gave_up{0};
+  const DerivedRecipe slow = PollingRecipe(&started, &gave_up);
+  const StopCondition impatient_condition(absl::Now() + absl::Milliseconds(300), nullptr,
+                                          0);
+  DerivedStop impatient_stop(impatient_condition);
+  std::shared_ptr<const Made> impatient;
+  std::thread builder([&] { impatient = Get(cache, v1, "k", slow, &impatient_stop); });
+  started.WaitForNotification();
+  // The patient one (no deadline) waits on that build, then builds itself.
+  Counters counters;
+  const DerivedRecipe quick = Recipe(&counters);
+  const StopCondition patient_condition;
+  DerivedStop patient_stop(patient_condition);
+  const std::shared_ptr<const Made> patient = Get(cache, v1, "k", quick, &patient_stop);
+  builder.join();
+  EXPECT_EQ(impatient, nullptr);
+  EXPECT_EQ(gave_up, 1);
+  ASSERT_NE(patient, nullptr) << patient_stop.stopped_while();
+  EXPECT_EQ(patient_stop.stopped_while(), "");
+  EXPECT_EQ(counters.builds, 1);
+  EXPECT_EQ(cache.stats().stopped_builds, 1);
+  EXPECT_EQ(cache.stats().entries, 1u);
+  EXPECT_EQ(Get(cache, v1, "k", quick), patient);
 }
 
 }  // namespace

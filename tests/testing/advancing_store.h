@@ -73,9 +73,8 @@ class AdvancingStore : public DerivedStore {
 
   // Builds and advances run without the lock held, so a recipe may ask the
   // store for another key (a structure made from another one).
-  std::shared_ptr<const void> Get(const std::string& key,
-                                  const DerivedRecipe& recipe) override
-      ABSL_LOCKS_EXCLUDED(mu_) {
+  std::shared_ptr<const void> Get(const std::string& key, const DerivedRecipe& recipe,
+                                  DerivedStop& stop) override ABSL_LOCKS_EXCLUDED(mu_) {
     Entry previous;
     std::shared_ptr<const Grid> grid;
     {
@@ -98,11 +97,13 @@ class AdvancingStore : public DerivedStore {
         previous.grid->height() == grid->height()) {
       const std::vector<Cell> changed = ChangedCells(*previous.grid, *grid);
       changed_count = changed.size();
-      if (recipe.advance) value = recipe.advance(previous.value.get(), *grid, changed);
+      if (recipe.advance) value = recipe.advance(previous.value.get(), *grid, changed, stop);
       advanced = value != nullptr;
       rebuilt = !advanced;
     }
-    if (value == nullptr) value = recipe.build(*grid);
+    if (value == nullptr) value = recipe.build(*grid, stop);
+    // Stopped: nothing to keep.
+    if (value == nullptr) return nullptr;
     const absl::Duration took = absl::Now() - started;
     const size_t bytes = recipe.bytes ? recipe.bytes(value.get()) : 0;
     absl::MutexLock lock(&mu_);
@@ -116,6 +117,13 @@ class AdvancingStore : public DerivedStore {
     }
     entries_[key] = Entry{grid, value};
     return value;
+  }
+
+  // For tests of the store itself: never stops.
+  std::shared_ptr<const void> Get(const std::string& key, const DerivedRecipe& recipe)
+      ABSL_LOCKS_EXCLUDED(mu_) {
+    DerivedStop never;
+    return Get(key, recipe, never);
   }
 
   Stats stats() const ABSL_LOCKS_EXCLUDED(mu_) {

@@ -12,6 +12,7 @@
 #include "core/geometry/visibility_graph.h"
 #include "core/map/cost_model.h"
 #include "core/planners/planners.h"
+#include "core/search/derived.h"
 #include "core/search/grid_planner.h"
 
 namespace pathd {
@@ -38,8 +39,10 @@ class EuclideanSpmPlanner final : public GridPlanner {
   // (the map itself is built, or taken from the store, before).
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     const PlanRequest& request = q.request;
+    DerivedStop stop(q.stop);
     const std::shared_ptr<const EuclideanSpm> spm = GetEuclideanSpm(
-        request.derived, q.grid, request.goal, request.cost.unknown_is_free);
+        request.derived, q.grid, request.goal, request.cost.unknown_is_free, stop);
+    if (spm == nullptr) return StoppedWhileDeriving(stop);
     const FreeSpace& space = spm->graph().space();
     PlanResult result;
     std::vector<LatticePoint> polyline = {CentreOf(request.start)};

@@ -37,21 +37,23 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
+// The decomposition of `grid`; null when `stop` fired first, building it
+// or waiting for another query's build.
 std::shared_ptr<const TrapezoidalDecomposition> Decomposition(
-    const Grid& grid, const PlanRequest& request) {
+    const Grid& grid, const PlanRequest& request, DerivedStop& stop) {
   const bool unknown_is_free = request.cost.unknown_is_free;
   return GetDerived<TrapezoidalDecomposition>(
       request.derived, grid,
       std::string("trapezoidal:unknown_is_free=") +
           (unknown_is_free ? "1" : "0"),
-      [unknown_is_free](const Grid& g) {
-        return std::make_shared<const TrapezoidalDecomposition>(
-            g, unknown_is_free);
+      "the trapezoidal decomposition of this map version", stop,
+      [unknown_is_free](const Grid& g, DerivedStop& s) {
+        return TrapezoidalDecomposition::Build(g, unknown_is_free, s);
       },
       // A change can merge or split trapezoids of any length across its
       // column; rebuilding is one sweep, O(cells).
-      [](const TrapezoidalDecomposition&, const Grid&, absl::Span<const Cell>)
-          -> std::shared_ptr<const TrapezoidalDecomposition> {
+      [](const TrapezoidalDecomposition&, const Grid&, absl::Span<const Cell>,
+         DerivedStop&) -> std::shared_ptr<const TrapezoidalDecomposition> {
         return nullptr;
       },
       [](const TrapezoidalDecomposition& d) { return d.bytes(); });
@@ -192,8 +194,10 @@ class TrapezoidalPlanner final : public GridPlanner {
     // costs no build.
     result.outcome = q.stop.Check(0);
     if (result.outcome != PlanOutcome::kFound) return result;
+    DerivedStop stop(q.stop);
     const std::shared_ptr<const TrapezoidalDecomposition> d =
-        Decomposition(grid, request);
+        Decomposition(grid, request, stop);
+    if (d == nullptr) return StoppedWhileDeriving(stop);
     const LatticePoint start = CentreOf(request.start);
     const LatticePoint goal = CentreOf(request.goal);
     const int32_t start_trapezoid = d->TrapezoidOf(request.start);

@@ -44,6 +44,7 @@
 #include "core/geometry/visibility_graph.h"
 #include "core/map/cost_model.h"
 #include "core/planners/planners.h"
+#include "core/search/derived.h"
 #include "core/search/grid_planner.h"
 
 namespace pathd {
@@ -196,8 +197,10 @@ class VisibilityGraphPlanner final : public GridPlanner {
   // included).
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     const PlanRequest& request = q.request;
+    DerivedStop stop(q.stop);
     const std::shared_ptr<const VisibilityGraph> graph = GetVisibilityGraph(
-        request.derived, q.grid, request.cost.unknown_is_free);
+        request.derived, q.grid, request.cost.unknown_is_free, stop);
+    if (graph == nullptr) return StoppedWhileDeriving(stop);
     const LatticePoint start = CentreOf(request.start);
     const LatticePoint goal = CentreOf(request.goal);
     if (start == goal) return SinglePoint(graph->space(), start);
@@ -406,8 +409,10 @@ class MinimalConstructPlanner final : public GridPlanner {
   // whose segment turned out blocked.
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     const PlanRequest& request = q.request;
+    DerivedStop stop(q.stop);
     const std::shared_ptr<const ObstacleCorners> obstacles = GetObstacleCorners(
-        request.derived, q.grid, request.cost.unknown_is_free);
+        request.derived, q.grid, request.cost.unknown_is_free, stop);
+    if (obstacles == nullptr) return StoppedWhileDeriving(stop);
     const LatticePoint start = CentreOf(request.start);
     const LatticePoint goal = CentreOf(request.goal);
     if (start == goal) return SinglePoint(obstacles->space(), start);

@@ -52,17 +52,21 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // factors make detours along long GVD branches worth little shortcuts.
 constexpr double kOffDiagramFactor = 4.0;
 
-std::shared_ptr<const VoronoiField> Field(const Grid& grid,
-                                          const PlanRequest& request) {
+// The field of `grid`; null when `stop` fired first, building it or
+// waiting for another query's build. An advance (O(cells whose nearest
+// obstacle changed)) does not poll.
+std::shared_ptr<const VoronoiField> Field(const Grid& grid, const PlanRequest& request,
+                                          DerivedStop& stop) {
   const bool unknown_is_free = request.cost.unknown_is_free;
   return GetDerived<VoronoiField>(
       request.derived, grid,
       std::string("voronoi:unknown_is_free=") + (unknown_is_free ? "1" : "0"),
-      [unknown_is_free](const Grid& g) {
-        return std::make_shared<const VoronoiField>(g, unknown_is_free);
+      "the Voronoi field of this map version", stop,
+      [unknown_is_free](const Grid& g, DerivedStop& s) {
+        return VoronoiField::Build(g, unknown_is_free, s);
       },
       [](const VoronoiField& previous, const Grid& g,
-         absl::Span<const Cell> changed)
+         absl::Span<const Cell> changed, DerivedStop&)
           -> std::shared_ptr<const VoronoiField> {
         auto next = std::make_shared<VoronoiField>(previous);
         next->Update(g, changed);
@@ -250,7 +254,9 @@ class VoronoiPlanner final : public GridPlanner {
     // build.
     result.outcome = q.stop.Check(0);
     if (result.outcome != PlanOutcome::kFound) return result;
-    const std::shared_ptr<const VoronoiField> field = Field(grid, request);
+    DerivedStop stop(q.stop);
+    const std::shared_ptr<const VoronoiField> field = Field(grid, request, stop);
+    if (field == nullptr) return StoppedWhileDeriving(stop);
     VoronoiSearch search(*field, request, q.stop);
     double bottleneck = 0.0;
     result.outcome = search.WidestBottleneck(bottleneck);

@@ -6,6 +6,7 @@
 #include "core/geometry/trapezoidal.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -20,6 +21,8 @@
 #include "core/geometry/structure.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
+#include "core/search/stop_condition.h"
+#include "absl/time/clock.h"
 #include "gtest/gtest.h"
 #include "tests/testing/test_grids.h"
 
@@ -359,6 +362,26 @@ TEST(PullString, IsTheShortestPathInItsChannel) {
     ++channels;
   }
   EXPECT_GT(channels, 1000);
+}
+
+TEST(TrapezoidalDecomposition, ABuildUnderAStopThatFiredReturnsNothing) {
+  std::mt19937 rng(23);
+  const Grid grid = RandomGrid(rng, 200, 150, 20);
+  const StopCondition expired(absl::Now() - absl::Seconds(1), nullptr, 0);
+  DerivedStop stop(expired);
+  EXPECT_EQ(TrapezoidalDecomposition::Build(grid, false, stop), nullptr);
+  std::atomic<bool> cancelled{true};
+  const StopCondition cancel(absl::InfiniteFuture(), &cancelled, 0);
+  DerivedStop cancelled_stop(cancel);
+  EXPECT_EQ(TrapezoidalDecomposition::Build(grid, false, cancelled_stop), nullptr);
+  EXPECT_EQ(cancelled_stop.Outcome(), PlanOutcome::kCancelled);
+  // Not stopped, it is the decomposition the constructor builds.
+  DerivedStop never;
+  const auto built = TrapezoidalDecomposition::Build(grid, false, never);
+  ASSERT_NE(built, nullptr);
+  const TrapezoidalDecomposition direct(grid, false);
+  EXPECT_EQ(built->trapezoids().size(), direct.trapezoids().size());
+  EXPECT_EQ(built->portals(), direct.portals());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "core/geometry/visibility_graph.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -20,6 +21,12 @@
 #include "core/geometry/euclidean_spm.h"
 #include "core/geometry/free_space.h"
 #include "core/geometry/structure.h"
+#include "core/search/derived.h"
+#include "core/search/registry.h"
+#include "core/search/search_scratch.h"
+#include "core/search/stop_condition.h"
+#include "absl/strings/match.h"
+#include "absl/time/clock.h"
 #include "gtest/gtest.h"
 #include "tests/testing/test_grids.h"
 
@@ -359,6 +366,114 @@ TEST(EuclideanSpmTest, LargerMapsMatchTheCompleteGraph) {
           << "trial " << trial << " cell " << CellToString(free[i]) << "\n" << Dump(grid);
     }
   }
+}
+
+// width x height with a quarter of the cells blocked at random, row 0 and
+// the last column open (so a path joins their ends): at 512 x 512 about
+// 49,000 bend corners, like Moving AI's random512-25, whose visibility graph
+// takes minutes.
+Grid QuarterBlocked(int width, int height, uint32_t seed) {
+  std::mt19937 rng(seed);
+  Grid grid = Grid::Create(width, height).value();
+  for (int y = 1; y < height; ++y) {
+    for (int x = 0; x + 1 < width; ++x) {
+      if (rng() % 4 == 0) grid.set_cost(x, y, kLethalCost);
+    }
+  }
+  return grid;
+}
+
+StopCondition Expired() {
+  return StopCondition(absl::Now() - absl::Seconds(1), nullptr, 0);
+}
+
+TEST(DerivedStopTest, AVisibilityGraphBuildPastItsDeadlineReturnsNothing) {
+  const Grid grid = QuarterBlocked(512, 512, 7);
+  const StopCondition expired = Expired();
+  DerivedStop stop(expired);
+  EXPECT_EQ(GetVisibilityGraph(nullptr, grid, false, stop), nullptr);
+  EXPECT_EQ(stop.Outcome(), PlanOutcome::kTimeout);
+  EXPECT_TRUE(absl::StartsWith(stop.stopped_while(),
+                               "building the visibility graph of this map version ("))
+      << stop.stopped_while();
+  EXPECT_TRUE(absl::EndsWith(stop.stopped_while(), " vertices)")) << stop.stopped_while();
+
+  std::atomic<bool> cancelled{true};
+  const StopCondition cancel(absl::InfiniteFuture(), &cancelled, 0);
+  DerivedStop cancelled_stop(cancel);
+  EXPECT_EQ(VisibilityGraph::Build(SharedFreeSpace(nullptr, grid, false), cancelled_stop),
+            nullptr);
+  EXPECT_EQ(cancelled_stop.Outcome(), PlanOutcome::kCancelled);
+}
+
+// Minutes of pairs if the build ignored its stop; it polls once per vertex.
+TEST(DerivedStopTest, AVisibilityGraphBuildStopsAtADeadlineThatPassesDuringIt) {
+  const Grid grid = QuarterBlocked(512, 512, 11);
+  const StopCondition soon(absl::Now() + absl::Milliseconds(100), nullptr, 0);
+  DerivedStop stop(soon);
+  EXPECT_EQ(GetVisibilityGraph(nullptr, grid, false, stop), nullptr);
+  EXPECT_EQ(stop.Outcome(), PlanOutcome::kTimeout);
+}
+
+TEST(DerivedStopTest, AVisibilityGraphAdvancePastItsDeadlineReturnsNothing) {
+  Grid grid = QuarterBlocked(48, 48, 3);
+  const auto graph = VisibilityGraph::Build(SharedFreeSpace(nullptr, grid, false));
+  grid.set_cost(20, 20, grid.cost(20, 20) == kLethalCost ? 0 : kLethalCost);
+  const StopCondition expired = Expired();
+  DerivedStop stop(expired);
+  EXPECT_EQ(VisibilityGraph::Advance(*graph, SharedFreeSpace(nullptr, grid, false),
+                                     std::vector<Cell>{{20, 20}}, stop),
+            nullptr);
+  EXPECT_TRUE(absl::StartsWith(stop.stopped_while(),
+                               "advancing the visibility graph to this map version ("))
+      << stop.stopped_while();
+  // Not stopped, the same advance answers.
+  DerivedStop never;
+  EXPECT_NE(VisibilityGraph::Advance(*graph, SharedFreeSpace(nullptr, grid, false),
+                                     std::vector<Cell>{{20, 20}}, never),
+            nullptr);
+}
+
+TEST(DerivedStopTest, AEuclideanSpmBuildPastItsDeadlineReturnsNothing) {
+  // On the large map the graph under the map gives up first, and says so.
+  const Grid large = QuarterBlocked(512, 512, 7);
+  const StopCondition expired = Expired();
+  DerivedStop stop(expired);
+  EXPECT_EQ(GetEuclideanSpm(nullptr, large, Cell{0, 0}, false, stop), nullptr);
+  EXPECT_TRUE(absl::StartsWith(stop.stopped_while(), "building the visibility graph"))
+      << stop.stopped_while();
+  // Over a graph already built, the map's own build gives up.
+  const Grid small = QuarterBlocked(48, 48, 3);
+  const auto graph = GetVisibilityGraph(nullptr, small, false);
+  std::atomic<bool> cancelled{true};
+  const StopCondition cancel(absl::InfiniteFuture(), &cancelled, 0);
+  DerivedStop cancelled_stop(cancel);
+  EXPECT_EQ(EuclideanSpm::Build(graph, Cell{0, 0}, cancelled_stop), nullptr);
+  EXPECT_EQ(cancelled_stop.Outcome(), PlanOutcome::kCancelled);
+  EXPECT_TRUE(absl::StartsWith(cancelled_stop.stopped_while(),
+                               "building the Euclidean shortest path map of goal (0, 0)"))
+      << cancelled_stop.stopped_while();
+}
+
+// The planners end the query with the stop's outcome and name the structure.
+TEST(DerivedStopTest, PlannersAnswerTheStopNamingTheStructure) {
+  const Grid grid = QuarterBlocked(512, 512, 7);
+  const PlanRequest request = PlanRequest::Between({0, 0}, {511, 511});
+  SearchScratch scratch;
+  const StopCondition soon(absl::Now() + absl::Milliseconds(100), nullptr, 0);
+  const absl::StatusOr<PlanResult> vg =
+      PlannerRegistry::Default().Get("visibility_graph")->Plan(grid, request, soon, scratch);
+  ASSERT_TRUE(vg.ok()) << vg.status();
+  EXPECT_EQ(vg->outcome, PlanOutcome::kTimeout);
+  EXPECT_TRUE(absl::StartsWith(vg->stopped_while, "building the visibility graph"))
+      << vg->stopped_while;
+  std::atomic<bool> cancelled{true};
+  const StopCondition cancel(absl::InfiniteFuture(), &cancelled, 0);
+  const absl::StatusOr<PlanResult> spm =
+      PlannerRegistry::Default().Get("euclidean_spm")->Plan(grid, request, cancel, scratch);
+  ASSERT_TRUE(spm.ok()) << spm.status();
+  EXPECT_EQ(spm->outcome, PlanOutcome::kCancelled);
+  EXPECT_FALSE(spm->stopped_while.empty());
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 // build of the same map, cell by cell.
 #include "core/geometry/voronoi.h"
 
+#include <atomic>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -12,6 +13,8 @@
 #include "core/geometry/structure.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
+#include "core/search/stop_condition.h"
+#include "absl/time/clock.h"
 #include "gtest/gtest.h"
 #include "tests/testing/test_grids.h"
 
@@ -236,6 +239,26 @@ TEST(VoronoiField, OpeningAWallLetsTheFarSideIn) {
   field.Update(grid, changed);
   EXPECT_DOUBLE_EQ(field.Clearance({3, 2}), 3.0);  // the top edge, 3 rows up
   ExpectSameField(field, VoronoiField(grid, false), "opened");
+}
+
+TEST(VoronoiField, ABuildUnderAStopThatFiredReturnsNothing) {
+  std::mt19937 rng(17);
+  const Grid grid = RandomGrid(rng, 300, 300, 20);
+  const StopCondition expired(absl::Now() - absl::Seconds(1), nullptr, 0);
+  DerivedStop stop(expired);
+  EXPECT_EQ(VoronoiField::Build(grid, false, stop), nullptr);
+  EXPECT_EQ(stop.stopped_while(),
+            "building the Voronoi field of this map version (300 x 300 cells)");
+  std::atomic<bool> cancelled{true};
+  const StopCondition cancel(absl::InfiniteFuture(), &cancelled, 0);
+  DerivedStop cancelled_stop(cancel);
+  EXPECT_EQ(VoronoiField::Build(grid, false, cancelled_stop), nullptr);
+  EXPECT_EQ(cancelled_stop.Outcome(), PlanOutcome::kCancelled);
+  // Not stopped, it is the field the constructor builds.
+  DerivedStop never;
+  const auto built = VoronoiField::Build(grid, false, never);
+  ASSERT_NE(built, nullptr);
+  ExpectSameField(*built, VoronoiField(grid, false), "under a stop");
 }
 
 }  // namespace

@@ -345,19 +345,19 @@ TEST(VoronoiPlanner, PrefersTheWiderOfTwoCorridors) {
 // changed, advances it with the changed cells instead of building anew.
 class AdvancingStore final : public DerivedStore {
  public:
-  std::shared_ptr<const void> Get(const std::string& key,
-                                  const DerivedRecipe& recipe) override {
+  std::shared_ptr<const void> Get(const std::string& key, const DerivedRecipe& recipe,
+                                  DerivedStop& stop) override {
     auto it = values_.find(key);
     if (it == values_.end()) {
       ++builds_;
-      return values_[key] = recipe.build(*grid_);
+      return values_[key] = recipe.build(*grid_, stop);
     }
     if (!changed_.empty()) {
       std::shared_ptr<const void> next =
-          recipe.advance(it->second.get(), *grid_, changed_);
+          recipe.advance(it->second.get(), *grid_, changed_, stop);
       if (next == nullptr) {
         ++builds_;
-        next = recipe.build(*grid_);
+        next = recipe.build(*grid_, stop);
       } else {
         ++advances_;
       }

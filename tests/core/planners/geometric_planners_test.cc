@@ -793,11 +793,11 @@ TEST(AdvancingStoreTest, AdvancesWithTheChangedCells) {
   };
   DerivedRecipe recipe;
   bool decline = false;
-  recipe.build = [](const Grid&) -> std::shared_ptr<const void> {
+  recipe.build = [](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
     return std::make_shared<const Value>(Value{1, 0, {}});
   };
-  recipe.advance = [&](const void* previous, const Grid&,
-                       absl::Span<const Cell> changed) -> std::shared_ptr<const void> {
+  recipe.advance = [&](const void* previous, const Grid&, absl::Span<const Cell> changed,
+                       DerivedStop&) -> std::shared_ptr<const void> {
     if (decline) return nullptr;
     const auto* p = static_cast<const Value*>(previous);
     return std::make_shared<const Value>(

@@ -304,12 +304,12 @@ TEST(VisibilityPlannersTest, StopConditions) {
 class CountingStore final : public DerivedStore {
  public:
   explicit CountingStore(const Grid& grid) : grid_(grid) {}
-  std::shared_ptr<const void> Get(const std::string& key,
-                                  const DerivedRecipe& recipe) override {
+  std::shared_ptr<const void> Get(const std::string& key, const DerivedRecipe& recipe,
+                                  DerivedStop& stop) override {
     auto it = values_.find(key);
     if (it != values_.end()) return it->second;
     ++builds[key];
-    return values_[key] = recipe.build(grid_);
+    return values_[key] = recipe.build(grid_, stop);
   }
   std::map<std::string, int> builds;
 

@@ -468,7 +468,8 @@ TEST(PlanQueryTest, GeometricViaPlansJoinTheirPolylinesAtTheViaCentres) {
 // A derived store that only says which store a planner was handed.
 class TaggedStore final : public DerivedStore {
  public:
-  std::shared_ptr<const void> Get(const std::string&, const DerivedRecipe&) override {
+  std::shared_ptr<const void> Get(const std::string&, const DerivedRecipe&,
+                                  DerivedStop&) override {
     return nullptr;
   }
 };
