@@ -65,14 +65,6 @@ absl::Status CheckInscribed(const PlanQuery& query, Cell goal, const Grid& store
   return absl::OkStatus();
 }
 
-// With a minimum clearance the answer says how close the path came.
-void ReportClearance(const PlanQuery& query, PlanAnswer* answer) {
-  if (query.min_clearance_cells <= 0.0 || answer->result.path.empty()) return;
-  answer->result.min_clearance =
-      PathClearance(*answer->source.grid, answer->result.path,
-                    query.request.cost.unknown_is_free);
-}
-
 }  // namespace
 
 void SetSingleLeg(PlanAnswer* answer) {
@@ -82,6 +74,13 @@ void SetSingleLeg(PlanAnswer* answer) {
     answer->leg_end_indices.push_back(
         static_cast<int32_t>(answer->result.path.size()) - 1);
   }
+}
+
+void ReportClearance(const PlanQuery& query, PlanAnswer* answer) {
+  if (query.min_clearance_cells <= 0.0 || answer->result.path.empty()) return;
+  answer->result.min_clearance =
+      PathClearance(*answer->source.grid, answer->result.path,
+                    query.request.cost.unknown_is_free);
 }
 
 absl::Status CheckMinClearance(const PlanQuery& query) {

@@ -132,6 +132,12 @@ struct PlanEngine {
       derived;
 };
 
+// With a minimum clearance, sets answer->result.min_clearance to the path's
+// smallest clearance on answer->source.grid (PathClearance); otherwise does
+// nothing. RunPlanQuery calls it; so do searches answered outside it
+// (Navigate sessions).
+void ReportClearance(const PlanQuery& query, PlanAnswer* answer);
+
 // INVALID_ARGUMENT when the query's minimum clearance cannot act: it works
 // through cell costs, which planners that need uniform cost (the geometric
 // ones) refuse and cost_weight 0 ignores. OK without a clearance.

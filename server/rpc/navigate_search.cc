@@ -5,7 +5,6 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/time.h"
-#include "core/map/clearance.h"
 #include "core/map/inflation.h"
 #include "core/planning/plan_query.h"
 #include "core/search/endpoints.h"
@@ -236,10 +235,7 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
   answer.source =
       PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
   if (result.ok()) answer.result = *std::move(result);
-  if (min_clearance_cells_ > 0.0 && !answer.result.path.empty()) {
-    answer.result.min_clearance =
-        PathClearance(*grid_, answer.result.path, cost_.unknown_is_free);
-  }
+  ReportClearance(query, &answer);
   SetSingleLeg(&answer);
   BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
   if (!result.ok()) plan->set_reason(std::string(result.status().message()));

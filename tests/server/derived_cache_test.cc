@@ -198,6 +198,20 @@ TEST(DerivedCacheTest, EntriesOfFreedVersionsAreDropped) {
   EXPECT_EQ(cache.stats().entries, 1u);
 }
 
+// A build that ignores its stop: it notifies `started`, then returns a
+// value once `release` is notified (or after 20 s, so a test whose waiter
+// never returns fails instead of hanging).
+DerivedRecipe BlockingRecipe(absl::Notification* started, absl::Notification* release) {
+  DerivedRecipe recipe;
+  recipe.build = [started, release](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
+    started->Notify();
+    release->WaitForNotificationWithTimeout(absl::Seconds(20));
+    return std::make_shared<const Made>();
+  };
+  recipe.bytes = [](const void*) { return size_t{100}; };
+  return recipe;
+}
+
 // A build that polls its stop every millisecond until it fires (or, so a
 // store that never passes the stop fails the test instead of hanging it,
 // for at most 20 s), then gives up; `started` is notified when it begins.
@@ -284,13 +298,7 @@ TEST(DerivedCacheTest, AWaiterWithADeadlineReturnsAtItWhileTheBuildGoesOn) {
   auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
   // The builder has no deadline and finishes when released.
   absl::Notification started, release;
-  DerivedRecipe blocking;
-  blocking.build = [&](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
-    started.Notify();
-    release.WaitForNotificationWithTimeout(absl::Seconds(20));
-    return std::make_shared<const Made>();
-  };
-  blocking.bytes = [](const void*) { return size_t{100}; };
+  const DerivedRecipe blocking = BlockingRecipe(&started, &release);
   std::shared_ptr<const Made> built;
   std::thread builder([&] { built = Get(cache, v1, "k", blocking); });
   started.WaitForNotification();
@@ -328,12 +336,7 @@ TEST(DerivedCacheTest, ACancelledWaiterStopsWaiting) {
   DerivedCache cache(1 << 20);
   auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
   absl::Notification started, release;
-  DerivedRecipe blocking;
-  blocking.build = [&](const Grid&, DerivedStop&) -> std::shared_ptr<const void> {
-    started.Notify();
-    release.WaitForNotificationWithTimeout(absl::Seconds(20));
-    return std::make_shared<const Made>();
-  };
+  const DerivedRecipe blocking = BlockingRecipe(&started, &release);
   std::thread builder([&] { Get(cache, v1, "k", blocking); });
   started.WaitForNotification();
   std::atomic<bool> cancelled{false};

@@ -61,6 +61,18 @@ std::optional<double> DijkstraCost(const Grid& grid, Cell start, Cell goal) {
   return result->cost;
 }
 
+// Three corridors joined at alternate ends: plans through via points on it
+// turn back on themselves.
+Grid ViaMaze() {
+  return MakeGrid({
+      ".......",
+      ".#####.",
+      ".......",
+      "##.####",
+      ".......",
+  });
+}
+
 absl::StatusOr<PlanAnswer> Plan(const PlanQuery& query, const PlanSnapshot& snapshot,
                                 const PlanEngine& engine) {
   SearchScratch scratch;
@@ -314,13 +326,7 @@ TEST(PlanQueryTest, ToleranceOnceUnderARadiusMatchesChoosingAfreshOnRandomMaps) 
 }
 
 TEST(PlanQueryTest, ViaPointsPlanLegByLegAtDijkstrasCost) {
-  const PlanSnapshot snapshot = Snapshot(MakeGrid({
-      ".......",
-      ".#####.",
-      ".......",
-      "##.####",
-      ".......",
-  }));
+  const PlanSnapshot snapshot = Snapshot(ViaMaze());
   PlanQuery query = Query({0, 0}, {6, 4});
   query.via = {Cell{6, 0}, Cell{0, 2}};
   absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("dijkstra"));
@@ -413,13 +419,7 @@ TEST(PlanQueryTest, StatefulEngineGetsTheSettledGoalAndReportsItsSource) {
 }
 
 TEST(PlanQueryTest, GeometricViaPlansJoinTheirPolylinesAtTheViaCentres) {
-  const PlanSnapshot snapshot = Snapshot(MakeGrid({
-      ".......",
-      ".#####.",
-      ".......",
-      "##.####",
-      ".......",
-  }));
+  const PlanSnapshot snapshot = Snapshot(ViaMaze());
   for (const char* planner : {"navmesh", "visibility_graph", "trapezoidal"}) {
     SCOPED_TRACE(planner);
     PlanQuery query = Query({0, 0}, {6, 4});
