@@ -224,6 +224,13 @@ TEST_F(E2eTest, MinimumClearanceCostsNearWallsAndIsReported) {
                 1e-6)
         << planner;
   }
+  // A Navigate session's D* Lite plans on the same shaped grid.
+  const ProcessResult nav =
+      Ctl({"navigate", "walled", "2", "2", "17", "3", "--min_clearance=1.5"});
+  ASSERT_EQ(nav.exit_code, 0) << nav;
+  EXPECT_TRUE(
+      absl::StrContains(nav.out, absl::StrFormat("found, cost %.6f,", wide.cost())))
+      << nav << " want cost " << wide.cost();
   const ProcessResult text =
       Ctl({"plan", "walled", "2", "2", "17", "3", "--min_clearance_cells=3"});
   ASSERT_EQ(text.exit_code, 0) << text;
