@@ -1,6 +1,8 @@
 #include "core/kinematics/vehicle.h"
 
+#include <cmath>
 #include <list>
+#include <numbers>
 #include <utility>
 
 #include "absl/base/thread_annotations.h"
@@ -87,6 +89,19 @@ absl::StatusOr<MotionModel> ParseMotionModel(std::string_view name) {
 }
 
 bool AllowsReverse(MotionModel model) { return model != MotionModel::kDubins; }
+
+KinematicQuery DefaultKinematicQuery(Cell start, Cell goal) {
+  KinematicQuery q;
+  q.start = Pose::AtCellCenter(start);
+  q.goal = Pose::AtCellCenter(goal);
+  if (!(start == goal)) q.start.yaw = std::atan2(goal.y - start.y, goal.x - start.x);
+  // A circle of 0.05 cells is valid, so this cannot fail.
+  q.footprint = *SharedFootprintChecker(*Footprint::Circle(0.05), {.subcells = 4});
+  q.motion = MotionModel::kReedsShepp;
+  q.min_turning_radius_cells = 1.0;
+  q.goal_tolerance_yaw = std::numbers::pi;
+  return q;
+}
 
 absl::StatusOr<std::shared_ptr<const FootprintChecker>> SharedFootprintChecker(
     const Footprint& footprint, const FootprintCheckerOptions& options) {

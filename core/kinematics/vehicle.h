@@ -64,6 +64,13 @@ struct KinematicQuery {
   bool smooth = true;
 };
 
+// The query a kinematic planner answers for a request that carries none (a
+// grid query naming a kinematic planner): a point-like robot (a disc of 0.05
+// cells, checked with 4 subcells so one-cell corridors stay open),
+// Reeds-Shepp with a one-cell turning radius, starting at the start cell's
+// centre facing the goal, ending at the goal cell's centre with any heading.
+KinematicQuery DefaultKinematicQuery(Cell start, Cell goal);
+
 // A footprint's checker with the given options, shared by every query that
 // asks for the same footprint and options: building the masks costs
 // milliseconds, so a process-wide cache of the most recent ones (thread-safe)
