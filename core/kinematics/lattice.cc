@@ -183,7 +183,11 @@ absl::StatusOr<LatticePrimitive> ParsePrimitive(const Field& f, const ControlSet
     for (size_t k = 0; k < 3; ++k) {
       PATHD_ASSIGN_OR_RETURN(v[k], pose.Element(k).Double());
     }
-    read.push_back(Pose{v[0] / res, v[1] / res, NormalizeAngle(v[2])});
+    // Headings written rounded near +-pi read as pi, so a file reads back
+    // the same whatever side of pi its rounding fell on.
+    double yaw = NormalizeAngle(v[2]);
+    if (std::fabs(std::fabs(yaw) - std::numbers::pi) < 1e-8) yaw = std::numbers::pi;
+    read.push_back(Pose{v[0] / res, v[1] / res, yaw});
   }
   const double start_yaw = NormalizeAngle(set.heading_angles[p.start_heading]);
   const double end_yaw = NormalizeAngle(set.heading_angles[p.end_heading]);
@@ -433,8 +437,8 @@ std::string WriteControlSet(const ControlSet& set) {
     absl::StrAppend(&out, "      \"poses\": [");
     for (size_t k = 0; k < p.poses.size(); ++k) {
       const Pose& q = p.poses[k];
-      absl::StrAppend(&out, k == 0 ? "\n" : ",\n", "        [", Number(q.x * res, 7), ", ",
-                      Number(q.y * res, 7), ", ", Number(q.yaw, 9), "]");
+      absl::StrAppend(&out, k == 0 ? "\n" : ",\n", "        [", Number(q.x * res, 10), ", ",
+                      Number(q.y * res, 10), ", ", Number(q.yaw, 10), "]");
     }
     absl::StrAppend(&out, "\n      ]\n    }");
   }

@@ -249,13 +249,13 @@ Motion Translation(const Pose& from, const Pose& to) {
 // ---- Collision checks of motions ----
 
 // The query's checker, two grown copies, the grid and its distance field.
+// One per query, used on its thread.
 struct MotionChecker {
   const Grid* grid = nullptr;
   bool unknown_is_free = false;
   const float* distance = nullptr;
   std::shared_ptr<const FootprintChecker> exact;
   std::shared_ptr<const FootprintChecker> coarse;
-  std::shared_ptr<const FootprintChecker> fine;
   // How far the grown footprint reaches from the reference point: the lever
   // arm of a heading change.
   double reach = 0.0;
@@ -263,6 +263,23 @@ struct MotionChecker {
   bool Free(const FootprintChecker& checker, const Pose& p) const {
     return !checker.Collides(*grid, p, unknown_is_free, distance);
   }
+  // The footprint grown by a quarter of the margin, made on first use: only
+  // exact start and goal poses near obstacles need it, and building masks
+  // costs milliseconds.
+  const FootprintChecker* Fine() const {
+    if (fine_ == nullptr) {
+      FootprintCheckerOptions options = exact->options();
+      options.margin_cells += kStateLatticeMargin / 4.0;
+      absl::StatusOr<std::shared_ptr<const FootprintChecker>> made =
+          SharedFootprintChecker(exact->footprint(), options);
+      // The options are the query's valid ones with a larger margin.
+      fine_ = made.ok() ? *made : coarse;
+    }
+    return fine_.get();
+  }
+
+ private:
+  mutable std::shared_ptr<const FootprintChecker> fine_;
 };
 
 double SweepBetween(const Pose& a, const Pose& b, double reach) {
@@ -332,7 +349,7 @@ bool MotionFree(const MotionChecker& checker, const std::vector<Pose>& poses, bo
         std::max<int32_t>(1, static_cast<int32_t>(std::ceil(half_step / (m / 2.0))));
     for (int32_t j = 0; j < fine; ++j) {
       const double offset = std::min(m / 4.0 + j * m / 2.0, total);
-      if (!checker.Free(*checker.fine, walk.At(k == 0 ? offset : total - offset))) return false;
+      if (!checker.Free(*checker.Fine(), walk.At(k == 0 ? offset : total - offset))) return false;
     }
   }
   return true;
@@ -1015,8 +1032,6 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
   FootprintCheckerOptions grown = q.footprint->options();
   grown.margin_cells = q.footprint->options().margin_cells + kStateLatticeMargin;
   PATHD_ASSIGN_OR_RETURN(checker.coarse, SharedFootprintChecker(q.footprint->footprint(), grown));
-  grown.margin_cells = q.footprint->options().margin_cells + kStateLatticeMargin / 4.0;
-  PATHD_ASSIGN_OR_RETURN(checker.fine, SharedFootprintChecker(q.footprint->footprint(), grown));
   checker.reach = q.footprint->footprint().circumscribed_radius() +
                   q.footprint->options().margin_cells + kStateLatticeMargin;
   if (!checker.Free(*checker.exact, q.start)) {
