@@ -340,6 +340,48 @@ ControlSetCache& Cache() {
   return *cache;
 }
 
+// What a query's default choice needs to know of a shipped set, read from
+// its metadata alone (parsing a whole set takes a quarter of a second).
+struct ShippedSummary {
+  std::string_view name;
+  LatticeRobot robot = LatticeRobot::kAckermann;
+  bool reverse = false;
+  int64_t headings = 0;
+  double radius_cells = 0.0;
+};
+
+ShippedSummary Summarize(std::string_view name, std::string_view text) {
+  ShippedSummary s;
+  s.name = name;
+  // The metadata object: from its key to the first closing brace (it holds
+  // no nested object).
+  const size_t key = text.find("\"lattice_metadata\"");
+  const size_t open = key == std::string_view::npos ? key : text.find('{', key);
+  const size_t close = open == std::string_view::npos ? open : text.find('}', open);
+  if (close == std::string_view::npos) return s;
+  try {
+    const YAML::Node meta = YAML::Load(std::string(text.substr(open, close - open + 1)));
+    absl::StatusOr<LatticeRobot> robot = ParseLatticeRobot(meta["motion_model"].as<std::string>());
+    if (!robot.ok()) return s;
+    s.robot = *robot;
+    s.headings = meta["num_of_headings"].as<int64_t>();
+    s.radius_cells = meta["turning_radius"].as<double>() / meta["grid_resolution"].as<double>();
+  } catch (const YAML::Exception&) {
+    return ShippedSummary{name};
+  }
+  s.reverse = text.find("\"reverse\": true") != std::string_view::npos;
+  return s;
+}
+
+const std::vector<ShippedSummary>& ShippedSummaries() {
+  static const auto* const kSummaries = [] {
+    auto* out = new std::vector<ShippedSummary>();
+    for (const auto& [name, text] : EmbeddedControlSets()) out->push_back(Summarize(name, text));
+    return out;
+  }();
+  return *kSummaries;
+}
+
 }  // namespace
 
 std::string_view LatticeRobotName(LatticeRobot robot) {
@@ -576,15 +618,12 @@ absl::StatusOr<std::shared_ptr<const ControlSet>> ControlSetForQuery(const Kinem
         MotionModelName(query.motion)));
   }
   const bool reverse = options.robot != LatticeRobot::kAckermann || options.reverse;
-  for (const auto& [name, text] : EmbeddedControlSets()) {
-    absl::StatusOr<std::shared_ptr<const ControlSet>> shipped = Cache().Shipped(name);
-    if (!shipped.ok()) return shipped.status();
-    const ControlSet& s = **shipped;
+  for (const ShippedSummary& s : ShippedSummaries()) {
     // A set with reverse moves serves a robot without: the planner leaves
     // them out.
-    if (s.robot == options.robot && (s.has_reverse() || !reverse) && s.headings() == 16 &&
-        std::fabs(s.turning_radius_cells() - radius) <= 1e-9 * radius) {
-      return shipped;
+    if (s.robot == options.robot && (s.reverse || !reverse) && s.headings == 16 &&
+        std::fabs(s.radius_cells - radius) <= 1e-9 * radius) {
+      return Cache().Shipped(s.name);
     }
   }
   options.resolution_m = 1.0;
