@@ -543,7 +543,20 @@ struct Primitive {
   const LatticePrimitive* p = nullptr;
   Motion motion;
   // Check samples relative to the start lattice point.
-  std::vector<Pose> samples;
+  struct Sample {
+    Pose pose;
+    // The coarse checker's heading bin.
+    int32_t bin;
+    // The centre of the footprint's bounding disc at this pose.
+    double cx;
+    double cy;
+  };
+  std::vector<Sample> samples;
+  // Each piece's share of the length, in the order of the poses after the
+  // first (MotionCost's weights, precomputed).
+  std::vector<double> pieces;
+  // How far the primitive's poses get from its start, cells.
+  double extent = 0.0;
 };
 
 struct Node {
@@ -643,6 +656,25 @@ class LatticeSearch {
   };
 
   void Prepare() {
+    // The footprint's bounding disc: about its vertices' bounding box's
+    // centre (for a polygon), through the farthest vertex.
+    const Footprint& footprint = checker_.coarse->footprint();
+    disc_ = CellPoint{0.0, 0.0};
+    double disc_radius = footprint.circle_radius();
+    if (!footprint.is_circle()) {
+      double x0 = kInfinity, y0 = kInfinity, x1 = -kInfinity, y1 = -kInfinity;
+      for (const CellPoint& v : footprint.vertices()) {
+        x0 = std::min(x0, v.x);
+        y0 = std::min(y0, v.y);
+        x1 = std::max(x1, v.x);
+        y1 = std::max(y1, v.y);
+      }
+      disc_ = CellPoint{(x0 + x1) / 2.0, (y0 + y1) / 2.0};
+      for (const CellPoint& v : footprint.vertices()) {
+        disc_radius = std::max(disc_radius, std::hypot(v.x - disc_.x, v.y - disc_.y));
+      }
+    }
+    disc_clear_ = disc_radius + checker_.coarse->options().margin_cells + kSqrt2 + 1e-6;
     bin_ = 2.0 * kPi / set_.headings();
     primitives_.clear();
     by_heading_.assign(set_.headings(), {});
@@ -658,12 +690,44 @@ class LatticeSearch {
       prim.motion.left = p.left_turn;
       prim.motion.in_place = p.turn_in_place;
       prim.motion.rotation_steps = 1.0;
-      prim.samples = MotionSamples(p.poses, checker_.reach);
+      for (const Pose& q : MotionSamples(p.poses, checker_.reach)) {
+        prim.samples.push_back(
+            {q, checker_.coarse->HeadingIndex(q.yaw),
+             q.x + std::cos(q.yaw) * disc_.x - std::sin(q.yaw) * disc_.y,
+             q.y + std::sin(q.yaw) * disc_.x + std::cos(q.yaw) * disc_.y});
+      }
+      double chords = 0.0;
+      for (size_t i = 1; i < p.poses.size(); ++i) {
+        prim.pieces.push_back(
+            std::sqrt((p.poses[i].x - p.poses[i - 1].x) * (p.poses[i].x - p.poses[i - 1].x) +
+                      (p.poses[i].y - p.poses[i - 1].y) * (p.poses[i].y - p.poses[i - 1].y)));
+        chords += prim.pieces.back();
+      }
+      for (double& piece : prim.pieces) piece = chords > 0.0 ? p.length * piece / chords : 0.0;
+      for (const Pose& q : p.poses) prim.extent = std::max(prim.extent, std::hypot(q.x, q.y));
       rotates_ = rotates_ || p.turn_in_place;
       by_heading_[p.start_heading].push_back(static_cast<int32_t>(primitives_.size()));
       primitives_.push_back(std::move(prim));
     }
     reverse_ = AllowsReverse(q_.motion) && set_.has_reverse();
+    // Without weighted cells (or a cost penalty) a motion costs its length:
+    // no cell needs reading.
+    weighted_ = false;
+    if (q_.cost_penalty > 0.0) {
+      for (const uint8_t v : grid_.cells()) {
+        if (v > kFreeCost && v <= kMaxTraversableCost) {
+          weighted_ = true;
+          break;
+        }
+      }
+    }
+    // Farther than this from every obstacle (cell centre to cell centre),
+    // the grown footprint anywhere in the cell is free: it reaches its
+    // circumscribed radius plus the margins, and a pose is at most half a
+    // diagonal from its cell's centre, an obstacle's boundary half a
+    // diagonal from its centre.
+    clear_beyond_ = checker_.coarse->footprint().circumscribed_radius() +
+                    checker_.coarse->options().margin_cells + kSqrt2 + 1e-6;
     car_radius_ = std::max(set_.turning_radius_cells(), q_.min_turning_radius_cells);
     analytic_reach_ = std::max(60.0, 6.0 * car_radius_);
   }
@@ -679,7 +743,9 @@ class LatticeSearch {
 
   double Heuristic(const Pose& p) const {
     const double tol = q_.goal_tolerance_cells;
-    double h = std::hypot(p.x - q_.goal.x, p.y - q_.goal.y) - tol;
+    const double dx = p.x - q_.goal.x;
+    const double dy = p.y - q_.goal.y;
+    double h = std::sqrt(dx * dx + dy * dy) - tol;
     if (field_ != nullptr) {
       const Cell c = p.cell();
       if (grid_.InBounds(c)) {
@@ -690,7 +756,7 @@ class LatticeSearch {
         h = std::max(h, f - kSqrt2 - tol);
       }
     }
-    return std::max(0.0, h);
+    return std::max(0.0, h) * request_.heuristic_weight;
   }
 
   // The roots and the anchor (see the file comment).
@@ -786,6 +852,9 @@ class LatticeSearch {
     const Pose at = PoseOf(node);
     const Motion* incoming = IncomingMotion(node);
     const bool exact_root = node.primitive < 0 && roots_[node.root].exact;
+    // The state's cell's distance to the nearest obstacle, centre to centre.
+    const Cell cell = at.cell();
+    const double clearance = grid_.InBounds(cell) ? checker_.distance[grid_.Index(cell)] : 0.0;
     for (int32_t pi : by_heading_[node.heading]) {
       const Primitive& prim = primitives_[pi];
       const LatticePrimitive& p = *prim.p;
@@ -802,16 +871,18 @@ class LatticeSearch {
           q.y += at.y;
         }
         free = MotionFree(checker_, moved, false, false);
-      } else {
-        for (const Pose& s : prim.samples) {
-          if (!checker_.Free(*checker_.coarse, Pose{at.x + s.x, at.y + s.y, s.yaw})) {
+      } else if (clearance <= prim.extent + clear_beyond_ + kSqrt2) {
+        // Nearer an obstacle than the primitive reaches: test its samples
+        // (farther, every sample's cell is beyond clear_beyond_).
+        for (const Primitive::Sample& s : prim.samples) {
+          if (!SampleFree(s, at)) {
             free = false;
             break;
           }
         }
       }
       if (!free) continue;
-      const double g = node.g + MotionCost(grid_, prim.motion, at.x, at.y, incoming, q_);
+      const double g = node.g + PrimitiveCost(prim, at, incoming);
       Node child;
       child.ix = cx;
       child.iy = cy;
@@ -833,6 +904,55 @@ class LatticeSearch {
       nodes_.push_back(child);
       open_.push({g + h, g, child_id});
     }
+  }
+
+  // Whether the grown footprint at sample `s` of a primitive from `at` is
+  // free. Far from obstacles the distance field says so at once: when the
+  // cell of the footprint's bounding disc's centre is farther than the
+  // disc's radius, the margin and a cell's diagonal from every obstacle
+  // cell's centre, the grown footprint touches none (what the motion check
+  // needs of a sample). Nearer, the coarse checker decides, its verdict
+  // remembered per (cell, heading bin, subcell): it depends on nothing else
+  // (FootprintChecker::Collides picks its mask by these, the same way).
+  bool SampleFree(const Primitive::Sample& s, const Pose& at) {
+    const Cell centre = Pose{at.x + s.cx, at.y + s.cy, 0.0}.cell();
+    if (grid_.InBounds(centre) && checker_.distance[grid_.Index(centre)] > disc_clear_) return true;
+    const Pose p{at.x + s.pose.x, at.y + s.pose.y, s.pose.yaw};
+    const Cell c = p.cell();
+    if (!grid_.InBounds(c)) return false;
+    const size_t index = grid_.Index(c);
+    const int32_t bin = s.bin;
+    const FootprintChecker& checker = *checker_.coarse;
+    const int32_t n = checker.options().subcells;
+    const auto sub = [n](double v) {
+      return std::clamp(static_cast<int32_t>((v - std::floor(v)) * n), 0, n - 1);
+    };
+    const uint64_t mask = (static_cast<uint64_t>(bin) * n + sub(p.y)) * n + sub(p.x);
+    const uint64_t key = static_cast<uint64_t>(index) *
+                             (static_cast<uint64_t>(checker.headings()) * n * n) +
+                         mask;
+    auto [it, inserted] = verdicts_.emplace(key, false);
+    if (inserted) it->second = checker_.Free(checker, p);
+    return it->second;
+  }
+
+  // MotionCost of a primitive from `at`, with the precomputed weights.
+  double PrimitiveCost(const Primitive& prim, const Pose& at, const Motion* incoming) const {
+    const Motion& m = prim.motion;
+    double raw;
+    if (m.in_place) {
+      raw = kStateLatticeRotationPenalty * CostFactor(grid_, at, q_.cost_penalty);
+    } else if (!weighted_) {
+      raw = m.length;
+    } else {
+      raw = 0.0;
+      for (size_t i = 1; i < m.poses.size(); ++i) {
+        raw += prim.pieces[i - 1] *
+               CostFactor(grid_, Pose{at.x + m.poses[i].x, at.y + m.poses[i].y, 0.0},
+                          q_.cost_penalty);
+      }
+    }
+    return raw * Multiplier(m, incoming, q_);
   }
 
   // The analytic expansion from node `id` at `at` to the exact goal: the
@@ -959,6 +1079,16 @@ class LatticeSearch {
   std::vector<std::vector<int32_t>> by_heading_;
   bool rotates_ = false;
   bool reverse_ = false;
+  bool weighted_ = false;
+  double clear_beyond_ = 0.0;
+  // The footprint's bounding disc (centre in the body frame) and the
+  // distance beyond which it is clear with the margin.
+  CellPoint disc_;
+  double disc_clear_ = 0.0;
+  // Collision verdicts of the coarse checker by (cell, heading bin,
+  // subcell): neighbouring states' primitives sample the same masks at the
+  // same cells over and over.
+  absl::flat_hash_map<uint64_t, bool> verdicts_;
   double car_radius_ = 0.0;
   double analytic_reach_ = 0.0;
   Pose anchor_;
@@ -980,8 +1110,9 @@ class StateLatticePlanner final : public GridPlanner {
           t.description =
               "state lattice (Pivtoraiko & Kelly 2005; Nav2 Smac State Lattice): A* over "
               "(lattice point, heading) with a minimal control set of motion primitives for "
-              "the robot's motion model, footprint collision checks, Nav2 Smac penalties and "
-              "an analytic expansion to the exact goal pose";
+              "the robot's motion model, footprint collision checks, Nav2 Smac penalties, "
+              "the heuristic weighted by heuristic_weight, and an analytic expansion to the "
+              "exact goal pose";
           return t;
         }()) {}
 
