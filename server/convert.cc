@@ -46,11 +46,16 @@ absl::StatusOr<Cell> CellFromPosition(const v1::Position& position,
       }
       return *cell;
     }
+    case v1::Position::kWorldPose:
+    case v1::Position::kCellPose: {
+      PATHD_ASSIGN_OR_RETURN(const PositionPose pose, PoseFromPosition(position, grid, what));
+      return pose.pose.cell();
+    }
     case v1::Position::KIND_NOT_SET:
       break;
   }
   return absl::InvalidArgumentError(
-      absl::StrFormat("%s is not set (give a cell or a world point)", what));
+      absl::StrFormat("%s is not set (give a cell, a world point or a pose)", what));
 }
 
 absl::StatusOr<CostParams> CostParamsFromOptions(const v1::PlanOptions& options) {
@@ -322,6 +327,7 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
   if (wire.goal_tolerance) {
     PATHD_ASSIGN_OR_RETURN(query.goal_tolerance_cells, GoalToleranceCells(options, grid));
   }
+  PATHD_RETURN_IF_ERROR(DecodeKinematics(wire, grid, &query));
   if (wire.via != nullptr && !wire.via->empty()) {
     // Counted before anything is sized by the request.
     PATHD_RETURN_IF_ERROR(CheckViaCount(static_cast<size_t>(wire.via->size())));
@@ -446,6 +452,10 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
   response->set_any_angle(result.any_angle);
   response->set_cost(result.cost);
   response->set_length(result.length);
+  response->set_cost_m(result.cost * grid.resolution());
+  response->set_length_m(result.length * grid.resolution());
+  response->set_frame_id(kFrameId);
+  FillPoses(result, grid, response);
   response->mutable_path()->Reserve(static_cast<int>(result.path.size()));
   response->mutable_world_path()->Reserve(static_cast<int>(result.path.size()));
   for (const Cell& c : result.path) {
@@ -502,6 +512,7 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
         absl::StrFormat("%s (%s)", response->reason(), expansion_limit_source));
   }
   response->set_robot_radius_cells(query.robot_radius_cells);
+  response->set_robot_radius_m(query.robot_radius_cells * grid.resolution());
   response->set_map_version(answer.source.map_version);
   response->set_planner(std::string(query.planner));
   response->set_cache_hit(answer.source.cache_hit);
