@@ -6,7 +6,9 @@
 //   lattice_gen --robot ackermann --resolution 0.05 --turning_radius 0.5
 //       --output data/lattices/ackermann_5cm_r50cm.json
 //
-// --summary prints the primitives per start heading to stderr.
+// --summary prints the primitives per start heading to stderr; --check FILE
+// reads a control-set file (pathd's or Nav2's) and prints its summary or
+// the error naming the line and field.
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -32,6 +34,25 @@ ABSL_FLAG(int32_t, stopping_threshold, 5,
           "rings of end points without a new primitive before stopping");
 ABSL_FLAG(std::string, output, "", "file to write (default: standard output)");
 ABSL_FLAG(bool, summary, false, "print the primitives per start heading to stderr");
+ABSL_FLAG(std::string, check, "",
+          "read this control-set file instead of generating one; print its summary");
+
+namespace {
+
+void PrintSummary(const pathd::ControlSet& set) {
+  for (int32_t h = 0; h < set.headings(); ++h) {
+    std::cerr << absl::StrFormat("heading %2d (%6.2f deg):", h,
+                                 set.heading_angles[h] * 180.0 / 3.14159265358979323846);
+    for (size_t i = set.first_of_heading[h]; i < set.first_of_heading[h + 1]; ++i) {
+      const pathd::LatticePrimitive& p = set.primitives[i];
+      std::cerr << absl::StrFormat(" %s(%d,%d)->%d", p.reverse ? "-" : (p.turn_in_place ? "@" : ""),
+                                   p.dx, p.dy, p.end_heading);
+    }
+    std::cerr << "\n";
+  }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
@@ -39,6 +60,19 @@ int main(int argc, char** argv) {
       "  lattice_gen --robot ackermann --reverse --resolution 0.05 "
       "--turning_radius 0.5 --output set.json");
   absl::ParseCommandLine(argc, argv);
+  if (const std::string file = absl::GetFlag(FLAGS_check); !file.empty()) {
+    absl::StatusOr<pathd::ControlSet> set = pathd::ReadControlSetFile(file);
+    if (!set.ok()) {
+      std::cerr << "lattice_gen: " << set.status().message() << "\n";
+      return 1;
+    }
+    std::cerr << absl::StrFormat("%s: %s, %d primitives, %d headings, turning radius %g cells%s\n",
+                                 file, pathd::LatticeRobotName(set->robot), set->primitives.size(),
+                                 set->headings(), set->turning_radius_cells(),
+                                 set->has_reverse() ? ", with reverse moves" : "");
+    if (absl::GetFlag(FLAGS_summary)) PrintSummary(*set);
+    return 0;
+  }
   absl::StatusOr<pathd::LatticeRobot> robot = pathd::ParseLatticeRobot(absl::GetFlag(FLAGS_robot));
   if (!robot.ok()) {
     std::cerr << "lattice_gen: --robot: " << robot.status().message() << "\n";
@@ -74,17 +108,6 @@ int main(int argc, char** argv) {
   std::cerr << absl::StrFormat("%s: %d primitives, %d headings, turning radius %g cells, %.2f s\n",
                                set->name, set->primitives.size(), set->headings(),
                                set->turning_radius_cells(), seconds);
-  if (absl::GetFlag(FLAGS_summary)) {
-    for (int32_t h = 0; h < set->headings(); ++h) {
-      std::cerr << absl::StrFormat("heading %2d (%6.2f deg):", h,
-                                   set->heading_angles[h] * 180.0 / 3.14159265358979323846);
-      for (size_t i = set->first_of_heading[h]; i < set->first_of_heading[h + 1]; ++i) {
-        const pathd::LatticePrimitive& p = set->primitives[i];
-        std::cerr << absl::StrFormat(" %s(%d,%d)->%d", p.reverse ? "-" : (p.turn_in_place ? "@" : ""),
-                                     p.dx, p.dy, p.end_heading);
-      }
-      std::cerr << "\n";
-    }
-  }
+  if (absl::GetFlag(FLAGS_summary)) PrintSummary(*set);
   return 0;
 }
