@@ -60,6 +60,14 @@ int main(int argc, char** argv) {
                        .c_str());
       return 2;
     }
+    // The checks are the grid's (legal moves, the scenario's optimum); a
+    // kinematic planner's paths are poses for a robot with a turning radius,
+    // which tests/core/planners/state_lattice_test checks.
+    if (p->traits().kinematic) {
+      std::fprintf(stderr, "planner %s is kinematic: pathd_check checks grid paths\n",
+                   name.c_str());
+      return 2;
+    }
     planners.push_back(p);
   }
   const int stride = std::max(1, absl::GetFlag(FLAGS_stride));

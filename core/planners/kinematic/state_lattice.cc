@@ -373,13 +373,20 @@ struct LatticeHeuristicField {
   size_t bytes() const { return sizeof(*this) + cost.capacity() * sizeof(float); }
 };
 
+// Cells whose centre is nearer than `blocked_within` to an obstacle cell's
+// centre are closed too: a pose in such a cell is within the footprint's
+// inscribed radius of the obstacle (blocked_within is that radius less half
+// a cell's diagonal), so no free pose lies there. `distance` is the obstacle
+// distance field (ObstacleDistanceField) when blocked_within > 0.
 std::shared_ptr<const LatticeHeuristicField> BuildLatticeHeuristicField(
-    const Grid& grid, Cell goal, bool unknown_is_free, double cost_penalty, DerivedStop& stop) {
+    const Grid& grid, Cell goal, bool unknown_is_free, double cost_penalty, double blocked_within,
+    const float* distance, DerivedStop& stop) {
   auto field = std::make_shared<LatticeHeuristicField>();
   field->width = grid.width();
   field->cost.assign(grid.size(), std::numeric_limits<float>::infinity());
   const auto open_cell = [&](int32_t x, int32_t y) {
-    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), unknown_is_free);
+    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), unknown_is_free) &&
+           (blocked_within <= 0.0 || distance[grid.Index(x, y)] >= blocked_within);
   };
   using Item = std::pair<float, uint32_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
@@ -418,17 +425,20 @@ std::shared_ptr<const LatticeHeuristicField> BuildLatticeHeuristicField(
 
 std::shared_ptr<const LatticeHeuristicField> GetLatticeHeuristicField(
     DerivedStore* store, const Grid& grid, Cell goal, bool unknown_is_free, double cost_penalty,
-    DerivedStop& stop) {
-  const std::string key =
-      absl::StrFormat("state_lattice_heuristic goal=%d,%d unknown_is_free=%d cost_penalty=%.17g",
-                      goal.x, goal.y, unknown_is_free ? 1 : 0, cost_penalty);
+    double blocked_within, std::shared_ptr<const std::vector<float>> distance, DerivedStop& stop) {
+  const std::string key = absl::StrFormat(
+      "state_lattice_heuristic goal=%d,%d unknown_is_free=%d cost_penalty=%.17g "
+      "blocked_within=%.17g",
+      goal.x, goal.y, unknown_is_free ? 1 : 0, cost_penalty, blocked_within);
   return GetDerived<LatticeHeuristicField>(
       store, grid, key,
       absl::StrFormat("the holonomic cost-to-go of goal (%d, %d) on this map version", goal.x,
                       goal.y),
       stop,
-      [goal, unknown_is_free, cost_penalty](const Grid& g, DerivedStop& s) {
-        return BuildLatticeHeuristicField(g, goal, unknown_is_free, cost_penalty, s);
+      [goal, unknown_is_free, cost_penalty, blocked_within, distance](const Grid& g,
+                                                                       DerivedStop& s) {
+        return BuildLatticeHeuristicField(g, goal, unknown_is_free, cost_penalty, blocked_within,
+                                          distance->data(), s);
       },
       [](const LatticeHeuristicField&, const Grid&, absl::Span<const Cell>, DerivedStop&) {
         return std::shared_ptr<const LatticeHeuristicField>();
@@ -1185,8 +1195,11 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
   std::shared_ptr<const LatticeHeuristicField> field;
   if (options.obstacle_heuristic && Traversable(grid.cost(request.goal), unknown_is_free)) {
     DerivedStop derived_stop(stop);
+    // No free pose lies in a cell whose centre is nearer an obstacle's than
+    // the footprint's inscribed radius less half a cell's diagonal.
+    const double blocked_within = q.footprint->footprint().inscribed_radius() - kSqrt2 / 2.0;
     field = GetLatticeHeuristicField(request.derived, grid, request.goal, unknown_is_free,
-                                     q.cost_penalty, derived_stop);
+                                     q.cost_penalty, blocked_within, distance, derived_stop);
     if (field == nullptr) return StoppedWhileDeriving(derived_stop);
   }
   LatticeSearch search(grid, request, q, *set, stop, options, checker, field.get(), goal_free);

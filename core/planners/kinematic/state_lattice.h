@@ -40,8 +40,9 @@
 //   heading, times the cell's cost factor.
 // - The heuristic is the larger of the straight-line distance and the
 //   holonomic cost-to-go with obstacles (a Dijkstra field from the goal
-//   cell over the 8-connected grid, at most 8% above the true distance:
-//   paths may cost that much more than the lattice optimum), times
+//   cell over the 8-connected grid, closed where the footprint's inscribed
+//   disc cannot fit, at most 8% above the true distance: paths may cost that
+//   much more than the lattice optimum), times
 //   PlanRequest::heuristic_weight (weighted A*: at most that factor more
 //   again; the search then expands far fewer states, docs/performance.md).
 #ifndef PATHD_CORE_PLANNERS_KINEMATIC_STATE_LATTICE_H_
