@@ -1,0 +1,54 @@
+// Shortest paths of a car between two poses when nothing is in the way:
+// Dubins curves (forward only; Dubins 1957) and Reeds-Shepp curves (forward
+// and reverse; Reeds & Shepp 1990), at a given turning radius. The curves
+// come from OMPL's DubinsStateSpace and ReedsSheppStateSpace (a private
+// dependency of pathd::core: no OMPL type appears here); this file turns
+// them into pathd's steering segments and drives them.
+#ifndef PATHD_CORE_KINEMATICS_CURVES_H_
+#define PATHD_CORE_KINEMATICS_CURVES_H_
+
+#include <array>
+#include <cstdint>
+
+#include "core/kinematics/pose.h"
+
+namespace pathd {
+
+// Which way the wheels point during a motion.
+enum class Steer : int8_t { kRight = -1, kStraight = 0, kLeft = 1 };
+
+// The pose reached from `pose` after driving `length` cells (negative:
+// backwards) with the wheels at `steer`, on a circle of `radius` cells when
+// turning. Forward left turns raise the heading, as does reversing with the
+// wheels turned right. The heading is normalised. Precondition: radius > 0.
+Pose Drive(const Pose& pose, Steer steer, double radius, double length);
+
+// One segment of a curve: a steering and a signed length (cells; negative:
+// reverse).
+struct CurveSegment {
+  Steer steer = Steer::kStraight;
+  double length = 0.0;
+};
+
+// A shortest curve: up to five segments (three for Dubins), in order.
+struct Curve {
+  std::array<CurveSegment, 5> segments;
+  int32_t count = 0;
+  // Sum of the segments' absolute lengths, cells.
+  double length = 0.0;
+};
+
+// The shortest curve from `from` to `to` for a car with turning radius
+// `radius` cells (> 0): Reeds-Shepp when `reverse` is true, else Dubins.
+// Driving its segments from `from` ends at `to` up to rounding (~1e-9 of the
+// distance). Thread-safe.
+Curve ShortestCurve(const Pose& from, const Pose& to, double radius, bool reverse);
+
+// ShortestCurve(...).length, the non-holonomic distance without obstacles.
+// Thread-safe; a Reeds-Shepp length costs about 5-10 us (OMPL tries all 48
+// word families), a Dubins length about 1 us.
+double ShortestCurveLength(const Pose& from, const Pose& to, double radius, bool reverse);
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_KINEMATICS_CURVES_H_

@@ -1,0 +1,70 @@
+// Hybrid A* (Dolgov, Thrun, Montemerlo & Diebel, "Path Planning for
+// Autonomous Vehicles in Unknown Semi-structured Environments", IJRR 2010),
+// as ROS 2 Nav2's Smac Hybrid-A* planner runs it: A* over continuous poses
+// (x, y, yaw), pruned to the best pose per lattice state (cell x heading
+// bin of the footprint checker), expanded by driving short arcs at the
+// largest curvature and straight, forward only (Dubins) or both ways
+// (Reeds-Shepp); every few expansions, and at each one near the goal, an
+// analytic expansion tries the shortest Dubins / Reeds-Shepp curve (OMPL)
+// to the exact goal pose. The heuristic is the larger of the curve length
+// without obstacles and the holonomic cost-to-go with obstacles
+// (core/kinematics/obstacle_heuristic.h). Motions are checked over their
+// whole sweep (core/kinematics/motion_check.h); the path is smoothed
+// (core/kinematics/smoother.h) when the query asks.
+//
+// The planner "hybrid_astar" is registered in core/search/registry.cc;
+// PlanHybridAStar is the same search with options for tests and benchmarks.
+#ifndef PATHD_CORE_PLANNERS_KINEMATIC_HYBRID_ASTAR_H_
+#define PATHD_CORE_PLANNERS_KINEMATIC_HYBRID_ASTAR_H_
+
+#include "absl/status/statusor.h"
+#include "core/map/grid.h"
+#include "core/search/plan_types.h"
+#include "core/search/stop_condition.h"
+
+namespace pathd {
+
+// The motions the search drives from each pose, derived from the query as
+// Nav2's HybridMotionTable does: a turn of the fewest heading bins whose
+// chord is at least sqrt(2) cells long (so it leaves the cell; a quarter
+// turn when the radius is below sqrt(2)/2), and a straight motion of that
+// chord (at least sqrt(2)).
+struct HybridMotions {
+  // Heading change of one turning motion, radians (a whole number of bins).
+  double turn = 0.0;
+  // Length of a turning motion (radius x turn) and of a straight one, cells.
+  double turn_length = 0.0;
+  double straight_length = 0.0;
+};
+HybridMotions HybridMotionsFor(double min_turning_radius_cells, int32_t heading_bins);
+
+struct HybridAStarOptions {
+  // Nav2's analytic_expansion_ratio: an analytic expansion is tried every
+  // max(1, floor(h / ratio)) expansions, h the heuristic (cells) of the
+  // state expanded, so every expansion near the goal.
+  double analytic_expansion_ratio = 3.5;
+  // Off: the lattice alone must reach the goal tolerance (tests compare it
+  // with a brute-force search over the same motions).
+  bool analytic_expansion = true;
+  // Off: the heuristic is the curve length alone (benchmarks).
+  bool obstacle_heuristic = true;
+  // Off: the straight-line distance instead of the curve length.
+  bool curve_heuristic = true;
+  // Smooth when the query asks (KinematicQuery::smooth); off: never.
+  bool smooth = true;
+};
+
+// Plans request.kinematic (DefaultKinematicQuery of request.start/goal when
+// null) on `grid`. INVALID_ARGUMENT for a bad request: endpoints off the map
+// or blocked ("start"/"goal" named, with their EndpointFault), a start or
+// goal pose whose footprint collides, a motion model other than dubins or
+// reeds_shepp, a turning radius, tolerance or penalty out of range, or
+// request.start/goal not the cells of the query's poses. A search that ends
+// without a path is an OK result (kNoPath when the lattice is exhausted).
+absl::StatusOr<PlanResult> PlanHybridAStar(const Grid& grid, const PlanRequest& request,
+                                           const StopCondition& stop,
+                                           const HybridAStarOptions& options = {});
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_PLANNERS_KINEMATIC_HYBRID_ASTAR_H_
