@@ -49,6 +49,22 @@ Curve ShortestCurve(const Pose& from, const Pose& to, double radius, bool revers
 // word families), a Dubins length about 1 us.
 double ShortestCurveLength(const Pose& from, const Pose& to, double radius, bool reverse);
 
+// Within kCurveTableRadii turning radii of `to`: ShortestCurveLength read
+// from a process-wide table, Nav2's "distance heuristic lookup table" in
+// the goal's frame, shared by every query (lengths scale with the radius, so
+// one table in units of the radius serves all radii): the relative pose is
+// rounded to 1/kCurveTableSteps radius in position and to one of
+// `heading_bins` bins in heading, and the table holds the exact length from
+// the rounded pose, computed on first use (thread-safe; 2.4 MB per motion
+// model for 72 bins). The rounding moves the pose by at most 0.09 radius,
+// so the value is within about that of the exact length (and a heading bin
+// of turning). Farther: ShortestCurveLength itself.
+// Precondition: radius > 0, heading_bins in 1..3600.
+inline constexpr double kCurveTableRadii = 8.0;
+inline constexpr int kCurveTableSteps = 8;
+double TabledCurveLength(const Pose& from, const Pose& to, double radius, bool reverse,
+                         int32_t heading_bins);
+
 }  // namespace pathd
 
 #endif  // PATHD_CORE_KINEMATICS_CURVES_H_

@@ -80,15 +80,24 @@ class MotionChecker {
     return !coarse_->Collides(*grid_, pose, unknown_is_free_, distance_);
   }
 
+  // The number of sample steps a motion needs (samples at t = i / n, i =
+  // 0..n).
+  static int SampleCount(double sweep, double deviation) {
+    const double cover = kMotionMargin - deviation;
+    return std::max(1, static_cast<int>(std::ceil(sweep / (2.0 * cover))));
+  }
+
   // Whether the motion pose_at(t), t in [0, 1], is free: `sweep` bounds how
   // far any point of the footprint moves over it (distance + reach() x
   // heading change), `deviation` (<= kMotionDeviation) how far the poses a
   // caller reports may stray from it. Precondition: sweep >= 0.
+  // MotionFree calls pose_at at t = i / SampleCount(sweep, deviation), i =
+  // 0..n (callers may precompute those poses), and at other t only next to
+  // a kExact end that fails the margin.
   template <typename PoseAt>
   bool MotionFree(const PoseAt& pose_at, double sweep, double deviation, MotionEnd from,
                   MotionEnd to) const {
-    const double cover = kMotionMargin - deviation;
-    const int n = std::max(1, static_cast<int>(std::ceil(sweep / (2.0 * cover))));
+    const int n = SampleCount(sweep, deviation);
     for (int i = 0; i <= n; ++i) {
       const MotionEnd end = i == 0 ? from : (i == n ? to : MotionEnd::kSample);
       if (end == MotionEnd::kProven) continue;

@@ -9,7 +9,7 @@
 namespace pathd {
 
 double PieceLength(const Pose& a, const Pose& b) {
-  const double chord = std::hypot(b.x - a.x, b.y - a.y);
+  const double chord = std::sqrt((b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y));
   const double half = std::fabs(NormalizeAngle(b.yaw - a.yaw)) / 2.0;
   // sin(h) / h is 1 - h^2/6 + ...; below 1e-4 the ratio is 1 to double
   // precision.

@@ -14,6 +14,10 @@ namespace {
 // Longest piece a result may have, cells (the planners' half cell, and what
 // the motion checks' sample spacing assumes of a changed piece).
 constexpr double kMaxPiece = 0.5 + 1e-9;
+// The most a changed piece's direction may differ from its mean heading,
+// radians: a piece of an arc differs by nothing; headings taken along the
+// smoothed positions differ by a little; more would be sliding sideways.
+constexpr double kMaxDrift = 0.02;
 
 bool SamePose(const Pose& a, const Pose& b) {
   return a.x == b.x && a.y == b.y && a.yaw == b.yaw;
@@ -138,22 +142,22 @@ class Smoothing {
     return kNone;
   }
 
-  // A changed piece from p to q: short, driven the way the robot faces, and
-  // within the curvature bound measured on the chord.
+  // A changed piece from p to q: short, driven the way the robot faces
+  // (drifting at most kMaxDrift off the heading halfway along), and, when
+  // bounded, curving no more than the turning radius allows: the circle
+  // through both poses, 2 sin(|turn| / 2) / chord, is the piece's curvature.
   bool PieceFits(const Pose& p, const Pose& q, bool reverse) const {
     const double chord = std::hypot(q.x - p.x, q.y - p.y);
     if (!(chord > 0.0) || chord > kMaxPiece) return false;
     const double turn = NormalizeAngle(q.yaw - p.yaw);
     if (options_.min_turning_radius > 0.0 &&
-        std::fabs(turn) > chord / options_.min_turning_radius) {
+        2.0 * std::sin(std::fabs(turn) / 2.0) / chord >
+            (1.0 - 1e-9) / options_.min_turning_radius) {
       return false;
     }
-    // The chord's direction against the mean heading (backwards when
-    // reversing): an arc's chord points exactly along it; a quarter turn
-    // off would be sliding sideways.
     double direction = std::atan2(q.y - p.y, q.x - p.x);
     if (reverse) direction += std::numbers::pi;
-    return AngleBetween(direction, p.yaw + turn / 2.0) < std::numbers::pi / 4.0;
+    return AngleBetween(direction, p.yaw + turn / 2.0) <= kMaxDrift;
   }
 
   const std::vector<PathPose>& original_;

@@ -35,9 +35,9 @@ struct SmootherOptions {
   // Stop when a sweep moves the poses by less than this in total, cells.
   double tolerance = 1e-10;
   int32_t max_iterations = 1000;
-  // > 0: between cusps, every changed piece turns by at most its chord /
-  // min_turning_radius (the chord, not the arc: a bound that holds however
-  // a follower or checker measures the distance driven). 0: no bound.
+  // > 0: between cusps, every changed piece curves at most 1 /
+  // min_turning_radius, its curvature being that of the circle through both
+  // poses, 2 sin(|heading change| / 2) / chord. 0: no bound.
   double min_turning_radius = 0.0;
   // A stretch whose smoothing failed this many times (each failure pins one
   // more original pose) keeps its original poses.

@@ -9,6 +9,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <queue>
 #include <string>
 #include <utility>
@@ -36,15 +37,17 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr char kName[] = "hybrid_astar";
 
-// Within this many turning radii of the goal the curve heuristic is the
-// exact Dubins / Reeds-Shepp length from OMPL; farther, the straight-line
-// distance (a lower bound of it, and there the obstacle heuristic
-// dominates anyway). OMPL's Reeds-Shepp length costs 5-10 us; docs/
-// performance.md ("hybrid_astar") has the measurements behind the choice.
-constexpr double kCurveHeuristicRadii = 8.0;
 // Analytic expansions tried per attempt: the shortest curves to the goal
-// headings the tolerance allows, shortest first.
+// headings the tolerance allows, cheapest first.
 constexpr int kAnalyticTries = 2;
+// An analytic expansion ends the search when its path costs at most this
+// times the estimate (g + h) of the state it starts from, as it usually
+// does; a dearer one (a long way round, or backing up most of the way) is
+// kept while the search goes on, and taken once nothing left on the open
+// list is estimated within this factor of it. Nav2 takes the first one
+// always; on the brute-force comparison (hybrid_astar_test) that cost up to
+// 2.7 times the brute force's paths, this at most 1.4 (docs/planners.md).
+constexpr double kAnalyticSlack = 1.2;
 
 // The query a request plans: its own, or the default one of a grid request,
 // whose cost penalty is the request's cost weight (so cost_weight means the
@@ -55,6 +58,10 @@ std::shared_ptr<const KinematicQuery> QueryOf(const PlanRequest& request) {
       std::make_shared<KinematicQuery>(DefaultKinematicQuery(request.start, request.goal));
   query->cost_penalty = request.cost.cost_weight;
   return query;
+}
+
+double Distance(const Pose& a, const Pose& b) {
+  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y));
 }
 
 std::string PoseString(const Pose& p) {
@@ -153,17 +160,24 @@ absl::Status Validate(const Grid& grid, const PlanRequest& request,
   return ValidateQuery(grid, request, *QueryOf(request));
 }
 
-// One driven motion of the search: a steering and a signed length, with
-// what its collision test and pricing need.
+// One driven motion: a steering and a signed length, with what its
+// collision test and pricing need, precomputed in the frame of the pose it
+// starts from (so driving it from a state costs one sine and cosine).
 struct Primitive {
   Steer steer = Steer::kStraight;
   double length = 0.0;
-  // Returned pieces (each at most MaxPieceLength long).
-  int32_t pieces = 1;
   // How far any point of the footprint moves over it, and how far the
   // returned pieces' chords stray from it.
   double sweep = 0.0;
   double deviation = 0.0;
+  // The ends of the returned pieces (each at most MaxPieceLength long),
+  // relative to the start; the last is the motion's end.
+  std::vector<Pose> pieces;
+  // The collision samples at t = i / (samples.size() - 1), relative.
+  std::vector<Pose> samples;
+  // Every piece is as long and drives the same way.
+  double piece_length = 0.0;
+  PieceKind kind;
 };
 
 // The greatest distance between an arc of `radius` and angle `angle` and its
@@ -172,24 +186,78 @@ double Sagitta(double radius, double angle) {
   return radius * (1.0 - std::cos(angle / 2.0));
 }
 
+// `a` in (-pi, pi] for |a| < 3 pi (a heading plus one motion's turn).
+double Wrap(double a) {
+  if (a > std::numbers::pi) return a - 2.0 * std::numbers::pi;
+  if (a <= -std::numbers::pi) return a + 2.0 * std::numbers::pi;
+  return a;
+}
+
+// The pose `local`, given relative to `from` (whose heading has cosine c
+// and sine s), in cell coordinates.
+Pose Place(const Pose& from, double c, double s, const Pose& local) {
+  return Pose{from.x + c * local.x - s * local.y, from.y + s * local.x + c * local.y,
+              Wrap(from.yaw + local.yaw)};
+}
+
+// How many pieces a motion is returned as.
+int32_t PieceCount(Steer steer, double length, double radius) {
+  const double max_piece = MaxPieceLength(steer != Steer::kStraight ? radius : kInfinity);
+  return std::max(1, static_cast<int32_t>(std::ceil(std::fabs(length) / max_piece - 1e-9)));
+}
+
 Primitive MakeMotion(Steer steer, double length, double radius, double reach) {
   Primitive p;
   p.steer = steer;
   p.length = length;
   const double abs_length = std::fabs(length);
   const bool turns = steer != Steer::kStraight;
-  const double max_piece = MaxPieceLength(turns ? radius : kInfinity);
-  p.pieces = std::max(1, static_cast<int32_t>(std::ceil(abs_length / max_piece - 1e-9)));
+  const int32_t pieces = PieceCount(steer, length, radius);
   const double turn = turns ? abs_length / radius : 0.0;
   p.sweep = abs_length + reach * turn;
-  p.deviation = turns ? Sagitta(radius, turn / p.pieces) : 0.0;
+  p.deviation = turns ? Sagitta(radius, turn / pieces) : 0.0;
+  const Pose origin;
+  for (int32_t j = 1; j <= pieces; ++j) {
+    p.pieces.push_back(Drive(origin, steer, radius, length * j / pieces));
+  }
+  const int32_t n = MotionChecker::SampleCount(p.sweep, p.deviation);
+  for (int32_t i = 0; i < n; ++i) p.samples.push_back(Drive(origin, steer, radius, length * i / n));
+  // The last sample is the end exactly as the pieces reach it.
+  p.samples.push_back(p.pieces.back());
+  p.piece_length = PieceLength(origin, p.pieces[0]);
+  p.kind = KindOf(origin, p.pieces[0], length < 0.0);
   return p;
 }
 
-// The pose at fraction t of driving `p` from `from`.
-Pose DriveFraction(const Pose& from, const Primitive& p, double radius, double t) {
-  return Drive(from, p.steer, radius, p.length * t);
-}
+// A primitive driven from one pose: the poses MotionChecker asks for, from
+// the precomputed samples.
+class DrivenMotion {
+ public:
+  DrivenMotion(const Pose& from, const Primitive& p, double radius)
+      : DrivenMotion(from, std::cos(from.yaw), std::sin(from.yaw), p, radius) {}
+  // `c` and `s`: the cosine and sine of from.yaw.
+  DrivenMotion(const Pose& from, double c, double s, const Primitive& p, double radius)
+      : from_(from), p_(p), radius_(radius), c_(c), s_(s) {}
+
+  Pose operator()(double t) const {
+    const double k = t * static_cast<double>(p_.samples.size() - 1);
+    const double i = std::round(k);
+    if (std::fabs(k - i) < 1e-9) return At(p_.samples[static_cast<size_t>(i)]);
+    return At(Drive(Pose{}, p_.steer, radius_, p_.length * t));
+  }
+  // The end of piece j (1-based).
+  Pose Piece(int32_t j) const { return At(p_.pieces[static_cast<size_t>(j - 1)]); }
+  Pose End() const { return At(p_.pieces.back()); }
+
+ private:
+  Pose At(const Pose& local) const { return Place(from_, c_, s_, local); }
+
+  const Pose from_;
+  const Primitive& p_;
+  const double radius_;
+  const double c_;
+  const double s_;
+};
 
 class HybridSearch {
  public:
@@ -220,10 +288,15 @@ class HybridSearch {
     // goal heading is (nearly) fixed.
     const double bin = 2.0 * std::numbers::pi / bins_;
     exact_curve_heuristic_ = options.curve_heuristic && q.goal_tolerance_yaw < bin / 2.0;
-    curve_window_ = kCurveHeuristicRadii * radius_;
+    curve_window_ = options.curve_heuristic_radii * radius_;
   }
 
-  PlanResult Run();
+  // Searches the lattice of squares 1/subdivisions cell on a side, counting
+  // expansions on from `expansions`.
+  PlanResult Run(int32_t subdivisions, int64_t expansions);
+  // The start cannot reach the goal cell even ignoring its heading (the
+  // obstacle heuristic is infinite there): no lattice will do better.
+  bool unreachable() const { return unreachable_; }
 
  private:
   static constexpr uint32_t kNoNode = std::numeric_limits<uint32_t>::max();
@@ -237,6 +310,11 @@ class HybridSearch {
     // The kind of the last piece driven into this pose (for the change
     // penalty of the next); none at the start.
     PieceKind kind;
+    // The heuristic, and whether the curve part is in it yet: it is added
+    // when the state first reaches the top of the open list, so states
+    // never expanded never pay for a Reeds-Shepp length (5-10 us).
+    double h = 0.0;
+    bool curve_heuristic = false;
   };
   struct OpenEntry {
     double f;
@@ -254,12 +332,18 @@ class HybridSearch {
     Pose goal;
   };
 
+  // The lattice state of a pose on the map: its square of 1/subdivisions_
+  // cell and its heading bin.
   uint64_t Key(const Pose& p) const {
-    return static_cast<uint64_t>(grid_.Index(p.cell())) * static_cast<uint64_t>(bins_) +
+    const auto square = [this](double v) {
+      return static_cast<uint64_t>(std::floor(v * subdivisions_));
+    };
+    const uint64_t row = static_cast<uint64_t>(grid_.width()) * subdivisions_;
+    return (square(p.y) * row + square(p.x)) * static_cast<uint64_t>(bins_) +
            static_cast<uint64_t>(q_.footprint->HeadingIndex(p.yaw));
   }
   bool Reached(const Pose& p) const {
-    return std::hypot(p.x - q_.goal.x, p.y - q_.goal.y) <= q_.goal_tolerance_cells &&
+    return Distance(p, q_.goal) <= q_.goal_tolerance_cells &&
            (q_.goal_tolerance_yaw >= std::numbers::pi ||
             AngleBetween(p.yaw, q_.goal.yaw) <= q_.goal_tolerance_yaw);
   }
@@ -267,9 +351,10 @@ class HybridSearch {
     return obstacle_ == nullptr ? 0.0 : obstacle_->At(p.cell());
   }
   double CurveHeuristic(const Pose& p) const {
-    double h = std::hypot(p.x - q_.goal.x, p.y - q_.goal.y);
+    double h = Distance(p, q_.goal);
     if (exact_curve_heuristic_ && h < curve_window_) {
-      h = ShortestCurveLength(p, q_.goal, radius_, reverse_);
+      h = options_.curve_table ? TabledCurveLength(p, q_.goal, radius_, reverse_, bins_)
+                               : ShortestCurveLength(p, q_.goal, radius_, reverse_);
     }
     return std::max(0.0, h - q_.goal_tolerance_cells);
   }
@@ -277,12 +362,17 @@ class HybridSearch {
     return node == 0 ? MotionEnd::kExact : MotionEnd::kProven;
   }
 
-  // The priced cost of driving `p` from node `from`, and the kind of its last
-  // piece.
-  double PriceMotion(const Node& from, const Primitive& p, PieceKind& last) const;
+  // The priced cost of driving `p` from node `from` (PathCost of its pieces
+  // up to rounding).
+  double PriceMotion(const Node& from, const DrivenMotion& drive, const Primitive& p) const;
   void Expand(uint32_t id);
+  // A curve's price under the penalties, cell costs aside.
+  double CurvePrice(const Curve& curve) const;
   bool TryAnalytic(uint32_t id, Shot& shot) const;
   bool CurveFree(uint32_t id, const Curve& curve) const;
+  // Appends the poses of `shot` driven from node `id` to `poses`; returns
+  // their price.
+  double DriveShot(uint32_t id, const Shot& shot, std::vector<PathPose>& poses) const;
   PlanResult Finish(uint32_t id, const Shot* shot, int64_t expansions) const;
 
   const Grid& grid_;
@@ -300,51 +390,47 @@ class HybridSearch {
   bool exact_curve_heuristic_ = false;
   double curve_window_ = 0.0;
 
+  int32_t subdivisions_ = 1;
+  bool unreachable_ = false;
   std::vector<Node> nodes_;
   absl::flat_hash_map<uint64_t, uint32_t> states_;
   std::priority_queue<OpenEntry> open_;
 };
 
-double HybridSearch::PriceMotion(const Node& from, const Primitive& p, PieceKind& last) const {
+double HybridSearch::PriceMotion(const Node& from, const DrivenMotion& drive,
+                                 const Primitive& p) const {
   double cost = 0.0;
-  Pose previous = from.pose;
-  const bool has_kind = from.primitive >= 0;
-  PieceKind kind = from.kind;
-  const bool reverse = p.length < 0.0;
-  for (int32_t j = 1; j <= p.pieces; ++j) {
-    const Pose next = DriveFraction(from.pose, p, radius_, static_cast<double>(j) / p.pieces);
-    const PieceKind piece = KindOf(previous, next, reverse);
-    const Cell c = next.cell();
+  const int32_t pieces = static_cast<int32_t>(p.pieces.size());
+  for (int32_t j = 1; j <= pieces; ++j) {
+    const Cell c = drive.Piece(j).cell();
     const uint8_t cell_cost = grid_.InBounds(c) ? grid_.cost(c) : kFreeCost;
-    cost += PieceCost(PieceLength(previous, next), cell_cost, piece,
-                      (j > 1 || has_kind) ? &kind : nullptr, penalties_);
-    kind = piece;
-    previous = next;
+    const bool first = j == 1;
+    cost += PieceCost(p.piece_length, cell_cost, p.kind,
+                      first ? (from.primitive >= 0 ? &from.kind : nullptr) : &p.kind,
+                      penalties_);
   }
-  last = kind;
   return cost;
 }
 
 void HybridSearch::Expand(uint32_t id) {
   const Node from = nodes_[id];
+  const double c = std::cos(from.pose.yaw);
+  const double s = std::sin(from.pose.yaw);
   for (size_t k = 0; k < primitives_.size(); ++k) {
     const Primitive& p = primitives_[k];
-    const Pose end = DriveFraction(from.pose, p, radius_, 1.0);
+    const DrivenMotion drive(from.pose, c, s, p, radius_);
+    const Pose end = drive.End();
     if (!grid_.InBounds(end.cell())) continue;
     const uint64_t key = Key(end);
     const auto it = states_.find(key);
     if (it != states_.end() && nodes_[it->second].closed) continue;
     const double h_obstacle = ObstacleHeuristic(end);
     if (!(h_obstacle < kInfinity)) continue;
-    PieceKind kind;
-    const double g = from.g + PriceMotion(from, p, kind);
+    const double g = from.g + PriceMotion(from, drive, p);
     if (it != states_.end() && g >= nodes_[it->second].g) continue;
-    if (!motion_.MotionFree(
-            [&](double t) { return DriveFraction(from.pose, p, radius_, t); }, p.sweep,
-            p.deviation, FromEnd(id), MotionEnd::kSample)) {
+    if (!motion_.MotionFree(drive, p.sweep, p.deviation, FromEnd(id), MotionEnd::kSample)) {
       continue;
     }
-    const double h = std::max(h_obstacle, CurveHeuristic(end));
     uint32_t next;
     if (it == states_.end()) {
       next = static_cast<uint32_t>(nodes_.size());
@@ -361,61 +447,123 @@ void HybridSearch::Expand(uint32_t id) {
     n.g = g;
     n.parent = id;
     n.primitive = static_cast<int8_t>(k);
-    n.kind = kind;
-    open_.push(OpenEntry{g + h, g, next});
+    n.kind = p.kind;
+    n.h = h_obstacle;
+    n.curve_heuristic = false;
+    open_.push(OpenEntry{g + h_obstacle, g, next});
   }
 }
 
 bool HybridSearch::CurveFree(uint32_t id, const Curve& curve) const {
+  // Most curves tried collide early: the segments are driven sample by
+  // sample, not precomputed like the primitives.
   Pose at = nodes_[id].pose;
   for (int32_t i = 0; i < curve.count; ++i) {
     const CurveSegment& s = curve.segments[i];
-    const Primitive p = MakeMotion(s.steer, s.length, radius_, motion_.reach());
+    const bool turns = s.steer != Steer::kStraight;
+    const double abs_length = std::fabs(s.length);
+    const int32_t pieces = PieceCount(s.steer, s.length, radius_);
+    const double turn = turns ? abs_length / radius_ : 0.0;
+    const double deviation = turns ? Sagitta(radius_, turn / pieces) : 0.0;
     const MotionEnd from = i == 0 ? FromEnd(id) : MotionEnd::kProven;
     const MotionEnd to = i + 1 == curve.count ? MotionEnd::kExact : MotionEnd::kSample;
-    if (!motion_.MotionFree([&](double t) { return DriveFraction(at, p, radius_, t); },
-                            p.sweep, p.deviation, from, to)) {
+    if (!motion_.MotionFree(
+            [&](double t) { return Drive(at, s.steer, radius_, s.length * t); },
+            abs_length + motion_.reach() * turn, deviation, from, to)) {
       return false;
     }
-    at = DriveFraction(at, p, radius_, 1.0);
+    at = Drive(at, s.steer, radius_, s.length);
   }
   return true;
+}
+
+double HybridSearch::CurvePrice(const Curve& curve) const {
+  double price = 0.0;
+  for (int32_t i = 0; i < curve.count; ++i) {
+    const CurveSegment& s = curve.segments[i];
+    double p = std::fabs(s.length);
+    if (s.steer != Steer::kStraight) p *= penalties_.non_straight;
+    if (s.length < 0.0) p *= penalties_.reverse;
+    price += p;
+  }
+  return price;
 }
 
 bool HybridSearch::TryAnalytic(uint32_t id, Shot& shot) const {
   const Pose& from = nodes_[id].pose;
   const Pose& goal = q_.goal;
   // Goal headings worth a curve: the goal's own; with a tolerance, also the
-  // heading closest to the robot's and to the bearing of the goal (driving
-  // straight in, or backing straight in).
+  // ones closest to the robot's heading and to the bearing of the goal
+  // (driving straight in).
   std::vector<double> headings = {goal.yaw};
   if (q_.goal_tolerance_yaw > 0.0) {
     const double bearing = std::atan2(goal.y - from.y, goal.x - from.x);
-    for (const double yaw : {from.yaw, bearing, bearing + std::numbers::pi}) {
-      if (yaw != bearing + std::numbers::pi || reverse_) {
-        headings.push_back(IntoTolerance(yaw, goal, q_.goal_tolerance_yaw));
-      }
+    for (const double yaw : {from.yaw, bearing}) {
+      headings.push_back(IntoTolerance(yaw, goal, q_.goal_tolerance_yaw));
     }
   }
-  std::vector<Shot> shots;
-  for (const double yaw : headings) {
-    const Pose target{goal.x, goal.y, yaw};
+  // For each, the shortest curve, and for Reeds-Shepp also the shortest
+  // forward one (Dubins): the shortest Reeds-Shepp curve often reverses,
+  // which the reverse penalty prices at twice its length, where a forward
+  // curve a little longer costs less. Tried cheapest first by their price
+  // without cell costs.
+  struct Candidate {
+    Shot shot;
+    double price;
+  };
+  std::vector<Candidate> candidates;
+  for (size_t h = 0; h < headings.size(); ++h) {
+    const double yaw = headings[h];
     bool seen = false;
-    for (const Shot& s : shots) seen = seen || AngleBetween(s.goal.yaw, yaw) < 1e-9;
+    for (size_t k = 0; k < h; ++k) seen = seen || AngleBetween(headings[k], yaw) < 1e-9;
     if (seen) continue;
+    const Pose target{goal.x, goal.y, yaw};
     // The validation tested the goal's own heading only.
     if (yaw != goal.yaw && !motion_.PoseFree(target)) continue;
-    shots.push_back(Shot{ShortestCurve(from, target, radius_, reverse_), target});
+    for (const bool reverse : {reverse_, false}) {
+      const Curve curve = ShortestCurve(from, target, radius_, reverse);
+      candidates.push_back(Candidate{Shot{curve, target}, CurvePrice(curve)});
+      if (!reverse_) break;
+    }
   }
-  std::sort(shots.begin(), shots.end(),
-            [](const Shot& a, const Shot& b) { return a.curve.length < b.curve.length; });
-  for (size_t i = 0; i < shots.size() && i < kAnalyticTries; ++i) {
-    if (CurveFree(id, shots[i].curve)) {
-      shot = shots[i];
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.price < b.price; });
+  for (size_t i = 0; i < candidates.size() && i < kAnalyticTries; ++i) {
+    if (CurveFree(id, candidates[i].shot.curve)) {
+      shot = candidates[i].shot;
       return true;
     }
   }
   return false;
+}
+
+double HybridSearch::DriveShot(uint32_t id, const Shot& shot,
+                               std::vector<PathPose>& poses) const {
+  // Driven as CurveFree drove it.
+  const Node& n = nodes_[id];
+  Pose at = n.pose;
+  Pose previous = at;
+  std::optional<PieceKind> kind;
+  if (n.primitive >= 0) kind = n.kind;
+  double cost = 0.0;
+  for (int32_t i = 0; i < shot.curve.count; ++i) {
+    const CurveSegment& s = shot.curve.segments[i];
+    const int32_t pieces = PieceCount(s.steer, s.length, radius_);
+    for (int32_t j = 1; j <= pieces; ++j) {
+      const bool last = i + 1 == shot.curve.count && j == pieces;
+      // Driving the curve ends on the goal up to rounding; end exactly there.
+      const Pose next = last ? shot.goal : Drive(at, s.steer, radius_, s.length * j / pieces);
+      const PieceKind piece = KindOf(previous, next, s.length < 0.0);
+      const Cell c = next.cell();
+      cost += PieceCost(PieceLength(previous, next), grid_.InBounds(c) ? grid_.cost(c) : kFreeCost,
+                        piece, kind ? &*kind : nullptr, penalties_);
+      kind = piece;
+      previous = next;
+      poses.push_back(PathPose{next, s.length < 0.0});
+    }
+    at = Drive(at, s.steer, radius_, s.length);
+  }
+  return cost;
 }
 
 PlanResult HybridSearch::Finish(uint32_t id, const Shot* shot, int64_t expansions) const {
@@ -423,29 +571,17 @@ PlanResult HybridSearch::Finish(uint32_t id, const Shot* shot, int64_t expansion
   for (uint32_t at = id; at != kNoNode; at = nodes_[at].parent) chain.push_back(at);
   std::reverse(chain.begin(), chain.end());
   std::vector<PathPose> poses = {PathPose{nodes_[0].pose, false}};
+  const auto append = [&poses](const DrivenMotion& drive, const Primitive& p) {
+    for (int32_t j = 1; j <= static_cast<int32_t>(p.pieces.size()); ++j) {
+      poses.push_back(PathPose{drive.Piece(j), p.length < 0.0});
+    }
+  };
   for (size_t i = 1; i < chain.size(); ++i) {
     const Node& n = nodes_[chain[i]];
     const Primitive& p = primitives_[static_cast<size_t>(n.primitive)];
-    const Pose& from = nodes_[n.parent].pose;
-    for (int32_t j = 1; j <= p.pieces; ++j) {
-      poses.push_back(PathPose{
-          DriveFraction(from, p, radius_, static_cast<double>(j) / p.pieces), p.length < 0.0});
-    }
+    append(DrivenMotion(nodes_[n.parent].pose, p, radius_), p);
   }
-  if (shot != nullptr) {
-    Pose at = nodes_[id].pose;
-    for (int32_t i = 0; i < shot->curve.count; ++i) {
-      const CurveSegment& s = shot->curve.segments[i];
-      const Primitive p = MakeMotion(s.steer, s.length, radius_, motion_.reach());
-      for (int32_t j = 1; j <= p.pieces; ++j) {
-        poses.push_back(PathPose{DriveFraction(at, p, radius_, static_cast<double>(j) / p.pieces),
-                                 p.length < 0.0});
-      }
-      at = DriveFraction(at, p, radius_, 1.0);
-    }
-    // Driving the curve ends on the goal up to rounding; end exactly there.
-    if (shot->curve.count > 0) poses.back().pose = shot->goal;
-  }
+  if (shot != nullptr) DriveShot(id, *shot, poses);
   if (poses.size() > 1) poses[0].reverse = poses[1].reverse;
 
   if (options_.smooth && q_.smooth && poses.size() > 2) {
@@ -464,23 +600,45 @@ PlanResult HybridSearch::Finish(uint32_t id, const Shot* shot, int64_t expansion
   return result;
 }
 
-PlanResult HybridSearch::Run() {
+PlanResult HybridSearch::Run(int32_t subdivisions, int64_t expansions) {
+  subdivisions_ = subdivisions;
+  nodes_.clear();
+  states_.clear();
+  open_ = {};
   Node start;
   start.pose = q_.start;
   start.pose.yaw = NormalizeAngle(start.pose.yaw);
+  start.h = ObstacleHeuristic(start.pose);
+  unreachable_ = !(start.h < kInfinity);
   nodes_.push_back(start);
   states_.emplace(Key(start.pose), 0);
-  open_.push(OpenEntry{std::max(ObstacleHeuristic(start.pose), CurveHeuristic(start.pose)),
-                       0.0, 0});
-  int64_t expansions = 0;
+  open_.push(OpenEntry{start.h, 0.0, 0});
   int64_t until_analytic = 0;
+  // The cheapest analytic expansion found so far that was not taken at once
+  // (see kAnalyticSlack).
+  uint32_t best_node = kNoNode;
+  Shot best_shot;
+  double best_cost = kInfinity;
   while (!open_.empty()) {
     const OpenEntry top = open_.top();
     open_.pop();
     Node& n = nodes_[top.node];
     if (n.closed || top.g != n.g) continue;
+    if (!n.curve_heuristic) {
+      n.curve_heuristic = true;
+      const double h = std::max(n.h, CurveHeuristic(n.pose));
+      if (h > n.h) {
+        n.h = h;
+        open_.push(OpenEntry{n.g + h, n.g, top.node});
+        continue;
+      }
+    }
+    if (best_node != kNoNode && top.f * kAnalyticSlack >= best_cost) break;
     const PlanOutcome stop = stop_.Check(expansions, top.f);
     if (stop != PlanOutcome::kFound) {
+      // A path in hand is an answer, even if not the best the search would
+      // have found.
+      if (best_node != kNoNode) break;
       PlanResult result;
       result.outcome = stop;
       result.expansions = expansions;
@@ -491,16 +649,25 @@ PlanResult HybridSearch::Run() {
     if (request_.expansion_recorder != nullptr) {
       request_.expansion_recorder->Record(n.pose.cell());
     }
-    if (Reached(n.pose)) return Finish(top.node, nullptr, expansions);
+    if (Reached(n.pose) && n.g <= best_cost) return Finish(top.node, nullptr, expansions);
     if (options_.analytic_expansion && --until_analytic <= 0) {
-      const double h = top.f - top.g;
       until_analytic = std::max<int64_t>(
-          1, static_cast<int64_t>(std::floor(h / options_.analytic_expansion_ratio)));
+          1, static_cast<int64_t>(std::floor(n.h / options_.analytic_expansion_ratio)));
       Shot shot;
-      if (TryAnalytic(top.node, shot)) return Finish(top.node, &shot, expansions);
+      if (TryAnalytic(top.node, shot)) {
+        std::vector<PathPose> poses;
+        const double cost = n.g + DriveShot(top.node, shot, poses);
+        if (cost <= kAnalyticSlack * (n.g + n.h)) return Finish(top.node, &shot, expansions);
+        if (cost < best_cost) {
+          best_node = top.node;
+          best_shot = shot;
+          best_cost = cost;
+        }
+      }
     }
     Expand(top.node);
   }
+  if (best_node != kNoNode) return Finish(best_node, &best_shot, expansions);
   PlanResult result;
   result.outcome = PlanOutcome::kNoPath;
   result.expansions = expansions;
@@ -531,7 +698,18 @@ absl::StatusOr<PlanResult> Run(const Grid& grid, const PlanRequest& request,
     if (obstacle == nullptr) return StoppedWhileDeriving(derived_stop);
   }
   HybridSearch search(grid, request, *q, stop, options, motion, obstacle.get());
-  return search.Run();
+  // A lattice exhausted without reaching the goal is searched again with
+  // squares of half the size (docs/planners.md, "hybrid_astar"): keeping one
+  // pose per coarse state can lose the only way through a tight place.
+  int64_t expansions = 0;
+  for (int32_t subdivisions = 1;; subdivisions *= 2) {
+    PlanResult result = search.Run(subdivisions, expansions);
+    if (result.outcome != PlanOutcome::kNoPath || search.unreachable() ||
+        subdivisions >= options.max_subdivisions) {
+      return result;
+    }
+    expansions = result.expansions;
+  }
 }
 
 class HybridAStarPlanner final : public GridPlanner {

@@ -50,8 +50,24 @@ struct HybridAStarOptions {
   bool obstacle_heuristic = true;
   // Off: the straight-line distance instead of the curve length.
   bool curve_heuristic = true;
+  // Within this many turning radii of the goal the curve heuristic is the
+  // exact Dubins / Reeds-Shepp length (OMPL; a Reeds-Shepp length costs
+  // 5-10 us); farther, the straight-line distance, a lower bound of it, and
+  // there the obstacle heuristic dominates anyway. docs/performance.md
+  // ("hybrid_astar") has the measurements behind the default.
+  double curve_heuristic_radii = 8.0;
+  // Read the curve length from the shared table (TabledCurveLength in
+  // core/kinematics/curves.h, Nav2's lookup table) instead of computing it.
+  bool curve_table = true;
   // Smooth when the query asks (KinematicQuery::smooth); off: never.
   bool smooth = true;
+  // When the lattice (one cell x one heading bin per state) is exhausted
+  // without reaching the goal, the search starts again with states of half
+  // a cell, then a quarter, ..., down to 1 / max_subdivisions (a power of
+  // two; 1: no retry). A query without a path costs about 1 + 4 + 16 + ...
+  // times an exhausted lattice; one whose goal cell the obstacle heuristic
+  // shows unreachable is answered at once.
+  int32_t max_subdivisions = 4;
 };
 
 // Plans request.kinematic (DefaultKinematicQuery of request.start/goal when
