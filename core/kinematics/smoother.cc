@@ -14,10 +14,6 @@ namespace {
 // Longest piece a result may have, cells (the planners' half cell, and what
 // the motion checks' sample spacing assumes of a changed piece).
 constexpr double kMaxPiece = 0.5 + 1e-9;
-// The most a changed piece's direction may differ from its mean heading,
-// radians: a piece of an arc differs by nothing; headings taken along the
-// smoothed positions differ by a little; more would be sliding sideways.
-constexpr double kMaxDrift = 0.02;
 
 bool SamePose(const Pose& a, const Pose& b) {
   return a.x == b.x && a.y == b.y && a.yaw == b.yaw;
@@ -88,6 +84,24 @@ class Smoothing {
     for (size_t i = a + 1; i < b; ++i) poses_[i] = original_[i];
     const double wd = options_.w_data;
     const double ws = options_.w_smooth;
+    // A fixed pose keeps its heading, so the pose next to it is also pulled
+    // to where that heading points (one original spacing along it): the
+    // smoothness term of a point before the fixed one on its tangent.
+    // Without it the neighbours of every fixed pose bend away from its
+    // heading and fail the curvature and direction checks.
+    const auto along = [this](size_t fixed, size_t next) {
+      const Pose& f = original_[fixed].pose;
+      const Pose& n = original_[next].pose;
+      const double spacing = std::hypot(n.x - f.x, n.y - f.y);
+      // The direction of travel between the two, as the fixed heading has
+      // it: backwards when reversing, towards `fixed` when it comes after.
+      double sign = original_[std::max(fixed, next)].reverse ? -1.0 : 1.0;
+      if (next < fixed) sign = -sign;
+      return CellPoint{f.x + sign * spacing * std::cos(f.yaw),
+                       f.y + sign * spacing * std::sin(f.yaw)};
+    };
+    const CellPoint after_a = along(a, a + 1);
+    const CellPoint before_b = along(b, b - 1);
     for (int32_t it = 0; it < options_.max_iterations; ++it) {
       double change = 0.0;
       for (size_t i = a + 1; i < b; ++i) {
@@ -95,8 +109,16 @@ class Smoothing {
         const Pose& o = original_[i].pose;
         const Pose& prev = poses_[i - 1].pose;
         const Pose& next = poses_[i + 1].pose;
-        const double x = p.x + wd * (o.x - p.x) + ws * (prev.x + next.x - 2.0 * p.x);
-        const double y = p.y + wd * (o.y - p.y) + ws * (prev.y + next.y - 2.0 * p.y);
+        double x = p.x + wd * (o.x - p.x) + ws * (prev.x + next.x - 2.0 * p.x);
+        double y = p.y + wd * (o.y - p.y) + ws * (prev.y + next.y - 2.0 * p.y);
+        if (i == a + 1) {
+          x += ws * (after_a.x - p.x);
+          y += ws * (after_a.y - p.y);
+        }
+        if (i + 1 == b) {
+          x += ws * (before_b.x - p.x);
+          y += ws * (before_b.y - p.y);
+        }
         change += std::fabs(x - p.x) + std::fabs(y - p.y);
         p.x = x;
         p.y = y;
@@ -143,7 +165,7 @@ class Smoothing {
   }
 
   // A changed piece from p to q: short, driven the way the robot faces
-  // (drifting at most kMaxDrift off the heading halfway along), and, when
+  // (drifting at most max_drift off the heading halfway along), and, when
   // bounded, curving no more than the turning radius allows: the circle
   // through both poses, 2 sin(|turn| / 2) / chord, is the piece's curvature.
   bool PieceFits(const Pose& p, const Pose& q, bool reverse) const {
@@ -157,7 +179,7 @@ class Smoothing {
     }
     double direction = std::atan2(q.y - p.y, q.x - p.x);
     if (reverse) direction += std::numbers::pi;
-    return AngleBetween(direction, p.yaw + turn / 2.0) <= kMaxDrift;
+    return AngleBetween(direction, p.yaw + turn / 2.0) <= options_.max_drift;
   }
 
   const std::vector<PathPose>& original_;
@@ -208,7 +230,12 @@ absl::StatusOr<std::vector<PathPose>> SmoothPolyline(
   absl::StatusOr<MotionChecker> checker =
       MotionChecker::Create(std::move(footprint), grid, unknown_is_free, distance.data());
   if (!checker.ok()) return checker.status();
-  return SmoothPath(PosesAlongPolyline(points), *checker, options);
+  SmootherOptions polyline = options;
+  // The polyline's own poses slide sideways at every bend (the heading
+  // turns over the piece after it); only a car's smoothed poses are held to
+  // the direction rule.
+  if (polyline.min_turning_radius <= 0.0) polyline.max_drift = std::numbers::pi;
+  return SmoothPath(PosesAlongPolyline(points), *checker, polyline);
 }
 
 }  // namespace pathd

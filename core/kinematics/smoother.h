@@ -39,6 +39,12 @@ struct SmootherOptions {
   // min_turning_radius, its curvature being that of the circle through both
   // poses, 2 sin(|heading change| / 2) / chord. 0: no bound.
   double min_turning_radius = 0.0;
+  // The most a changed piece's direction may differ from its heading
+  // halfway along (or its opposite, reversing), radians: a piece of an arc
+  // differs by nothing, headings taken along smoothed positions by a
+  // little, more is sliding sideways. Just under the independent checker's
+  // 0.05 (tests/testing/kinematic_checker.h).
+  double max_drift = 0.045;
   // A stretch whose smoothing failed this many times (each failure pins one
   // more original pose) keeps its original poses.
   int32_t max_pins = 32;

@@ -548,7 +548,6 @@ TEST(HybridAStar, DubinsNeverReversesReedsSheppMay) {
   q.start.yaw = kPi;
   dubins = PlanHybridAStar(grid, KinematicRequest(q), StopCondition::None());
   ASSERT_TRUE(dubins.ok()) << dubins.status();
-  std::printf("dubins out: %s %lld\n", std::string(PlanOutcomeName(dubins->outcome)).c_str(), (long long)dubins->expansions);
   ASSERT_TRUE(dubins->found());
   EXPECT_EQ(CheckResult(grid, *dubins, q, false), "");
 }
