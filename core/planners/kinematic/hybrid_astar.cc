@@ -12,6 +12,7 @@
 #include <optional>
 #include <queue>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -40,14 +41,6 @@ constexpr char kName[] = "hybrid_astar";
 // Analytic expansions tried per attempt: the shortest curves to the goal
 // headings the tolerance allows, cheapest first.
 constexpr int kAnalyticTries = 2;
-// An analytic expansion ends the search when its path costs at most this
-// times the estimate (g + h) of the state it starts from, as it usually
-// does; a dearer one (a long way round, or backing up most of the way) is
-// kept while the search goes on, and taken once nothing left on the open
-// list is estimated within this factor of it. Nav2 takes the first one
-// always; on the brute-force comparison (hybrid_astar_test) that cost up to
-// 2.7 times the brute force's paths, this at most 1.4 (docs/planners.md).
-constexpr double kAnalyticSlack = 1.2;
 
 // The query a request plans: its own, or the default one of a grid request,
 // whose cost penalty is the request's cost weight (so cost_weight means the
@@ -72,9 +65,8 @@ bool Finite(const Pose& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.yaw);
 }
 
-// The goal headings a search may end with: the goal's, and when the
-// tolerance allows others, `extra` (headings worth trying) moved into the
-// tolerance.
+// `yaw` moved into the goal's heading tolerance (the nearest heading the
+// tolerance allows).
 double IntoTolerance(double yaw, const Pose& goal, double tolerance) {
   if (tolerance >= std::numbers::pi) return NormalizeAngle(yaw);
   const double off = std::clamp(NormalizeAngle(yaw - goal.yaw), -tolerance, tolerance);
@@ -518,8 +510,9 @@ bool HybridSearch::TryAnalytic(uint32_t id, Shot& shot) const {
     for (size_t k = 0; k < h; ++k) seen = seen || AngleBetween(headings[k], yaw) < 1e-9;
     if (seen) continue;
     const Pose target{goal.x, goal.y, yaw};
-    // The validation tested the goal's own heading only.
-    if (yaw != goal.yaw && !motion_.PoseFree(target)) continue;
+    // With a heading tolerance the validation only showed that some
+    // heading is free.
+    if (!motion_.PoseFree(target)) continue;
     for (const bool reverse : {reverse_, false}) {
       const Curve curve = ShortestCurve(from, target, radius_, reverse);
       candidates.push_back(Candidate{Shot{curve, target}, CurvePrice(curve)});
@@ -615,7 +608,7 @@ PlanResult HybridSearch::Run(int32_t subdivisions, int64_t expansions) {
   open_.push(OpenEntry{start.h, 0.0, 0});
   int64_t until_analytic = 0;
   // The cheapest analytic expansion found so far that was not taken at once
-  // (see kAnalyticSlack).
+  // (HybridAStarOptions::analytic_slack).
   uint32_t best_node = kNoNode;
   Shot best_shot;
   double best_cost = kInfinity;
@@ -633,7 +626,7 @@ PlanResult HybridSearch::Run(int32_t subdivisions, int64_t expansions) {
         continue;
       }
     }
-    if (best_node != kNoNode && top.f * kAnalyticSlack >= best_cost) break;
+    if (best_node != kNoNode && top.f * options_.analytic_slack >= best_cost) break;
     const PlanOutcome stop = stop_.Check(expansions, top.f);
     if (stop != PlanOutcome::kFound) {
       // A path in hand is an answer, even if not the best the search would
@@ -657,7 +650,9 @@ PlanResult HybridSearch::Run(int32_t subdivisions, int64_t expansions) {
       if (TryAnalytic(top.node, shot)) {
         std::vector<PathPose> poses;
         const double cost = n.g + DriveShot(top.node, shot, poses);
-        if (cost <= kAnalyticSlack * (n.g + n.h)) return Finish(top.node, &shot, expansions);
+        if (cost <= options_.analytic_slack * (n.g + n.h)) {
+          return Finish(top.node, &shot, expansions);
+        }
         if (cost < best_cost) {
           best_node = top.node;
           best_shot = shot;
