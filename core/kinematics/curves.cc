@@ -1,22 +1,26 @@
-// Dubins and Reeds-Shepp curves through OMPL (docs/decisions.md, "What
-// hybrid_astar takes from OMPL"): OMPL computes the shortest word and its
-// segment lengths; pathd drives the segments itself so it knows exactly
+// Dubins and Reeds-Shepp curves (docs/decisions.md, "Hybrid A* and the path
+// smoother"): OMPL computes the shortest Reeds-Shepp word and its segment
+// lengths; the Dubins words are OMPL's formulas (Shkel & Lumelsky) written
+// out here, because Debian's OMPL asserts on its own rounding in them and
+// aborts the process; pathd drives the segments itself so it knows exactly
 // where each arc starts, ends and reverses.
 #include "core/kinematics/curves.h"
 
+#include <array>
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 
-#include <ompl/base/spaces/DubinsStateSpace.h>
 #include <ompl/base/spaces/ReedsSheppStateSpace.h>
 
 namespace pathd {
@@ -24,17 +28,101 @@ namespace {
 
 namespace ob = ompl::base;
 
-// OMPL's spaces at unit radius: a curve for radius r is the unit curve
+// OMPL's space at unit radius: a curve for radius r is the unit curve
 // between the poses scaled by 1/r, its lengths scaled by r. Built once,
-// never destroyed (so no static destruction order to worry about); their
-// curve functions are const and keep no state, so threads share them.
+// never destroyed (so no static destruction order to worry about); its
+// curve function is const and keeps no state, so threads share it.
 const ob::ReedsSheppStateSpace& ReedsShepp() {
   static const auto* const kSpace = new ob::ReedsSheppStateSpace(1.0);
   return *kSpace;
 }
-const ob::DubinsStateSpace& Dubins() {
-  static const auto* const kSpace = new ob::DubinsStateSpace(1.0);
-  return *kSpace;
+
+// Dubins's six words at unit radius, from the start's frame rotated onto
+// the line to the goal: distance d, headings alpha and beta relative to it
+// (Shkel & Lumelsky, "Classification of the Dubins set", 2001, as OMPL's
+// DubinsStateSpace computes them, without its asserts).
+struct DubinsWord {
+  std::array<Steer, 3> steer;
+  std::array<double, 3> length;
+  double total() const { return length[0] + length[1] + length[2]; }
+};
+
+double Mod2Pi(double a) {
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  double v = std::fmod(a, kTwoPi);
+  if (v < 0.0) v += kTwoPi;
+  // Within rounding of a whole turn is no turn.
+  if (v > kTwoPi - 1e-12) v = 0.0;
+  return v;
+}
+
+DubinsWord ShortestDubins(double d, double alpha, double beta) {
+  constexpr Steer L = Steer::kLeft, S = Steer::kStraight, R = Steer::kRight;
+  const double ca = std::cos(alpha), sa = std::sin(alpha);
+  const double cb = std::cos(beta), sb = std::sin(beta);
+  const double cab = std::cos(alpha - beta);
+  std::optional<DubinsWord> best;
+  const auto offer = [&best](const DubinsWord& w) {
+    if (!best || w.total() < best->total()) best = w;
+  };
+  // LSL and RSR always exist: their squared straight lengths are
+  // (d + sa - sb)^2 + (cb - ca)^2 and its mirror (clamped against
+  // rounding below zero).
+  {
+    const double tmp = std::max(0.0, 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb));
+    const double theta = std::atan2(cb - ca, d + sa - sb);
+    offer({{L, S, L}, {Mod2Pi(-alpha + theta), std::sqrt(tmp), Mod2Pi(beta - theta)}});
+  }
+  {
+    const double tmp = std::max(0.0, 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa));
+    const double theta = std::atan2(ca - cb, d - sa + sb);
+    offer({{R, S, R}, {Mod2Pi(alpha - theta), std::sqrt(tmp), Mod2Pi(-beta + theta)}});
+  }
+  // LSR
+  if (const double tmp = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb); tmp >= 0.0) {
+    const double p = std::sqrt(tmp);
+    const double theta = std::atan2(-ca - cb, d + sa + sb) - std::atan2(-2.0, p);
+    offer({{L, S, R}, {Mod2Pi(-alpha + theta), p, Mod2Pi(-Mod2Pi(beta) + theta)}});
+  }
+  // RSL
+  if (const double tmp = d * d - 2.0 + 2.0 * cab - 2.0 * d * (sa + sb); tmp >= 0.0) {
+    const double p = std::sqrt(tmp);
+    const double theta = std::atan2(ca + cb, d - sa - sb) - std::atan2(2.0, p);
+    offer({{R, S, L}, {Mod2Pi(alpha - theta), p, Mod2Pi(beta - theta)}});
+  }
+  // RLR
+  if (const double tmp = 0.125 * (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb));
+      std::fabs(tmp) <= 1.0) {
+    const double p = 2.0 * std::numbers::pi - std::acos(tmp);
+    const double theta = std::atan2(ca - cb, d - sa + sb);
+    const double t = Mod2Pi(alpha - theta + 0.5 * p);
+    offer({{R, L, R}, {t, p, Mod2Pi(alpha - beta - t + p)}});
+  }
+  // LRL
+  if (const double tmp = 0.125 * (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa));
+      std::fabs(tmp) <= 1.0) {
+    const double p = 2.0 * std::numbers::pi - std::acos(tmp);
+    const double theta = std::atan2(-ca + cb, d + sa - sb);
+    const double t = Mod2Pi(-alpha + theta + 0.5 * p);
+    offer({{L, R, L}, {t, p, Mod2Pi(beta - alpha - t + p)}});
+  }
+  return *best;
+}
+
+// The shortest Dubins word from `from` to `to` at unit radius (poses
+// already scaled).
+DubinsWord DubinsBetween(const Pose& from, const Pose& to) {
+  const double dx = to.x - from.x;
+  const double dy = to.y - from.y;
+  const double d = std::sqrt(dx * dx + dy * dy);
+  const double th = d > 0.0 ? std::atan2(dy, dx) : 0.0;
+  const double alpha = Mod2Pi(from.yaw - th);
+  const double beta = Mod2Pi(to.yaw - th);
+  // The same pose: no motion.
+  if (d < 1e-10 && std::fabs(NormalizeAngle(alpha - beta)) < 1e-10) {
+    return DubinsWord{{Steer::kStraight, Steer::kStraight, Steer::kStraight}, {0.0, 0.0, 0.0}};
+  }
+  return ShortestDubins(d, alpha, beta);
 }
 
 // Two SE(2) states of a space for one call, freed on scope exit.
@@ -72,17 +160,6 @@ Steer FromReedsShepp(ob::ReedsSheppStateSpace::ReedsSheppPathSegmentType type) {
     case ob::ReedsSheppStateSpace::RS_LEFT:
       return Steer::kLeft;
     case ob::ReedsSheppStateSpace::RS_RIGHT:
-      return Steer::kRight;
-    default:
-      return Steer::kStraight;
-  }
-}
-
-Steer FromDubins(ob::DubinsStateSpace::DubinsPathSegmentType type) {
-  switch (type) {
-    case ob::DubinsStateSpace::DUBINS_LEFT:
-      return Steer::kLeft;
-    case ob::DubinsStateSpace::DUBINS_RIGHT:
       return Steer::kRight;
     default:
       return Steer::kStraight;
@@ -217,13 +294,12 @@ Curve ShortestCurve(const Pose& from, const Pose& to, double radius, bool revers
     }
     return curve;
   }
-  const StatePair states(Dubins(), from, to, radius);
-  const ob::DubinsStateSpace::DubinsPath path = Dubins().dubins(states.from(), states.to());
+  const DubinsWord word = DubinsBetween(Pose{from.x / radius, from.y / radius, from.yaw},
+                                        Pose{to.x / radius, to.y / radius, to.yaw});
   for (int i = 0; i < 3; ++i) {
-    if (path.length_[i] == 0.0) continue;
-    curve.segments[curve.count++] =
-        CurveSegment{FromDubins(path.type_[i]), path.length_[i] * radius};
-    curve.length += path.length_[i] * radius;
+    if (word.length[i] == 0.0) continue;
+    curve.segments[curve.count++] = CurveSegment{word.steer[i], word.length[i] * radius};
+    curve.length += word.length[i] * radius;
   }
   return curve;
 }
@@ -233,8 +309,10 @@ double ShortestCurveLength(const Pose& from, const Pose& to, double radius, bool
     const StatePair states(ReedsShepp(), from, to, radius);
     return ReedsShepp().reedsShepp(states.from(), states.to()).length() * radius;
   }
-  const StatePair states(Dubins(), from, to, radius);
-  return Dubins().dubins(states.from(), states.to()).length() * radius;
+  return DubinsBetween(Pose{from.x / radius, from.y / radius, from.yaw},
+                       Pose{to.x / radius, to.y / radius, to.yaw})
+             .total() *
+         radius;
 }
 
 }  // namespace pathd

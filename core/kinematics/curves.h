@@ -1,9 +1,13 @@
 // Shortest paths of a car between two poses when nothing is in the way:
 // Dubins curves (forward only; Dubins 1957) and Reeds-Shepp curves (forward
-// and reverse; Reeds & Shepp 1990), at a given turning radius. The curves
-// come from OMPL's DubinsStateSpace and ReedsSheppStateSpace (a private
-// dependency of pathd::core: no OMPL type appears here); this file turns
-// them into pathd's steering segments and drives them.
+// and reverse; Reeds & Shepp 1990), at a given turning radius. Reeds-Shepp
+// curves come from OMPL's ReedsSheppStateSpace (a private dependency of
+// pathd::core: no OMPL type appears here); Dubins curves are OMPL's
+// DubinsStateSpace formulas written out in curves.cc, because Debian's OMPL
+// build asserts on its own rounding in them (about once in 10^5-10^6 random
+// pose pairs 40 radii apart, more often farther) and the assert aborts the
+// process. This file turns them into pathd's steering segments and drives
+// them.
 #ifndef PATHD_CORE_KINEMATICS_CURVES_H_
 #define PATHD_CORE_KINEMATICS_CURVES_H_
 
@@ -46,7 +50,7 @@ Curve ShortestCurve(const Pose& from, const Pose& to, double radius, bool revers
 
 // ShortestCurve(...).length, the non-holonomic distance without obstacles.
 // Thread-safe; a Reeds-Shepp length costs about 5-10 us (OMPL tries all 48
-// word families), a Dubins length about 1 us.
+// word families), a Dubins length well under 1 us.
 double ShortestCurveLength(const Pose& from, const Pose& to, double radius, bool reverse);
 
 // Within kCurveTableRadii turning radii of `to`: ShortestCurveLength read

@@ -41,6 +41,14 @@ constexpr char kName[] = "hybrid_astar";
 // Analytic expansions tried per attempt: the shortest curves to the goal
 // headings the tolerance allows, cheapest first.
 constexpr int kAnalyticTries = 2;
+// Curves are asked of OMPL only between poses at most this many turning
+// radii apart (analytic expansions farther are not tried; the curve
+// heuristic's window is capped here). OMPL's Reeds-Shepp words assert on
+// their own rounding like its Dubins words do (curves.h); no assert fired
+// in 6 million random pose pairs up to 280 radii apart, but a daemon
+// should not bet on the far ones. Nav2 stops at 3 m (7.5 of its default
+// radii, analytic_expansion_max_length).
+constexpr double kMaxCurveRadii = 64.0;
 
 // The query a request plans: its own, or the default one of a grid request,
 // whose cost penalty is the request's cost weight (so cost_weight means the
@@ -280,7 +288,7 @@ class HybridSearch {
     // goal heading is (nearly) fixed.
     const double bin = 2.0 * std::numbers::pi / bins_;
     exact_curve_heuristic_ = options.curve_heuristic && q.goal_tolerance_yaw < bin / 2.0;
-    curve_window_ = options.curve_heuristic_radii * radius_;
+    curve_window_ = std::min(options.curve_heuristic_radii, kMaxCurveRadii) * radius_;
   }
 
   // Searches the lattice of squares 1/subdivisions cell on a side, counting
@@ -350,6 +358,10 @@ class HybridSearch {
     }
     return std::max(0.0, h - q_.goal_tolerance_cells);
   }
+  // What a path through `n` is expected to cost, for weighing an analytic
+  // expansion: h is a length, and a curve to the goal pays the
+  // non-straight penalty on its turns, so the rest is priced as if turning.
+  double Expected(const Node& n) const { return n.g + penalties_.non_straight * n.h; }
   MotionEnd FromEnd(uint32_t node) const {
     return node == 0 ? MotionEnd::kExact : MotionEnd::kProven;
   }
@@ -484,6 +496,7 @@ double HybridSearch::CurvePrice(const Curve& curve) const {
 bool HybridSearch::TryAnalytic(uint32_t id, Shot& shot) const {
   const Pose& from = nodes_[id].pose;
   const Pose& goal = q_.goal;
+  if (Distance(from, goal) > kMaxCurveRadii * radius_) return false;
   // Goal headings worth a curve: the goal's own; with a tolerance, also the
   // ones closest to the robot's heading and to the bearing of the goal
   // (driving straight in).
@@ -626,7 +639,7 @@ PlanResult HybridSearch::Run(int32_t subdivisions, int64_t expansions) {
         continue;
       }
     }
-    if (best_node != kNoNode && top.f * options_.analytic_slack >= best_cost) break;
+    if (best_node != kNoNode && Expected(n) * options_.analytic_slack >= best_cost) break;
     const PlanOutcome stop = stop_.Check(expansions, top.f);
     if (stop != PlanOutcome::kFound) {
       // A path in hand is an answer, even if not the best the search would
@@ -650,7 +663,7 @@ PlanResult HybridSearch::Run(int32_t subdivisions, int64_t expansions) {
       if (TryAnalytic(top.node, shot)) {
         std::vector<PathPose> poses;
         const double cost = n.g + DriveShot(top.node, shot, poses);
-        if (cost <= options_.analytic_slack * (n.g + n.h)) {
+        if (cost <= options_.analytic_slack * Expected(n)) {
           return Finish(top.node, &shot, expansions);
         }
         if (cost < best_cost) {
