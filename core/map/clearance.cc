@@ -97,14 +97,20 @@ absl::Status ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free
     return absl::InvalidArgumentError(absl::StrFormat(
         "minimum clearance %g cells must be finite and > 0", min_clearance_cells));
   }
-  if (grid->size() == 0) return absl::OkStatus();
+  EuclideanDistanceField transform;
+  ApplyClearanceCost(min_clearance_cells, unknown_is_free, transform, grid);
+  return absl::OkStatus();
+}
+
+void ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free,
+                        EuclideanDistanceField& transform, Grid* grid) {
+  if (grid->size() == 0) return;
   // Squared distances up to ceil(m^2) are all the ramp needs.
   const double m2 = std::ceil(min_clearance_cells * min_clearance_cells);
   const int64_t bound = static_cast<int64_t>(
       std::min(m2, static_cast<double>(std::numeric_limits<int32_t>::max())));
   const size_t w = static_cast<size_t>(grid->width());
   uint8_t* cells = grid->mutable_cells().data();
-  EuclideanDistanceField transform;
   transform.ForEachRow(
       *grid, ObstacleSources(unknown_is_free), bound,
       [&](int32_t y, const int64_t* row) {
@@ -120,7 +126,6 @@ absl::Status ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free
           if (penalty > own) out[x] = penalty;
         }
       });
-  return absl::OkStatus();
 }
 
 double PathClearance(const Grid& grid, absl::Span<const Cell> path,

@@ -36,6 +36,13 @@ struct DistanceSources {
 // Sources are the cells of exactly the given cost.
 DistanceSources SourcesOfCost(uint8_t cost);
 
+// The largest integer n with n <= radius^2 in exact arithmetic, so that an
+// integer squared distance d2 is within the radius (inclusive) exactly when
+// d2 <= n: the bound to give the transforms below for "within radius".
+// Radii beyond any grid's diagonal are clamped to 2^40. Precondition:
+// radius finite and >= 0.
+int64_t SquaredRadiusBound(double radius);
+
 // Reusable working memory for the transform; the buffers grow to the largest
 // grid seen and are then reused, so repeated transforms do not allocate. Not
 // thread-safe: one per thread.
