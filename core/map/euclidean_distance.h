@@ -65,8 +65,17 @@ class EuclideanDistanceField {
   template <typename RowSink>
   void ForEachRow(const Grid& grid, const DistanceSources& sources,
                   int64_t max_squared, RowSink&& sink) {
+    ForEachRowIn(grid, sources, max_squared, 0, grid.height() - 1, sink);
+  }
+  // As ForEachRow for rows first_row .. last_row only (the distances still
+  // count every source of the grid): a window's rows cost only their own
+  // row pass.
+  template <typename RowSink>
+  void ForEachRowIn(const Grid& grid, const DistanceSources& sources,
+                    int64_t max_squared, int32_t first_row, int32_t last_row,
+                    RowSink&& sink) {
     const int64_t bound = Prepare(grid, sources, max_squared);
-    for (int32_t y = 0; y < grid.height(); ++y) {
+    for (int32_t y = first_row; y <= last_row; ++y) {
       DistanceRow(y, grid.width(), sources.border, bound);
       sink(y, static_cast<const int64_t*>(row_.data()));
     }
@@ -81,8 +90,15 @@ class EuclideanDistanceField {
   template <typename RowSink>
   void ForEachRowWithin(const Grid& grid, const DistanceSources& sources,
                         int64_t max_squared, RowSink&& sink) {
+    ForEachRowWithinIn(grid, sources, max_squared, 0, grid.height() - 1, sink);
+  }
+  // As ForEachRowWithin for rows first_row .. last_row only.
+  template <typename RowSink>
+  void ForEachRowWithinIn(const Grid& grid, const DistanceSources& sources,
+                          int64_t max_squared, int32_t first_row, int32_t last_row,
+                          RowSink&& sink) {
     PrepareChords(Prepare(grid, sources, max_squared));
-    for (int32_t y = 0; y < grid.height(); ++y) {
+    for (int32_t y = first_row; y <= last_row; ++y) {
       ChordRow(y, grid.width(), sources.border);
       sink(y, static_cast<const uint8_t*>(within_.data()));
     }

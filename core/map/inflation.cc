@@ -19,19 +19,21 @@
 namespace pathd {
 namespace {
 
-// Marks the cells within the radius of a lethal cell inscribed, in place
-// (the transform's column pass reads the whole grid before any row is
+// Marks the cells of `area` within the radius of a lethal cell inscribed, in
+// place (the transform's column pass reads the whole grid before any row is
 // written). Precondition: radius finite and >= 0.
-void InflateInPlace(double radius_cells, EuclideanDistanceField& transform, Grid* grid) {
+void InflateInPlace(double radius_cells, EuclideanDistanceField& transform,
+                    const CellRect& area, Grid* grid) {
   const int64_t bound = SquaredRadiusBound(radius_cells);
   // Below radius 1 only the lethal cells themselves are within reach.
   if (bound == 0 || grid->size() == 0) return;
   const size_t w = static_cast<size_t>(grid->width());
   uint8_t* cells = grid->mutable_cells().data();
-  transform.ForEachRowWithin(
-      *grid, SourcesOfCost(kLethalCost), bound, [&](int32_t y, const uint8_t* within) {
+  transform.ForEachRowWithinIn(
+      *grid, SourcesOfCost(kLethalCost), bound, area.y0, area.y1,
+      [&](int32_t y, const uint8_t* within) {
         uint8_t* row = cells + static_cast<size_t>(y) * w;
-        for (size_t x = 0; x < w; ++x) {
+        for (int32_t x = area.x0; x <= area.x1; ++x) {
           const uint8_t c = row[x];
           // Branch-free so the loop vectorises.
           row[x] = (within[x] & (c < kLethalCost)) ? kInscribedCost : c;
@@ -39,39 +41,46 @@ void InflateInPlace(double radius_cells, EuclideanDistanceField& transform, Grid
       });
 }
 
-// ShapeGrid's steps on `grid` in place, sharing one transform. Precondition:
+// ShapeGrid's steps on `grid` in place, sharing one transform, for the cells
+// of `area` (exact there; other cells are left partly shaped). The clearance
+// of an area cell reads whether cells closer than the clearance are blocked,
+// so the radius's inflation covers the area grown by it; the inflation
+// costs block nothing and cover the area only. Precondition:
 // CheckGridShape(shape) is OK.
-void ShapeInPlace(const GridShape& shape, EuclideanDistanceField& transform, Grid* grid) {
-  InflateInPlace(shape.robot_radius_cells, transform, grid);
+void ShapeInPlace(const GridShape& shape, EuclideanDistanceField& transform,
+                  const CellRect& area, Grid* grid) {
+  CellRect blocked = area;
+  if (shape.min_clearance_cells > 0.0) {
+    const auto grow = static_cast<int32_t>(std::ceil(shape.min_clearance_cells));
+    blocked = CellRect{std::max(area.x0 - grow, 0), std::max(area.y0 - grow, 0),
+                       std::min(area.x1 + grow, grid->width() - 1),
+                       std::min(area.y1 + grow, grid->height() - 1)};
+  }
+  InflateInPlace(shape.robot_radius_cells, transform, blocked, grid);
   if (shape.has_inflation_cost()) {
     ApplyInflationCost(shape.robot_radius_cells, shape.inflation_radius_cells,
-                       shape.cost_scaling_per_cell, shape.unknown_is_free, transform, grid);
+                       shape.cost_scaling_per_cell, shape.unknown_is_free, transform,
+                       area, grid);
   }
   if (shape.min_clearance_cells > 0.0) {
-    ApplyClearanceCost(shape.min_clearance_cells, shape.unknown_is_free, transform, grid);
+    ApplyClearanceCost(shape.min_clearance_cells, shape.unknown_is_free, transform, area,
+                       grid);
   }
 }
 
-// An inclusive box of cells.
-struct Box {
-  int32_t x0 = 0;
-  int32_t y0 = 0;
-  int32_t x1 = 0;
-  int32_t y1 = 0;
-};
-
 // Cells of `b` grown by `pad` on every side (not clipped: for comparing).
-int64_t PaddedArea(const Box& b, int32_t pad) {
+int64_t PaddedArea(const CellRect& b, int32_t pad) {
   return (int64_t{b.x1} - b.x0 + 1 + 2 * int64_t{pad}) *
          (int64_t{b.y1} - b.y0 + 1 + 2 * int64_t{pad});
 }
 
-Box Clip(Box b, int32_t pad, const Grid& grid) {
-  return Box{std::max(b.x0 - pad, 0), std::max(b.y0 - pad, 0),
-             std::min(b.x1 + pad, grid.width() - 1), std::min(b.y1 + pad, grid.height() - 1)};
+CellRect Clip(CellRect b, int32_t pad, const Grid& grid) {
+  return CellRect{std::max(b.x0 - pad, 0), std::max(b.y0 - pad, 0),
+                  std::min(b.x1 + pad, grid.width() - 1),
+                  std::min(b.y1 + pad, grid.height() - 1)};
 }
 
-int64_t Area(const Box& b) {
+int64_t Area(const CellRect& b) {
   return (int64_t{b.x1} - b.x0 + 1) * (int64_t{b.y1} - b.y0 + 1);
 }
 
@@ -83,10 +92,11 @@ constexpr int kMaxMergePasses = 4;
 
 // Merges two boxes into their bounding box where shaping that once costs no
 // more than shaping both (their padded windows overlap enough).
-void MergeBoxes(int32_t pad, std::vector<Box>* boxes) {
+void MergeBoxes(int32_t pad, std::vector<CellRect>* boxes) {
   if (boxes->size() > kMaxBoxesToMerge) return;
-  std::vector<Box>& b = *boxes;
-  std::sort(b.begin(), b.end(), [](const Box& l, const Box& r) { return l.x0 < r.x0; });
+  std::vector<CellRect>& b = *boxes;
+  std::sort(b.begin(), b.end(),
+            [](const CellRect& l, const CellRect& r) { return l.x0 < r.x0; });
   std::vector<bool> gone(b.size(), false);
   for (int pass = 0; pass < kMaxMergePasses; ++pass) {
     bool merged = false;
@@ -97,8 +107,8 @@ void MergeBoxes(int32_t pad, std::vector<Box>* boxes) {
         // for their padded windows to meet box i's.
         if (int64_t{b[j].x0} > int64_t{b[i].x1} + 2 * int64_t{pad} + 1) break;
         if (gone[j]) continue;
-        const Box both{b[i].x0, std::min(b[i].y0, b[j].y0), std::max(b[i].x1, b[j].x1),
-                       std::max(b[i].y1, b[j].y1)};
+        const CellRect both{b[i].x0, std::min(b[i].y0, b[j].y0),
+                            std::max(b[i].x1, b[j].x1), std::max(b[i].y1, b[j].y1)};
         if (PaddedArea(both, pad) <= PaddedArea(b[i], pad) + PaddedArea(b[j], pad)) {
           b[i] = both;
           gone[j] = true;
@@ -119,14 +129,14 @@ void MergeBoxes(int32_t pad, std::vector<Box>* boxes) {
 
 absl::StatusOr<Grid> InflateObstacles(const Grid& grid, double radius_cells) {
   if (!std::isfinite(radius_cells) || radius_cells < 0.0) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "robot radius %g cells must be finite and >= 0", radius_cells));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("robot radius %g cells must be finite and >= 0", radius_cells));
   }
   Grid inflated = grid;
   // One transform per call: its O(cells) buffers cost less than a lock or a
   // thread-local cache would, and the server caches the inflated grid anyway.
   EuclideanDistanceField transform;
-  InflateInPlace(radius_cells, transform, &inflated);
+  InflateInPlace(radius_cells, transform, CellRect::Of(inflated), &inflated);
   return inflated;
 }
 
@@ -151,7 +161,7 @@ absl::StatusOr<Grid> ShapeGrid(const Grid& grid, const GridShape& shape) {
   PATHD_RETURN_IF_ERROR(CheckGridShape(shape));
   Grid shaped = grid;
   EuclideanDistanceField transform;
-  ShapeInPlace(shape, transform, &shaped);
+  ShapeInPlace(shape, transform, CellRect::Of(shaped), &shaped);
   return shaped;
 }
 
@@ -164,7 +174,8 @@ double ShapeReach(const GridShape& shape) {
   }
   // A cell the radius blocks or frees moves the clearance of cells up to the
   // clearance beyond it.
-  if (shape.min_clearance_cells > 0.0) reach = std::max(reach, r + shape.min_clearance_cells);
+  if (shape.min_clearance_cells > 0.0)
+    reach = std::max(reach, r + shape.min_clearance_cells);
   return reach;
 }
 
@@ -186,14 +197,15 @@ absl::StatusOr<ShapedGridAdvance> AdvanceShapedGrid(const Grid& previous_shaped,
   const double reach = ShapeReach(shape);
   if (reach >= static_cast<double>(kMaxGridDimension)) return in_full();
   const auto pad = static_cast<int32_t>(std::ceil(reach));
-  const auto near = static_cast<int32_t>(std::ceil(std::max(shape.min_clearance_cells, 0.0)));
+  const auto near =
+      static_cast<int32_t>(std::ceil(std::max(shape.min_clearance_cells, 0.0)));
 
   // One box per changed cell (a row's run of neighbours shares one): a cell
   // that became or stopped being lethal moves every cell within the reach;
   // any other moves its own cost and, through the clearance, the cells
   // within the clearance of it. The previous shaped grid is lethal exactly
   // where the previous stored grid was (no step makes or unmakes 254).
-  std::vector<Box> boxes;
+  std::vector<CellRect> boxes;
   const uint8_t* before = previous_shaped.cells().data();
   const uint8_t* after = stored.cells().data();
   for (const Cell& c : changed_cells) {
@@ -202,44 +214,48 @@ absl::StatusOr<ShapedGridAdvance> AdvanceShapedGrid(const Grid& previous_shaped,
     const bool lethal_moved = (before[i] == kLethalCost) != (after[i] == kLethalCost);
     const int32_t h = lethal_moved ? pad : near;
     if (!boxes.empty()) {
-      Box& last = boxes.back();
+      CellRect& last = boxes.back();
       if (last.y0 == c.y - h && last.y1 == c.y + h && last.x1 == c.x - 1 + h) {
         last.x1 = c.x + h;
         continue;
       }
     }
-    boxes.push_back(Box{c.x - h, c.y - h, c.x + h, c.y + h});
+    boxes.push_back(CellRect{c.x - h, c.y - h, c.x + h, c.y + h});
   }
   MergeBoxes(pad, &boxes);
-  int64_t shaped_cells = 0;
-  for (Box& b : boxes) {
+  int64_t window_cells = 0;
+  for (CellRect& b : boxes) {
     b = Clip(b, 0, stored);
-    shaped_cells += Area(Clip(b, pad, stored));
+    window_cells += Area(Clip(b, pad, stored));
   }
-  if (shaped_cells > cells / 2) return in_full();
+  if (window_cells > cells / 2) return in_full();
 
-  ShapedGridAdvance advance{previous_shaped, true, shaped_cells};
+  ShapedGridAdvance advance{previous_shaped, true, window_cells};
   Grid& out = advance.grid;
   out.set_resolution(stored.resolution());
   out.set_origin(stored.origin());
   EuclideanDistanceField transform;
   std::vector<uint8_t> buffer;
   const size_t w = static_cast<size_t>(stored.width());
-  for (const Box& b : boxes) {
+  for (const CellRect& b : boxes) {
     // The box padded by the reach, shaped as a grid of its own: every source
     // a box cell's shaping reads lies inside it, and its edges (which the
     // clearance counts as the map's outside) are further from every box cell
     // than the clearance, unless they are the map's own.
-    const Box p = Clip(b, pad, stored);
+    const CellRect p = Clip(b, pad, stored);
     const int32_t pw = p.x1 - p.x0 + 1;
     const int32_t ph = p.y1 - p.y0 + 1;
     buffer.resize(static_cast<size_t>(pw) * static_cast<size_t>(ph));
     for (int32_t y = p.y0; y <= p.y1; ++y) {
-      std::copy_n(after + stored.Index(p.x0, y), pw,
-                  buffer.begin() + static_cast<size_t>(y - p.y0) * static_cast<size_t>(pw));
+      std::copy_n(
+          after + stored.Index(p.x0, y), pw,
+          buffer.begin() + static_cast<size_t>(y - p.y0) * static_cast<size_t>(pw));
     }
     PATHD_ASSIGN_OR_RETURN(Grid window, Grid::FromCells(pw, ph, std::move(buffer)));
-    ShapeInPlace(shape, transform, &window);
+    // Only the box's own cells are wanted, and only their rows are
+    // transformed.
+    ShapeInPlace(shape, transform,
+                 CellRect{b.x0 - p.x0, b.y0 - p.y0, b.x1 - p.x0, b.y1 - p.y0}, &window);
     const size_t bw = static_cast<size_t>(b.x1 - b.x0 + 1);
     uint8_t* dst = out.mutable_cells().data();
     for (int32_t y = b.y0; y <= b.y1; ++y) {

@@ -78,8 +78,9 @@ struct ShapedGridAdvance {
   // True when only windows around the changed cells were recomputed; false
   // when the changes covered too much and the grid was shaped in full.
   bool advanced = false;
-  // Cells whose shaping was recomputed (the padded windows', or all).
-  int64_t cells_shaped = 0;
+  // Cells of the padded windows read (the map's when shaped in full); the
+  // work is about proportional to them.
+  int64_t window_cells = 0;
 };
 
 // ShapeGrid(stored, shape), computed from the previous version's shaped

@@ -54,9 +54,9 @@ absl::Status CheckInflationCost(double robot_radius_cells, double inflation_radi
 
 double InflationCostReach(double robot_radius_cells, double inflation_radius_cells,
                           double cost_scaling_per_cell) {
-  const double fades = robot_radius_cells +
-                       (std::log(static_cast<double>(kInscribedCost - 1)) + 1.0) /
-                           cost_scaling_per_cell;
+  const double fades =
+      robot_radius_cells +
+      (std::log(static_cast<double>(kInscribedCost - 1)) + 1.0) / cost_scaling_per_cell;
   return std::min(inflation_radius_cells, fades);
 }
 
@@ -74,13 +74,14 @@ absl::Status ApplyInflationCost(double robot_radius_cells, double inflation_radi
   }
   EuclideanDistanceField transform;
   ApplyInflationCost(robot_radius_cells, inflation_radius_cells, cost_scaling_per_cell,
-                     unknown_is_free, transform, grid);
+                     unknown_is_free, transform, CellRect::Of(*grid), grid);
   return absl::OkStatus();
 }
 
 void ApplyInflationCost(double robot_radius_cells, double inflation_radius_cells,
                         double cost_scaling_per_cell, bool unknown_is_free,
-                        EuclideanDistanceField& transform, Grid* grid) {
+                        EuclideanDistanceField& transform, const CellRect& area,
+                        Grid* grid) {
   if (grid->size() == 0) return;
   // Squared distances in (inner, outer] get a cost: beyond the robot radius
   // (exactly: d2 <= inner is within it) and within the reach.
@@ -101,10 +102,11 @@ void ApplyInflationCost(double robot_radius_cells, double inflation_radius_cells
   }
   const size_t w = static_cast<size_t>(grid->width());
   uint8_t* cells = grid->mutable_cells().data();
-  transform.ForEachRow(
-      *grid, SourcesOfCost(kLethalCost), outer, [&](int32_t y, const int64_t* row) {
+  transform.ForEachRowIn(
+      *grid, SourcesOfCost(kLethalCost), outer, area.y0, area.y1,
+      [&](int32_t y, const int64_t* row) {
         uint8_t* out = cells + static_cast<size_t>(y) * w;
-        for (size_t x = 0; x < w; ++x) {
+        for (int32_t x = area.x0; x <= area.x1; ++x) {
           const int64_t d2 = row[x];
           // kFar (no lethal cell within the reach) is above outer too.
           if (d2 <= inner || d2 > outer) continue;

@@ -69,10 +69,13 @@ absl::Status ApplyInflationCost(double robot_radius_cells, double inflation_radi
                                 double cost_scaling_per_cell, bool unknown_is_free,
                                 Grid* grid);
 // The same with the caller's transform, reused across calls (ShapeGrid's
-// steps share one). Precondition: CheckInflationCost is OK.
+// steps share one), writing only the cells of `area` (a rectangle of the
+// grid; distances still count every lethal cell of the grid). Precondition:
+// CheckInflationCost is OK.
 void ApplyInflationCost(double robot_radius_cells, double inflation_radius_cells,
                         double cost_scaling_per_cell, bool unknown_is_free,
-                        EuclideanDistanceField& transform, Grid* grid);
+                        EuclideanDistanceField& transform, const CellRect& area,
+                        Grid* grid);
 
 }  // namespace pathd
 

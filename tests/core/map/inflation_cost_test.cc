@@ -92,8 +92,8 @@ Grid BruteShape(const Grid& grid, const GridShape& shape) {
       if (!Traversable(c, shape.unknown_is_free)) continue;
       const double d = BruteClearance(inflated, Cell{x, y}, shape.unknown_is_free);
       if (!(d < m)) continue;
-      const auto ramp = static_cast<uint8_t>(
-          std::clamp(std::ceil(252.0 * (m - d) / m), 1.0, 252.0));
+      const auto ramp =
+          static_cast<uint8_t>(std::clamp(std::ceil(252.0 * (m - d) / m), 1.0, 252.0));
       if (ramp > (c == kUnknownCost ? 0 : c)) out.set_cost(x, y, ramp);
     }
   }
@@ -122,7 +122,9 @@ GridShape RandomShape(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   // Whole radii half the time: the cells exactly that far away count.
   const bool whole = u(rng) < 0.5;
-  auto length = [&](double most) { return whole ? std::round(most * u(rng)) : most * u(rng); };
+  auto length = [&](double most) {
+    return whole ? std::round(most * u(rng)) : most * u(rng);
+  };
   const double r = u(rng) < 0.25 ? 0.0 : length(4.0);
   const double big = u(rng) < 0.6 ? r + length(8.0) : 0.0;
   const double s = 0.1 + 2.0 * u(rng);
@@ -188,7 +190,7 @@ TEST(InflationCost, ApplyLeavesTheRadiusToInflation) {
   EXPECT_EQ(costed.cost(2, 0), 0);
   EXPECT_EQ(costed.cost(3, 0), 152);  // 252 * e^-0.5, above its own 40
   EXPECT_EQ(costed.cost(6, 0), kUnknownCost);
-  EXPECT_EQ(costed.cost(9, 0), 7);  // 252 * e^-3.5
+  EXPECT_EQ(costed.cost(9, 0), 7);   // 252 * e^-3.5
   EXPECT_EQ(costed.cost(10, 0), 0);  // beyond the inflation radius
   Grid free_unknown = grid;
   ASSERT_TRUE(ApplyInflationCost(2.0, 9.0, 0.5, true, &free_unknown).ok());
@@ -206,7 +208,8 @@ TEST(InflationCost, RefusesBadParameters) {
               absl::StatusCode::kInvalidArgument);
     return std::string(shaped.status().message());
   };
-  EXPECT_THAT(message(GridShape::Of(0, -1.0, 0.5, 0, false)), HasSubstr("inflation radius"));
+  EXPECT_THAT(message(GridShape::Of(0, -1.0, 0.5, 0, false)),
+              HasSubstr("inflation radius"));
   EXPECT_THAT(message(GridShape::Of(0, std::nan(""), 0.5, 0, false)),
               HasSubstr("inflation radius"));
   EXPECT_THAT(message(GridShape::Of(0, INFINITY, 0.5, 0, false)),
@@ -214,10 +217,12 @@ TEST(InflationCost, RefusesBadParameters) {
   EXPECT_THAT(message(GridShape::Of(3.0, 2.0, 0.5, 0, false)),
               HasSubstr("smaller than the robot radius"));
   EXPECT_THAT(message(GridShape::Of(1.0, 2.0, 0.0, 0, false)), HasSubstr("cost scaling"));
-  EXPECT_THAT(message(GridShape::Of(1.0, 2.0, -0.5, 0, false)), HasSubstr("cost scaling"));
+  EXPECT_THAT(message(GridShape::Of(1.0, 2.0, -0.5, 0, false)),
+              HasSubstr("cost scaling"));
   EXPECT_THAT(message(GridShape::Of(1.0, 2.0, std::nan(""), 0, false)),
               HasSubstr("cost scaling"));
-  EXPECT_THAT(message(GridShape::Of(-1.0, 2.0, 0.5, 0, false)), HasSubstr("robot radius"));
+  EXPECT_THAT(message(GridShape::Of(-1.0, 2.0, 0.5, 0, false)),
+              HasSubstr("robot radius"));
   EXPECT_EQ(ApplyInflationCost(1.0, 0.5, 0.5, false, &grid).code(),
             absl::StatusCode::kInvalidArgument);
   // Equal radii are fine (no costs beyond the inscribed cells).
@@ -242,7 +247,8 @@ void RandomUpdate(std::mt19937& rng, Grid* grid, std::vector<Cell>* changed) {
   const int n = count(rng);
   int written = 0;
   while (written < n) {
-    std::uniform_int_distribution<int> px(0, grid->width() - 1), py(0, grid->height() - 1);
+    std::uniform_int_distribution<int> px(0, grid->width() - 1),
+        py(0, grid->height() - 1);
     const Cell at{px(rng), py(rng)};
     const uint8_t cost = u(rng) < 0.4 ? kFreeCost : RandomCost(rng, 0.7);
     if (u(rng) < 0.25) {
@@ -294,7 +300,7 @@ TEST(AdvanceShapedGrid, EqualsShapingAfreshAfterRandomUpdates) {
       advanced += next->advanced;
       ++steps;
       if (next->advanced) {
-        EXPECT_LT(next->cells_shaped, static_cast<int64_t>(stored.size()));
+        EXPECT_LT(next->window_cells, static_cast<int64_t>(stored.size()));
       }
       shaped = std::move(next->grid);
     }
@@ -309,9 +315,9 @@ TEST(AdvanceShapedGrid, EqualsShapingAfreshAfterRandomUpdates) {
 // radii where the cells at exactly that distance count.
 TEST(AdvanceShapedGrid, ReachesAsFarAsEachStepDoes) {
   const GridShape shapes[] = {
-      GridShape::Of(3.0, 0.0, 0.0, 0.0, false),  GridShape::Of(0.0, 6.0, 0.1, 0.0, false),
-      GridShape::Of(2.0, 7.0, 0.1, 0.0, false),  GridShape::Of(3.0, 0.0, 0.0, 4.0, false),
-      GridShape::Of(0.0, 0.0, 0.0, 5.0, false),  GridShape::Of(3.0, 5.0, 0.1, 4.0, true)};
+      GridShape::Of(3.0, 0.0, 0.0, 0.0, false), GridShape::Of(0.0, 6.0, 0.1, 0.0, false),
+      GridShape::Of(2.0, 7.0, 0.1, 0.0, false), GridShape::Of(3.0, 0.0, 0.0, 4.0, false),
+      GridShape::Of(0.0, 0.0, 0.0, 5.0, false), GridShape::Of(3.0, 5.0, 0.1, 4.0, true)};
   for (const GridShape& shape : shapes) {
     Grid stored = Grid::Create(81, 81).value();
     const Grid shaped = ShapeGrid(stored, shape).value();
@@ -343,7 +349,7 @@ TEST(AdvanceShapedGrid, FallsBackWhereWindowsCannotHelp) {
   absl::StatusOr<ShapedGridAdvance> same = AdvanceShapedGrid(shaped, stored, {}, shape);
   ASSERT_TRUE(same.ok());
   EXPECT_TRUE(same->advanced);
-  EXPECT_EQ(same->cells_shaped, 0);
+  EXPECT_EQ(same->window_cells, 0);
   EXPECT_EQ(same->grid.cells(), shaped.cells());
 
   absl::StatusOr<ShapedGridAdvance> off =
