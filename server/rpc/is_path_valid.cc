@@ -154,7 +154,7 @@ grpc::ServerUnaryReactor* ServeIsPathValid(const PlanDeps& deps,
   auto work = [inflation = &deps.inflation](PathCheckCall& call,
                                             SearchScratch&) -> Verdict {
     absl::StatusOr<std::shared_ptr<const Grid>> inflated =
-        inflation->Get(call.snapshot->grid, call.robot_radius_cells);
+        inflation->Get(*call.snapshot, call.robot_radius_cells);
     if (!inflated.ok()) return {inflated.status(), "ERROR"};
     CheckPathOn(**inflated, call);
     return {absl::OkStatus(), call.response->valid() ? "VALID" : "INVALID"};
