@@ -251,7 +251,8 @@ constexpr absl::string_view kBatchFlags[] = {
     "planner", "world", "max_expansions", "heuristic_weight", "simplify", "lookahead",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "inflation_radius",
+    "inflation_radius_cells", "cost_scaling_factor"};
 
 const Command kBatchCommand = {
     .name = "batch",

@@ -313,7 +313,8 @@ constexpr absl::string_view kPlanFlagNames[] = {
     "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "progress",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "inflation_radius",
+    "inflation_radius_cells", "cost_scaling_factor"};
 
 }  // namespace
 
@@ -324,6 +325,8 @@ const Command kPlanCommand = {
                 " [--max_expansions N] [--world] [--simplify]\n"
                 " [--robot_radius M | --robot_radius_cells C]\n"
                 " [--min_clearance M | --min_clearance_cells C]\n"
+                " [--inflation_radius M | --inflation_radius_cells C]\n"
+                " [--cost_scaling_factor K]\n"
                 " [--heuristic_weight W] [--lookahead N]\n"
                 " [--cost_to_go_file F] [--pf_* ...]\n"
                 " [--goal_tolerance C | --goal_tolerance_m M]\n"

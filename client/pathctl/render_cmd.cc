@@ -1,5 +1,7 @@
 // pathctl render: a map (and optionally a plan over it, with its expanded
 // cells) drawn as a PNG or as text (render.h does the drawing).
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <utility>
@@ -13,6 +15,8 @@
 #include "client/pathctl/png_io.h"
 #include "client/pathctl/render.h"
 #include "core/geometry/structure.h"
+#include "core/map/inflation.h"
+#include "core/map/inflation_cost.h"
 #include "core/status_macros.h"
 
 namespace pathd::pathctl {
@@ -56,6 +60,39 @@ absl::StatusOr<v1::PlanRequest> RenderPlanRequest(const PlanFlags& options,
 
 Cell CoreCell(const v1::Cell& cell) { return Cell{cell.x(), cell.y()}; }
 
+// The grid the planners see for these options: `stored` shaped (robot
+// radius, Nav2 inflation costs, clearance costs) by the server's own core
+// function, with the options converted as the server decodes them
+// (server/convert.cc: metres / resolution, capped at the map's diagonal;
+// the cost scaling factor per metre times the resolution, unset 10). Drawn
+// here rather than fetched: the API has no call that returns a shaped grid,
+// and the same function on the same cells gives the same bytes.
+absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& options) {
+  const double diagonal = std::hypot(stored.width(), stored.height());
+  auto cells = [&](bool metres, double value) {
+    return std::min(metres ? value / stored.resolution() : value, diagonal);
+  };
+  using O = v1::PlanOptions;
+  const double robot = cells(options.robot_radius_case() == O::kRobotRadiusM,
+                             options.robot_radius_case() == O::kRobotRadiusM
+                                 ? options.robot_radius_m()
+                                 : options.robot_radius_cells());
+  const double inflation = cells(options.inflation_radius_case() == O::kInflationRadiusM,
+                                 options.inflation_radius_case() == O::kInflationRadiusM
+                                     ? options.inflation_radius_m()
+                                     : options.inflation_radius_cells());
+  const double clearance = cells(options.min_clearance_case() == O::kMinClearanceM,
+                                 options.min_clearance_case() == O::kMinClearanceM
+                                     ? options.min_clearance_m()
+                                     : options.min_clearance_cells());
+  const double factor = options.has_cost_scaling_factor() ? options.cost_scaling_factor()
+                                                          : kDefaultCostScalingFactor;
+  const GridShape shape = GridShape::Of(robot, inflation, factor * stored.resolution(),
+                                        clearance, options.unknown_is_free());
+  if (!shape.shaped()) return stored;
+  return ShapeGrid(stored, shape);
+}
+
 // `render NAME [--plan SX SY GX GY] (-o FILE.png | --ascii)`: GetMap, an
 // optional Plan, then the picture.
 int Render(CommandEnv& env, Args args) {
@@ -94,6 +131,12 @@ int Render(CommandEnv& env, Args args) {
         RenderPlanRequest(plan_flags, env.options().cost, args[0], args.subspan(1));
     if (!built.ok()) return env.Usage(built.status().message());
     request = *std::move(built);
+  }
+
+  // The cost options shape the drawn grid with or without a plan.
+  v1::PlanOptions cost_options;
+  if (absl::Status s = SetCostOptions(env.options().cost, &cost_options); !s.ok()) {
+    return env.Usage(s.message());
   }
 
   absl::StatusOr<Grid> grid = FetchGrid(env, args[0]);
@@ -135,6 +178,10 @@ int Render(CommandEnv& env, Args args) {
               : "");
     }
   }
+  // After the plan, so a bad option is reported by the server first, with
+  // its field's name.
+  grid = PlanningGridOf(*grid, cost_options);
+  if (!grid.ok()) return env.Usage(grid.status().message());
   if (!options.overlay.empty()) {
     absl::StatusOr<GeometricStructure> structure =
         DescribeStructure(options.overlay, *grid, env.options().cost.unknown_is_free);
@@ -171,7 +218,8 @@ constexpr absl::string_view kRenderFlags[] = {
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "inflation_radius",
+    "inflation_radius_cells", "cost_scaling_factor"};
 
 }  // namespace
 
@@ -182,9 +230,12 @@ const Command kRenderCommand = {
                 " (-o FILE.png [--scale N] | --ascii) [--y_up] [--overlay KIND]",
     .help = "Draws map NAME as a PNG (-o) or as text (--ascii), and with --plan the\n"
             "path from (SX, SY) to (GX, GY), its start and goal, and with\n"
-            "--expansions the cells the search expanded. --overlay KIND draws what a\n"
-            "geometric planner builds from the map under it (polygons, visibility,\n"
-            "mesh, decomposition, voronoi), built here by the planners' own code.\n"
+            "--expansions the cells the search expanded. Cost options that shape the\n"
+            "planning grid (--robot_radius, --inflation_radius, --min_clearance)\n"
+            "draw the grid the planners see: inscribed cells, and costs in shades.\n"
+            "--overlay KIND draws what a geometric planner builds from the map under\n"
+            "it (polygons, visibility, mesh, decomposition, voronoi), built here by\n"
+            "the planners' own code.\n"
             "Exit code 3 when the plan found no path (the map is still drawn).",
     .flags = kRenderFlags,
     .run = Render,

@@ -237,12 +237,18 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  robot_radius_cells: float | None = None,
                  robot_radius_m: float | None = None,
                  min_clearance_m: float | None = None,
+                 inflation_radius_m: float | None = None,
+                 cost_scaling_factor: float | None = None,
                  simplify: bool = False) -> planner_service_pb2.PlanOptions:
     """The common PlanOptions; build the message yourself for the rest.
 
     min_clearance_m: grid planners prefer keeping this far from obstacles
     (cells nearer cost more; the response's min_clearance_m says how close
     the path came).
+    inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
+    grid planners: cells up to inflation_radius_m from a lethal cell, beyond
+    the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
+    robot radius)); the factor is per metre, unset means Nav2's 10.
     """
     if robot_radius_cells is not None and robot_radius_m is not None:
         raise ValueError("give robot_radius_cells or robot_radius_m, not both")
@@ -259,4 +265,8 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
         options.robot_radius_m = robot_radius_m
     if min_clearance_m is not None:
         options.min_clearance_m = min_clearance_m
+    if inflation_radius_m is not None:
+        options.inflation_radius_m = inflation_radius_m
+    if cost_scaling_factor is not None:
+        options.cost_scaling_factor = cost_scaling_factor
     return options
