@@ -116,6 +116,17 @@ absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
 absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
                                          const Grid& grid);
 
+// Nav2's inflation costs: query->inflation_radius_cells from
+// inflation_radius_cells as given or inflation_radius_m / resolution, capped
+// at the map's diagonal (0 when unset or 0: no inflation costs), and
+// query->cost_scaling_per_cell = cost_scaling_factor (per metre; unset:
+// Nav2's 10) * resolution. query->robot_radius_cells is not read: the
+// radius is compared with the one in `options`. INVALID_ARGUMENT naming the
+// field when the radius is negative or not finite, smaller than the robot
+// radius, or the factor is not finite and > 0.
+absl::Status DecodeInflationCost(const v1::PlanOptions& options, const Grid& grid,
+                                 PlanQuery* query);
+
 // Largest goal tolerance a request may ask for: the search for a substitute
 // goal runs on the gRPC thread and visits up to (2 * 1024 + 1)^2 cells.
 inline constexpr double kMaxGoalToleranceCells = 1024.0;

@@ -150,6 +150,13 @@ absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_op
       "min_clearance", options.min_clearance_m, options.min_clearance_cells,
       [&](double m) { plan_options->set_min_clearance_m(m); },
       [&](double c) { plan_options->set_min_clearance_cells(c); }));
+  PATHD_RETURN_IF_ERROR(SetDistance(
+      "inflation_radius", options.inflation_radius_m, options.inflation_radius_cells,
+      [&](double m) { plan_options->set_inflation_radius_m(m); },
+      [&](double c) { plan_options->set_inflation_radius_cells(c); }));
+  if (options.cost_scaling_factor.has_value()) {
+    plan_options->set_cost_scaling_factor(*options.cost_scaling_factor);
+  }
   return absl::OkStatus();
 }
 

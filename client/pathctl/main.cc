@@ -67,6 +67,14 @@ ABSL_FLAG(std::optional<double>, min_clearance, std::nullopt,
           "where the map allows (a cost, not a rule)");
 ABSL_FLAG(std::optional<double>, min_clearance_cells, std::nullopt,
           "plan, navigate, cost-to-go: the minimum clearance in cells");
+ABSL_FLAG(std::optional<double>, inflation_radius, std::nullopt,
+          "plan, navigate, cost-to-go, render: Nav2 inflation costs out to this "
+          "many metres from lethal cells (Nav2's default is 0.55)");
+ABSL_FLAG(std::optional<double>, inflation_radius_cells, std::nullopt,
+          "plan, navigate, cost-to-go, render: the inflation radius in cells");
+ABSL_FLAG(std::optional<double>, cost_scaling_factor, std::nullopt,
+          "plan, navigate, cost-to-go, render: Nav2's cost_scaling_factor, per "
+          "metre (default 10)");
 ABSL_FLAG(std::optional<double>, goal_tolerance, std::nullopt,
           "plan: substitute the nearest free cell within this many metres for "
           "a blocked goal (kinematic planners: end this close to the goal)");
@@ -235,6 +243,9 @@ int main(int argc, char** argv) {
   cost.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
   cost.min_clearance_m = absl::GetFlag(FLAGS_min_clearance);
   cost.min_clearance_cells = absl::GetFlag(FLAGS_min_clearance_cells);
+  cost.inflation_radius_m = absl::GetFlag(FLAGS_inflation_radius);
+  cost.inflation_radius_cells = absl::GetFlag(FLAGS_inflation_radius_cells);
+  cost.cost_scaling_factor = absl::GetFlag(FLAGS_cost_scaling_factor);
 
   pathctl::MapsOptions& maps = options.maps;
   maps.from = absl::GetFlag(FLAGS_from);

@@ -48,6 +48,9 @@ struct CostOptions {
   std::optional<double> robot_radius_cells;
   std::optional<double> min_clearance_m;
   std::optional<double> min_clearance_cells;
+  std::optional<double> inflation_radius_m;
+  std::optional<double> inflation_radius_cells;
+  std::optional<double> cost_scaling_factor;
 };
 
 // The robot's shape and motion (plan, batch, render): the kinematic

@@ -333,7 +333,8 @@ constexpr absl::string_view kPlanFlagNames[] = {
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
-    "lattice", "no_smooth"};
+    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 }  // namespace
 
@@ -344,6 +345,8 @@ const Command kPlanCommand = {
                 " [--max_expansions N] [--world] [--simplify]\n"
                 " [--robot_radius M | --robot_radius_cells C]\n"
                 " [--min_clearance M | --min_clearance_cells C]\n"
+                " [--inflation_radius M | --inflation_radius_cells C]\n"
+                " [--cost_scaling_factor K]\n"
                 " [--heuristic_weight W] [--lookahead N]\n"
                 " [--cost_to_go_file F] [--pf_* ...]\n"
                 " [--goal_tolerance M | --goal_tolerance_cells C]\n"

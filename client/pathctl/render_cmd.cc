@@ -16,6 +16,8 @@
 #include "client/pathctl/png_io.h"
 #include "client/pathctl/render.h"
 #include "core/geometry/structure.h"
+#include "core/map/inflation.h"
+#include "core/map/inflation_cost.h"
 #include "core/status_macros.h"
 
 namespace pathd::pathctl {
@@ -119,6 +121,39 @@ std::vector<std::vector<CellPoint>> OutlinesAlong(const v1::PlanResponse& respon
 
 Cell CoreCell(const v1::Cell& cell) { return Cell{cell.x(), cell.y()}; }
 
+// The grid the planners see for these options: `stored` shaped (robot
+// radius, Nav2 inflation costs, clearance costs) by the server's own core
+// function, with the options converted as the server decodes them
+// (server/convert.cc: metres / resolution, capped at the map's diagonal;
+// the cost scaling factor per metre times the resolution, unset 10). Drawn
+// here rather than fetched: the API has no call that returns a shaped grid,
+// and the same function on the same cells gives the same bytes.
+absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& options) {
+  const double diagonal = std::hypot(stored.width(), stored.height());
+  auto cells = [&](bool metres, double value) {
+    return std::min(metres ? value / stored.resolution() : value, diagonal);
+  };
+  using O = v1::PlanOptions;
+  const double robot = cells(options.robot_radius_case() == O::kRobotRadiusM,
+                             options.robot_radius_case() == O::kRobotRadiusM
+                                 ? options.robot_radius_m()
+                                 : options.robot_radius_cells());
+  const double inflation = cells(options.inflation_radius_case() == O::kInflationRadiusM,
+                                 options.inflation_radius_case() == O::kInflationRadiusM
+                                     ? options.inflation_radius_m()
+                                     : options.inflation_radius_cells());
+  const double clearance = cells(options.min_clearance_case() == O::kMinClearanceM,
+                                 options.min_clearance_case() == O::kMinClearanceM
+                                     ? options.min_clearance_m()
+                                     : options.min_clearance_cells());
+  const double factor = options.has_cost_scaling_factor() ? options.cost_scaling_factor()
+                                                          : kDefaultCostScalingFactor;
+  const GridShape shape = GridShape::Of(robot, inflation, factor * stored.resolution(),
+                                        clearance, options.unknown_is_free());
+  if (!shape.shaped()) return stored;
+  return ShapeGrid(stored, shape);
+}
+
 // `render NAME [--plan SX SY GX GY] (-o FILE.png | --ascii)`: GetMap, an
 // optional Plan, then the picture.
 int Render(CommandEnv& env, Args args) {
@@ -158,6 +193,12 @@ int Render(CommandEnv& env, Args args) {
                           args.subspan(1));
     if (!built.ok()) return env.Usage(built.status().message());
     request = *std::move(built);
+  }
+
+  // The cost options shape the drawn grid with or without a plan.
+  v1::PlanOptions cost_options;
+  if (absl::Status s = SetCostOptions(env.options().cost, &cost_options); !s.ok()) {
+    return env.Usage(s.message());
   }
 
   absl::StatusOr<Grid> grid = FetchGrid(env, args[0]);
@@ -207,6 +248,10 @@ int Render(CommandEnv& env, Args args) {
               : "");
     }
   }
+  // After the plan, so a bad option is reported by the server first, with
+  // its field's name.
+  grid = PlanningGridOf(*grid, cost_options);
+  if (!grid.ok()) return env.Usage(grid.status().message());
   if (!options.overlay.empty()) {
     absl::StatusOr<GeometricStructure> structure =
         DescribeStructure(options.overlay, *grid, env.options().cost.unknown_is_free);
@@ -246,7 +291,8 @@ constexpr absl::string_view kRenderFlags[] = {
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
-    "lattice", "no_smooth"};
+    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 }  // namespace
 
@@ -257,9 +303,12 @@ const Command kRenderCommand = {
                 " (-o FILE.png [--scale N] | --ascii) [--y_up] [--overlay KIND]",
     .help = "Draws map NAME as a PNG (-o) or as text (--ascii), and with --plan the\n"
             "path from (SX, SY) to (GX, GY), its start and goal, and with\n"
-            "--expansions the cells the search expanded. --overlay KIND draws what a\n"
-            "geometric planner builds from the map under it (polygons, visibility,\n"
-            "mesh, decomposition, voronoi), built here by the planners' own code.\n"
+            "--expansions the cells the search expanded. Cost options that shape the\n"
+            "planning grid (--robot_radius, --inflation_radius, --min_clearance)\n"
+            "draw the grid the planners see: inscribed cells, and costs in shades.\n"
+            "--overlay KIND draws what a geometric planner builds from the map under\n"
+            "it (polygons, visibility, mesh, decomposition, voronoi), built here by\n"
+            "the planners' own code.\n"
             "With a --footprint (or a robot radius) the robot's outline is drawn\n"
             "along the path, about one robot length apart.\n"
             "Exit code 3 when the plan found no path (the map is still drawn).",

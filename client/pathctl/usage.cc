@@ -234,6 +234,11 @@ cost options (plan, navigate, cost-to-go, check):
   --min_clearance M    prefer keeping M metres from obstacles: nearer cells
                        cost up to 252 (a preference, not a rule; not check)
   --min_clearance_cells C  the same in cells
+  --inflation_radius M Nav2 inflation costs: cells up to M metres from a lethal
+                       cell, beyond the robot radius, cost
+                       252 * exp(-K * (distance - robot radius)) (not check)
+  --inflation_radius_cells C  the same in cells
+  --cost_scaling_factor K  the decay K per metre (Nav2's, default 10)
 
 maps watch prints one line per map version: "version V updated: N cells in
 R rects: (x0,y0)-(x1,y1) ...", "version V resync: whole map WxH", "version V

@@ -137,6 +137,18 @@ class Grid {
   std::vector<uint8_t> cells_;
 };
 
+// An inclusive rectangle of cells, [x0, x1] x [y0, y1].
+struct CellRect {
+  int32_t x0 = 0;
+  int32_t y0 = 0;
+  int32_t x1 = -1;
+  int32_t y1 = -1;
+  // Every cell of `grid`.
+  static CellRect Of(const Grid& grid) {
+    return CellRect{0, 0, grid.width() - 1, grid.height() - 1};
+  }
+};
+
 // "(x, y)" for messages.
 std::string CellToString(Cell c);
 

@@ -264,7 +264,7 @@ grpc::ServerUnaryReactor* ServeIsPathValid(const PlanDeps& deps,
                                             SearchScratch&) -> Verdict {
     absl::StatusOr<std::shared_ptr<const Grid>> inflated =
         call.robot_radius_cells > 0.0
-            ? inflation->Get(call.snapshot->grid, call.robot_radius_cells)
+            ? inflation->Get(*call.snapshot, call.robot_radius_cells)
             : absl::StatusOr<std::shared_ptr<const Grid>>(call.snapshot->grid);
     if (!inflated.ok()) return {inflated.status(), "ERROR"};
     CheckPathOn(**inflated, call);

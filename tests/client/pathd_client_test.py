@@ -225,6 +225,23 @@ class RealServerTest(unittest.TestCase, PathChecks):
         shaped = self.client.plan("poses", start, goal, options=options)
         self.assertAlmostEqual(shaped.raw.robot_radius_m, 0.2)
 
+    def test_inflation_costs_are_sent(self):
+        self.make_map("inflate")
+        start, goal = Cell(1, 3), Cell(12, 4)
+        plain = self.client.plan("inflate", start, goal)
+        options = pathd_client.plan_options(inflation_radius_m=3.0,
+                                            cost_scaling_factor=0.5)
+        self.assertEqual(options.inflation_radius_m, 3.0)
+        self.assertEqual(options.cost_scaling_factor, 0.5)
+        inflated = self.client.plan("inflate", start, goal, options=options)
+        self.assertTrue(inflated.found)
+        # Around the wall's ends every path pays the inflation costs.
+        self.assertGreater(inflated.cost, plain.cost)
+        with self.assertRaises(pathd_client.InvalidArgumentError) as bad:
+            self.client.plan("inflate", start, goal, options=pathd_client.plan_options(
+                inflation_radius_m=3.0, cost_scaling_factor=0.0))
+        self.assertIn("options.cost_scaling_factor", bad.exception.details)
+
     def test_errors_carry_the_status(self):
         self.make_map("errors")
         with self.assertRaises(PathdError) as missing:

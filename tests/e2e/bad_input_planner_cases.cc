@@ -153,6 +153,32 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
       },
       StatusCode::INVALID_ARGUMENT, "goal (-5, 1) in cell coordinates is outside");
   plan_case(
+      "NaN inflation_radius_m",
+      [](P& r) { r.mutable_options()->set_inflation_radius_m(kNaN); },
+      StatusCode::INVALID_ARGUMENT, "options.inflation_radius_m");
+  plan_case(
+      "negative inflation_radius_cells",
+      [](P& r) { r.mutable_options()->set_inflation_radius_cells(-2); },
+      StatusCode::INVALID_ARGUMENT, "options.inflation_radius_cells");
+  plan_case(
+      "inflation_radius_cells smaller than the robot radius",
+      [](P& r) {
+        r.mutable_options()->set_robot_radius_cells(3);
+        r.mutable_options()->set_inflation_radius_cells(2);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.inflation_radius_cells 2 is smaller");
+  plan_case(
+      "cost_scaling_factor 0",
+      [](P& r) {
+        r.mutable_options()->set_inflation_radius_cells(4);
+        r.mutable_options()->set_cost_scaling_factor(0);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.cost_scaling_factor");
+  plan_case(
+      "infinite cost_scaling_factor",
+      [](P& r) { r.mutable_options()->set_cost_scaling_factor(kInf); },
+      StatusCode::INVALID_ARGUMENT, "options.cost_scaling_factor");
+  plan_case(
       "goal_tolerance_cells 1e9",
       [](P& r) { r.mutable_options()->set_goal_tolerance_cells(1e9); },
       StatusCode::INVALID_ARGUMENT, "the limit is 1024 cells");
@@ -290,6 +316,13 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
         "open with unknown connectivity",
         [=, this] { return Navigate({NavigateOpen(p)}); },
         StatusCode::INVALID_ARGUMENT, "unknown connectivity 3");
+    p = GoodPlan();
+    p.mutable_options()->set_robot_radius_m(2.0);
+    p.mutable_options()->set_inflation_radius_m(1.0);
+    nav(
+        "open with an inflation radius under the robot radius",
+        [=, this] { return Navigate({NavigateOpen(p)}); },
+        StatusCode::INVALID_ARGUMENT, "options.inflation_radius_m 1 is smaller");
   }
   nav(
       "pose off the map",
@@ -419,6 +452,20 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
         static_cast<v1::Connectivity>(5));
     field("unknown connectivity 5", request, StatusCode::INVALID_ARGUMENT,
           "unknown connectivity 5");
+    request = Field();
+    request.mutable_options()->set_inflation_radius_m(-0.5);
+    field("negative inflation_radius_m", request, StatusCode::INVALID_ARGUMENT,
+          "options.inflation_radius_m");
+    request = Field();
+    request.mutable_options()->set_inflation_radius_cells(3);
+    request.mutable_options()->set_cost_scaling_factor(kNaN);
+    field("NaN cost_scaling_factor", request, StatusCode::INVALID_ARGUMENT,
+          "options.cost_scaling_factor");
+    request = Field();
+    request.mutable_options()->set_inflation_radius_cells(3);
+    request.mutable_options()->set_cost_weight(0);
+    field("inflation costs with cost_weight 0", request, StatusCode::INVALID_ARGUMENT,
+          "options.inflation_radius_m/_cells");
   }
   field("window width 0", Window(0, 0, 0, 4), StatusCode::INVALID_ARGUMENT,
         "window.width 0 must be > 0");

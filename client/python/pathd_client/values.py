@@ -264,6 +264,8 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  robot_radius_cells: float | None = None,
                  robot_radius_m: float | None = None,
                  min_clearance_m: float | None = None,
+                 inflation_radius_m: float | None = None,
+                 cost_scaling_factor: float | None = None,
                  simplify: bool = False,
                  footprint_m: list[tuple[float, float]] | None = None,
                  min_turning_radius_m: float | None = None,
@@ -283,6 +285,10 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     motion_model ("dubins", "reeds_shepp", "differential",
     "omnidirectional"), goal_yaw_tolerance (radians), reverse_penalty,
     lattice and smooth; the others plan for its inscribed radius.
+    inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
+    grid planners: cells up to inflation_radius_m from a lethal cell, beyond
+    the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
+    robot radius)); the factor is per metre, unset means Nav2's 10.
     """
     if robot_radius_cells is not None and robot_radius_m is not None:
         raise ValueError("give robot_radius_cells or robot_radius_m, not both")
@@ -316,4 +322,8 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     options.lattice = lattice
     if smooth is not None:
         options.smooth = smooth
+    if inflation_radius_m is not None:
+        options.inflation_radius_m = inflation_radius_m
+    if cost_scaling_factor is not None:
+        options.cost_scaling_factor = cost_scaling_factor
     return options
