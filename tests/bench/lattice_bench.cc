@@ -3,8 +3,9 @@
 //      aisles, pallets) for a car-like footprint, per motion model, against
 //      grid A*'s length for a point robot on the same map;
 //  (2) on Reeds-Shepp-like queries on an empty map: pose to pose, against
-//      the exact shortest Reeds-Shepp (Dubins) curve length from OMPL, which
-//      is the optimum there.
+//      the exact shortest Reeds-Shepp (Dubins) curve length
+//      (core/kinematics/curves.h: OMPL's Reeds-Shepp curves, its Dubins
+//      formulas), which is the optimum there.
 // Prints markdown tables; docs/performance.md records them with the command.
 //
 //   lattice_bench [--queries 50] [--seed 7] [--models reeds_shepp,dubins,...]
@@ -24,13 +25,12 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
+#include "core/kinematics/curves.h"
 #include "core/kinematics/footprint.h"
 #include "core/kinematics/vehicle.h"
 #include "core/map/grid.h"
 #include "core/planners/kinematic/state_lattice.h"
 #include "core/search/registry.h"
-#include "ompl/base/spaces/DubinsStateSpace.h"
-#include "ompl/base/spaces/ReedsSheppStateSpace.h"
 
 ABSL_FLAG(int32_t, queries, 50, "queries per table row");
 ABSL_FLAG(uint32_t, seed, 7, "random seed of the map's pallets and the queries");
@@ -106,32 +106,13 @@ void PrintRow(const std::string& label, const Figures& f) {
               f.ratio_n ? f.ratio / f.ratio_n : 0.0);
 }
 
-double CurveLength(const pathd::Pose& a, const pathd::Pose& b, double radius, bool reverse) {
-  std::unique_ptr<ompl::base::SE2StateSpace> space;
-  if (reverse) {
-    space = std::make_unique<ompl::base::ReedsSheppStateSpace>(radius);
-  } else {
-    space = std::make_unique<ompl::base::DubinsStateSpace>(radius);
-  }
-  ompl::base::State* s = space->allocState();
-  ompl::base::State* t = space->allocState();
-  s->as<ompl::base::SE2StateSpace::StateType>()->setXY(a.x, a.y);
-  s->as<ompl::base::SE2StateSpace::StateType>()->setYaw(a.yaw);
-  t->as<ompl::base::SE2StateSpace::StateType>()->setXY(b.x, b.y);
-  t->as<ompl::base::SE2StateSpace::StateType>()->setYaw(b.yaw);
-  const double d = space->distance(s, t);
-  space->freeState(s);
-  space->freeState(t);
-  return d;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "lattice_bench [--queries N] [--seed S] [--models reeds_shepp,dubins,differential,"
       "omnidirectional]\nstate_lattice on a 1000 x 1000 warehouse-like map at 0.05 m and on "
-      "Reeds-Shepp-like queries against OMPL's curve lengths.");
+      "Reeds-Shepp-like queries against the shortest curves' lengths.");
   absl::ParseCommandLine(argc, argv);
   const int32_t queries = absl::GetFlag(FLAGS_queries);
   std::mt19937 rng(absl::GetFlag(FLAGS_seed));
@@ -233,11 +214,11 @@ int main(int argc, char** argv) {
   }
 
   // Reeds-Shepp-like queries: an empty 400 x 400 map (20 m), poses within
-  // 2 to 8 m of each other; the obstacle-free optimum is OMPL's curve.
+  // 2 to 8 m of each other; the obstacle-free optimum is the shortest curve.
   const pathd::Grid open_map = pathd::Grid::Create(400, 400).value();
-  std::printf("\n## state_lattice against OMPL's Reeds-Shepp and Dubins curves (empty map)\n\n");
+  std::printf("\n## state_lattice against the shortest Reeds-Shepp and Dubins curves (empty map)\n\n");
   std::printf("same car and radius; %d random pose pairs 2-8 m apart on an empty 20 m map; "
-              "len/curve is the path length over the exact shortest curve's (OMPL).\n\n",
+              "len/curve is the path length over the exact shortest curve's.\n\n",
               queries);
   std::printf("| motion model | found | p50 ms | p95 ms | max ms | p50 CPU ms | expansions | "
               "length m | len/curve |\n|---|---|---|---|---|---|---|---|---|\n");
@@ -285,8 +266,8 @@ int main(int argc, char** argv) {
         if (!r->found()) continue;
         ++f.found;
         f.length_m += r->length * kResolution;
-        f.ratio += r->length /
-                   CurveLength(a, b, 10.0, model == pathd::MotionModel::kReedsShepp);
+        f.ratio += r->length / pathd::ShortestCurveLength(
+                                   a, b, 10.0, model == pathd::MotionModel::kReedsShepp);
         ++f.ratio_n;
       }
       PrintRow(std::string(pathd::MotionModelName(model)) +

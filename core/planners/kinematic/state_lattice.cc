@@ -17,9 +17,12 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/kinematics/curves.h"
 #include "core/kinematics/footprint.h"
 #include "core/kinematics/lattice.h"
+#include "core/kinematics/obstacle_heuristic.h"
 #include "core/kinematics/pose.h"
+#include "core/kinematics/pose_path.h"
 #include "core/kinematics/vehicle.h"
 #include "core/map/cost_model.h"
 #include "core/planners/planners.h"
@@ -27,8 +30,6 @@
 #include "core/search/endpoints.h"
 #include "core/search/grid_planner.h"
 #include "core/status_macros.h"
-#include "ompl/base/spaces/DubinsStateSpace.h"
-#include "ompl/base/spaces/ReedsSheppStateSpace.h"
 
 namespace pathd {
 namespace {
@@ -138,65 +139,22 @@ void Drive(int steer, double radius, double length, std::vector<Pose>* poses) {
 }
 
 // The shortest car curve from `from` to `to` (Dubins 1957 forward only, or
-// Reeds & Shepp 1990 both ways) at `radius`, from OMPL, as one Motion per
-// segment. The hybrid A* planner's curves (core/kinematics/curves.h on its
-// branch) are the same curves; the two are to become one.
+// Reeds & Shepp 1990 both ways) at `radius` (core/kinematics/curves.h, the
+// curves hybrid_astar expands with), as one Motion per segment.
 std::vector<Motion> ShortestCarCurve(const Pose& from, const Pose& to, double radius,
                                      bool reverse) {
-  struct Segment {
-    int steer;
-    double length;  // cells, negative backwards
-  };
-  std::vector<Segment> segments;
-  if (reverse) {
-    ompl::base::ReedsSheppStateSpace space(radius);
-    ompl::base::State* a = space.allocState();
-    ompl::base::State* b = space.allocState();
-    a->as<ompl::base::SE2StateSpace::StateType>()->setXY(from.x, from.y);
-    a->as<ompl::base::SE2StateSpace::StateType>()->setYaw(from.yaw);
-    b->as<ompl::base::SE2StateSpace::StateType>()->setXY(to.x, to.y);
-    b->as<ompl::base::SE2StateSpace::StateType>()->setYaw(to.yaw);
-    const auto path = space.reedsShepp(a, b);
-    space.freeState(a);
-    space.freeState(b);
-    for (int i = 0; i < 5; ++i) {
-      const auto type = path.type_[i];
-      if (type == ompl::base::ReedsSheppStateSpace::RS_NOP || path.length_[i] == 0.0) continue;
-      segments.push_back(
-          {type == ompl::base::ReedsSheppStateSpace::RS_LEFT
-               ? 1
-               : (type == ompl::base::ReedsSheppStateSpace::RS_RIGHT ? -1 : 0),
-           path.length_[i] * radius});
-    }
-  } else {
-    ompl::base::DubinsStateSpace space(radius);
-    ompl::base::State* a = space.allocState();
-    ompl::base::State* b = space.allocState();
-    a->as<ompl::base::SE2StateSpace::StateType>()->setXY(from.x, from.y);
-    a->as<ompl::base::SE2StateSpace::StateType>()->setYaw(from.yaw);
-    b->as<ompl::base::SE2StateSpace::StateType>()->setXY(to.x, to.y);
-    b->as<ompl::base::SE2StateSpace::StateType>()->setYaw(to.yaw);
-    const auto path = space.dubins(a, b);
-    space.freeState(a);
-    space.freeState(b);
-    for (int i = 0; i < 3; ++i) {
-      if (path.length_[i] == 0.0) continue;
-      const auto type = path.type_[i];
-      segments.push_back({type == ompl::base::DubinsStateSpace::DUBINS_LEFT
-                              ? 1
-                              : (type == ompl::base::DubinsStateSpace::DUBINS_RIGHT ? -1 : 0),
-                          path.length_[i] * radius});
-    }
-  }
+  const Curve curve = ShortestCurve(from, to, radius, reverse);
   std::vector<Motion> out;
   Pose at = from;
-  for (const Segment& s : segments) {
+  for (int32_t i = 0; i < curve.count; ++i) {
+    const CurveSegment& segment = curve.segments[i];
+    if (segment.length == 0.0) continue;
     Motion m;
     m.poses.push_back(at);
-    Drive(s.steer, radius, s.length, &m.poses);
-    m.length = std::fabs(s.length);
-    m.reverse = s.length < 0.0;
-    m.turns = s.steer != 0;
+    Drive(static_cast<int>(segment.steer), radius, segment.length, &m.poses);
+    m.length = std::fabs(segment.length);
+    m.reverse = segment.length < 0.0;
+    m.turns = segment.steer != Steer::kStraight;
     m.left = NormalizeAngle(m.poses.back().yaw - m.poses.front().yaw) > 0.0;
     at = m.poses.back();
     out.push_back(std::move(m));
@@ -355,112 +313,6 @@ bool MotionFree(const MotionChecker& checker, const std::vector<Pose>& poses, bo
   return true;
 }
 
-// ---- The heuristic field ----
-
-// The holonomic cost-to-go with obstacles (Dolgov et al., "Path Planning for
-// Autonomous Vehicles in Unknown Semi-structured Environments", 2010): from
-// each cell's centre to the goal cell's, by Dijkstra over 8 moves, a
-// diagonal allowed when a continuous path passes (one of its side cells is
-// open), each move's length times the entered cell's factor. A small,
-// self-contained version so the lead can merge it with hybrid A*'s
-// (core/kinematics/obstacle_heuristic.h on that branch).
-struct LatticeHeuristicField {
-  int32_t width = 0;
-  std::vector<float> cost;
-  double At(Cell c) const {
-    return cost[static_cast<size_t>(c.y) * static_cast<size_t>(width) + static_cast<size_t>(c.x)];
-  }
-  size_t bytes() const { return sizeof(*this) + cost.capacity() * sizeof(float); }
-};
-
-// Cells whose centre is nearer than `blocked_within` to an obstacle cell's
-// centre are closed too: a pose in such a cell is within the footprint's
-// inscribed radius of the obstacle (blocked_within is that radius less half
-// a cell's diagonal), so no free pose lies there. `distance` is the obstacle
-// distance field (ObstacleDistanceField) when blocked_within > 0.
-std::shared_ptr<const LatticeHeuristicField> BuildLatticeHeuristicField(
-    const Grid& grid, Cell goal, bool unknown_is_free, double cost_penalty, double blocked_within,
-    const float* distance, DerivedStop& stop) {
-  auto field = std::make_shared<LatticeHeuristicField>();
-  field->width = grid.width();
-  field->cost.assign(grid.size(), std::numeric_limits<float>::infinity());
-  const auto open_cell = [&](int32_t x, int32_t y) {
-    return grid.InBounds(x, y) && Traversable(grid.cost(x, y), unknown_is_free) &&
-           (blocked_within <= 0.0 || distance[grid.Index(x, y)] >= blocked_within);
-  };
-  using Item = std::pair<float, uint32_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
-  field->cost[grid.Index(goal)] = 0.0f;
-  open.push({0.0f, static_cast<uint32_t>(grid.Index(goal))});
-  int64_t pops = 0;
-  while (!open.empty()) {
-    const auto [d, i] = open.top();
-    open.pop();
-    if (d > field->cost[i]) continue;
-    if ((++pops & 16383) == 0 && stop.Stopped()) return nullptr;
-    const Cell c = grid.CellAt(i);
-    // The field runs from the goal outwards: moving v -> u costs the factor
-    // of the cell entered, u's neighbour v here, so the factor is v's.
-    const uint8_t vcost = grid.cost(c);
-    const double factor =
-        1.0 + cost_penalty * (vcost <= kMaxTraversableCost ? vcost : 0) / 252.0;
-    for (const Move& move : kMoves) {
-      const int32_t nx = c.x + move.dx;
-      const int32_t ny = c.y + move.dy;
-      if (!open_cell(nx, ny)) continue;
-      if (move.dx != 0 && move.dy != 0 && !open_cell(c.x + move.dx, c.y) &&
-          !open_cell(c.x, c.y + move.dy)) {
-        continue;
-      }
-      const float nd = d + static_cast<float>(move.length * factor);
-      const size_t j = grid.Index(nx, ny);
-      if (nd < field->cost[j]) {
-        field->cost[j] = nd;
-        open.push({nd, static_cast<uint32_t>(j)});
-      }
-    }
-  }
-  return field;
-}
-
-std::shared_ptr<const LatticeHeuristicField> GetLatticeHeuristicField(
-    DerivedStore* store, const Grid& grid, Cell goal, bool unknown_is_free, double cost_penalty,
-    double blocked_within, std::shared_ptr<const std::vector<float>> distance, DerivedStop& stop) {
-  const std::string key = absl::StrFormat(
-      "state_lattice_heuristic goal=%d,%d unknown_is_free=%d cost_penalty=%.17g "
-      "blocked_within=%.17g",
-      goal.x, goal.y, unknown_is_free ? 1 : 0, cost_penalty, blocked_within);
-  return GetDerived<LatticeHeuristicField>(
-      store, grid, key,
-      absl::StrFormat("the holonomic cost-to-go of goal (%d, %d) on this map version", goal.x,
-                      goal.y),
-      stop,
-      [goal, unknown_is_free, cost_penalty, blocked_within, distance](const Grid& g,
-                                                                       DerivedStop& s) {
-        return BuildLatticeHeuristicField(g, goal, unknown_is_free, cost_penalty, blocked_within,
-                                          distance->data(), s);
-      },
-      [](const LatticeHeuristicField&, const Grid&, absl::Span<const Cell>, DerivedStop&) {
-        return std::shared_ptr<const LatticeHeuristicField>();
-      },
-      [](const LatticeHeuristicField& f) { return f.bytes(); });
-}
-
-std::shared_ptr<const std::vector<float>> GetObstacleDistanceField(DerivedStore* store,
-                                                                   const Grid& grid,
-                                                                   bool unknown_is_free) {
-  return GetDerived<std::vector<float>>(
-      store, grid,
-      absl::StrFormat("obstacle_distance unknown_is_free=%d", unknown_is_free ? 1 : 0),
-      [unknown_is_free](const Grid& g) {
-        return std::make_shared<const std::vector<float>>(ObstacleDistanceField(g, unknown_is_free));
-      },
-      [](const std::vector<float>&, const Grid&, absl::Span<const Cell>) {
-        return std::shared_ptr<const std::vector<float>>();
-      },
-      [](const std::vector<float>& v) { return v.capacity() * sizeof(float); });
-}
-
 // ---- Validation ----
 
 absl::Status ValidateQuery(const PlanRequest& request, const KinematicQuery& q) {
@@ -601,7 +453,7 @@ class LatticeSearch {
  public:
   LatticeSearch(const Grid& grid, const PlanRequest& request, const KinematicQuery& q,
                 const ControlSet& set, const StopCondition& stop, const StateLatticeOptions& options,
-                const MotionChecker& checker, const LatticeHeuristicField* field, bool goal_free)
+                const MotionChecker& checker, const ObstacleHeuristic* field, bool goal_free)
       : grid_(grid),
         request_(request),
         q_(q),
@@ -739,6 +591,13 @@ class LatticeSearch {
     clear_beyond_ = checker_.coarse->footprint().circumscribed_radius() +
                     checker_.coarse->options().margin_cells + kSqrt2 + 1e-6;
     car_radius_ = std::max(set_.turning_radius_cells(), q_.min_turning_radius_cells);
+    // The curve heuristic applies to cars aiming at a heading; the table's
+    // rounding (0.1 radius) and the goal tolerances come off it.
+    curve_heuristic_ = !rotates_ && q_.goal_tolerance_yaw < kPi &&
+                       (q_.motion == MotionModel::kDubins || q_.motion == MotionModel::kReedsShepp);
+    curve_reach_ = (kCurveTableRadii - 1.0) * car_radius_;
+    curve_slack_ = 0.1 * car_radius_ + q_.goal_tolerance_cells +
+                   car_radius_ * q_.goal_tolerance_yaw;
     analytic_reach_ = std::max(60.0, 6.0 * car_radius_);
   }
 
@@ -765,6 +624,12 @@ class LatticeSearch {
         // diagonal from theirs.
         h = std::max(h, f - kSqrt2 - tol);
       }
+    }
+    // Near the goal, a car's shortest curve to it (Nav2's distance
+    // heuristic, from hybrid A*'s shared table: within 0.1 radius of the
+    // exact length) bounds what turning to its heading costs.
+    if (curve_heuristic_ && dx * dx + dy * dy < curve_reach_ * curve_reach_) {
+      h = std::max(h, TabledCurveLength(p, q_.goal, car_radius_, reverse_, 72) - curve_slack_);
     }
     return std::max(0.0, h) * request_.heuristic_weight;
   }
@@ -1068,10 +933,7 @@ class LatticeSearch {
       result->cost += MotionCost(grid_, m, previous, q_);
       previous = &m;
     }
-    for (const PathPose& p : result->poses) {
-      const Cell c = p.pose.cell();
-      if (result->path.empty() || !(result->path.back() == c)) result->path.push_back(c);
-    }
+    result->path = PathCells(grid_, result->poses, request_.cost.unknown_is_free);
   }
 
   const Grid& grid_;
@@ -1081,7 +943,7 @@ class LatticeSearch {
   const StopCondition& stop_;
   const StateLatticeOptions& options_;
   const MotionChecker& checker_;
-  const LatticeHeuristicField* field_;
+  const ObstacleHeuristic* field_;
   const bool goal_free_;
 
   double bin_ = 0.0;
@@ -1100,6 +962,9 @@ class LatticeSearch {
   // same cells over and over.
   absl::flat_hash_map<uint64_t, bool> verdicts_;
   double car_radius_ = 0.0;
+  bool curve_heuristic_ = false;
+  double curve_reach_ = 0.0;
+  double curve_slack_ = 0.0;
   double analytic_reach_ = 0.0;
   Pose anchor_;
   std::vector<Root> roots_;
@@ -1141,7 +1006,13 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
   const absl::Time started = absl::Now();
   std::shared_ptr<const KinematicQuery> query = request.kinematic;
   if (query == nullptr) {
-    query = std::make_shared<const KinematicQuery>(DefaultKinematicQuery(request.start, request.goal));
+    // A grid request: the default robot, its cost penalty the request's
+    // cost weight (so cost_weight means the same to every planner, as for
+    // hybrid_astar).
+    auto defaults =
+        std::make_shared<KinematicQuery>(DefaultKinematicQuery(request.start, request.goal));
+    defaults->cost_penalty = request.cost.cost_weight;
+    query = std::move(defaults);
   }
   const KinematicQuery& q = *query;
   PATHD_RETURN_IF_ERROR(ValidateQuery(request, q));
@@ -1164,7 +1035,7 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
   }
   const bool unknown_is_free = request.cost.unknown_is_free;
   const std::shared_ptr<const std::vector<float>> distance =
-      GetObstacleDistanceField(request.derived, grid, unknown_is_free);
+      GetObstacleDistance(request.derived, grid, unknown_is_free);
   MotionChecker checker;
   checker.grid = &grid;
   checker.unknown_is_free = unknown_is_free;
@@ -1192,14 +1063,17 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
             q.goal.x, q.goal.y, q.goal.yaw)),
         EndpointFault::kGoalBlocked);
   }
-  std::shared_ptr<const LatticeHeuristicField> field;
+  std::shared_ptr<const ObstacleHeuristic> field;
   if (options.obstacle_heuristic && Traversable(grid.cost(request.goal), unknown_is_free)) {
     DerivedStop derived_stop(stop);
+    ObstacleHeuristicParams params;
+    params.goal = request.goal;
+    params.unknown_is_free = unknown_is_free;
+    params.cost_penalty = q.cost_penalty;
     // No free pose lies in a cell whose centre is nearer an obstacle's than
     // the footprint's inscribed radius less half a cell's diagonal.
-    const double blocked_within = q.footprint->footprint().inscribed_radius() - kSqrt2 / 2.0;
-    field = GetLatticeHeuristicField(request.derived, grid, request.goal, unknown_is_free,
-                                     q.cost_penalty, blocked_within, distance, derived_stop);
+    params.blocked_within = q.footprint->footprint().inscribed_radius() - kSqrt2 / 2.0;
+    field = GetObstacleHeuristic(request.derived, grid, params, derived_stop);
     if (field == nullptr) return StoppedWhileDeriving(derived_stop);
   }
   LatticeSearch search(grid, request, q, *set, stop, options, checker, field.get(), goal_free);

@@ -22,9 +22,9 @@
 //   free connection from an expanded state to the exact goal pose, tried
 //   every max(1, distance / 3.5) expansions within 60 cells (or six turning
 //   radii) of the goal. The connection is the shortest Dubins or
-//   Reeds-Shepp curve (OMPL) at the set's turning radius for car-like
-//   robots; turn, straight, turn for a differential robot; one straight move
-//   while turning for an omnidirectional one.
+//   Reeds-Shepp curve (core/kinematics/curves.h) at the set's turning radius
+//   for car-like robots; turn, straight, turn for a differential robot; one
+//   straight move while turning for an omnidirectional one.
 // - Motions are collision-checked at samples dense enough, with a footprint
 //   grown by kStateLatticeMargin, that a free verdict covers the whole motion
 //   (every point of the footprint moves at most the distance driven plus its
@@ -38,13 +38,15 @@
 //   the primitive before), times reverse_penalty when it reverses; a turn in
 //   place costs kStateLatticeRotationPenalty (Nav2's rotation_penalty) per
 //   heading, times the cell's cost factor.
-// - The heuristic is the larger of the straight-line distance and the
-//   holonomic cost-to-go with obstacles (a Dijkstra field from the goal
-//   cell over the 8-connected grid, closed where the footprint's inscribed
-//   disc cannot fit, at most 8% above the true distance: paths may cost that
-//   much more than the lattice optimum), times
-//   PlanRequest::heuristic_weight (weighted A*: at most that factor more
-//   again; the search then expands far fewer states, docs/performance.md).
+// - The heuristic is the largest of the straight-line distance, the
+//   holonomic cost-to-go with obstacles (core/kinematics/obstacle_heuristic.h:
+//   a Dijkstra field from the goal cell over the 8-connected grid, closed
+//   where the footprint's inscribed disc cannot fit, up to 8% above the true
+//   distance, so paths may cost that much more than the lattice optimum)
+//   and, for a car aiming at a heading near the goal, the shortest curve's
+//   length (curves.h's table); times PlanRequest::heuristic_weight (weighted
+//   A*: at most that factor more again, for far fewer expansions,
+//   docs/performance.md).
 #ifndef PATHD_CORE_PLANNERS_KINEMATIC_STATE_LATTICE_H_
 #define PATHD_CORE_PLANNERS_KINEMATIC_STATE_LATTICE_H_
 

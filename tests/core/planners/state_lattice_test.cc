@@ -85,7 +85,8 @@ testing::KinematicCheck CheckFor(const KinematicQuery& q, bool unknown_is_free) 
 }
 
 // The checker's verdict, and the result's own consistency: poses at most
-// half a cell apart, `path` their cells without repeats in a row, `length`
+// half a cell apart, `path` a chain of edge neighbours through their cells,
+// `length`
 // the sum of the pieces' lengths: a piece whose chord points along the
 // heading halfway is an arc (its length the arc's), any other its chord.
 // An omnidirectional robot's straight move that turns symmetrically about
@@ -122,7 +123,21 @@ std::string CheckResult(const Grid& grid, const PlanResult& r, const KinematicQu
     length += arc ? chord * (std::fabs(turn) / 2) / std::sin(std::fabs(turn) / 2) : chord;
     chords += chord;
   }
-  if (cells != r.path) return "path is not the cells of the poses";
+  // `path`: edge neighbours one after the other, through the poses' cells
+  // in order.
+  for (size_t i = 1; i < r.path.size(); ++i) {
+    if (std::abs(r.path[i].x - r.path[i - 1].x) + std::abs(r.path[i].y - r.path[i - 1].y) != 1) {
+      return absl::StrCat("path cells ", i - 1, " and ", i, " are not edge neighbours");
+    }
+  }
+  size_t at = 0;
+  for (const Cell& c : cells) {
+    while (at < r.path.size() && !(r.path[at] == c)) ++at;
+    if (at == r.path.size()) return "path does not pass the poses' cells in order";
+  }
+  if (r.path.empty() || !(r.path.front() == cells.front()) || !(r.path.back() == cells.back())) {
+    return "path does not run from the first pose's cell to the last's";
+  }
   const bool omni = q.motion == MotionModel::kOmnidirectional;
   if (omni ? (r.length < chords - 1e-6 * (1 + length) || r.length > length + 1e-6 * (1 + length))
            : std::fabs(length - r.length) > 1e-6 * (1 + length)) {
