@@ -24,6 +24,9 @@ SERVE_PACKAGES=(
   # libcgal-dev: the navigation mesh's constrained Delaunay triangulation
   # (core/geometry/navmesh.cc; header-only, brings GMP and MPFR).
   libcgal-dev
+  # libompl-dev: Dubins and Reeds-Shepp curves for the kinematic planners
+  # (core/kinematics); Eigen comes with it and serves their geometry.
+  libompl-dev libeigen3-dev
 )
 
 TEST_PACKAGES=(

@@ -87,7 +87,9 @@ PathdServer::PathdServer(ServerOptions options)
       store_(options_.max_map_cells),
       inflation_(options_.inflation_cache_entries),
       cache_(inflation_, options_.cache_bytes),
-      derived_(options_.derived_cache_bytes) {}
+      derived_(options_.derived_cache_bytes) {
+  store_.SetHonourOriginYaw(options_.honour_origin_yaw);
+}
 
 PathdServer::~PathdServer() { Shutdown(); }
 

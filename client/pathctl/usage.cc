@@ -157,9 +157,10 @@ a usage error naming the flag (e.g. plan ... -o x.png):
                        cost-to-go field as CSV (one row per line, inf =
                        unreachable); cost-to-go prints a table otherwise
   --window X,Y,W,H     cost-to-go: only columns X..X+W-1, rows Y..Y+H-1
-  --goal_tolerance C   plan: when the goal cell is blocked, plan to the nearest
-                       free cell within C cells and say so (up to 1024 cells)
-  --goal_tolerance_m M plan: the same in metres
+  --goal_tolerance M   plan: when the goal cell is blocked, plan to the nearest
+                       free cell within M metres and say so (up to 1024 cells);
+                       kinematic planners: end within M metres of the goal
+  --goal_tolerance_cells C  plan: the same in cells
   --via X,Y[;X,Y...]   plan: visit these points in order before the goal (up to
                        256; metres with --world); one leg per point
   --allow_partial      plan: with --via, when a leg finds no path print the path
@@ -207,6 +208,22 @@ a usage error naming the flag (e.g. plan ... -o x.png):
   --occupied_thresh T, --free_thresh T, --negate
                        maps import of a .png: map_server's thresholds (default
                        0.65 and 0.196) and colour inversion; see below
+
+robot options (plan, batch, render):
+  --footprint "[[x,y],...]"  the robot's outline in metres, x forward, y left
+                       (Nav2's footprint syntax); kinematic planners check it
+                       at every pose, the others plan for its inscribed radius
+  --footprint_cells "[[x,y],...]"  the same in cells
+  --min_turning_radius M  kinematic planners: smallest turning radius (0.4 m)
+  --min_turning_radius_cells C  the same in cells
+  --motion_model MODEL dubins (forward only, the default), reeds_shepp (with
+                       reversing), differential, omnidirectional
+  --start_yaw R, --goal_yaw R  headings in radians (unset goal heading: any)
+  --goal_yaw_tolerance R  end within R radians of --goal_yaw
+  --reverse_penalty P, --change_penalty P, --non_straight_penalty P,
+  --cost_penalty P     Nav2 Smac's penalties (defaults 2, 0, 1.2, 2)
+  --lattice NAME|FILE  state_lattice's control set
+  --no_smooth          return kinematic paths unsmoothed
 
 cost options (plan, navigate, cost-to-go, check):
   --connectivity N     4 or 8 (default 8)

@@ -112,7 +112,52 @@ absl::Status CheckCostShaping(const PlanQuery& query) {
   return absl::OkStatus();
 }
 
+namespace {
+
+bool IsKinematic(std::string_view planner) {
+  const Planner* p = PlannerRegistry::Default().Get(planner);
+  return p != nullptr && p->traits().kinematic;
+}
+
+// The rules of a kinematic planner's query: it plans between exact poses for
+// a footprint, so the grid planners' goal substitution, radius, via legs and
+// simplification do not apply (the decoder folds the radius into the
+// footprint and the tolerance into the kinematic query).
+absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
+  if (!query->via.empty()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "via: planner %s plans between poses and does not plan through via "
+        "points; plan each leg as its own request",
+        query->planner));
+  }
+  if (query->simplify) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.simplify: planner %s returns motions the robot can drive; "
+        "simplifying would cut its turns (options.smooth smooths them within "
+        "the footprint and the turning radius)",
+        query->planner));
+  }
+  if (query->request.want_cost_to_go) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.return_cost_to_go: planner %s searches poses, not cells, and "
+        "has no cost-to-go field",
+        query->planner));
+  }
+  if (query->robot_radius_cells > 0.0 || query->goal_tolerance_cells > 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "planner %s takes the robot's shape as a footprint and the goal "
+        "tolerance in its kinematic query (PlanRequest::kinematic), not as a "
+        "robot radius or a blocked-goal tolerance",
+        query->planner));
+  }
+  PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, query->request));
+  return CheckCostShaping(*query);
+}
+
+}  // namespace
+
 absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query) {
+  if (IsKinematic(query->planner)) return CheckKinematicQuery(stored, query);
   PlanRequest& request = query->request;
   // Substituted before anything keys on the goal, so every planner (and a
   // stateful search's cache entry) sees the cell actually planned to.

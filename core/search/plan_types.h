@@ -5,11 +5,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "absl/time/time.h"
+#include "core/kinematics/pose.h"
+#include "core/kinematics/vehicle.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/search/derived.h"
@@ -100,6 +103,10 @@ struct PlanRequest {
   // (core/search/derived.h) build it for this query. The server passes its
   // per-version cache.
   DerivedStore* derived = nullptr;
+  // Kinematic planners (PlannerTraits::kinematic): the exact poses, the
+  // footprint and the motion model; start and goal above are the cells of
+  // its poses. Null for every other planner.
+  std::shared_ptr<const KinematicQuery> kinematic;
 
   // A request with every option at its default.
   static PlanRequest Between(Cell start, Cell goal, CostParams cost = {}) {
@@ -143,6 +150,12 @@ struct PlanResult {
   // a corner and need not be legal moves), any_angle is false, and length
   // and cost are the polyline's. Empty for every other planner.
   std::vector<CellPoint> polyline;
+  // Kinematic planners: the path as poses with headings, in cell
+  // coordinates, from the start pose to the pose that meets the goal, close
+  // enough together (at most a cell apart) to be followed as they are; `path`
+  // lists the cells of those poses, deduplicated, and length is the
+  // poses' arc length. Empty for every other planner.
+  std::vector<PathPose> poses;
   // The smallest clearance, in cells, of the path's cells. Plans with a
   // minimum clearance (PlanQuery::min_clearance_cells): the Euclidean
   // distance from a cell's centre to the nearest blocked or off-map cell's

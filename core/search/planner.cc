@@ -7,6 +7,7 @@ namespace pathd {
 
 std::string_view GuaranteeName(const PlannerTraits& traits) {
   if (traits.real_time) return "real-time";
+  if (traits.kinematic) return "kinematic";
   if (traits.geometric) return traits.optimal ? "euclidean-optimal" : "geometric";
   if (traits.any_angle) return "any-angle";
   if (traits.fewest_moves) return "fewest moves";

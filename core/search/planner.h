@@ -41,6 +41,9 @@ struct PlannerTraits {
   // Plans in the continuous plane, not on the lattice: the answer is
   // PlanResult::polyline (core/geometry/free_space.h).
   bool geometric = false;
+  // Plans oriented poses for a robot with a footprint and a motion model
+  // (PlanRequest::kinematic, required): the answer is PlanResult::poses.
+  bool kinematic = false;
   // Can return the full cost-to-go field (PlanRequest::want_cost_to_go).
   bool cost_to_go = false;
   // One line for --help and docs/planners.md.
@@ -48,7 +51,7 @@ struct PlannerTraits {
 };
 
 // "optimal", "fewest moves", "bounded", "any-angle", "real-time",
-// "euclidean-optimal", "geometric" or "heuristic": what a planner's paths
+// "kinematic", "euclidean-optimal", "geometric" or "heuristic": what a planner's paths
 // guarantee, for listings.
 std::string_view GuaranteeName(const PlannerTraits& traits);
 
