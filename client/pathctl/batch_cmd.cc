@@ -260,10 +260,10 @@ constexpr absl::string_view kBatchFlags[] = {
     "planner", "world", "max_expansions", "heuristic_weight", "simplify", "lookahead",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells", "inflation_radius", "inflation_radius_cells",
-    "cost_scaling_factor", "footprint", "footprint_cells", "min_turning_radius",
+    "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
-    "non_straight_penalty", "cost_penalty", "goal_yaw_tolerance", "lattice", "no_smooth"};
+    "non_straight_penalty", "cost_penalty", "goal_yaw_tolerance", "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 const Command kBatchCommand = {
     .name = "batch",

@@ -322,11 +322,11 @@ constexpr absl::string_view kRenderFlags[] = {
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells", "inflation_radius", "inflation_radius_cells",
-    "cost_scaling_factor", "footprint", "footprint_cells", "min_turning_radius",
+    "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
-    "lattice", "no_smooth"};
+    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 }  // namespace
 
@@ -342,8 +342,9 @@ const Command kRenderCommand = {
             "draw the grid the planners see: inscribed cells, and costs in shades.\n"
             "--overlay KIND draws what a geometric planner builds from the map under\n"
             "it (polygons, visibility, mesh, decomposition, voronoi), built here by\n"
-            "the planners' own code. With a --footprint (or a robot radius) the\n"
-            "robot's outline is drawn along the path, about one robot length apart.\n"
+            "the planners' own code.\n"
+            "With a --footprint (or a robot radius) the robot's outline is drawn\n"
+            "along the path, about one robot length apart.\n"
             "Exit code 3 when the plan found no path (the map is still drawn).",
     .flags = kRenderFlags,
     .run = Render,

@@ -164,11 +164,11 @@ absl::Status CheckCostShaping(const PlanQuery& query);
 // the planner) and with want_cost_to_go, ValidateVia; inflation costs and a
 // minimum clearance are refused for planners that need uniform cost (the
 // geometric ones) and with cost_weight 0, which would ignore them
-// (CheckCostShaping). Cheap: O(tolerance^2 + via points); never inflates. A
-// kinematic planner's query (PlannerTraits::kinematic) has rules of its own:
-// via points, simplify, return_cost_to_go, a robot radius and a goal
-// tolerance are refused (its footprint and tolerances are in
-// request.kinematic), then the endpoint cells are validated.
+// (CheckCostShaping). Cheap: O(tolerance^2 + via points);
+// never inflates. A kinematic planner's query (PlannerTraits::kinematic)
+// has rules of its own: via points, simplify, return_cost_to_go, a robot
+// radius and a goal tolerance are refused (its footprint and tolerances are
+// in request.kinematic), then the endpoint cells are validated.
 absl::Status CheckPlanQuery(const Grid& stored, bool stateful,
                             PlanQuery* query);
 

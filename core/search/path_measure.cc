@@ -65,9 +65,47 @@ PathMeasure MeasurePolyline(const Grid& grid,
   return m;
 }
 
+PathMeasure MeasurePosePath(const Grid& grid, const std::vector<PathPose>& poses,
+                            const std::vector<Cell>& path, const CostParams& cost,
+                            const MotionPenalties& penalties) {
+  PathMeasure m = MeasurePath(grid, path, cost);
+  if (!m.valid) return m;
+  m.valid = false;
+  if (poses.empty()) return m;
+  size_t at = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Pose& p = poses[i].pose;
+    if (i > 0) {
+      const Pose& q = poses[i - 1].pose;
+      if (std::hypot(p.x - q.x, p.y - q.y) > 0.5 + 1e-9) {
+        m.first_invalid = i;
+        return m;
+      }
+    }
+    while (at < path.size() && !(path[at] == p.cell())) ++at;
+    if (at == path.size() || (i == 0 && at != 0)) {
+      m.first_invalid = i;
+      return m;
+    }
+  }
+  if (at + 1 != path.size()) {
+    m.first_invalid = path.size() - 1;
+    return m;
+  }
+  m.valid = true;
+  m.length = PathLength(poses);
+  m.cost = PathCost(grid, poses, penalties);
+  return m;
+}
+
 PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
                               const CostParams& cost) {
   if (!result.polyline.empty()) return MeasurePolyline(grid, result.polyline, cost);
+  if (!result.poses.empty()) {
+    KinematicQuery defaults;
+    defaults.cost_penalty = cost.cost_weight;
+    return MeasurePosePath(grid, result.poses, result.path, cost, PenaltiesOf(defaults));
+  }
   return result.any_angle ? MeasureAnyAnglePath(grid, result.path, cost)
                           : MeasurePath(grid, result.path, cost);
 }

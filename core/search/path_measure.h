@@ -6,6 +6,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/kinematics/pose_path.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/search/plan_types.h"
@@ -51,8 +52,22 @@ PathMeasure MeasurePolyline(const Grid& grid,
                             const std::vector<CellPoint>& polyline,
                             const CostParams& cost);
 
-// MeasurePolyline for geometric results, MeasureAnyAnglePath when
-// result.any_angle, else MeasurePath.
+// Measures a kinematic path (PlanResult::poses, with `path` its cells):
+// valid when the cells are a chain of legal moves (MeasurePath's rule) that
+// visits every pose's cell in order from the first pose's to the last's, and
+// consecutive poses are at most half a cell apart (first_invalid: the index
+// of the first bad cell or pose). Length is PathLength(poses) and cost
+// PathCost(grid, poses, penalties) (core/kinematics/pose_path.h). Only the
+// centre's cells are checked, not the footprint.
+PathMeasure MeasurePosePath(const Grid& grid, const std::vector<PathPose>& poses,
+                            const std::vector<Cell>& path, const CostParams& cost,
+                            const MotionPenalties& penalties);
+
+// MeasurePolyline for geometric results, MeasurePosePath for kinematic ones
+// (priced with KinematicQuery's default penalties and cost_penalty =
+// cost.cost_weight, what a kinematic planner uses for a request without a
+// kinematic query; MeasurePosePath prices a query's own), MeasureAnyAnglePath
+// when result.any_angle, else MeasurePath.
 PathMeasure MeasureResultPath(const Grid& grid, const PlanResult& result,
                               const CostParams& cost);
 

@@ -1,6 +1,8 @@
 // bad_input_test's PlannerService and Health rows: Plan (and the same through
 // PlanStream and PlanBatch), Navigate, IsPathValid, CostToGo, Health and
 // GetCacheStats.
+#include <utility>
+
 #include "tests/e2e/bad_input_fixture.h"
 
 namespace pathd::bad_input_test {
@@ -111,6 +113,45 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
       "negative min_clearance_cells",
       [](P& r) { r.mutable_options()->set_min_clearance_cells(-3); },
       StatusCode::INVALID_ARGUMENT, "options.min_clearance_cells");
+  plan_case(
+      "footprint polygon crossing itself",
+      [](P& r) {
+        for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, 1.0}, {1.0, 0.0}, {0.0, 1.0}}) {
+          v1::WorldPoint* p = r.mutable_options()->mutable_footprint()->add_polygon_m();
+          p->set_x(x);
+          p->set_y(y);
+        }
+      },
+      StatusCode::INVALID_ARGUMENT, "options.footprint: footprint edges 0 and 2 cross");
+  plan_case(
+      "footprint vertex NaN",
+      [](P& r) {
+        for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, kNaN}, {1.0, 0.0}}) {
+          v1::WorldPoint* p = r.mutable_options()->mutable_footprint()->add_polygon_m();
+          p->set_x(x);
+          p->set_y(y);
+        }
+      },
+      StatusCode::INVALID_ARGUMENT, "footprint vertex 1 is not a finite point");
+  plan_case(
+      "footprint radius 1e300 m",
+      [](P& r) { r.mutable_options()->mutable_footprint()->set_radius_m(1e300); },
+      StatusCode::INVALID_ARGUMENT, "more than the map's diagonal");
+  plan_case(
+      "start world pose with infinite yaw",
+      [](P& r) {
+        r.mutable_start()->mutable_world_pose()->set_x(1);
+        r.mutable_start()->mutable_world_pose()->set_y(1);
+        r.mutable_start()->mutable_world_pose()->set_yaw(kInf);
+      },
+      StatusCode::INVALID_ARGUMENT, "start world pose (1, 1, inf) is not finite");
+  plan_case(
+      "goal cell pose off the map",
+      [](P& r) {
+        r.mutable_goal()->mutable_cell_pose()->set_x(-5);
+        r.mutable_goal()->mutable_cell_pose()->set_y(1);
+      },
+      StatusCode::INVALID_ARGUMENT, "goal (-5, 1) in cell coordinates is outside");
   plan_case(
       "NaN inflation_radius_m",
       [](P& r) { r.mutable_options()->set_inflation_radius_m(kNaN); },

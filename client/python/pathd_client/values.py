@@ -279,16 +279,16 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     min_clearance_m: grid planners prefer keeping this far from obstacles
     (cells nearer cost more; the response's min_clearance_m says how close
     the path came).
-    inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
-    grid planners: cells up to inflation_radius_m from a lethal cell, beyond
-    the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
-    robot radius)); the factor is per metre, unset means Nav2's 10.
     footprint_m: the robot's outline, [(x, y), ...] in metres, x forward, y
     left (Nav2's footprint). The kinematic planners (hybrid_astar,
     state_lattice) check it at every pose with min_turning_radius_m,
     motion_model ("dubins", "reeds_shepp", "differential",
     "omnidirectional"), goal_yaw_tolerance (radians), reverse_penalty,
     lattice and smooth; the others plan for its inscribed radius.
+    inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
+    grid planners: cells up to inflation_radius_m from a lethal cell, beyond
+    the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
+    robot radius)); the factor is per metre, unset means Nav2's 10.
     """
     if robot_radius_cells is not None and robot_radius_m is not None:
         raise ValueError("give robot_radius_cells or robot_radius_m, not both")
@@ -305,10 +305,6 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
         options.robot_radius_m = robot_radius_m
     if min_clearance_m is not None:
         options.min_clearance_m = min_clearance_m
-    if inflation_radius_m is not None:
-        options.inflation_radius_m = inflation_radius_m
-    if cost_scaling_factor is not None:
-        options.cost_scaling_factor = cost_scaling_factor
     for x, y in footprint_m or []:
         options.footprint.polygon_m.add(x=x, y=y)
     if min_turning_radius_m is not None:
@@ -326,4 +322,8 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     options.lattice = lattice
     if smooth is not None:
         options.smooth = smooth
+    if inflation_radius_m is not None:
+        options.inflation_radius_m = inflation_radius_m
+    if cost_scaling_factor is not None:
+        options.cost_scaling_factor = cost_scaling_factor
     return options

@@ -3,7 +3,9 @@
 // the precision the file stores it with, the other optimal planners match
 // Dijkstra, fewest-move planners match a separate reference BFS in this file,
 // and the rest are checked by what their traits promise (PlannerStride and
-// kPlannerScenariosPerMap say how often). Skips, saying so, when the benchmark folder is absent. Set
+// kPlannerScenariosPerMap say how often; kinematic planners: a path from
+// the start cell to the goal cell through legal moves, when they find one).
+// Skips, saying so, when the benchmark folder is absent. Set
 // PATHD_MOVINGAI_DIR to point elsewhere, PATHD_CONFORMANCE_STRIDE=N to check
 // every N-th scenario only (slow sanitizer builds), PATHD_CONFORMANCE_FULL=1
 // to check every planner on every scenario.
@@ -107,6 +109,12 @@ int PlannerStride(const Planner& planner) {
     // maps); cell_planners_test and geometric_planners_test check it
     // against brute force.
     stride = 50;
+  } else if (t.kinematic) {
+    // A search over poses and heading bins, with a budget (kKinematicBudget):
+    // here it plans DefaultKinematicQuery's point-like Reeds-Shepp robot;
+    // hybrid_astar_test checks kinematic planners against the independent
+    // checker.
+    stride = 100;
   } else if (t.any_angle || t.incremental) {
     stride = 4;
   } else if (t.real_time || !t.complete) {
@@ -130,6 +138,12 @@ constexpr size_t kPlannerScenariosPerMap = 750;
 // search of these maps expands (a 512x512 map has 262,144 cells); LRTA*
 // spent a sixth of a maze's time failing at 4,000,000.
 constexpr int64_t kWanderBudget = 1'500'000;
+
+// Budget for the kinematic planners: a robot with a one-cell turning radius
+// cannot turn in the mazes' one-cell corridors, and an exhausted lattice is
+// searched again at finer resolutions, so a query it cannot answer would
+// otherwise take minutes.
+constexpr int64_t kKinematicBudget = 200'000;
 
 struct PlannerTally {
   const Planner* planner = nullptr;
@@ -166,8 +180,10 @@ TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
   for (const std::string& name : registry.Names()) {
     const Planner* p = registry.Get(name);
     // Geometric planners answer in the plane, shorter than the grid optimum
-    // these scenarios list: geometric_movingai_test checks them.
-    if (p != dijkstra && !p->traits().geometric) {
+    // these scenarios list: geometric_movingai_test checks them. Kinematic
+    // planners answer for a robot that cannot follow every grid path:
+    // state_lattice_test checks them.
+    if (p != dijkstra && !p->traits().geometric && !p->traits().kinematic) {
       tallies.push_back({p, PlannerStride(*p)});
     }
   }
@@ -210,10 +226,11 @@ TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
       if (k % static_cast<size_t>(tally.stride) != 0) continue;
       const Planner& planner = *tally.planner;
       const PlannerTraits& t = planner.traits();
-      const bool wanders = t.real_time || !t.complete;
+      const bool wanders = t.real_time || (!t.complete && !t.kinematic);
       const StopCondition stop =
           wanders ? StopCondition(absl::InfiniteFuture(), nullptr, kWanderBudget)
-                  : StopCondition::None();
+          : t.kinematic ? StopCondition(absl::InfiniteFuture(), nullptr, kKinematicBudget)
+                        : StopCondition::None();
       const absl::Time started = absl::Now();
       auto r = planner.Plan(*grid, request, stop, scratch);
       tally.planning += absl::Now() - started;
@@ -222,6 +239,13 @@ TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
           absl::StrFormat("%s %s line %d", planner.name(), GetParam(), s.line);
       ++tally.checked;
       if (!r->found()) {
+        if (t.kinematic) {
+          // Not complete: its lattice keeps one pose per cell and heading.
+          ASSERT_TRUE(r->outcome == PlanOutcome::kExpansionLimit ||
+                      r->outcome == PlanOutcome::kNoPath)
+              << where << ": " << PlanOutcomeName(r->outcome);
+          continue;
+        }
         ASSERT_TRUE(wanders) << where << ": " << PlanOutcomeName(r->outcome);
         ASSERT_TRUE(r->outcome == PlanOutcome::kExpansionLimit ||
                     r->outcome == PlanOutcome::kLocalMinimum)
