@@ -188,20 +188,20 @@ absl::Status DecodeInflationCost(const v1::PlanOptions& options, const Grid& gri
               : std::nullopt,
           grid));
   if (radius <= 0.0) return absl::OkStatus();
-  // Compared as given (in cells, before the diagonal caps both).
+  // As given (before the diagonal's cap, which the robot radius may have had).
   const double given = metres ? options.inflation_radius_m() / grid.resolution()
                               : options.inflation_radius_cells();
-  const double robot = options.robot_radius_case() == v1::PlanOptions::kRobotRadiusM
-                           ? options.robot_radius_m() / grid.resolution()
-                           : options.robot_radius_cells();
-  if (given < robot) {
+  if (given < query->robot_radius_cells) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "options.inflation_radius_%s %s is smaller than the robot radius (%s "
-        "cells); inflation costs apply between the robot radius and the "
+        "cells%s); inflation costs apply between the robot radius and the "
         "inflation radius",
         metres ? "m" : "cells",
         Num(metres ? options.inflation_radius_m() : options.inflation_radius_cells()),
-        Num(robot)));
+        Num(query->robot_radius_cells),
+        options.robot_radius_case() == v1::PlanOptions::ROBOT_RADIUS_NOT_SET
+            ? ", the footprint's inscribed radius"
+            : ""));
   }
   query->inflation_radius_cells = radius;
   // Nav2's factor is per metre; core decays per cell.
@@ -355,7 +355,6 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
     PATHD_ASSIGN_OR_RETURN(request.cost, CostParamsFromOptions(options));
   }
   PATHD_ASSIGN_OR_RETURN(query.robot_radius_cells, RobotRadiusCells(options, grid));
-  PATHD_RETURN_IF_ERROR(DecodeInflationCost(options, grid, &query));
   PATHD_ASSIGN_OR_RETURN(query.min_clearance_cells, MinClearanceCells(options, grid));
   // A whole field is 8 bytes per cell in a Plan message.
   if (limits.max_cost_to_go_cells.has_value() && request.want_cost_to_go &&
@@ -375,6 +374,8 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
     PATHD_ASSIGN_OR_RETURN(query.goal_tolerance_cells, GoalToleranceCells(options, grid));
   }
   PATHD_RETURN_IF_ERROR(DecodeKinematics(wire, grid, &query));
+  // After the footprint, whose inscribed radius is then the robot radius.
+  PATHD_RETURN_IF_ERROR(DecodeInflationCost(options, grid, &query));
   if (wire.via != nullptr && !wire.via->empty()) {
     // Counted before anything is sized by the request.
     PATHD_RETURN_IF_ERROR(CheckViaCount(static_cast<size_t>(wire.via->size())));

@@ -120,10 +120,10 @@ absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
 // inflation_radius_cells as given or inflation_radius_m / resolution, capped
 // at the map's diagonal (0 when unset or 0: no inflation costs), and
 // query->cost_scaling_per_cell = cost_scaling_factor (per metre; unset:
-// Nav2's 10) * resolution. query->robot_radius_cells is not read: the
-// radius is compared with the one in `options`. INVALID_ARGUMENT naming the
-// field when the radius is negative or not finite, smaller than the robot
-// radius, or the factor is not finite and > 0.
+// Nav2's 10) * resolution. Reads query->robot_radius_cells, so it comes
+// after the robot radius and the footprint are decoded. INVALID_ARGUMENT
+// naming the field when the radius is negative or not finite, smaller than
+// the robot radius, or the factor is not finite and > 0.
 absl::Status DecodeInflationCost(const v1::PlanOptions& options, const Grid& grid,
                                  PlanQuery* query);
 

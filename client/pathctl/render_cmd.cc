@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
@@ -16,6 +17,7 @@
 #include "client/pathctl/png_io.h"
 #include "client/pathctl/render.h"
 #include "core/geometry/structure.h"
+#include "core/kinematics/footprint.h"
 #include "core/map/inflation.h"
 #include "core/map/inflation_cost.h"
 #include "core/status_macros.h"
@@ -121,23 +123,44 @@ std::vector<std::vector<CellPoint>> OutlinesAlong(const v1::PlanResponse& respon
 
 Cell CoreCell(const v1::Cell& cell) { return Cell{cell.x(), cell.y()}; }
 
+// The robot radius a grid planner applies without a plan to say so: the
+// options' robot radius, else the footprint's inscribed radius (as the
+// server's decoding does, server/convert_kinematic.cc), else 0.
+absl::StatusOr<double> GridRobotRadius(const Grid& stored, const v1::PlanOptions& options) {
+  using O = v1::PlanOptions;
+  if (options.robot_radius_case() != O::ROBOT_RADIUS_NOT_SET) {
+    return options.robot_radius_case() == O::kRobotRadiusM
+               ? options.robot_radius_m() / stored.resolution()
+               : options.robot_radius_cells();
+  }
+  const v1::Footprint& f = options.footprint();
+  std::vector<CellPoint> polygon;
+  for (const v1::WorldPoint& p : f.polygon_m()) {
+    polygon.push_back(CellPoint{p.x() / stored.resolution(), p.y() / stored.resolution()});
+  }
+  for (const v1::CellPoint& p : f.polygon_cells()) polygon.push_back(CellPoint{p.x(), p.y()});
+  if (polygon.empty()) return 0.0;
+  PATHD_ASSIGN_OR_RETURN(const Footprint footprint, Footprint::Polygon(std::move(polygon)));
+  return footprint.inscribed_radius();
+}
+
 // The grid the planners see for these options: `stored` shaped (robot
 // radius, Nav2 inflation costs, clearance costs) by the server's own core
 // function, with the options converted as the server decodes them
 // (server/convert.cc: metres / resolution, capped at the map's diagonal;
-// the cost scaling factor per metre times the resolution, unset 10). Drawn
-// here rather than fetched: the API has no call that returns a shaped grid,
-// and the same function on the same cells gives the same bytes.
-absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& options) {
+// the cost scaling factor per metre times the resolution, unset 10).
+// `robot_radius_cells` is the radius the plan applied (PlanResponse), or
+// GridRobotRadius without a plan. Drawn here rather than fetched: the API
+// has no call that returns a shaped grid, and the same function on the same
+// cells gives the same bytes.
+absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& options,
+                                    double robot_radius_cells) {
   const double diagonal = std::hypot(stored.width(), stored.height());
   auto cells = [&](bool metres, double value) {
     return std::min(metres ? value / stored.resolution() : value, diagonal);
   };
   using O = v1::PlanOptions;
-  const double robot = cells(options.robot_radius_case() == O::kRobotRadiusM,
-                             options.robot_radius_case() == O::kRobotRadiusM
-                                 ? options.robot_radius_m()
-                                 : options.robot_radius_cells());
+  const double robot = std::min(robot_radius_cells, diagonal);
   const double inflation = cells(options.inflation_radius_case() == O::kInflationRadiusM,
                                  options.inflation_radius_case() == O::kInflationRadiusM
                                      ? options.inflation_radius_m()
@@ -195,9 +218,13 @@ int Render(CommandEnv& env, Args args) {
     request = *std::move(built);
   }
 
-  // The cost options shape the drawn grid with or without a plan.
+  // The cost options (and a footprint's inscribed radius) shape the drawn
+  // grid with or without a plan.
   v1::PlanOptions cost_options;
   if (absl::Status s = SetCostOptions(env.options().cost, &cost_options); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  if (absl::Status s = SetFootprint(env.options().robot, &cost_options); !s.ok()) {
     return env.Usage(s.message());
   }
 
@@ -206,9 +233,11 @@ int Render(CommandEnv& env, Args args) {
   PlanOverlay overlay;
   int code = kExitOk;
   std::string summary;
+  std::optional<double> applied_radius;
   if (request.has_value()) {
     absl::StatusOr<v1::PlanResponse> response = env.client().Plan(*request);
     if (!response.ok()) return env.Fail(response.status());
+    applied_radius = response->robot_radius_cells();
     for (const v1::Cell& c : response->path())
       overlay.path.push_back(CoreCell(c));
     for (const v1::CellPoint& p : response->polyline())
@@ -250,7 +279,12 @@ int Render(CommandEnv& env, Args args) {
   }
   // After the plan, so a bad option is reported by the server first, with
   // its field's name.
-  grid = PlanningGridOf(*grid, cost_options);
+  if (!applied_radius.has_value()) {
+    absl::StatusOr<double> radius = GridRobotRadius(*grid, cost_options);
+    if (!radius.ok()) return env.Usage(radius.status().message());
+    applied_radius = *radius;
+  }
+  grid = PlanningGridOf(*grid, cost_options, *applied_radius);
   if (!grid.ok()) return env.Usage(grid.status().message());
   if (!options.overlay.empty()) {
     absl::StatusOr<GeometricStructure> structure =

@@ -168,6 +168,19 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
       },
       StatusCode::INVALID_ARGUMENT, "options.inflation_radius_cells 2 is smaller");
   plan_case(
+      "inflation_radius_cells under a footprint's inscribed radius",
+      [](P& r) {
+        v1::Footprint* f = r.mutable_options()->mutable_footprint();
+        constexpr double kSquare[4][2] = {{-2, -2}, {2, -2}, {2, 2}, {-2, 2}};
+        for (const auto& corner : kSquare) {
+          v1::CellPoint* p = f->add_polygon_cells();
+          p->set_x(corner[0]);
+          p->set_y(corner[1]);
+        }
+        r.mutable_options()->set_inflation_radius_cells(1);
+      },
+      StatusCode::INVALID_ARGUMENT, "footprint's inscribed radius");
+  plan_case(
       "cost_scaling_factor 0",
       [](P& r) {
         r.mutable_options()->set_inflation_radius_cells(4);

@@ -76,20 +76,39 @@ bool Refuses(const PlannerTraits& traits, const Grid& grid, const CostParams& p)
   return false;
 }
 
-// A found path is legal: MeasureResultPath accepts it (for a kinematic
-// planner, MeasurePosePath: poses at most half a cell apart, `path` a chain
-// of legal moves through their cells), and a kinematic path runs from the
-// start cell's centre to the goal cell's (the default query of a grid
-// request).
+// A found path is legal: for grid and geometric planners MeasureResultPath
+// accepts it; a kinematic planner's (PlanResult::poses) starts at the start
+// cell's centre and ends at the goal cell's (the default query of a grid
+// request), its poses at most a cell apart on traversable cells, and their
+// cells appear in `path` in order.
 bool ResultIsValid(const Grid& grid, const PlanResult& r, const CostParams& params) {
-  if (!MeasureResultPath(grid, r, params).valid) return false;
-  if (r.poses.empty()) return true;
+  if (r.poses.empty()) return MeasureResultPath(grid, r, params).valid;
   const Pose& first = r.poses.front().pose;
   const Pose& last = r.poses.back().pose;
-  return std::fabs(first.x - (r.path.front().x + 0.5)) <= 1e-9 &&
-         std::fabs(first.y - (r.path.front().y + 0.5)) <= 1e-9 &&
-         std::fabs(last.x - (r.path.back().x + 0.5)) <= 1e-9 &&
-         std::fabs(last.y - (r.path.back().y + 0.5)) <= 1e-9;
+  if (!(r.path.front() == first.cell()) || !(r.path.back() == last.cell())) return false;
+  if (std::fabs(first.x - (r.path.front().x + 0.5)) > 1e-9 ||
+      std::fabs(first.y - (r.path.front().y + 0.5)) > 1e-9 ||
+      std::fabs(last.x - (r.path.back().x + 0.5)) > 1e-9 ||
+      std::fabs(last.y - (r.path.back().y + 0.5)) > 1e-9) {
+    return false;
+  }
+  std::vector<Cell> cells;
+  for (size_t i = 0; i < r.poses.size(); ++i) {
+    const Pose& p = r.poses[i].pose;
+    if (i > 0 && std::hypot(p.x - r.poses[i - 1].pose.x, p.y - r.poses[i - 1].pose.y) > 1.0) {
+      return false;
+    }
+    const Cell c = p.cell();
+    if (!grid.InBounds(c) || !Traversable(grid.cost(c), params.unknown_is_free)) return false;
+    if (cells.empty() || !(cells.back() == c)) cells.push_back(c);
+  }
+  // Every pose's cell is in `path`, in order (a planner may also list the
+  // cells its motions sweep between poses: hybrid_astar's MeasurePosePath).
+  size_t at = 0;
+  for (const Cell& c : r.path) {
+    if (at < cells.size() && c == cells[at]) ++at;
+  }
+  return at == cells.size();
 }
 
 class EveryPlanner : public ::testing::TestWithParam<std::string> {
