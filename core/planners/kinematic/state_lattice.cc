@@ -593,7 +593,7 @@ class LatticeSearch {
     car_radius_ = std::max(set_.turning_radius_cells(), q_.min_turning_radius_cells);
     // The curve heuristic applies to cars aiming at a heading; the table's
     // rounding (0.1 radius) and the goal tolerances come off it.
-    curve_heuristic_ = !rotates_ && q_.goal_tolerance_yaw < kPi &&
+    curve_heuristic_ = options_.curve_heuristic && !rotates_ && q_.goal_tolerance_yaw < kPi &&
                        (q_.motion == MotionModel::kDubins || q_.motion == MotionModel::kReedsShepp);
     curve_reach_ = (kCurveTableRadii - 1.0) * car_radius_;
     curve_slack_ = 0.1 * car_radius_ + q_.goal_tolerance_cells +

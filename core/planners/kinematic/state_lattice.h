@@ -69,6 +69,9 @@ struct StateLatticeOptions {
   bool analytic_expansion = true;
   // Off: the heuristic is the straight-line distance alone (benchmarks).
   bool obstacle_heuristic = true;
+  // Off: no curve length near the goal (benchmarks; docs/decisions.md says
+  // what it costs and buys).
+  bool curve_heuristic = true;
   // Nav2's analytic_expansion_ratio.
   double analytic_expansion_ratio = 3.5;
 };
