@@ -9,6 +9,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/map/inflation_cost.h"
 #include "core/postprocess/plan_through.h"
 #include "core/search/endpoints.h"
 #include "core/status_macros.h"
@@ -46,11 +47,16 @@ absl::StatusOr<Cell> CellFromPosition(const v1::Position& position,
       }
       return *cell;
     }
+    case v1::Position::kWorldPose:
+    case v1::Position::kCellPose: {
+      PATHD_ASSIGN_OR_RETURN(const PositionPose pose, PoseFromPosition(position, grid, what));
+      return pose.pose.cell();
+    }
     case v1::Position::KIND_NOT_SET:
       break;
   }
   return absl::InvalidArgumentError(
-      absl::StrFormat("%s is not set (give a cell or a world point)", what));
+      absl::StrFormat("%s is not set (give a cell, a world point or a pose)", what));
 }
 
 absl::StatusOr<CostParams> CostParamsFromOptions(const v1::PlanOptions& options) {
@@ -156,6 +162,51 @@ absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
       c == Case::kMinClearanceCells ? std::optional(options.min_clearance_cells())
                                     : std::nullopt,
       grid);
+}
+
+absl::Status DecodeInflationCost(const v1::PlanOptions& options, const Grid& grid,
+                                 PlanQuery* query) {
+  double factor = kDefaultCostScalingFactor;
+  if (options.has_cost_scaling_factor()) {
+    factor = options.cost_scaling_factor();
+    if (!std::isfinite(factor) || factor <= 0.0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "options.cost_scaling_factor %s must be finite and > 0 (per metre)",
+          Num(factor)));
+    }
+  }
+  using Case = v1::PlanOptions::InflationRadiusCase;
+  const Case c = options.inflation_radius_case();
+  const bool metres = c == Case::kInflationRadiusM;
+  PATHD_ASSIGN_OR_RETURN(
+      const double radius,
+      DistanceCells(
+          "inflation_radius",
+          metres ? std::optional(options.inflation_radius_m()) : std::nullopt,
+          c == Case::kInflationRadiusCells
+              ? std::optional(options.inflation_radius_cells())
+              : std::nullopt,
+          grid));
+  if (radius <= 0.0) return absl::OkStatus();
+  // Compared as given (in cells, before the diagonal caps both).
+  const double given = metres ? options.inflation_radius_m() / grid.resolution()
+                              : options.inflation_radius_cells();
+  const double robot = options.robot_radius_case() == v1::PlanOptions::kRobotRadiusM
+                           ? options.robot_radius_m() / grid.resolution()
+                           : options.robot_radius_cells();
+  if (given < robot) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.inflation_radius_%s %s is smaller than the robot radius (%s "
+        "cells); inflation costs apply between the robot radius and the "
+        "inflation radius",
+        metres ? "m" : "cells",
+        Num(metres ? options.inflation_radius_m() : options.inflation_radius_cells()),
+        Num(robot)));
+  }
+  query->inflation_radius_cells = radius;
+  // Nav2's factor is per metre; core decays per cell.
+  query->cost_scaling_per_cell = factor * grid.resolution();
+  return absl::OkStatus();
 }
 
 absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
@@ -304,6 +355,7 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
     PATHD_ASSIGN_OR_RETURN(request.cost, CostParamsFromOptions(options));
   }
   PATHD_ASSIGN_OR_RETURN(query.robot_radius_cells, RobotRadiusCells(options, grid));
+  PATHD_RETURN_IF_ERROR(DecodeInflationCost(options, grid, &query));
   PATHD_ASSIGN_OR_RETURN(query.min_clearance_cells, MinClearanceCells(options, grid));
   // A whole field is 8 bytes per cell in a Plan message.
   if (limits.max_cost_to_go_cells.has_value() && request.want_cost_to_go &&
@@ -322,6 +374,7 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
   if (wire.goal_tolerance) {
     PATHD_ASSIGN_OR_RETURN(query.goal_tolerance_cells, GoalToleranceCells(options, grid));
   }
+  PATHD_RETURN_IF_ERROR(DecodeKinematics(wire, grid, &query));
   if (wire.via != nullptr && !wire.via->empty()) {
     // Counted before anything is sized by the request.
     PATHD_RETURN_IF_ERROR(CheckViaCount(static_cast<size_t>(wire.via->size())));
@@ -446,6 +499,10 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
   response->set_any_angle(result.any_angle);
   response->set_cost(result.cost);
   response->set_length(result.length);
+  response->set_cost_m(result.cost * grid.resolution());
+  response->set_length_m(result.length * grid.resolution());
+  response->set_frame_id(kFrameId);
+  FillPoses(result, grid, response);
   response->mutable_path()->Reserve(static_cast<int>(result.path.size()));
   response->mutable_world_path()->Reserve(static_cast<int>(result.path.size()));
   for (const Cell& c : result.path) {
@@ -502,6 +559,7 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
         absl::StrFormat("%s (%s)", response->reason(), expansion_limit_source));
   }
   response->set_robot_radius_cells(query.robot_radius_cells);
+  response->set_robot_radius_m(query.robot_radius_cells * grid.resolution());
   response->set_map_version(answer.source.map_version);
   response->set_planner(std::string(query.planner));
   response->set_cache_hit(answer.source.cache_hit);

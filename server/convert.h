@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/kinematics/footprint.h"
+#include "core/kinematics/pose.h"
 #include "core/map/grid.h"
 #include "core/planning/plan_query.h"
 #include "core/search/endpoints.h"
@@ -38,6 +40,53 @@ inline Cell FromProto(const v1::Cell& c) { return Cell{c.x(), c.y()}; }
 // its EndpointFault when `what` is "start" or "goal").
 absl::StatusOr<Cell> CellFromPosition(const v1::Position& position,
                                       const Grid& grid, std::string_view what);
+
+// ---- robots with shape and kinematics (convert_kinematic.cc) ----
+
+struct WireQuery;
+
+// The frame of every world coordinate pathd answers in (Nav2's global
+// frame).
+inline constexpr char kFrameId[] = "map";
+
+// A request position as a pose in cell coordinates, and whether it carried a
+// heading (a world or cell pose) rather than only a place.
+struct PositionPose {
+  Pose pose;
+  bool has_yaw = false;
+};
+
+// The exact pose a position denotes: a cell's centre, a world point (its
+// cell coordinates, heading 0), a world pose (heading turned into the grid
+// frame, less Grid::frame_yaw) or a cell pose. INVALID_ARGUMENT naming
+// `what` when unset, not finite, or off the map (with its EndpointFault).
+absl::StatusOr<PositionPose> PoseFromPosition(const v1::Position& position, const Grid& grid,
+                                              std::string_view what);
+
+// options.footprint in cells (metres divided by the resolution), nullopt
+// when unset. INVALID_ARGUMENT "options.footprint: ..." naming the problem
+// (not exactly one shape, a bad polygon, larger than the map).
+absl::StatusOr<std::optional<Footprint>> FootprintFromOptions(const v1::PlanOptions& options,
+                                                              const Grid& grid);
+
+// The kinematic part of a decoded query. For a kinematic planner (PlannerTraits::
+// kinematic): query->request.kinematic from the exact start and goal poses
+// (a missing start heading faces the goal; a missing goal heading lets the
+// path end at any heading unless goal_yaw_tolerance says otherwise), the
+// footprint (else the robot radius as a circle, else a point), the motion
+// model, turning radius (default 0.4 m, at least a cell), penalties, the goal
+// tolerances (goal_tolerance becomes the position tolerance and stops being
+// a blocked-goal substitute), lattice and smoothing; the robot radius is
+// folded into the footprint. For other planners: a footprint without a robot
+// radius sets robot_radius_cells to its inscribed radius. Errors name the
+// option.
+absl::Status DecodeKinematics(const WireQuery& wire, const Grid& grid, PlanQuery* query);
+
+// The path as poses (cell and world frame, headings) into response->poses,
+// world_poses and, when any pose reverses, reverse: a kinematic planner's
+// own poses, else the path's cell centres or polyline vertices each facing
+// the next.
+void FillPoses(const PlanResult& result, const Grid& grid, v1::PlanResponse* response);
 
 // Cost model parameters from request options. INVALID_ARGUMENT for an unknown
 // connectivity, or a cost_weight that is negative or not finite. An unset
@@ -66,6 +115,17 @@ absl::StatusOr<double> RobotRadiusCells(const v1::PlanOptions& options,
 // INVALID_ARGUMENT naming the field when negative or not finite.
 absl::StatusOr<double> MinClearanceCells(const v1::PlanOptions& options,
                                          const Grid& grid);
+
+// Nav2's inflation costs: query->inflation_radius_cells from
+// inflation_radius_cells as given or inflation_radius_m / resolution, capped
+// at the map's diagonal (0 when unset or 0: no inflation costs), and
+// query->cost_scaling_per_cell = cost_scaling_factor (per metre; unset:
+// Nav2's 10) * resolution. query->robot_radius_cells is not read: the
+// radius is compared with the one in `options`. INVALID_ARGUMENT naming the
+// field when the radius is negative or not finite, smaller than the robot
+// radius, or the factor is not finite and > 0.
+absl::Status DecodeInflationCost(const v1::PlanOptions& options, const Grid& grid,
+                                 PlanQuery* query);
 
 // Largest goal tolerance a request may ask for: the search for a substitute
 // goal runs on the gRPC thread and visits up to (2 * 1024 + 1)^2 cells.

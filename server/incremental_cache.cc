@@ -49,9 +49,11 @@ std::string_view IncrementalCache::KindName(Kind kind) {
 
 bool IncrementalCache::KeyLess::operator()(const Key& a, const Key& b) const {
   return std::tie(a.map, a.goal.x, a.goal.y, a.cost.connectivity, a.cost.cost_weight,
-                  a.cost.unknown_is_free, a.robot_radius_cells, a.min_clearance_cells) <
+                  a.cost.unknown_is_free, a.robot_radius_cells, a.inflation_radius_cells,
+                  a.cost_scaling_per_cell, a.min_clearance_cells) <
          std::tie(b.map, b.goal.x, b.goal.y, b.cost.connectivity, b.cost.cost_weight,
-                  b.cost.unknown_is_free, b.robot_radius_cells, b.min_clearance_cells);
+                  b.cost.unknown_is_free, b.robot_radius_cells, b.inflation_radius_cells,
+                  b.cost_scaling_per_cell, b.min_clearance_cells);
 }
 
 IncrementalCache::IncrementalCache(InflationCache& inflation, size_t budget_bytes)
@@ -132,10 +134,12 @@ void IncrementalCache::EvictLocked(Shard& shard) {
 
 absl::StatusOr<std::shared_ptr<const Grid>> IncrementalCache::PlanningGrid(
     const Key& key, const MapSnapshot& snapshot) {
-  const GridShape shape = GridShape::Of(key.robot_radius_cells, key.min_clearance_cells,
-                                        key.cost.unknown_is_free);
+  const GridShape shape =
+      GridShape::Of(key.robot_radius_cells, key.inflation_radius_cells,
+                    key.cost_scaling_per_cell, key.min_clearance_cells,
+                    key.cost.unknown_is_free);
   if (!shape.shaped()) return snapshot.grid;
-  return inflation_.Get(snapshot.grid, shape);
+  return inflation_.Get(snapshot, shape);
 }
 
 absl::StatusOr<IncrementalCache::Advance> IncrementalCache::AdvanceSlot(

@@ -74,9 +74,11 @@ class IncrementalCache {
     std::string map;
     Cell goal;
     CostParams cost;
-    // Both 0: the map as stored; otherwise the InflationCache copy shaped
-    // by them (GridShape).
+    // All 0: the map as stored; otherwise the InflationCache copy shaped
+    // by them (GridShape::Of).
     double robot_radius_cells = 0.0;
+    double inflation_radius_cells = 0.0;
+    double cost_scaling_per_cell = 0.0;
     double min_clearance_cells = 0.0;
   };
 

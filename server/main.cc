@@ -81,6 +81,9 @@ ABSL_FLAG(int64_t, derived_cache_bytes, int64_t{512} << 20,
           "byte budget of the structures derived from map versions for the "
           "geometric planners (free-space bitmaps, visibility graphs, "
           "navigation meshes, Voronoi graphs); least recently used beyond it");
+ABSL_FLAG(bool, honour_origin_yaw, false,
+          "apply a map's origin yaw in world coordinates; off (the default) "
+          "world points and poses ignore it, as Nav2's costmap does");
 ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(5),
           "on SIGINT/SIGTERM, time in-flight calls get before they are cancelled");
 ABSL_FLAG(absl::Duration, session_idle_timeout, absl::Minutes(10),
@@ -285,6 +288,7 @@ pathd::server::ServerOptions OptionsFromFlags() {
   }
   options.derived_cache_bytes =
       static_cast<size_t>(absl::GetFlag(FLAGS_derived_cache_bytes));
+  options.honour_origin_yaw = absl::GetFlag(FLAGS_honour_origin_yaw);
   if (threads < 0) FlagError("threads", "must be >= 0");
   if (queue_depth < 1) FlagError("queue_depth", "must be >= 1");
   if (options.max_map_cells < 1) FlagError("max_map_cells", "must be >= 1");

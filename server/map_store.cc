@@ -10,6 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "core/map/grid.h"
 #include "server/map_store_grid_pool.h"
+#include "spdlog/spdlog.h"
 
 namespace pathd::server {
 namespace {
@@ -192,6 +193,16 @@ absl::Status MapStore::CheckSize(int64_t width, int64_t height) const {
       width, height, max_cells_));
 }
 
+void MapStore::StampOriginYaw(std::string_view name, Grid* grid) const {
+  grid->set_honour_origin_yaw(honour_origin_yaw_);
+  if (!honour_origin_yaw_ && grid->origin().yaw != 0.0) {
+    spdlog::warn(
+        "map '{}': origin yaw {} rad is ignored in world coordinates, as Nav2's "
+        "costmap ignores it; start pathd with --honour_origin_yaw to apply it",
+        std::string(name), grid->origin().yaw);
+  }
+}
+
 absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
     std::string_view name, Grid grid, bool replace) {
   if (absl::Status s = ValidateName(name); !s.ok()) return s;
@@ -203,6 +214,7 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Create(
     if (absl::Status s = journal_->Writable(); !s.ok()) return s;
   }
 
+  StampOriginYaw(name, &grid);
   auto buffer = std::make_unique<Grid>(std::move(grid));
   auto pool = std::make_shared<GridPool>(buffer->size());
   // The journal record holds the version, which is only settled under the
@@ -280,6 +292,7 @@ absl::StatusOr<std::shared_ptr<const MapSnapshot>> MapStore::Restore(
     return absl::InvalidArgumentError(absl::StrFormat("map '%s' is empty", name));
   }
   if (absl::Status s = CheckSize(grid.width(), grid.height()); !s.ok()) return s;
+  StampOriginYaw(name, &grid);
   auto buffer = std::make_unique<Grid>(std::move(grid));
   auto pool = std::make_shared<GridPool>(buffer->size());
   absl::MutexLock lock(&mu_);

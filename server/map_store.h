@@ -253,6 +253,11 @@ class MapStore {
   // outlive the store's writers) before they return; null stops logging.
   // Not thread-safe with respect to writers: set at start-up.
   void SetJournal(MapJournal* journal) { journal_ = journal; }
+  // Whether the grids of later Creates and Restores honour their origin's
+  // yaw in world coordinates (Grid::honour_origin_yaw; pathd
+  // --honour_origin_yaw). Off, a map with a non-zero yaw is logged with a
+  // warning when it is created. Call before serving.
+  void SetHonourOriginYaw(bool honour) { honour_origin_yaw_ = honour; }
 
   size_t size() const;
 
@@ -263,6 +268,9 @@ class MapStore {
   void AddListener(Listener listener);
 
  private:
+  // Sets the grid's honour_origin_yaw from the store's, warning about an
+  // ignored yaw.
+  void StampOriginYaw(std::string_view name, Grid* grid) const;
   // Spare grid buffers and the change log of one map id (map_store.cc).
   class GridPool;
 
@@ -336,6 +344,7 @@ class MapStore {
   std::atomic<int64_t> grids_allocated_{0};
   std::vector<Listener> listeners_;
   MapJournal* journal_ = nullptr;
+  bool honour_origin_yaw_ = false;
 };
 
 }  // namespace pathd::server

@@ -144,15 +144,17 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
   }
 
  private:
-  // One series per cache: the two incremental caches and the inflation cache
+  // One series per cache: the two incremental caches, the inflation cache
   // (which has no byte budget and evicts by entry count, so it has neither
-  // budget nor evictions).
+  // budget nor evictions; its advances from an older version's shaped grid
+  // count as repairs, its full shapings as rebuilds) and the derived cache.
   void AddCaches(std::vector<prometheus::MetricFamily>& families) const {
     using prometheus::MetricType;
     struct Row {
       std::string name;
       IncrementalCache::Stats stats;
-      bool incremental;
+      // Has a byte budget and evictions beyond it.
+      bool budgeted;
     };
     std::vector<Row> rows;
     for (const IncrementalCache::Kind kind :
@@ -166,6 +168,8 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
     as_incremental.bytes = static_cast<int64_t>(inflation.bytes);
     as_incremental.hits = inflation.hits;
     as_incremental.misses = inflation.misses;
+    as_incremental.repairs = inflation.advances;
+    as_incremental.rebuilds = inflation.builds;
     rows.push_back({"inflation", as_incremental, false});
     if (s_.derived != nullptr) {
       // Structures derived from map versions: a miss is a build or an
@@ -188,7 +192,7 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
       const char* help;
       MetricType type;
       int64_t IncrementalCache::Stats::*field;
-      bool incremental_only;
+      bool budgeted_only;
     };
     static constexpr Column kColumns[] = {
         {"pathd_cache_entries", "Entries in the cache.", MetricType::Gauge,
@@ -203,16 +207,19 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
          MetricType::Counter, &IncrementalCache::Stats::misses, false},
         {"pathd_cache_evictions_total", "Entries evicted beyond the budget.",
          MetricType::Counter, &IncrementalCache::Stats::evictions, true},
-        {"pathd_cache_repairs_total", "Entries repaired for a new map version.",
-         MetricType::Counter, &IncrementalCache::Stats::repairs, true},
+        {"pathd_cache_repairs_total",
+         "Entries repaired for a new map version (inflation, derived: advanced "
+         "from an older version's entry).",
+         MetricType::Counter, &IncrementalCache::Stats::repairs, false},
         {"pathd_cache_rebuilds_total",
-         "Entries rebuilt because a map changed too much to repair.",
-         MetricType::Counter, &IncrementalCache::Stats::rebuilds, true},
+         "Entries rebuilt because a map changed too much to repair (inflation, "
+         "derived: every entry made from scratch).",
+         MetricType::Counter, &IncrementalCache::Stats::rebuilds, false},
     };
     for (const Column& column : kColumns) {
       std::vector<prometheus::ClientMetric> metrics;
       for (const Row& row : rows) {
-        if (column.incremental_only && !row.incremental) continue;
+        if (column.budgeted_only && !row.budgeted) continue;
         metrics.push_back(Value(column.type, static_cast<double>(row.stats.*column.field),
                                 {{"cache", row.name}}));
       }

@@ -85,9 +85,11 @@ std::string ReplacePort(const std::string& address, int port) {
 PathdServer::PathdServer(ServerOptions options)
     : options_(std::move(options)),
       store_(options_.max_map_cells),
-      inflation_(&ShapeGrid, options_.inflation_cache_entries),
+      inflation_(options_.inflation_cache_entries),
       cache_(inflation_, options_.cache_bytes),
-      derived_(options_.derived_cache_bytes) {}
+      derived_(options_.derived_cache_bytes) {
+  store_.SetHonourOriginYaw(options_.honour_origin_yaw);
+}
 
 PathdServer::~PathdServer() { Shutdown(); }
 

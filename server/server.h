@@ -66,6 +66,8 @@ struct ServerOptions {
   // bitmaps, visibility graphs, navigation meshes, Voronoi graphs, Euclidean
   // shortest path maps), LRU beyond it.
   size_t derived_cache_bytes = size_t{512} << 20;
+  // World coordinates apply maps' origin yaw (Grid::honour_origin_yaw).
+  bool honour_origin_yaw = false;
   // Navigate sessions: idle expiry and the most open at once.
   absl::Duration session_idle_timeout = absl::Minutes(10);
   size_t max_sessions = 1024;

@@ -100,6 +100,15 @@ int Batch(CommandEnv& env, Args args) {
   }
   shared.set_simplify(options.simplify);
   shared.set_lookahead(options.lookahead);
+  {
+    // The robot's shape and motion apply to every line (headings do not:
+    // the lines have none).
+    v1::PlanRequest robot;
+    if (absl::Status s = SetRobotOptions(env.options().robot, &robot); !s.ok()) {
+      return env.Usage(s.message());
+    }
+    shared.MergeFrom(robot.options());
+  }
   std::optional<v1::Planner> default_planner;
   if (!options.planner.empty()) {
     absl::StatusOr<v1::Planner> planner = PlannerFromName(options.planner);
@@ -251,7 +260,10 @@ constexpr absl::string_view kBatchFlags[] = {
     "planner", "world", "max_expansions", "heuristic_weight", "simplify", "lookahead",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
+    "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
+    "non_straight_penalty", "cost_penalty", "goal_yaw_tolerance", "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 const Command kBatchCommand = {
     .name = "batch",

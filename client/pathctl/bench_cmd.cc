@@ -387,7 +387,8 @@ constexpr absl::string_view kBenchFlags[] = {
     "concurrency", "duration", "warmup", "requests", "channels", "movingai", "seed",
     "planner", "max_expansions", "heuristic_weight", "connectivity", "cost_weight",
     "unknown_is_free", "robot_radius", "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "inflation_radius",
+    "inflation_radius_cells", "cost_scaling_factor"};
 
 }  // namespace
 

@@ -73,6 +73,9 @@ int Check(CommandEnv& env, Args args) {
       !s.ok()) {
     return env.Usage(s.message());
   }
+  if (absl::Status s = SetFootprint(env.options().robot, request.mutable_options()); !s.ok()) {
+    return env.Usage(s.message());
+  }
 
   absl::StatusOr<v1::IsPathValidResponse> response =
       env.client().IsPathValid(request);
@@ -103,9 +106,13 @@ int Check(CommandEnv& env, Args args) {
     out << absl::StrFormat("robot radius:  %g cells\n",
                            response->robot_radius_cells());
   }
+  if (response->footprint_checked()) out << "footprint:     checked at every pose and step\n";
   if (response->valid()) {
-    out << absl::StrFormat("cost:          %.6f\nlength:        %.6f\n",
-                           response->cost(), response->length());
+    if (!response->footprint_checked()) {
+      out << absl::StrFormat("cost:          %.6f\n", response->cost());
+    }
+    out << absl::StrFormat("length:        %.6f (%g m)\n", response->length(),
+                           response->length_m());
     return code;
   }
   out << "invalid poses: " << FormatIndices(response->invalid_indices()) << "\n"
@@ -128,7 +135,22 @@ absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
         absl::StrSplit(line, absl::ByAnyChar(" \t,"), absl::SkipEmpty());
     v1::Position pose;
     bool ok = fields.size() == 2;
-    if (ok && world) {
+    if (fields.size() == 3) {
+      // "X Y YAW": a pose, X Y in metres (--world) or cell coordinates.
+      double x = 0.0, y = 0.0, yaw = 0.0;
+      ok = absl::SimpleAtod(fields[0], &x) && absl::SimpleAtod(fields[1], &y) &&
+           absl::SimpleAtod(fields[2], &yaw) && std::isfinite(x) && std::isfinite(y) &&
+           std::isfinite(yaw);
+      if (world) {
+        pose.mutable_world_pose()->set_x(x);
+        pose.mutable_world_pose()->set_y(y);
+        pose.mutable_world_pose()->set_yaw(yaw);
+      } else {
+        pose.mutable_cell_pose()->set_x(x);
+        pose.mutable_cell_pose()->set_y(y);
+        pose.mutable_cell_pose()->set_yaw(yaw);
+      }
+    } else if (ok && world) {
       double x = 0.0;
       double y = 0.0;
       ok = absl::SimpleAtod(fields[0], &x) && absl::SimpleAtod(fields[1], &y) &&
@@ -144,8 +166,8 @@ absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
     }
     if (!ok) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "%s:%d: '%s' is not \"X Y\" (%s)", file_name, line_number, line,
-          world ? "two finite numbers, metres" : "two integers, cells"));
+          "%s:%d: '%s' is not \"X Y\" (%s) or \"X Y YAW\" (a pose, radians)", file_name,
+          line_number, line, world ? "two finite numbers, metres" : "two integers, cells"));
     }
     poses.push_back(std::move(pose));
   }
@@ -157,16 +179,19 @@ absl::StatusOr<std::vector<v1::Position>> ParsePathFile(
 
 constexpr absl::string_view kCheckFlags[] = {
     "world", "path_file", "connectivity", "cost_weight", "unknown_is_free",
-    "robot_radius", "robot_radius_cells"};
+    "robot_radius", "robot_radius_cells", "footprint", "footprint_cells"};
 
 const Command kCheckCommand = {
     .name = "check",
-    .synopsis = "NAME X1 Y1 [X2 Y2 ...] [--world] [cost options]\n"
-                "NAME --path_file F [--world] [cost options]",
+    .synopsis = "NAME X1 Y1 [X2 Y2 ...] [--world] [cost options] [--footprint F]\n"
+                "NAME --path_file F [--world] [cost options] [--footprint F]",
     .help = "Checks a path on map NAME's current version: every pose free for the\n"
             "robot and every step a legal move. The poses come from the line or\n"
-            "from --path_file (one \"X Y\" per line). Exit code 4 when the path is\n"
-            "not valid; the invalid poses and steps are listed.",
+            "from --path_file (one \"X Y\" per line, or \"X Y YAW\" for a pose with its\n"
+            "heading). With --footprint (metres, Nav2's syntax) the robot's outline is\n"
+            "checked at every pose, turned to its heading, and along every step.\n"
+            "Exit code 4 when the path is not valid; the invalid poses and steps are\n"
+            "listed.",
     .flags = kCheckFlags,
     .run = Check,
     .map_arg = MapArg::kExisting,

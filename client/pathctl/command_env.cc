@@ -1,6 +1,8 @@
 // Implementation of the command environment and the shared request helpers.
 #include "client/pathctl/command_env.h"
 
+#include <algorithm>
+#include <iterator>
 #include <optional>
 #include <string_view>
 #include <utility>
@@ -12,8 +14,10 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "client/pathctl/command.h"
+#include "core/search/registry.h"
 #include "core/status_macros.h"
 #include "proto/planner_names.h"
+#include "yaml-cpp/yaml.h"
 
 namespace pathd::pathctl {
 
@@ -146,6 +150,130 @@ absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_op
       "min_clearance", options.min_clearance_m, options.min_clearance_cells,
       [&](double m) { plan_options->set_min_clearance_m(m); },
       [&](double c) { plan_options->set_min_clearance_cells(c); }));
+  PATHD_RETURN_IF_ERROR(SetDistance(
+      "inflation_radius", options.inflation_radius_m, options.inflation_radius_cells,
+      [&](double m) { plan_options->set_inflation_radius_m(m); },
+      [&](double c) { plan_options->set_inflation_radius_cells(c); }));
+  if (options.cost_scaling_factor.has_value()) {
+    plan_options->set_cost_scaling_factor(*options.cost_scaling_factor);
+  }
+  return absl::OkStatus();
+}
+
+bool IsKinematicPlanner(std::string_view name) {
+  const Planner* planner = PlannerRegistry::Default().Get(name);
+  return planner != nullptr && planner->traits().kinematic;
+}
+
+absl::StatusOr<std::vector<std::pair<double, double>>> ParseFootprint(
+    std::string_view flag, const std::string& text) {
+  const auto bad = [&](std::string_view why) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--", std::string(flag), ": ", std::string(why),
+        "; expected \"[[x, y], [x, y], [x, y], ...]\" as in Nav2's footprint parameter"));
+  };
+  YAML::Node node;
+  try {
+    node = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    return bad(absl::StrCat("cannot parse '", text, "': ", e.msg));
+  }
+  if (!node.IsSequence() || node.size() < 3) return bad("give at least 3 points");
+  std::vector<std::pair<double, double>> points;
+  for (size_t i = 0; i < node.size(); ++i) {
+    const YAML::Node& p = node[i];
+    if (!p.IsSequence() || p.size() != 2) {
+      return bad(absl::StrFormat("point %d is not a pair [x, y]", i + 1));
+    }
+    try {
+      points.emplace_back(p[0].as<double>(), p[1].as<double>());
+    } catch (const YAML::Exception&) {
+      return bad(absl::StrFormat("point %d is not two numbers", i + 1));
+    }
+  }
+  return points;
+}
+
+namespace {
+
+// The position as a pose facing `yaw`: a world point keeps its metres, a
+// cell becomes its centre in cell coordinates.
+void SetYaw(double yaw, v1::Position* position) {
+  if (position->has_world()) {
+    const v1::WorldPoint w = position->world();
+    v1::WorldPose* pose = position->mutable_world_pose();
+    pose->set_x(w.x());
+    pose->set_y(w.y());
+    pose->set_yaw(yaw);
+  } else if (position->has_cell()) {
+    const v1::Cell c = position->cell();
+    v1::CellPose* pose = position->mutable_cell_pose();
+    pose->set_x(c.x() + 0.5);
+    pose->set_y(c.y() + 0.5);
+    pose->set_yaw(yaw);
+  }
+}
+
+}  // namespace
+
+absl::Status SetFootprint(const RobotOptions& robot, v1::PlanOptions* options) {
+  if (!robot.footprint_m.empty() && !robot.footprint_cells.empty()) {
+    return absl::InvalidArgumentError("give --footprint (metres) or --footprint_cells, not both");
+  }
+  if (!robot.footprint_m.empty()) {
+    PATHD_ASSIGN_OR_RETURN(const auto points, ParseFootprint("footprint", robot.footprint_m));
+    for (const auto& [x, y] : points) {
+      v1::WorldPoint* p = options->mutable_footprint()->add_polygon_m();
+      p->set_x(x);
+      p->set_y(y);
+    }
+  }
+  if (!robot.footprint_cells.empty()) {
+    PATHD_ASSIGN_OR_RETURN(const auto points,
+                           ParseFootprint("footprint_cells", robot.footprint_cells));
+    for (const auto& [x, y] : points) {
+      v1::CellPoint* p = options->mutable_footprint()->add_polygon_cells();
+      p->set_x(x);
+      p->set_y(y);
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::Status SetRobotOptions(const RobotOptions& robot, v1::PlanRequest* request) {
+  v1::PlanOptions* options = request->mutable_options();
+  PATHD_RETURN_IF_ERROR(SetFootprint(robot, options));
+  PATHD_RETURN_IF_ERROR(SetDistance(
+      "min_turning_radius", robot.min_turning_radius_m, robot.min_turning_radius_cells,
+      [&](double m) { options->set_min_turning_radius_m(m); },
+      [&](double c) { options->set_min_turning_radius_cells(c); }));
+  if (!robot.motion_model.empty()) {
+    static constexpr std::pair<const char*, v1::MotionModel> kModels[] = {
+        {"dubins", v1::MOTION_MODEL_DUBINS},
+        {"reeds_shepp", v1::MOTION_MODEL_REEDS_SHEPP},
+        {"differential", v1::MOTION_MODEL_DIFFERENTIAL},
+        {"omnidirectional", v1::MOTION_MODEL_OMNIDIRECTIONAL},
+    };
+    const auto* found = std::find_if(std::begin(kModels), std::end(kModels), [&](const auto& m) {
+      return robot.motion_model == m.first;
+    });
+    if (found == std::end(kModels)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "--motion_model must be dubins, reeds_shepp, differential or omnidirectional, not '",
+          robot.motion_model, "'"));
+    }
+    options->set_motion_model(found->second);
+  }
+  v1::KinematicPenalties* penalties = options->mutable_penalties();
+  if (robot.reverse_penalty) penalties->set_reverse(*robot.reverse_penalty);
+  if (robot.change_penalty) penalties->set_change(*robot.change_penalty);
+  if (robot.non_straight_penalty) penalties->set_non_straight(*robot.non_straight_penalty);
+  if (robot.cost_penalty) penalties->set_cost(*robot.cost_penalty);
+  if (robot.goal_yaw_tolerance) options->set_goal_yaw_tolerance(*robot.goal_yaw_tolerance);
+  options->set_lattice(robot.lattice);
+  if (robot.no_smooth) options->set_smooth(false);
+  if (robot.start_yaw) SetYaw(*robot.start_yaw, request->mutable_start());
+  if (robot.goal_yaw) SetYaw(*robot.goal_yaw, request->mutable_goal());
   return absl::OkStatus();
 }
 

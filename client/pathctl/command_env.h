@@ -96,6 +96,26 @@ absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name);
 // INVALID_ARGUMENT (a usage error) for a bad combination.
 absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_options);
 
+// Sets the robot's footprint, turning radius, motion model, penalties, goal
+// heading tolerance, lattice and smoothing on request->options, and turns
+// the start and goal into poses when --start_yaw / --goal_yaw give their
+// headings (a cell becomes its centre). INVALID_ARGUMENT (a usage error)
+// naming the flag for a bad value or a flag pair given twice.
+absl::Status SetRobotOptions(const RobotOptions& robot, v1::PlanRequest* request);
+
+// Sets options->footprint from --footprint (metres) or --footprint_cells;
+// INVALID_ARGUMENT naming the flag.
+absl::Status SetFootprint(const RobotOptions& robot, v1::PlanOptions* options);
+
+// Whether the planner that answered (PlanResponse.planner) is kinematic: its
+// poses are the path.
+bool IsKinematicPlanner(std::string_view name);
+
+// Nav2's footprint syntax "[[x, y], [x, y], ...]" (a YAML flow sequence of
+// points; at least 3). INVALID_ARGUMENT naming `flag`.
+absl::StatusOr<std::vector<std::pair<double, double>>> ParseFootprint(
+    std::string_view flag, const std::string& text);
+
 // One position from two arguments (`names` word the errors): a cell, or
 // with `world` a point in metres.
 absl::StatusOr<v1::Position> PositionFromPair(Args xy, bool world,

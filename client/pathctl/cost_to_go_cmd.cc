@@ -196,7 +196,8 @@ namespace {
 constexpr absl::string_view kCostToGoFlags[] = {
     "world", "window", "cost_to_go_file", "connectivity", "cost_weight",
     "unknown_is_free", "robot_radius", "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "inflation_radius",
+    "inflation_radius_cells", "cost_scaling_factor"};
 
 }  // namespace
 

@@ -67,11 +67,49 @@ ABSL_FLAG(std::optional<double>, min_clearance, std::nullopt,
           "where the map allows (a cost, not a rule)");
 ABSL_FLAG(std::optional<double>, min_clearance_cells, std::nullopt,
           "plan, navigate, cost-to-go: the minimum clearance in cells");
+ABSL_FLAG(std::optional<double>, inflation_radius, std::nullopt,
+          "plan, navigate, cost-to-go, render: Nav2 inflation costs out to this "
+          "many metres from lethal cells (Nav2's default is 0.55)");
+ABSL_FLAG(std::optional<double>, inflation_radius_cells, std::nullopt,
+          "plan, navigate, cost-to-go, render: the inflation radius in cells");
+ABSL_FLAG(std::optional<double>, cost_scaling_factor, std::nullopt,
+          "plan, navigate, cost-to-go, render: Nav2's cost_scaling_factor, per "
+          "metre (default 10)");
 ABSL_FLAG(std::optional<double>, goal_tolerance, std::nullopt,
-          "plan: substitute the nearest free cell within this many cells for a "
-          "blocked goal");
-ABSL_FLAG(std::optional<double>, goal_tolerance_m, std::nullopt,
-          "plan: the goal tolerance in metres");
+          "plan: substitute the nearest free cell within this many metres for "
+          "a blocked goal (kinematic planners: end this close to the goal)");
+ABSL_FLAG(std::optional<double>, goal_tolerance_cells, std::nullopt,
+          "plan: the goal tolerance in cells");
+ABSL_FLAG(std::string, footprint, "",
+          "plan, batch, render: the robot's outline in metres, Nav2's syntax "
+          "\"[[x,y],[x,y],...]\" (x forward, y left)");
+ABSL_FLAG(std::string, footprint_cells, "", "plan, batch, render: the outline in cells");
+ABSL_FLAG(std::optional<double>, min_turning_radius, std::nullopt,
+          "plan, batch, render: kinematic planners' smallest turning radius, metres "
+          "(default 0.4)");
+ABSL_FLAG(std::optional<double>, min_turning_radius_cells, std::nullopt,
+          "plan, batch, render: the turning radius in cells");
+ABSL_FLAG(std::string, motion_model, "",
+          "plan, batch, render: dubins, reeds_shepp, differential or omnidirectional");
+ABSL_FLAG(std::optional<double>, reverse_penalty, std::nullopt,
+          "plan: kinematic planners' reversing cost multiplier (default 2)");
+ABSL_FLAG(std::optional<double>, change_penalty, std::nullopt,
+          "plan: cost added per change of direction (default 0)");
+ABSL_FLAG(std::optional<double>, non_straight_penalty, std::nullopt,
+          "plan: turning cost multiplier (default 1.2)");
+ABSL_FLAG(std::optional<double>, cost_penalty, std::nullopt,
+          "plan: weight of cell costs along motions (default 2)");
+ABSL_FLAG(std::optional<double>, start_yaw, std::nullopt,
+          "plan, render: the start's heading, radians");
+ABSL_FLAG(std::optional<double>, goal_yaw, std::nullopt,
+          "plan, render: the goal's heading, radians");
+ABSL_FLAG(std::optional<double>, goal_yaw_tolerance, std::nullopt,
+          "plan, render: how far (radians) a kinematic path may end from the goal's "
+          "heading");
+ABSL_FLAG(std::string, lattice, "",
+          "plan, batch, render: state_lattice's control set (a shipped name or a "
+          "file on the server)");
+ABSL_FLAG(bool, no_smooth, false, "plan, batch, render: do not smooth kinematic paths");
 ABSL_FLAG(std::string, via, "",
           "plan: via points X,Y[;X,Y...] visited in order before the goal");
 ABSL_FLAG(bool, allow_partial, false,
@@ -205,6 +243,9 @@ int main(int argc, char** argv) {
   cost.robot_radius_cells = absl::GetFlag(FLAGS_robot_radius_cells);
   cost.min_clearance_m = absl::GetFlag(FLAGS_min_clearance);
   cost.min_clearance_cells = absl::GetFlag(FLAGS_min_clearance_cells);
+  cost.inflation_radius_m = absl::GetFlag(FLAGS_inflation_radius);
+  cost.inflation_radius_cells = absl::GetFlag(FLAGS_inflation_radius_cells);
+  cost.cost_scaling_factor = absl::GetFlag(FLAGS_cost_scaling_factor);
 
   pathctl::MapsOptions& maps = options.maps;
   maps.from = absl::GetFlag(FLAGS_from);
@@ -228,8 +269,24 @@ int main(int argc, char** argv) {
   plan.via = absl::GetFlag(FLAGS_via);
   plan.allow_partial = absl::GetFlag(FLAGS_allow_partial);
   plan.expansions = absl::GetFlag(FLAGS_expansions);
-  plan.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance);
-  plan.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance_m);
+  plan.goal_tolerance_m = absl::GetFlag(FLAGS_goal_tolerance);
+  plan.goal_tolerance_cells = absl::GetFlag(FLAGS_goal_tolerance_cells);
+
+  pathctl::RobotOptions& robot = options.robot;
+  robot.footprint_m = absl::GetFlag(FLAGS_footprint);
+  robot.footprint_cells = absl::GetFlag(FLAGS_footprint_cells);
+  robot.min_turning_radius_m = absl::GetFlag(FLAGS_min_turning_radius);
+  robot.min_turning_radius_cells = absl::GetFlag(FLAGS_min_turning_radius_cells);
+  robot.motion_model = absl::GetFlag(FLAGS_motion_model);
+  robot.reverse_penalty = absl::GetFlag(FLAGS_reverse_penalty);
+  robot.change_penalty = absl::GetFlag(FLAGS_change_penalty);
+  robot.non_straight_penalty = absl::GetFlag(FLAGS_non_straight_penalty);
+  robot.cost_penalty = absl::GetFlag(FLAGS_cost_penalty);
+  robot.start_yaw = absl::GetFlag(FLAGS_start_yaw);
+  robot.goal_yaw = absl::GetFlag(FLAGS_goal_yaw);
+  robot.goal_yaw_tolerance = absl::GetFlag(FLAGS_goal_yaw_tolerance);
+  robot.lattice = absl::GetFlag(FLAGS_lattice);
+  robot.no_smooth = absl::GetFlag(FLAGS_no_smooth);
   plan.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
   plan.pf_attractive = absl::GetFlag(FLAGS_pf_attractive);
   plan.pf_attractive_gain = absl::GetFlag(FLAGS_pf_attractive_gain);

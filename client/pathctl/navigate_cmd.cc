@@ -57,7 +57,8 @@ int Navigate(CommandEnv& env, Args args) {
 constexpr absl::string_view kNavigateFlags[] = {
     "script", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "inflation_radius",
+    "inflation_radius_cells", "cost_scaling_factor"};
 
 }  // namespace
 

@@ -48,6 +48,33 @@ struct CostOptions {
   std::optional<double> robot_radius_cells;
   std::optional<double> min_clearance_m;
   std::optional<double> min_clearance_cells;
+  std::optional<double> inflation_radius_m;
+  std::optional<double> inflation_radius_cells;
+  std::optional<double> cost_scaling_factor;
+};
+
+// The robot's shape and motion (plan, batch, render): the kinematic
+// planners read all of it, the others the footprint (planned for by its
+// inscribed radius).
+struct RobotOptions {
+  // Nav2's footprint syntax, "[[x, y], [x, y], ...]": metres, or cells.
+  std::string footprint_m;
+  std::string footprint_cells;
+  std::optional<double> min_turning_radius_m;
+  std::optional<double> min_turning_radius_cells;
+  // dubins, reeds_shepp, differential, omnidirectional; empty: the planner's.
+  std::string motion_model;
+  std::optional<double> reverse_penalty;
+  std::optional<double> change_penalty;
+  std::optional<double> non_straight_penalty;
+  std::optional<double> cost_penalty;
+  // Headings of the start and the goal, radians (the goal's: unset lets a
+  // kinematic path end at any heading).
+  std::optional<double> start_yaw;
+  std::optional<double> goal_yaw;
+  std::optional<double> goal_yaw_tolerance;
+  std::string lattice;
+  bool no_smooth = false;
 };
 
 // maps create / import / get / set / rect / watch.
@@ -82,9 +109,9 @@ struct PlanFlags {
   bool allow_partial = false;
   // Ask for the expanded cells.
   bool expansions = false;
-  // Goal tolerance in cells or metres (at most one).
-  std::optional<double> goal_tolerance_cells;
+  // Goal tolerance in metres or cells (at most one).
   std::optional<double> goal_tolerance_m;
+  std::optional<double> goal_tolerance_cells;
   // Non-empty: request the cost-to-go field and write it here as CSV.
   std::string cost_to_go_file;
   // Potential field; empty / 0 keep the server's defaults.
@@ -154,6 +181,7 @@ struct RenderFlags {
 struct Options {
   GlobalOptions global;
   CostOptions cost;
+  RobotOptions robot;
   MapsOptions maps;
   PlanFlags plan;
   CheckOptions check;

@@ -147,7 +147,7 @@ int Plan(CommandEnv& env, Args args) {
   if (options.goal_tolerance_cells.has_value() &&
       options.goal_tolerance_m.has_value()) {
     return env.Usage(
-        "give --goal_tolerance (cells) or --goal_tolerance_m, not both");
+        "give --goal_tolerance (metres) or --goal_tolerance_cells, not both");
   }
   if (options.goal_tolerance_cells.has_value()) {
     plan_options->set_goal_tolerance_cells(*options.goal_tolerance_cells);
@@ -178,6 +178,9 @@ int Plan(CommandEnv& env, Args args) {
   pf->set_influence_distance(options.pf_influence);
   pf->set_step_size(options.pf_step);
   pf->set_max_steps(options.pf_max_steps);
+  if (absl::Status s = SetRobotOptions(env.options().robot, &request); !s.ok()) {
+    return env.Usage(s.message());
+  }
 
   absl::StatusOr<v1::PlanResponse> response =
       options.progress ? PlanWithProgress(env, request) : env.client().Plan(request);
@@ -223,13 +226,15 @@ int Plan(CommandEnv& env, Args args) {
   }
   out << "\n";
   if (response->robot_radius_cells() > 0) {
-    out << absl::StrFormat("robot radius: %g cells\n", response->robot_radius_cells());
+    out << absl::StrFormat("robot radius: %g cells (%g m)\n", response->robot_radius_cells(),
+                           response->robot_radius_m());
   }
   // A partial plan (--allow_partial) has a path without found.
   const bool has_path = response->path_size() > 0;
   if (has_path) {
-    out << absl::StrFormat("cost:        %.6f\nlength:      %.6f\n",
-                           response->cost(), response->length());
+    out << absl::StrFormat("cost:        %.6f (%g m)\nlength:      %.6f (%g m)\n",
+                           response->cost(), response->cost_m(), response->length(),
+                           response->length_m());
   }
   if (request.via_size() > 0) {
     const int reached = response->reached_goal_index();
@@ -287,6 +292,18 @@ int Plan(CommandEnv& env, Args args) {
       out << "polyline (" << response->polyline_size()
           << " vertices, cell coordinates): " << absl::StrJoin(points, " ") << "\n";
     }
+    const bool kinematic = IsKinematicPlanner(response->planner());
+    if (kinematic && response->poses_size() > 0) {
+      int cusps = 0;
+      for (int i = 1; i < response->reverse_size(); ++i) {
+        cusps += response->reverse(i) != response->reverse(i - 1);
+      }
+      const v1::WorldPose& last = response->world_poses(response->world_poses_size() - 1);
+      out << absl::StrFormat(
+          "poses:       %d (%d cusp%s), ends at (%g, %g) m facing %g rad in frame %s\n",
+          response->poses_size(), cusps, cusps == 1 ? "" : "s", last.x(), last.y(), last.yaw(),
+          response->frame_id());
+    }
     out << "path (" << response->path_size()
         << (response->any_angle()            ? " vertices, any-angle"
             : response->polyline_size() > 0 ? " cells crossed"
@@ -308,12 +325,16 @@ int Plan(CommandEnv& env, Args args) {
 
 constexpr absl::string_view kPlanFlagNames[] = {
     "world", "planner", "max_expansions", "heuristic_weight", "simplify", "lookahead",
-    "via", "allow_partial", "expansions", "goal_tolerance", "goal_tolerance_m",
+    "via", "allow_partial", "expansions", "goal_tolerance", "goal_tolerance_cells",
     "cost_to_go_file", "pf_attractive", "pf_attractive_gain", "pf_switch_distance",
     "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "progress",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
+    "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
+    "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
+    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 }  // namespace
 
@@ -324,15 +345,23 @@ const Command kPlanCommand = {
                 " [--max_expansions N] [--world] [--simplify]\n"
                 " [--robot_radius M | --robot_radius_cells C]\n"
                 " [--min_clearance M | --min_clearance_cells C]\n"
+                " [--inflation_radius M | --inflation_radius_cells C]\n"
+                " [--cost_scaling_factor K]\n"
                 " [--heuristic_weight W] [--lookahead N]\n"
                 " [--cost_to_go_file F] [--pf_* ...]\n"
-                " [--goal_tolerance C | --goal_tolerance_m M]\n"
+                " [--goal_tolerance M | --goal_tolerance_cells C]\n"
+                " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"
+                " [--motion_model dubins|reeds_shepp|differential|omnidirectional]\n"
+                " [--start_yaw R] [--goal_yaw R] [--goal_yaw_tolerance R]\n"
+                " [--reverse_penalty P] [--lattice L] [--no_smooth]\n"
                 " [--via X,Y[;X,Y...] [--allow_partial]] [--expansions]\n"
                 " [--progress]",
     .help = "Plans a path on map NAME from cell (SX, SY) to (GX, GY) (world metres\n"
             "with --world) and prints whether one was found, its cost, length,\n"
             "expansions and cells. Exit code 3 when no path was found (the outcome\n"
-            "says why). --progress streams the search's progress to stderr.",
+            "says why). --progress streams the search's progress to stderr.\n"
+            "The kinematic planners (hybrid_astar, state_lattice) plan poses for the\n"
+            "--footprint (metres) with --min_turning_radius; see docs/pathctl.md.",
     .flags = kPlanFlagNames,
     .run = Plan,
     .map_arg = MapArg::kExisting,

@@ -186,6 +186,14 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
   for (const CellPoint& p : overlay.structure_points) {
     canvas.FillRect(point_x(p) - dot / 2, point_y(p) - dot / 2, dot, kStructureColour);
   }
+  for (const std::vector<CellPoint>& outline : overlay.outlines) {
+    for (size_t i = 0; i < outline.size(); ++i) {
+      const CellPoint& a = outline[i];
+      const CellPoint& b = outline[(i + 1) % outline.size()];
+      ForEachLinePoint(point_x(a), point_y(a), point_x(b), point_y(b),
+                       [&](int64_t x, int64_t y) { canvas.FillRect(x, y, 1, kFootprintColour); });
+    }
+  }
   if (!overlay.polyline.empty()) {
     for (size_t i = 0; i < overlay.polyline.size(); ++i) {
       const CellPoint& a = overlay.polyline[i];

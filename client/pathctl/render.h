@@ -37,6 +37,8 @@ inline constexpr Rgb kMarkerOutlineColour = {0, 0, 0};
 inline constexpr Rgb kExpandedTint = {255, 170, 0};  // amber
 // Planner structures (mesh, visibility graph, Voronoi, decomposition).
 inline constexpr Rgb kStructureColour = {150, 60, 200};  // purple
+// The robot's footprint along a path.
+inline constexpr Rgb kFootprintColour = {0, 150, 170};  // teal
 
 // Text glyphs drawn over pathctl's cell glyphs (CellGlyph).
 inline constexpr char kPathGlyph = '*';
@@ -67,6 +69,10 @@ struct PlanOverlay {
   // thin lines and dots under the path.
   std::vector<std::array<CellPoint, 2>> structure_segments;
   std::vector<CellPoint> structure_points;
+  // Closed outlines in cell coordinates (the robot's footprint at poses
+  // along the path), drawn in one-pixel lines over the structure and under
+  // the path.
+  std::vector<std::vector<CellPoint>> outlines;
   std::optional<Cell> start;
   std::optional<Cell> goal;
 };

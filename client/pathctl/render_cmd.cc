@@ -1,5 +1,8 @@
 // pathctl render: a map (and optionally a plan over it, with its expanded
 // cells) drawn as a PNG or as text (render.h does the drawing).
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <utility>
@@ -13,6 +16,8 @@
 #include "client/pathctl/png_io.h"
 #include "client/pathctl/render.h"
 #include "core/geometry/structure.h"
+#include "core/map/inflation.h"
+#include "core/map/inflation_cost.h"
 #include "core/status_macros.h"
 
 namespace pathd::pathctl {
@@ -23,6 +28,7 @@ namespace {
 // always the expanded cells when --expansions asks to draw them.
 absl::StatusOr<v1::PlanRequest> RenderPlanRequest(const PlanFlags& options,
                                                   const CostOptions& cost,
+                                                  const RobotOptions& robot,
                                                   const std::string& map,
                                                   Args coordinates) {
   v1::PlanRequest request;
@@ -51,10 +57,102 @@ absl::StatusOr<v1::PlanRequest> RenderPlanRequest(const PlanFlags& options,
   plan_options->set_return_expansions(options.expansions);
   PATHD_RETURN_IF_ERROR(AddViaPoints(options.via, options.world, &request));
   request.set_allow_partial(options.allow_partial);
+  PATHD_RETURN_IF_ERROR(SetRobotOptions(robot, &request));
   return request;
 }
 
+// The robot's outline in its body frame, cells: --footprint (metres) or
+// --footprint_cells, else a circle of the radius the plan applied; empty
+// when the robot is a point.
+std::vector<CellPoint> BodyOutline(const v1::PlanRequest& request, const Grid& grid,
+                                   double applied_radius_cells) {
+  std::vector<CellPoint> outline;
+  const v1::Footprint& f = request.options().footprint();
+  for (const v1::WorldPoint& p : f.polygon_m()) {
+    outline.push_back(CellPoint{p.x() / grid.resolution(), p.y() / grid.resolution()});
+  }
+  for (const v1::CellPoint& p : f.polygon_cells()) outline.push_back(CellPoint{p.x(), p.y()});
+  if (!outline.empty()) return outline;
+  double radius = applied_radius_cells;
+  if (radius <= 0.0 && request.options().has_robot_radius_m()) {
+    radius = request.options().robot_radius_m() / grid.resolution();
+  }
+  if (radius <= 0.0 && request.options().has_robot_radius_cells()) {
+    radius = request.options().robot_radius_cells();
+  }
+  if (radius <= 0.0) return outline;
+  for (int i = 0; i < 24; ++i) {
+    const double a = 2 * std::numbers::pi * i / 24;
+    outline.push_back(CellPoint{radius * std::cos(a), radius * std::sin(a)});
+  }
+  return outline;
+}
+
+// The outline at poses along the path, about one robot length apart, and
+// at the last pose.
+std::vector<std::vector<CellPoint>> OutlinesAlong(const v1::PlanResponse& response,
+                                                  const std::vector<CellPoint>& body) {
+  std::vector<std::vector<CellPoint>> outlines;
+  if (body.empty() || response.poses_size() == 0) return outlines;
+  double reach = 0.0;
+  for (const CellPoint& p : body) reach = std::max(reach, std::hypot(p.x, p.y));
+  const double spacing = std::max(1.0, 1.5 * reach);
+  double travelled = spacing;
+  const auto place = [&](const v1::CellPose& pose) {
+    std::vector<CellPoint> placed;
+    const double c = std::cos(pose.yaw()), s = std::sin(pose.yaw());
+    for (const CellPoint& p : body) {
+      placed.push_back(CellPoint{pose.x() + c * p.x - s * p.y, pose.y() + s * p.x + c * p.y});
+    }
+    outlines.push_back(std::move(placed));
+  };
+  for (int i = 0; i < response.poses_size(); ++i) {
+    if (i > 0) {
+      travelled += std::hypot(response.poses(i).x() - response.poses(i - 1).x(),
+                              response.poses(i).y() - response.poses(i - 1).y());
+    }
+    if (travelled >= spacing || i + 1 == response.poses_size()) {
+      place(response.poses(i));
+      travelled = 0.0;
+    }
+  }
+  return outlines;
+}
+
 Cell CoreCell(const v1::Cell& cell) { return Cell{cell.x(), cell.y()}; }
+
+// The grid the planners see for these options: `stored` shaped (robot
+// radius, Nav2 inflation costs, clearance costs) by the server's own core
+// function, with the options converted as the server decodes them
+// (server/convert.cc: metres / resolution, capped at the map's diagonal;
+// the cost scaling factor per metre times the resolution, unset 10). Drawn
+// here rather than fetched: the API has no call that returns a shaped grid,
+// and the same function on the same cells gives the same bytes.
+absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& options) {
+  const double diagonal = std::hypot(stored.width(), stored.height());
+  auto cells = [&](bool metres, double value) {
+    return std::min(metres ? value / stored.resolution() : value, diagonal);
+  };
+  using O = v1::PlanOptions;
+  const double robot = cells(options.robot_radius_case() == O::kRobotRadiusM,
+                             options.robot_radius_case() == O::kRobotRadiusM
+                                 ? options.robot_radius_m()
+                                 : options.robot_radius_cells());
+  const double inflation = cells(options.inflation_radius_case() == O::kInflationRadiusM,
+                                 options.inflation_radius_case() == O::kInflationRadiusM
+                                     ? options.inflation_radius_m()
+                                     : options.inflation_radius_cells());
+  const double clearance = cells(options.min_clearance_case() == O::kMinClearanceM,
+                                 options.min_clearance_case() == O::kMinClearanceM
+                                     ? options.min_clearance_m()
+                                     : options.min_clearance_cells());
+  const double factor = options.has_cost_scaling_factor() ? options.cost_scaling_factor()
+                                                          : kDefaultCostScalingFactor;
+  const GridShape shape = GridShape::Of(robot, inflation, factor * stored.resolution(),
+                                        clearance, options.unknown_is_free());
+  if (!shape.shaped()) return stored;
+  return ShapeGrid(stored, shape);
+}
 
 // `render NAME [--plan SX SY GX GY] (-o FILE.png | --ascii)`: GetMap, an
 // optional Plan, then the picture.
@@ -91,9 +189,16 @@ int Render(CommandEnv& env, Args args) {
   std::optional<v1::PlanRequest> request;
   if (plan) {
     absl::StatusOr<v1::PlanRequest> built =
-        RenderPlanRequest(plan_flags, env.options().cost, args[0], args.subspan(1));
+        RenderPlanRequest(plan_flags, env.options().cost, env.options().robot, args[0],
+                          args.subspan(1));
     if (!built.ok()) return env.Usage(built.status().message());
     request = *std::move(built);
+  }
+
+  // The cost options shape the drawn grid with or without a plan.
+  v1::PlanOptions cost_options;
+  if (absl::Status s = SetCostOptions(env.options().cost, &cost_options); !s.ok()) {
+    return env.Usage(s.message());
   }
 
   absl::StatusOr<Grid> grid = FetchGrid(env, args[0]);
@@ -108,6 +213,14 @@ int Render(CommandEnv& env, Args args) {
       overlay.path.push_back(CoreCell(c));
     for (const v1::CellPoint& p : response->polyline())
       overlay.polyline.push_back(CellPoint{p.x(), p.y()});
+    const bool kinematic = IsKinematicPlanner(response->planner());
+    if (kinematic) {
+      // The poses are the path: drawn through their exact points.
+      for (const v1::CellPose& p : response->poses())
+        overlay.polyline.push_back(CellPoint{p.x(), p.y()});
+    }
+    overlay.outlines = OutlinesAlong(
+        *response, BodyOutline(*request, *grid, response->robot_radius_cells()));
     for (const v1::Cell& c : response->expanded())
       overlay.expanded.push_back(CoreCell(c));
     overlay.start = CoreCell(response->start());
@@ -135,6 +248,10 @@ int Render(CommandEnv& env, Args args) {
               : "");
     }
   }
+  // After the plan, so a bad option is reported by the server first, with
+  // its field's name.
+  grid = PlanningGridOf(*grid, cost_options);
+  if (!grid.ok()) return env.Usage(grid.status().message());
   if (!options.overlay.empty()) {
     absl::StatusOr<GeometricStructure> structure =
         DescribeStructure(options.overlay, *grid, env.options().cost.unknown_is_free);
@@ -171,7 +288,11 @@ constexpr absl::string_view kRenderFlags[] = {
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
-    "min_clearance_cells"};
+    "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
+    "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
+    "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
+    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "cost_scaling_factor"};
 
 }  // namespace
 
@@ -182,9 +303,14 @@ const Command kRenderCommand = {
                 " (-o FILE.png [--scale N] | --ascii) [--y_up] [--overlay KIND]",
     .help = "Draws map NAME as a PNG (-o) or as text (--ascii), and with --plan the\n"
             "path from (SX, SY) to (GX, GY), its start and goal, and with\n"
-            "--expansions the cells the search expanded. --overlay KIND draws what a\n"
-            "geometric planner builds from the map under it (polygons, visibility,\n"
-            "mesh, decomposition, voronoi), built here by the planners' own code.\n"
+            "--expansions the cells the search expanded. Cost options that shape the\n"
+            "planning grid (--robot_radius, --inflation_radius, --min_clearance)\n"
+            "draw the grid the planners see: inscribed cells, and costs in shades.\n"
+            "--overlay KIND draws what a geometric planner builds from the map under\n"
+            "it (polygons, visibility, mesh, decomposition, voronoi), built here by\n"
+            "the planners' own code.\n"
+            "With a --footprint (or a robot radius) the robot's outline is drawn\n"
+            "along the path, about one robot length apart.\n"
             "Exit code 3 when the plan found no path (the map is still drawn).",
     .flags = kRenderFlags,
     .run = Render,

@@ -157,9 +157,10 @@ a usage error naming the flag (e.g. plan ... -o x.png):
                        cost-to-go field as CSV (one row per line, inf =
                        unreachable); cost-to-go prints a table otherwise
   --window X,Y,W,H     cost-to-go: only columns X..X+W-1, rows Y..Y+H-1
-  --goal_tolerance C   plan: when the goal cell is blocked, plan to the nearest
-                       free cell within C cells and say so (up to 1024 cells)
-  --goal_tolerance_m M plan: the same in metres
+  --goal_tolerance M   plan: when the goal cell is blocked, plan to the nearest
+                       free cell within M metres and say so (up to 1024 cells);
+                       kinematic planners: end within M metres of the goal
+  --goal_tolerance_cells C  plan: the same in cells
   --via X,Y[;X,Y...]   plan: visit these points in order before the goal (up to
                        256; metres with --world); one leg per point
   --allow_partial      plan: with --via, when a leg finds no path print the path
@@ -208,6 +209,22 @@ a usage error naming the flag (e.g. plan ... -o x.png):
                        maps import of a .png: map_server's thresholds (default
                        0.65 and 0.196) and colour inversion; see below
 
+robot options (plan, batch, render):
+  --footprint "[[x,y],...]"  the robot's outline in metres, x forward, y left
+                       (Nav2's footprint syntax); kinematic planners check it
+                       at every pose, the others plan for its inscribed radius
+  --footprint_cells "[[x,y],...]"  the same in cells
+  --min_turning_radius M  kinematic planners: smallest turning radius (0.4 m)
+  --min_turning_radius_cells C  the same in cells
+  --motion_model MODEL dubins (forward only, the default), reeds_shepp (with
+                       reversing), differential, omnidirectional
+  --start_yaw R, --goal_yaw R  headings in radians (unset goal heading: any)
+  --goal_yaw_tolerance R  end within R radians of --goal_yaw
+  --reverse_penalty P, --change_penalty P, --non_straight_penalty P,
+  --cost_penalty P     Nav2 Smac's penalties (defaults 2, 0, 1.2, 2)
+  --lattice NAME|FILE  state_lattice's control set
+  --no_smooth          return kinematic paths unsmoothed
+
 cost options (plan, navigate, cost-to-go, check):
   --connectivity N     4 or 8 (default 8)
   --cost_weight W      w in step = length * (1 + w * cost / 252) (default 1)
@@ -217,6 +234,11 @@ cost options (plan, navigate, cost-to-go, check):
   --min_clearance M    prefer keeping M metres from obstacles: nearer cells
                        cost up to 252 (a preference, not a rule; not check)
   --min_clearance_cells C  the same in cells
+  --inflation_radius M Nav2 inflation costs: cells up to M metres from a lethal
+                       cell, beyond the robot radius, cost
+                       252 * exp(-K * (distance - robot radius)) (not check)
+  --inflation_radius_cells C  the same in cells
+  --cost_scaling_factor K  the decay K per metre (Nav2's, default 10)
 
 maps watch prints one line per map version: "version V updated: N cells in
 R rects: (x0,y0)-(x1,y1) ...", "version V resync: whole map WxH", "version V

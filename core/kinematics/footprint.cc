@@ -374,6 +374,39 @@ bool FootprintChecker::Collides(const Grid& grid, const Pose& pose, bool unknown
   return false;
 }
 
+bool FootprintChecker::CollidesExactly(const Grid& grid, const Pose& pose,
+                                       bool unknown_is_free) const {
+  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.yaw)) return true;
+  const double margin = options_.margin_cells;
+  const double reach = footprint_.circumscribed_radius() + margin;
+  const std::vector<CellPoint> poly = footprint_.At(pose);
+  // The footprint's extent, grown by the margin: anything reaching the
+  // map's outline leaves the map.
+  double x0 = pose.x - reach, x1 = pose.x + reach, y0 = pose.y - reach, y1 = pose.y + reach;
+  if (!poly.empty()) {
+    x0 = y0 = std::numeric_limits<double>::infinity();
+    x1 = y1 = -x0;
+    for (const CellPoint& v : poly) {
+      x0 = std::min(x0, v.x), x1 = std::max(x1, v.x);
+      y0 = std::min(y0, v.y), y1 = std::max(y1, v.y);
+    }
+    x0 -= margin, x1 += margin, y0 -= margin, y1 += margin;
+  }
+  if (x0 <= 0.0 || y0 <= 0.0 || x1 >= grid.width() || y1 >= grid.height()) return true;
+  for (int32_t cy = static_cast<int32_t>(std::floor(y0)); cy <= static_cast<int32_t>(y1); ++cy) {
+    for (int32_t cx = static_cast<int32_t>(std::floor(x0)); cx <= static_cast<int32_t>(x1);
+         ++cx) {
+      if (Traversable(grid.cost(cx, cy), unknown_is_free)) continue;
+      const Rect cell{static_cast<double>(cx), static_cast<double>(cy), cx + 1.0, cy + 1.0};
+      const double d = footprint_.is_circle()
+                           ? RectPointDistance(cell, pose.point()) - footprint_.circle_radius()
+                           : RectPolygonDistance(cell, poly);
+      if (d <= margin) return true;
+    }
+  }
+  return false;
+}
+
 uint8_t FootprintChecker::MaxCost(const Grid& grid, const Pose& pose) const {
   if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.yaw)) {
     return kUnknownCost;

@@ -119,6 +119,12 @@ class FootprintChecker {
   // the same grid and rule and enables the shortcuts.
   bool Collides(const Grid& grid, const Pose& pose, bool unknown_is_free,
                 const float* distance = nullptr) const;
+  // The exact test, without masks: true when the footprint at exactly
+  // `pose`, grown by margin_cells, overlaps or touches an obstacle cell or
+  // leaves the map. O(cells under the footprint x vertices); for validating
+  // given poses (IsPathValid), where the masks' conservative bins and
+  // subcells would call a path that passes 2 cm from a wall invalid.
+  bool CollidesExactly(const Grid& grid, const Pose& pose, bool unknown_is_free) const;
   // The highest cost of the cells the pose's mask covers, 255 when it
   // leaves the map (for planners that weigh cost under the whole robot).
   uint8_t MaxCost(const Grid& grid, const Pose& pose) const;

@@ -97,19 +97,27 @@ absl::Status ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free
     return absl::InvalidArgumentError(absl::StrFormat(
         "minimum clearance %g cells must be finite and > 0", min_clearance_cells));
   }
-  if (grid->size() == 0) return absl::OkStatus();
+  EuclideanDistanceField transform;
+  ApplyClearanceCost(min_clearance_cells, unknown_is_free, transform, CellRect::Of(*grid),
+                     grid);
+  return absl::OkStatus();
+}
+
+void ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free,
+                        EuclideanDistanceField& transform, const CellRect& area,
+                        Grid* grid) {
+  if (grid->size() == 0) return;
   // Squared distances up to ceil(m^2) are all the ramp needs.
   const double m2 = std::ceil(min_clearance_cells * min_clearance_cells);
   const int64_t bound = static_cast<int64_t>(
       std::min(m2, static_cast<double>(std::numeric_limits<int32_t>::max())));
   const size_t w = static_cast<size_t>(grid->width());
   uint8_t* cells = grid->mutable_cells().data();
-  EuclideanDistanceField transform;
-  transform.ForEachRow(
-      *grid, ObstacleSources(unknown_is_free), bound,
+  transform.ForEachRowIn(
+      *grid, ObstacleSources(unknown_is_free), bound, area.y0, area.y1,
       [&](int32_t y, const int64_t* row) {
         uint8_t* out = cells + static_cast<size_t>(y) * w;
-        for (size_t x = 0; x < w; ++x) {
+        for (int32_t x = area.x0; x <= area.x1; ++x) {
           if (row[x] == EuclideanDistanceField::kFar) continue;
           const uint8_t c = out[x];
           if (!Traversable(c, unknown_is_free)) continue;
@@ -120,7 +128,6 @@ absl::Status ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free
           if (penalty > own) out[x] = penalty;
         }
       });
-  return absl::OkStatus();
 }
 
 double PathClearance(const Grid& grid, absl::Span<const Cell> path,

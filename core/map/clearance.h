@@ -16,6 +16,7 @@
 
 #include "absl/status/status.h"
 #include "absl/types/span.h"
+#include "core/map/euclidean_distance.h"
 #include "core/map/grid.h"
 
 namespace pathd {
@@ -37,6 +38,13 @@ uint8_t ClearanceCost(double distance, double min_clearance_cells);
 // when it is not finite or not positive.
 absl::Status ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free,
                                 Grid* grid);
+// The same with the caller's transform, reused across calls (ShapeGrid's
+// steps share one), writing only the cells of `area` (a rectangle of the
+// grid; distances still count every obstacle of the grid). Precondition:
+// min_clearance_cells finite and > 0.
+void ApplyClearanceCost(double min_clearance_cells, bool unknown_is_free,
+                        EuclideanDistanceField& transform, const CellRect& area,
+                        Grid* grid);
 
 // The smallest clearance of the path's cells: the exact Euclidean distance
 // (cells) from a cell's centre to the centre of the nearest cell the robot

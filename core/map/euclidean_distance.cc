@@ -35,6 +35,19 @@ int64_t FloorSqrt(int64_t v) {
 
 }  // namespace
 
+int64_t SquaredRadiusBound(double r) {
+  // floor(r * r) alone can be off by one when the product rounds across an
+  // integer; fma gives the sign of r * r - n exactly. 2^40 > 2 *
+  // (kMaxGridDimension + 1)^2.
+  constexpr double kBeyondAnyGrid = 1099511627776.0;  // 2^40
+  const double r2 = r * r;
+  if (r2 >= kBeyondAnyGrid) return static_cast<int64_t>(kBeyondAnyGrid);
+  double n = std::floor(r2);
+  if (std::fma(r, r, -n) < 0.0) n -= 1.0;
+  if (std::fma(r, r, -(n + 1.0)) >= 0.0) n += 1.0;
+  return static_cast<int64_t>(n);
+}
+
 DistanceSources SourcesOfCost(uint8_t cost) {
   DistanceSources sources;
   sources.by_cost[cost] = true;

@@ -36,6 +36,13 @@ struct DistanceSources {
 // Sources are the cells of exactly the given cost.
 DistanceSources SourcesOfCost(uint8_t cost);
 
+// The largest integer n with n <= radius^2 in exact arithmetic, so that an
+// integer squared distance d2 is within the radius (inclusive) exactly when
+// d2 <= n: the bound to give the transforms below for "within radius".
+// Radii beyond any grid's diagonal are clamped to 2^40. Precondition:
+// radius finite and >= 0.
+int64_t SquaredRadiusBound(double radius);
+
 // Reusable working memory for the transform; the buffers grow to the largest
 // grid seen and are then reused, so repeated transforms do not allocate. Not
 // thread-safe: one per thread.
@@ -58,8 +65,17 @@ class EuclideanDistanceField {
   template <typename RowSink>
   void ForEachRow(const Grid& grid, const DistanceSources& sources,
                   int64_t max_squared, RowSink&& sink) {
+    ForEachRowIn(grid, sources, max_squared, 0, grid.height() - 1, sink);
+  }
+  // As ForEachRow for rows first_row .. last_row only (the distances still
+  // count every source of the grid): a window's rows cost only their own
+  // row pass.
+  template <typename RowSink>
+  void ForEachRowIn(const Grid& grid, const DistanceSources& sources,
+                    int64_t max_squared, int32_t first_row, int32_t last_row,
+                    RowSink&& sink) {
     const int64_t bound = Prepare(grid, sources, max_squared);
-    for (int32_t y = 0; y < grid.height(); ++y) {
+    for (int32_t y = first_row; y <= last_row; ++y) {
       DistanceRow(y, grid.width(), sources.border, bound);
       sink(y, static_cast<const int64_t*>(row_.data()));
     }
@@ -74,8 +90,15 @@ class EuclideanDistanceField {
   template <typename RowSink>
   void ForEachRowWithin(const Grid& grid, const DistanceSources& sources,
                         int64_t max_squared, RowSink&& sink) {
+    ForEachRowWithinIn(grid, sources, max_squared, 0, grid.height() - 1, sink);
+  }
+  // As ForEachRowWithin for rows first_row .. last_row only.
+  template <typename RowSink>
+  void ForEachRowWithinIn(const Grid& grid, const DistanceSources& sources,
+                          int64_t max_squared, int32_t first_row, int32_t last_row,
+                          RowSink&& sink) {
     PrepareChords(Prepare(grid, sources, max_squared));
-    for (int32_t y = 0; y < grid.height(); ++y) {
+    for (int32_t y = first_row; y <= last_row; ++y) {
       ChordRow(y, grid.width(), sources.border);
       sink(y, static_cast<const uint8_t*>(within_.data()));
     }

@@ -56,9 +56,18 @@ WorldPoint Grid::CellCenter(Cell c) const {
 WorldPoint Grid::CellPointToWorld(CellPoint p) const {
   const double lx = p.x * resolution_;
   const double ly = p.y * resolution_;
-  const double cs = std::cos(origin_.yaw);
-  const double sn = std::sin(origin_.yaw);
+  const double cs = std::cos(frame_yaw());
+  const double sn = std::sin(frame_yaw());
   return WorldPoint{origin_.x + cs * lx - sn * ly, origin_.y + sn * lx + cs * ly};
+}
+
+CellPoint Grid::WorldToCellPoint(WorldPoint p) const {
+  // Undo the rotation, then scale into cells.
+  const double dx = p.x - origin_.x;
+  const double dy = p.y - origin_.y;
+  const double cs = std::cos(frame_yaw());
+  const double sn = std::sin(frame_yaw());
+  return CellPoint{(cs * dx + sn * dy) / resolution_, (-sn * dx + cs * dy) / resolution_};
 }
 
 absl::StatusOr<Cell> Grid::WorldToCell(WorldPoint p) const {
@@ -66,13 +75,9 @@ absl::StatusOr<Cell> Grid::WorldToCell(WorldPoint p) const {
     return absl::InvalidArgumentError(
         absl::StrFormat("world point (%g, %g) is not finite", p.x, p.y));
   }
-  // Undo the rotation, then scale into cells.
-  const double dx = p.x - origin_.x;
-  const double dy = p.y - origin_.y;
-  const double cs = std::cos(origin_.yaw);
-  const double sn = std::sin(origin_.yaw);
-  const double gx = (cs * dx + sn * dy) / resolution_;
-  const double gy = (-sn * dx + cs * dy) / resolution_;
+  const CellPoint g = WorldToCellPoint(p);
+  const double gx = g.x;
+  const double gy = g.y;
   if (!(gx >= 0.0 && gy >= 0.0 && gx < width_ && gy < height_)) {
     return absl::OutOfRangeError(absl::StrFormat(
         "world point (%g, %g) is outside the %d x %d map (resolution %g, "

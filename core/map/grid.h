@@ -51,7 +51,8 @@ struct GridOrigin {
 };
 
 // A rectangular cost grid. Row y starts at index y * width. Cell (x, y) covers
-// world [x, x+1) x [y, y+1) cells from the origin, rotated by origin.yaw, so
+// world [x, x+1) x [y, y+1) cells from the origin (rotated by origin.yaw only
+// when honour_origin_yaw()), so
 // ROS maps are stored bottom row first (the OccupancyGrid convention) and
 // Moving AI maps keep their file order. A value type; not synchronised: share
 // it as shared_ptr<const Grid> once built.
@@ -78,6 +79,15 @@ class Grid {
   // Precondition: resolution > 0 and finite (callers validate input).
   void set_resolution(double resolution) { resolution_ = resolution; }
   void set_origin(const GridOrigin& origin) { origin_ = origin; }
+  // Whether world coordinates turn with origin().yaw. False by default: Nav2's
+  // costmap ignores a map_server origin's yaw, so a map saved with one is
+  // placed unrotated and world goals land on the cells Nav2 would use. The
+  // yaw is kept (and saved) either way. pathd --honour_origin_yaw sets it.
+  bool honour_origin_yaw() const { return honour_origin_yaw_; }
+  void set_honour_origin_yaw(bool honour) { honour_origin_yaw_ = honour; }
+  // The rotation world coordinates use: origin().yaw when honoured, else 0.
+  // A heading in the grid frame plus frame_yaw() is the world heading.
+  double frame_yaw() const { return honour_origin_yaw_ ? origin_.yaw : 0.0; }
 
   bool InBounds(int32_t x, int32_t y) const {
     return x >= 0 && y >= 0 && x < width_ && y < height_;
@@ -108,6 +118,8 @@ class Grid {
   WorldPoint CellCenter(Cell c) const;
   // World point of a point in cell coordinates.
   WorldPoint CellPointToWorld(CellPoint p) const;
+  // Cell coordinates of a world point, on the grid or not (no checks).
+  CellPoint WorldToCellPoint(WorldPoint p) const;
   // The cell containing a world point; fails with OUT_OF_RANGE when the point
   // is outside the grid and INVALID_ARGUMENT when it is not finite.
   absl::StatusOr<Cell> WorldToCell(WorldPoint p) const;
@@ -121,7 +133,20 @@ class Grid {
   int32_t height_ = 0;
   double resolution_ = 1.0;
   GridOrigin origin_;
+  bool honour_origin_yaw_ = false;
   std::vector<uint8_t> cells_;
+};
+
+// An inclusive rectangle of cells, [x0, x1] x [y0, y1].
+struct CellRect {
+  int32_t x0 = 0;
+  int32_t y0 = 0;
+  int32_t x1 = -1;
+  int32_t y1 = -1;
+  // Every cell of `grid`.
+  static CellRect Of(const Grid& grid) {
+    return CellRect{0, 0, grid.width() - 1, grid.height() - 1};
+  }
 };
 
 // "(x, y)" for messages.

@@ -33,6 +33,7 @@ std::unique_ptr<Planner> MakeVisibilityGraphPlanner();
 std::unique_ptr<Planner> MakeMinimalConstructPlanner();
 std::unique_ptr<Planner> MakeEuclideanSpmPlanner();
 std::unique_ptr<Planner> MakeNavMeshPlanner();
+std::unique_ptr<Planner> MakeStateLatticePlanner();
 std::unique_ptr<Planner> MakeHybridAStarPlanner();
 
 }  // namespace pathd

@@ -19,16 +19,11 @@
 namespace pathd {
 namespace {
 
-GridShape ShapeOf(const PlanQuery& query) {
-  return GridShape::Of(query.robot_radius_cells, query.min_clearance_cells,
-                       query.request.cost.unknown_is_free);
-}
-
 // The planning grid: the stored one, or the one shaped for the robot.
 absl::StatusOr<std::shared_ptr<const Grid>> PlanningGrid(const PlanQuery& query,
                                                          const PlanSnapshot& snapshot,
                                                          const PlanEngine& engine) {
-  const GridShape shape = ShapeOf(query);
+  const GridShape shape = PlanningShape(query);
   if (!shape.shaped()) return snapshot.grid;
   if (engine.inflate) return engine.inflate(snapshot.grid, shape);
   PATHD_ASSIGN_OR_RETURN(Grid shaped, ShapeGrid(*snapshot.grid, shape));
@@ -83,26 +78,86 @@ void ReportClearance(const PlanQuery& query, PlanAnswer* answer) {
                     query.request.cost.unknown_is_free);
 }
 
-absl::Status CheckMinClearance(const PlanQuery& query) {
-  if (query.min_clearance_cells <= 0.0) return absl::OkStatus();
+GridShape PlanningShape(const PlanQuery& query) {
+  return GridShape::Of(query.robot_radius_cells, query.inflation_radius_cells,
+                       query.cost_scaling_per_cell, query.min_clearance_cells,
+                       query.request.cost.unknown_is_free);
+}
+
+absl::Status CheckCostShaping(const PlanQuery& query) {
+  // Named as the client sets them; the first one asked for is reported.
+  const char* option = nullptr;
+  const char* what = nullptr;
+  if (query.inflation_radius_cells > 0.0) {
+    option = "options.inflation_radius_m/_cells";
+    what = "inflation costs work";
+  } else if (query.min_clearance_cells > 0.0) {
+    option = "options.min_clearance_m/_cells";
+    what = "a minimum clearance works";
+  } else {
+    return absl::OkStatus();
+  }
   if (const Planner* planner = PlannerRegistry::Default().Get(query.planner);
       planner != nullptr && planner->traits().needs_uniform_cost) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "options.min_clearance_m/_cells: planner %s plans on uniform-cost maps "
-        "and a minimum clearance works through cell costs; use a grid planner "
-        "(astar, theta_star, ...), voronoi to stay as far from obstacles as "
-        "the map allows, or robot_radius for a hard limit",
-        query.planner));
+        "%s: planner %s plans on uniform-cost maps and %s through cell costs; "
+        "use a grid planner (astar, theta_star, ...), voronoi to stay as far "
+        "from obstacles as the map allows, or robot_radius for a hard limit",
+        option, query.planner, what));
   }
   if (query.request.cost.cost_weight == 0.0) {
-    return absl::InvalidArgumentError(
-        "options.min_clearance_m/_cells: a minimum clearance works through "
-        "cell costs, and cost_weight 0 ignores them");
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s: %s through cell costs, and cost_weight 0 ignores them", option, what));
   }
   return absl::OkStatus();
 }
 
+namespace {
+
+bool IsKinematic(std::string_view planner) {
+  const Planner* p = PlannerRegistry::Default().Get(planner);
+  return p != nullptr && p->traits().kinematic;
+}
+
+// The rules of a kinematic planner's query: it plans between exact poses for
+// a footprint, so the grid planners' goal substitution, radius, via legs and
+// simplification do not apply (the decoder folds the radius into the
+// footprint and the tolerance into the kinematic query).
+absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
+  if (!query->via.empty()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "via: planner %s plans between poses and does not plan through via "
+        "points; plan each leg as its own request",
+        query->planner));
+  }
+  if (query->simplify) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.simplify: planner %s returns motions the robot can drive; "
+        "simplifying would cut its turns (options.smooth smooths them within "
+        "the footprint and the turning radius)",
+        query->planner));
+  }
+  if (query->request.want_cost_to_go) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.return_cost_to_go: planner %s searches poses, not cells, and "
+        "has no cost-to-go field",
+        query->planner));
+  }
+  if (query->robot_radius_cells > 0.0 || query->goal_tolerance_cells > 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "planner %s takes the robot's shape as a footprint and the goal "
+        "tolerance in its kinematic query (PlanRequest::kinematic), not as a "
+        "robot radius or a blocked-goal tolerance",
+        query->planner));
+  }
+  PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, query->request));
+  return CheckMinClearance(*query);
+}
+
+}  // namespace
+
 absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query) {
+  if (IsKinematic(query->planner)) return CheckKinematicQuery(stored, query);
   PlanRequest& request = query->request;
   // Substituted before anything keys on the goal, so every planner (and a
   // stateful search's cache entry) sees the cell actually planned to.
@@ -111,7 +166,7 @@ absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query)
                                         query->goal_tolerance_cells, request.cost,
                                         /*radius_cells=*/0.0));
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, request));
-  PATHD_RETURN_IF_ERROR(CheckMinClearance(*query));
+  PATHD_RETURN_IF_ERROR(CheckCostShaping(*query));
   if (query->via.empty()) return absl::OkStatus();
   if (stateful) {
     return absl::InvalidArgumentError(absl::StrFormat(

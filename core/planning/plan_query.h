@@ -47,6 +47,13 @@ struct PlanQuery {
   // 0: plan on the map as stored; otherwise on the map with obstacles
   // inflated by this radius (cells).
   double robot_radius_cells = 0.0;
+  // > 0: Nav2's inflation costs (core/map/inflation_cost.h) for cells
+  // between the robot radius and this distance (cells) from a lethal cell,
+  // decaying by cost_scaling_per_cell (Nav2's cost_scaling_factor per metre
+  // times the resolution; must be > 0 then). Grid planners only
+  // (CheckPlanQuery).
+  double inflation_radius_cells = 0.0;
+  double cost_scaling_per_cell = 0.0;
   // > 0: cells closer than this (cells) to an obstacle of the (inflated) map
   // cost more (core/map/clearance.h), and the answer reports the path's
   // clearance. Grid planners only (CheckPlanQuery).
@@ -120,7 +127,8 @@ struct PlanEngine {
   const Planner* planner = nullptr;
   StatefulSearch* stateful = nullptr;
   // The snapshot's grid shaped for the robot (inflated by its radius, with
-  // clearance costs): a cache's copy, or empty to compute it (ShapeGrid).
+  // inflation and clearance costs): a cache's copy, or empty to compute it
+  // (ShapeGrid).
   std::function<absl::StatusOr<std::shared_ptr<const Grid>>(
       const std::shared_ptr<const Grid>& stored, const GridShape& shape)>
       inflate;
@@ -138,24 +146,35 @@ struct PlanEngine {
 // (Navigate sessions).
 void ReportClearance(const PlanQuery& query, PlanAnswer* answer);
 
-// INVALID_ARGUMENT when the query's minimum clearance cannot act: it works
-// through cell costs, which planners that need uniform cost (the geometric
-// ones) refuse and cost_weight 0 ignores. OK without a clearance.
-absl::Status CheckMinClearance(const PlanQuery& query);
+// The shape of the grid the query plans on (robot radius, inflation costs,
+// clearance costs; GridShape::Of).
+GridShape PlanningShape(const PlanQuery& query);
+
+// INVALID_ARGUMENT when the query's inflation costs or minimum clearance
+// cannot act: they work through cell costs, which planners that need
+// uniform cost (the geometric ones) refuse and cost_weight 0 ignores. The
+// message names the option (options.inflation_radius_m/_cells first). OK
+// without either.
+absl::Status CheckCostShaping(const PlanQuery& query);
 
 // The rules a query must pass on the stored map before it is worth queueing,
 // in this order: the goal tolerance (substitutes query->request.goal, or
 // INVALID_ARGUMENT kGoalBlocked naming the tolerance), ValidateEndpoints
 // (once per query), then via points: refused for a stateful engine (naming
-// the planner) and with want_cost_to_go, ValidateVia; a minimum clearance is
-// refused for planners that need uniform cost (the geometric ones) and with
-// cost_weight 0, which would ignore it. Cheap: O(tolerance^2 + via points);
-// never inflates.
+// the planner) and with want_cost_to_go, ValidateVia; inflation costs and a
+// minimum clearance are refused for planners that need uniform cost (the
+// geometric ones) and with cost_weight 0, which would ignore them
+// (CheckCostShaping). Cheap: O(tolerance^2 + via points);
+// never inflates. A kinematic planner's query (PlannerTraits::kinematic)
+// has rules of its own: via points, simplify, return_cost_to_go, a robot
+// radius and a goal tolerance are refused (its footprint and tolerances are
+// in request.kinematic), then the endpoint cells are validated.
 absl::Status CheckPlanQuery(const Grid& stored, bool stateful,
                             PlanQuery* query);
 
 // Plans a query that passed CheckPlanQuery on `snapshot`: shapes the grid
-// for a robot radius and a minimum clearance (engine.inflate), re-chooses the goal on the inflated map only
+// for a robot radius, inflation costs and a minimum clearance
+// (engine.inflate; errors of CheckGridShape), re-chooses the goal on the inflated map only
 // when the radius made the stored map's choice inscribed, checks that no
 // endpoint became inscribed (INVALID_ARGUMENT "... within the robot radius
 // ..."), then plans through the via points (PlanThrough, one grid for every

@@ -40,6 +40,7 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeMinimalConstructPlanner),
              PlannerRegistry::Factory(&MakeEuclideanSpmPlanner),
              PlannerRegistry::Factory(&MakeNavMeshPlanner),
+             PlannerRegistry::Factory(&MakeStateLatticePlanner),
              PlannerRegistry::Factory(&MakeHybridAStarPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));

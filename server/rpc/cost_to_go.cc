@@ -72,11 +72,13 @@ absl::Status PrepareCostToGo(const PlanDeps& deps, CostToGoCall& call) {
   const Grid& grid = *call.snapshot->grid;
   PATHD_RETURN_IF_ERROR(
       ValidateEndpoint(grid, query.request.goal, "goal", query.request.cost));
-  PATHD_RETURN_IF_ERROR(CheckMinClearance(query));
+  PATHD_RETURN_IF_ERROR(CheckCostShaping(query));
   call.key = IncrementalCache::Key{.map = request.map(),
                                    .goal = query.request.goal,
                                    .cost = query.request.cost,
                                    .robot_radius_cells = query.robot_radius_cells,
+                                   .inflation_radius_cells = query.inflation_radius_cells,
+                                   .cost_scaling_per_cell = query.cost_scaling_per_cell,
                                    .min_clearance_cells = query.min_clearance_cells};
   call.x = 0;
   call.y = 0;
@@ -108,7 +110,7 @@ absl::Status AnswerCostToGo(CostToGoCall& call, InflationCache& inflation,
   const IncrementalCache::Key& key = call.key;
   if (key.robot_radius_cells > 0.0) {
     PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> inflated,
-                           inflation.Get(call.snapshot->grid, key.robot_radius_cells));
+                           inflation.Get(*call.snapshot, key.robot_radius_cells));
     PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(*call.snapshot->grid, *inflated,
                                                key.robot_radius_cells,
                                                {{key.goal, "goal"}}));

@@ -90,14 +90,13 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
   start_ = decoded.query.request.start;
   goal_ = decoded.query.request.goal;
   cost_ = decoded.query.request.cost;
-  radius_cells_ = decoded.query.robot_radius_cells;
-  min_clearance_cells_ = decoded.query.min_clearance_cells;
+  shape_ = PlanningShape(decoded.query);
   max_expansions_ = decoded.query.max_expansions;
   PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
   PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
-  if (radius_cells_ > 0.0) {
-    PATHD_RETURN_IF_ERROR(
-        CheckRadiusEndpoints(stored, *grid_, radius_cells_, {{goal_, "goal"}}));
+  if (shape_.robot_radius_cells > 0.0) {
+    PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(stored, *grid_, shape_.robot_radius_cells,
+                                               {{goal_, "goal"}}));
   }
   PATHD_ASSIGN_OR_RETURN(search_, DStarLite::Create(grid_, goal_, cost_));
   PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
@@ -156,11 +155,10 @@ absl::StatusOr<uint64_t> NavigationSearch::Observe(
 // shared shapes come from the cache, private ones are computed here).
 absl::StatusOr<std::shared_ptr<const Grid>> NavigationSearch::EffectiveGrid(
     const MapSnapshot& snapshot) {
-  const GridShape shape =
-      GridShape::Of(radius_cells_, min_clearance_cells_, cost_.unknown_is_free);
+  const GridShape& shape = shape_;
   if (overlay_.empty()) {
     if (!shape.shaped()) return snapshot.grid;
-    return deps_.inflation.Get(snapshot.grid, shape);
+    return deps_.inflation.Get(snapshot, shape);
   }
   Grid merged = *snapshot.grid;
   for (const auto& [index, cost] : overlay_) {
@@ -227,8 +225,10 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
   query.planner = "dstar_lite";
   query.request = PlanRequest::Between(start_, goal_, cost_);
   query.requested_goal = goal_;
-  query.robot_radius_cells = radius_cells_;
-  query.min_clearance_cells = min_clearance_cells_;
+  query.robot_radius_cells = shape_.robot_radius_cells;
+  query.inflation_radius_cells = shape_.inflation_radius_cells;
+  query.cost_scaling_per_cell = shape_.cost_scaling_per_cell;
+  query.min_clearance_cells = shape_.min_clearance_cells;
   query.max_expansions = max_expansions_;
   PlanAnswer answer;
   answer.goal = goal_;

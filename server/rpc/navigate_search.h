@@ -89,8 +89,9 @@ class NavigationSearch {
   Cell start_;
   Cell goal_;
   CostParams cost_;
-  double radius_cells_ = 0.0;
-  double min_clearance_cells_ = 0.0;
+  // What the session plans on: the map shaped for its robot (robot radius,
+  // inflation and clearance costs).
+  GridShape shape_;
   int64_t max_expansions_ = 0;
   int64_t repaired_cells_ = 0;
   int64_t plans_ = 0;

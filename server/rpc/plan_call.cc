@@ -46,6 +46,8 @@ class CachedSearch final : public StatefulSearch {
                                     .goal = request.goal,
                                     .cost = request.cost,
                                     .robot_radius_cells = query.robot_radius_cells,
+                                    .inflation_radius_cells = query.inflation_radius_cells,
+                                    .cost_scaling_per_cell = query.cost_scaling_per_cell,
                                     .min_clearance_cells = query.min_clearance_cells};
     const std::shared_ptr<const MapSnapshot>& snapshot = call_.decoded.snapshot;
     PlanResult& result = answer->result;
@@ -95,9 +97,15 @@ Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
   PlanEngine engine;
   engine.planner = call.planner;
   engine.stateful = cached.has_value() ? &*cached : nullptr;
-  engine.inflate = [&inflation](const std::shared_ptr<const Grid>& stored,
-                                const GridShape& shape) {
-    return inflation.Get(stored, shape);
+  engine.inflate = [&inflation, &shared_snapshot](
+                       const std::shared_ptr<const Grid>& stored,
+                       const GridShape& shape) -> absl::StatusOr<std::shared_ptr<const Grid>> {
+    // The cache keys on the snapshot (its map and version say what to
+    // advance from); RunPlanQuery shapes the snapshot's own grid.
+    if (stored != shared_snapshot->grid) {
+      return absl::InternalError("the façade shaped a grid that is not the snapshot's");
+    }
+    return inflation.Get(*shared_snapshot, shape);
   };
   if (derived != nullptr) {
     engine.derived = [derived, &shared_snapshot](const std::shared_ptr<const Grid>& grid,

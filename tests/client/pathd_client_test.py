@@ -198,6 +198,50 @@ class RealServerTest(unittest.TestCase, PathChecks):
         with self.assertRaisesRegex(ValueError, "not both"):
             pathd_client.plan_options(robot_radius_cells=1, robot_radius_m=1)
 
+    def test_world_poses_in_and_out(self):
+        self.make_map("poses")
+        # Resolution 1, origin 0: world (1.5, 3.5) is cell (1, 3)'s centre.
+        start = pathd_client.WorldPose(1.5, 3.5, 0.0)
+        goal = pathd_client.WorldPose(12.5, 4.5, 1.0)
+        plan = self.client.plan("poses", start, goal)
+        self.assertTrue(plan.found)
+        self.assertEqual(plan.path[0], Cell(1, 3))
+        self.assertEqual(plan.path[-1], Cell(12, 4))
+        self.assertEqual(plan.frame_id, "map")
+        self.assertEqual(len(plan.poses), len(plan.path))
+        self.assertAlmostEqual(plan.poses[0].x, 1.5)
+        self.assertAlmostEqual(plan.poses[0].y, 3.5)
+        self.assertAlmostEqual(plan.length_m, plan.length)
+        for pose, nxt in zip(plan.poses, plan.poses[1:]):
+            self.assertAlmostEqual(pose.yaw, math.atan2(nxt.y - pose.y, nxt.x - pose.x))
+        rectangle = [(0.3, 0.2), (0.3, -0.2), (-0.3, -0.2), (-0.3, 0.2)]
+        options = pathd_client.plan_options(footprint_m=rectangle, motion_model="reeds_shepp",
+                                            min_turning_radius_m=2.0, goal_yaw_tolerance=0.1)
+        self.assertEqual(len(options.footprint.polygon_m), 4)
+        self.assertEqual(options.min_turning_radius_m, 2.0)
+        with self.assertRaisesRegex(ValueError, "motion model 'tank'"):
+            pathd_client.plan_options(motion_model="tank")
+        # A grid planner plans for the footprint's inscribed radius (0.2 m).
+        shaped = self.client.plan("poses", start, goal, options=options)
+        self.assertAlmostEqual(shaped.raw.robot_radius_m, 0.2)
+
+    def test_inflation_costs_are_sent(self):
+        self.make_map("inflate")
+        start, goal = Cell(1, 3), Cell(12, 4)
+        plain = self.client.plan("inflate", start, goal)
+        options = pathd_client.plan_options(inflation_radius_m=3.0,
+                                            cost_scaling_factor=0.5)
+        self.assertEqual(options.inflation_radius_m, 3.0)
+        self.assertEqual(options.cost_scaling_factor, 0.5)
+        inflated = self.client.plan("inflate", start, goal, options=options)
+        self.assertTrue(inflated.found)
+        # Around the wall's ends every path pays the inflation costs.
+        self.assertGreater(inflated.cost, plain.cost)
+        with self.assertRaises(pathd_client.InvalidArgumentError) as bad:
+            self.client.plan("inflate", start, goal, options=pathd_client.plan_options(
+                inflation_radius_m=3.0, cost_scaling_factor=0.0))
+        self.assertIn("options.cost_scaling_factor", bad.exception.details)
+
     def test_errors_carry_the_status(self):
         self.make_map("errors")
         with self.assertRaises(PathdError) as missing:

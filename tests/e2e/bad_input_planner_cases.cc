@@ -1,6 +1,8 @@
 // bad_input_test's PlannerService and Health rows: Plan (and the same through
 // PlanStream and PlanBatch), Navigate, IsPathValid, CostToGo, Health and
 // GetCacheStats.
+#include <utility>
+
 #include "tests/e2e/bad_input_fixture.h"
 
 namespace pathd::bad_input_test {
@@ -111,6 +113,71 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
       "negative min_clearance_cells",
       [](P& r) { r.mutable_options()->set_min_clearance_cells(-3); },
       StatusCode::INVALID_ARGUMENT, "options.min_clearance_cells");
+  plan_case(
+      "footprint polygon crossing itself",
+      [](P& r) {
+        for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, 1.0}, {1.0, 0.0}, {0.0, 1.0}}) {
+          v1::WorldPoint* p = r.mutable_options()->mutable_footprint()->add_polygon_m();
+          p->set_x(x);
+          p->set_y(y);
+        }
+      },
+      StatusCode::INVALID_ARGUMENT, "options.footprint: footprint edges 0 and 2 cross");
+  plan_case(
+      "footprint vertex NaN",
+      [](P& r) {
+        for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, kNaN}, {1.0, 0.0}}) {
+          v1::WorldPoint* p = r.mutable_options()->mutable_footprint()->add_polygon_m();
+          p->set_x(x);
+          p->set_y(y);
+        }
+      },
+      StatusCode::INVALID_ARGUMENT, "footprint vertex 1 is not a finite point");
+  plan_case(
+      "footprint radius 1e300 m",
+      [](P& r) { r.mutable_options()->mutable_footprint()->set_radius_m(1e300); },
+      StatusCode::INVALID_ARGUMENT, "more than the map's diagonal");
+  plan_case(
+      "start world pose with infinite yaw",
+      [](P& r) {
+        r.mutable_start()->mutable_world_pose()->set_x(1);
+        r.mutable_start()->mutable_world_pose()->set_y(1);
+        r.mutable_start()->mutable_world_pose()->set_yaw(kInf);
+      },
+      StatusCode::INVALID_ARGUMENT, "start world pose (1, 1, inf) is not finite");
+  plan_case(
+      "goal cell pose off the map",
+      [](P& r) {
+        r.mutable_goal()->mutable_cell_pose()->set_x(-5);
+        r.mutable_goal()->mutable_cell_pose()->set_y(1);
+      },
+      StatusCode::INVALID_ARGUMENT, "goal (-5, 1) in cell coordinates is outside");
+  plan_case(
+      "NaN inflation_radius_m",
+      [](P& r) { r.mutable_options()->set_inflation_radius_m(kNaN); },
+      StatusCode::INVALID_ARGUMENT, "options.inflation_radius_m");
+  plan_case(
+      "negative inflation_radius_cells",
+      [](P& r) { r.mutable_options()->set_inflation_radius_cells(-2); },
+      StatusCode::INVALID_ARGUMENT, "options.inflation_radius_cells");
+  plan_case(
+      "inflation_radius_cells smaller than the robot radius",
+      [](P& r) {
+        r.mutable_options()->set_robot_radius_cells(3);
+        r.mutable_options()->set_inflation_radius_cells(2);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.inflation_radius_cells 2 is smaller");
+  plan_case(
+      "cost_scaling_factor 0",
+      [](P& r) {
+        r.mutable_options()->set_inflation_radius_cells(4);
+        r.mutable_options()->set_cost_scaling_factor(0);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.cost_scaling_factor");
+  plan_case(
+      "infinite cost_scaling_factor",
+      [](P& r) { r.mutable_options()->set_cost_scaling_factor(kInf); },
+      StatusCode::INVALID_ARGUMENT, "options.cost_scaling_factor");
   plan_case(
       "goal_tolerance_cells 1e9",
       [](P& r) { r.mutable_options()->set_goal_tolerance_cells(1e9); },
@@ -249,6 +316,13 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
         "open with unknown connectivity",
         [=, this] { return Navigate({NavigateOpen(p)}); },
         StatusCode::INVALID_ARGUMENT, "unknown connectivity 3");
+    p = GoodPlan();
+    p.mutable_options()->set_robot_radius_m(2.0);
+    p.mutable_options()->set_inflation_radius_m(1.0);
+    nav(
+        "open with an inflation radius under the robot radius",
+        [=, this] { return Navigate({NavigateOpen(p)}); },
+        StatusCode::INVALID_ARGUMENT, "options.inflation_radius_m 1 is smaller");
   }
   nav(
       "pose off the map",
@@ -378,6 +452,20 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
         static_cast<v1::Connectivity>(5));
     field("unknown connectivity 5", request, StatusCode::INVALID_ARGUMENT,
           "unknown connectivity 5");
+    request = Field();
+    request.mutable_options()->set_inflation_radius_m(-0.5);
+    field("negative inflation_radius_m", request, StatusCode::INVALID_ARGUMENT,
+          "options.inflation_radius_m");
+    request = Field();
+    request.mutable_options()->set_inflation_radius_cells(3);
+    request.mutable_options()->set_cost_scaling_factor(kNaN);
+    field("NaN cost_scaling_factor", request, StatusCode::INVALID_ARGUMENT,
+          "options.cost_scaling_factor");
+    request = Field();
+    request.mutable_options()->set_inflation_radius_cells(3);
+    request.mutable_options()->set_cost_weight(0);
+    field("inflation costs with cost_weight 0", request, StatusCode::INVALID_ARGUMENT,
+          "options.inflation_radius_m/_cells");
   }
   field("window width 0", Window(0, 0, 0, 4), StatusCode::INVALID_ARGUMENT,
         "window.width 0 must be > 0");

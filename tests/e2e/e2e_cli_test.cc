@@ -150,6 +150,48 @@ TEST_F(E2eTest, RenderDrawsAPlanAsPngAndAsText) {
   ExpectRpcError({"render", "nope", "--ascii"}, "NOT_FOUND", {"nope"});
 }
 
+// render --inflation_radius draws the grid the planners see: Nav2's costs
+// around the corridor's walls in shades (text glyphs and PNG greys of the
+// cost each row gets), the plain map without it.
+TEST_F(E2eTest, RenderDrawsTheInflationGradient) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("corridor", CorridorMap(), {"--resolution=0.05"}));
+  const ProcessResult plain = Ctl({"render", "corridor", "--ascii"});
+  ASSERT_EQ(plain.exit_code, 0) << plain;
+  EXPECT_TRUE(absl::StrContains(plain.out, "\n" + std::string(40, '.') + "\n")) << plain;
+  const ProcessResult text =
+      Ctl({"render", "corridor", "--ascii", "--inflation_radius=0.55"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  const std::vector<std::string> lines = absl::StrSplit(text.out, '\n');
+  ASSERT_GE(lines.size(), 11u) << text;
+  // Rows 1..5 are 1..5 cells from the nearest wall: 252 * e^(-d / 2) is 152,
+  // 92, 55, 34, 20, drawn '1' + (cost - 1) / 28.
+  const char want[] = {'#', '6', '4', '2', '2', '1', '2', '2', '4', '6', '#'};
+  for (int y = 0; y < 11; ++y) {
+    EXPECT_EQ(lines[y], std::string(40, want[y])) << "row " << y << "\n" << text;
+  }
+  const std::string png = (temp_dir_ / "corridor.png").string();
+  const ProcessResult picture = Ctl({"render", "corridor", "-o", png, "--scale=1",
+                                     "--inflation_radius_cells=11"});
+  ASSERT_EQ(picture.exit_code, 0) << picture;
+  const absl::StatusOr<pathctl::Image> image =
+      pathctl::DecodePngRgba(ReadFile(png), png, int64_t{1} << 24);
+  ASSERT_TRUE(image.ok()) << image.status();
+  ASSERT_EQ(image->width, 40);
+  const auto pixel = [&](int x, int y) {
+    const size_t i = (static_cast<size_t>(y) * image->width + x) * 4;
+    return pathctl::Rgb{image->pixels[i], image->pixels[i + 1], image->pixels[i + 2]};
+  };
+  EXPECT_EQ(pixel(20, 1), pathctl::CostColour(152));
+  EXPECT_EQ(pixel(20, 5), pathctl::CostColour(20));
+  EXPECT_EQ(pixel(20, 9), pathctl::CostColour(152));
+  EXPECT_EQ(pixel(20, 0), pathctl::kLethalColour);
+  // A bad value is refused before anything is drawn.
+  const ProcessResult bad =
+      Ctl({"render", "corridor", "--ascii", "--inflation_radius=-1"});
+  EXPECT_EQ(bad.exit_code, 2) << bad;
+  EXPECT_TRUE(absl::StrContains(bad.err, "inflation radius")) << bad;
+}
+
 // maps import / export through the server: the bundled ROS map exported as
 // YAML + PGM and imported again has the same cells; as a .map its unknown
 // cells become blocked (with a warning); a PNG occupancy image imports with

@@ -382,6 +382,15 @@ inline std::string WalledRoomMap() {
   return text;
 }
 
+// A corridor 9 cells wide between walls in rows 0 and 10, 40 cells long.
+inline std::string CorridorMap() {
+  std::string text = "type octile\nheight 11\nwidth 40\nmap\n";
+  for (int y = 0; y < 11; ++y) {
+    text += std::string(40, y == 0 || y == 10 ? '@' : '.') + "\n";
+  }
+  return text;
+}
+
 // WalledRoomMap with the goal corner (17..19, 0..1) walled off by column 16
 // and row 2 there.
 inline std::string PocketRoomMap() {

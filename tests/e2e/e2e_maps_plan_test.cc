@@ -246,6 +246,105 @@ TEST_F(E2eTest, MinimumClearanceCostsNearWallsAndIsReported) {
   EXPECT_EQ(both.exit_code, 2) << both;
 }
 
+// --inflation_radius (Nav2's 0.55 m and factor 10 at 5 cm per cell): from
+// beside one wall to beside it again, the plain plan hugs the wall and the
+// inflated one keeps to the middle, where the costs are lowest. Every RPC
+// that plans plans on the same shaped grid.
+TEST_F(E2eTest, InflationRadiusKeepsThePathInTheMiddleOfACorridor) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("corridor", CorridorMap(), {"--resolution=0.05"}));
+  const std::vector<std::string> ends = {"corridor", "1", "1", "38", "1"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = ends;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  auto plan = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = with(std::move(extra));
+    args.insert(args.begin(), "plan");
+    return args;
+  };
+  // The row of the path's middle cell, and its smallest distance to a wall
+  // along columns 12..27.
+  auto middle = [](const v1::PlanResponse& plan) {
+    int nearest = 100;
+    for (const v1::Cell& c : plan.path()) {
+      if (c.x() >= 12 && c.x() <= 27) nearest = std::min({nearest, c.y(), 10 - c.y()});
+    }
+    return nearest;
+  };
+  const v1::PlanResponse plain = PlanJson(ends);
+  EXPECT_EQ(middle(plain), 1);
+  const v1::PlanResponse inflated = PlanJson(with({"--inflation_radius=0.55"}));
+  ASSERT_EQ(inflated.outcome(), v1::PLAN_OUTCOME_FOUND);
+  EXPECT_EQ(middle(inflated), 5) << "the middle row is 5 cells from both walls";
+  EXPECT_GT(inflated.cost(), plain.cost());
+  // The factor is Nav2's default: saying so changes nothing; in cells too.
+  EXPECT_NEAR(PlanJson(with({"--inflation_radius_cells=11", "--cost_scaling_factor=10"}))
+                  .cost(),
+              inflated.cost(), 1e-9);
+  // Beyond a 0.2 m robot (4 cells) the same decay starts 4 cells out: rows
+  // 1..4 are inscribed, so the start is refused, and from the middle the
+  // path stays there.
+  ExpectRpcError({"plan", "corridor", "1", "1", "38", "1", "--robot_radius=0.2",
+                  "--inflation_radius=0.55"},
+                 "INVALID_ARGUMENT", {"start", "robot radius"});
+  EXPECT_EQ(middle(PlanJson({"corridor", "1", "5", "38", "5", "--robot_radius=0.2",
+                             "--inflation_radius=0.55"})),
+            5);
+
+  // The cached shortest path map and D* Lite (the inflation is part of their
+  // key), a Navigate session, a cost-to-go field and a batch item.
+  for (const char* planner : {"--planner=spm", "--planner=dstar_lite"}) {
+    EXPECT_NEAR(PlanJson(with({"--inflation_radius=0.55", planner})).cost(),
+                inflated.cost(), 1e-6)
+        << planner;
+    EXPECT_NEAR(PlanJson(with({planner})).cost(), plain.cost(), 1e-6) << planner;
+  }
+  const ProcessResult nav = Ctl({"navigate", "corridor", "1", "1", "38", "1",
+                                 "--inflation_radius=0.55"});
+  ASSERT_EQ(nav.exit_code, 0) << nav;
+  EXPECT_TRUE(
+      absl::StrContains(nav.out, absl::StrFormat("found, cost %.6f,", inflated.cost())))
+      << nav << " want cost " << inflated.cost();
+  const ProcessResult field =
+      Ctl({"cost-to-go", "corridor", "38", "1", "--window", "1,1,1,1", "--output=csv",
+           "--inflation_radius=0.55"});
+  ASSERT_EQ(field.exit_code, 0) << field;
+  // The CSV's last column of its one row (the field is single precision).
+  auto last_number = [](const std::string& csv) {
+    const std::vector<std::string> rows = absl::StrSplit(csv, '\n', absl::SkipEmpty());
+    double value = -1.0;
+    if (rows.size() != 2) return -1.0;
+    return absl::SimpleAtod(rows[1].substr(rows[1].rfind(',') + 1), &value) ? value : -1.0;
+  };
+  EXPECT_NEAR(last_number(field.out), inflated.cost(), 1e-4) << field;
+  const ProcessResult batch =
+      Ctl({"batch", MapFile("items.txt", "a corridor 1 1 38 1\n"), "--output=csv",
+           "--inflation_radius=0.55"});
+  ASSERT_EQ(batch.exit_code, 0) << batch;
+  const std::vector<std::string> item =
+      absl::StrSplit(batch.out.substr(batch.out.find('\n') + 1), ',');
+  ASSERT_GE(item.size(), 4u) << batch;
+  EXPECT_EQ(item[2], "FOUND") << batch;
+  double batch_cost = 0.0;
+  ASSERT_TRUE(absl::SimpleAtod(item[3], &batch_cost)) << batch;
+  EXPECT_NEAR(batch_cost, inflated.cost(), 1e-6) << batch;
+
+  // Refused where costs do not count, and bad values, naming the option.
+  ExpectRpcError(plan({"--planner=navmesh", "--inflation_radius=0.55"}),
+                 "INVALID_ARGUMENT", {"inflation_radius", "navmesh"});
+  ExpectRpcError(plan({"--cost_weight=0", "--inflation_radius=0.55"}),
+                 "INVALID_ARGUMENT", {"inflation_radius", "cost_weight 0"});
+  ExpectRpcError(plan({"--robot_radius=0.3", "--inflation_radius=0.2"}),
+                 "INVALID_ARGUMENT",
+                 {"inflation_radius_m", "smaller than the robot radius"});
+  ExpectRpcError(plan({"--inflation_radius=0.55", "--cost_scaling_factor=-1"}),
+                 "INVALID_ARGUMENT", {"cost_scaling_factor"});
+  const ProcessResult both =
+      Ctl(plan({"--inflation_radius=1", "--inflation_radius_cells=1"}));
+  EXPECT_EQ(both.exit_code, 2) << both;
+}
+
 TEST_F(E2eTest, SimplifyKeepsOnlyTheTurns) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
   const v1::PlanResponse plain = PlanJson({"walled", "2", "2", "17", "3"});

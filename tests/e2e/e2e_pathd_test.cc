@@ -215,17 +215,17 @@ TEST_F(E2eTest, GoalToleranceSubstitutesTheNearestFreeCell) {
                  {"goal (9, 9) is on a blocked cell"});
   // (9,8) and (8,9) are both 1 away; the smaller row wins.
   const ProcessResult text =
-      Ctl({"plan", "room", "0", "0", "9", "9", "--goal_tolerance", "1.5"});
+      Ctl({"plan", "room", "0", "0", "9", "9", "--goal_tolerance_cells", "1.5"});
   ASSERT_EQ(text.exit_code, 0) << text;
   EXPECT_TRUE(absl::StrContains(
       text.out, "goal:        (9,8) (substituted for blocked (9,9))\n"))
       << text;
   const v1::PlanResponse plan = PlanJson(
-      {"room", "0", "0", "9", "9", "--goal_tolerance=1.5", "--planner=spm"});
+      {"room", "0", "0", "9", "9", "--goal_tolerance_cells=1.5", "--planner=spm"});
   EXPECT_TRUE(plan.goal_substituted());
   EXPECT_EQ(plan.goal().y(), 8);
   EXPECT_EQ(plan.requested_goal().y(), 9);
-  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--goal_tolerance", "0.5"},
+  ExpectRpcError({"plan", "room", "0", "0", "9", "9", "--goal_tolerance_cells", "0.5"},
                  "INVALID_ARGUMENT", {"goal tolerance of 0.5 cells"});
 }
 

@@ -120,7 +120,7 @@ void DrainPool(WorkerPool& pool) {
 
 class IncrementalCacheTest : public ::testing::Test {
  protected:
-  IncrementalCacheTest() : store_(1 << 20), inflation_(&ShapeGrid, 4) {}
+  IncrementalCacheTest() : store_(1 << 20), inflation_(4) {}
 
   std::shared_ptr<const MapSnapshot> Create(const std::string& name, Grid grid) {
     auto snapshot = store_.Create(name, std::move(grid), /*replace=*/false);

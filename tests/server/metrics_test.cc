@@ -187,6 +187,9 @@ TEST_F(MetricsTest, CountsRequestsByRpcAndCodeAndReadsServerState) {
   EXPECT_EQ(s.at(R"(pathd_cache_budget_bytes{cache="spm"})"),
             static_cast<double>(server_->options().cache_bytes / 2));
   EXPECT_EQ(s.at(R"(pathd_cache_hits_total{cache="inflation"})"), 0);
+  // Shaped grids advanced from an older version's and shaped in full.
+  EXPECT_EQ(s.at(R"(pathd_cache_repairs_total{cache="inflation"})"), 0);
+  EXPECT_EQ(s.at(R"(pathd_cache_rebuilds_total{cache="inflation"})"), 0);
   EXPECT_EQ(s.at("pathd_worker_threads"), 2);
   EXPECT_EQ(s.at(R"(pathd_queue_capacity{priority="interactive"})"), 64);
   EXPECT_EQ(s.at(R"(pathd_queue_capacity{priority="batch"})"),

@@ -35,6 +35,7 @@ from pathd_client.values import (
     UNKNOWN,
     Cell,
     Change,
+    WorldPose,
     ChangedRect,
     MapCells,
     MapEvent,
@@ -54,5 +55,5 @@ __all__ = [
     "MapCells", "MapEvent", "MapInfo", "MapWatch", "NavigateUpdate",
     "NavigationSession", "NotFoundError", "PathdClient", "PathdError",
     "PlanResult", "ResourceExhaustedError", "SetCell", "SetRect",
-    "UnavailableError", "UpdateResult", "make_error", "plan_options",
+    "UnavailableError", "UpdateResult", "WorldPose", "make_error", "plan_options",
 ]

@@ -21,6 +21,7 @@ from pathd.v1 import planner_service_pb2_grpc
 from pathd_client.errors import _from_rpc_error
 from pathd_client.streams import MapWatch, NavigationSession
 from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CellLike, Change,
+                                 PositionLike,
                                  MapCells, MapInfo, PlanResult, UpdateResult,
                                  _change_proto, _planner, _position)
 
@@ -139,13 +140,15 @@ class PathdClient:
 
     # ---- PlannerService ----
 
-    def plan(self, map_name: str, start: CellLike, goal: CellLike, *,
+    def plan(self, map_name: str, start: PositionLike, goal: PositionLike, *,
              planner: str | None = None,
              options: planner_service_pb2.PlanOptions | None = None,
              timeout: float | None = None) -> PlanResult:
         """Plans one path. `planner` is a name as pathctl spells it ("astar",
-        "dstar_lite", ...; None: the server's default). No path is a result
-        with found False; a bad start or goal raises with `outcome` set."""
+        "dstar_lite", ...; None: the server's default). start and goal are
+        cells or WorldPose (metres, radians; the exact pose for the kinematic
+        planners). No path is a result with found False; a bad start or goal
+        raises with `outcome` set."""
         request = planner_service_pb2.PlanRequest(
             map=map_name, start=_position(start), goal=_position(goal),
             planner=_planner(planner), options=options)

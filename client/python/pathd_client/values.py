@@ -32,7 +32,18 @@ class Cell(NamedTuple):
     y: int
 
 
+class WorldPose(NamedTuple):
+    """A pose in the map's world frame: metres, heading in radians."""
+
+    x: float
+    y: float
+    yaw: float = 0.0
+
+
 CellLike = Union[Cell, tuple[int, int]]
+# Where a plan starts or ends: a cell, or an exact world pose (kinematic
+# planners use its position and heading; the others the cell it lies in).
+PositionLike = Union[Cell, tuple[int, int], WorldPose]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,8 +121,16 @@ class PlanResult:
     expansions: int
     map_version: int
     planner: str
+    # The path as world poses with headings (in `frame_id`); kinematic
+    # planners' own poses, else cell centres facing along the path.
+    poses: list[WorldPose] = dataclasses.field(default_factory=list)
+    # Per pose: reached driving backwards (empty when no pose reverses).
+    reverse: list[bool] = dataclasses.field(default_factory=list)
+    cost_m: float = 0.0
+    length_m: float = 0.0
+    frame_id: str = ""
     raw: planner_service_pb2.PlanResponse = dataclasses.field(
-        repr=False, compare=False)
+        default=None, repr=False, compare=False)
 
     @classmethod
     def from_proto(cls, plan: planner_service_pb2.PlanResponse) -> PlanResult:
@@ -126,6 +145,11 @@ class PlanResult:
             expansions=plan.expansions,
             map_version=plan.map_version,
             planner=plan.planner,
+            poses=[WorldPose(p.x, p.y, p.yaw) for p in plan.world_poses],
+            reverse=list(plan.reverse),
+            cost_m=plan.cost_m,
+            length_m=plan.length_m,
+            frame_id=plan.frame_id,
             raw=plan)
 
 
@@ -206,8 +230,11 @@ def _enum_name(enum, value: int, prefix: str) -> str:
         return str(value)
 
 
-def _position(cell: CellLike) -> common_pb2.Position:
-    x, y = cell
+def _position(where: PositionLike) -> common_pb2.Position:
+    if isinstance(where, WorldPose):
+        return common_pb2.Position(world_pose=common_pb2.WorldPose(
+            x=where.x, y=where.y, yaw=where.yaw))
+    x, y = where
     return common_pb2.Position(cell=common_pb2.Cell(x=x, y=y))
 
 
@@ -237,12 +264,31 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  robot_radius_cells: float | None = None,
                  robot_radius_m: float | None = None,
                  min_clearance_m: float | None = None,
-                 simplify: bool = False) -> planner_service_pb2.PlanOptions:
+                 inflation_radius_m: float | None = None,
+                 cost_scaling_factor: float | None = None,
+                 simplify: bool = False,
+                 footprint_m: list[tuple[float, float]] | None = None,
+                 min_turning_radius_m: float | None = None,
+                 motion_model: str | None = None,
+                 goal_yaw_tolerance: float | None = None,
+                 reverse_penalty: float | None = None,
+                 lattice: str = "",
+                 smooth: bool | None = None) -> planner_service_pb2.PlanOptions:
     """The common PlanOptions; build the message yourself for the rest.
 
     min_clearance_m: grid planners prefer keeping this far from obstacles
     (cells nearer cost more; the response's min_clearance_m says how close
     the path came).
+    footprint_m: the robot's outline, [(x, y), ...] in metres, x forward, y
+    left (Nav2's footprint). The kinematic planners (hybrid_astar,
+    state_lattice) check it at every pose with min_turning_radius_m,
+    motion_model ("dubins", "reeds_shepp", "differential",
+    "omnidirectional"), goal_yaw_tolerance (radians), reverse_penalty,
+    lattice and smooth; the others plan for its inscribed radius.
+    inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
+    grid planners: cells up to inflation_radius_m from a lethal cell, beyond
+    the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
+    robot radius)); the factor is per metre, unset means Nav2's 10.
     """
     if robot_radius_cells is not None and robot_radius_m is not None:
         raise ValueError("give robot_radius_cells or robot_radius_m, not both")
@@ -259,4 +305,25 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
         options.robot_radius_m = robot_radius_m
     if min_clearance_m is not None:
         options.min_clearance_m = min_clearance_m
+    for x, y in footprint_m or []:
+        options.footprint.polygon_m.add(x=x, y=y)
+    if min_turning_radius_m is not None:
+        options.min_turning_radius_m = min_turning_radius_m
+    if motion_model is not None:
+        try:
+            options.motion_model = planner_service_pb2.MotionModel.Value(
+                "MOTION_MODEL_" + motion_model.upper())
+        except ValueError:
+            raise ValueError(f"unknown motion model '{motion_model}'") from None
+    if goal_yaw_tolerance is not None:
+        options.goal_yaw_tolerance = goal_yaw_tolerance
+    if reverse_penalty is not None:
+        options.penalties.reverse = reverse_penalty
+    options.lattice = lattice
+    if smooth is not None:
+        options.smooth = smooth
+    if inflation_radius_m is not None:
+        options.inflation_radius_m = inflation_radius_m
+    if cost_scaling_factor is not None:
+        options.cost_scaling_factor = cost_scaling_factor
     return options

@@ -212,6 +212,14 @@ TEST(FootprintTest, AgreesWithExactGeometry) {
         }
       }
       if (fast && !plain) ADD_FAILURE() << "the shortcut found a collision the mask did not";
+      // The exact test agrees with the exact geometry at the pose itself.
+      const double here = ExactClearance(grid, footprint, pose.x, pose.y, pose.yaw, unknown_is_free);
+      if (here == 0.0 || std::fabs(here - options.margin_cells) > 1e-6) {
+        EXPECT_EQ(checker.CollidesExactly(grid, pose, unknown_is_free), here <= options.margin_cells)
+            << footprint.DebugString() << " at (" << pose.x << ", " << pose.y << ", " << pose.yaw
+            << "): clearance " << here;
+      }
+      if (!plain) EXPECT_FALSE(checker.CollidesExactly(grid, pose, unknown_is_free));
       if (plain) ++collision_verdicts;
       // Tightness at the pose itself.
       const double slack = options.margin_cells + turn + std::numbers::sqrt2 / options.subcells + 1e-6;

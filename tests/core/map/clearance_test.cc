@@ -142,13 +142,13 @@ TEST(PathClearance, MatchesBruteForceOnRandomPaths) {
 TEST(ShapeGrid, MeasuresClearanceFromTheInflatedObstacles) {
   Grid grid = Grid::Create(21, 21).value();
   grid.set_cost(10, 10, kLethalCost);
-  const Grid shaped = ShapeGrid(grid, GridShape::Of(2.0, 3.0, false)).value();
+  const Grid shaped = ShapeGrid(grid, GridShape::Of(2.0, 0.0, 0.0, 3.0, false)).value();
   EXPECT_EQ(shaped.cost(12, 10), kInscribedCost);
   // (13, 10) is 1 from the inscribed (12, 10): ramp ceil(252 * 2 / 3) = 168.
   EXPECT_EQ(shaped.cost(13, 10), 168);
   EXPECT_EQ(shaped.cost(15, 10), 0);
-  EXPECT_FALSE(GridShape::Of(0.0, 0.0, true).shaped());
-  EXPECT_EQ(GridShape::Of(1.0, 0.0, true), GridShape::Of(1.0, 0.0, false));
+  EXPECT_FALSE(GridShape::Of(0.0, 0.0, 0.0, 0.0, true).shaped());
+  EXPECT_EQ(GridShape::Of(1.0, 0.0, 0.0, 0.0, true), GridShape::Of(1.0, 0.0, 0.0, 0.0, false));
 }
 
 }  // namespace

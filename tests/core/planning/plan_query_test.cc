@@ -146,7 +146,7 @@ TEST(PlanQueryTest, MinimumClearanceKeepsAwayFromObstaclesAtTheShapedCost) {
   ASSERT_TRUE(wide.ok()) << wide.status();
   ASSERT_TRUE(wide->result.found());
   EXPECT_NE(wide->source.grid, snapshot.grid);
-  const Grid shaped = ShapeGrid(*snapshot.grid, GridShape::Of(0.0, 5.0, false)).value();
+  const Grid shaped = ShapeGrid(*snapshot.grid, GridShape::Of(0.0, 0.0, 0.0, 5.0, false)).value();
   EXPECT_EQ(wide->source.grid->cells(), shaped.cells());
   EXPECT_NEAR(wide->result.cost, *DijkstraCost(shaped, {2, 9}, {38, 11}), 1e-9);
   EXPECT_DOUBLE_EQ(wide->result.min_clearance,

@@ -110,7 +110,7 @@ class PlanAdmissionTest : public ::testing::Test {
   }
 
   MapStore store_{1 << 20};
-  InflationCache inflation_{&ShapeGrid, 4};
+  InflationCache inflation_{4};
   IncrementalCache cache_{inflation_, size_t{1} << 20};
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<NavigationSessions> sessions_;
