@@ -151,7 +151,7 @@ absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
         query->planner));
   }
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, query->request));
-  return CheckMinClearance(*query);
+  return CheckCostShaping(*query);
 }
 
 }  // namespace
