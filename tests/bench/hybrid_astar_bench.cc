@@ -58,7 +58,7 @@ ABSL_FLAG(std::string, ompl_planners, "RRTConnect,RRTstar,InformedRRTstar,BITsta
 ABSL_FLAG(int, seed, 1, "random seed for the poses");
 ABSL_FLAG(bool, verbose, false, "print every query of (a)");
 ABSL_FLAG(double, analytic_slack, 1.2, "HybridAStarOptions::analytic_slack");
-ABSL_FLAG(double, curve_radii, 8.0, "HybridAStarOptions::curve_heuristic_radii");
+ABSL_FLAG(double, curve_radii, 2.0, "HybridAStarOptions::curve_heuristic_radii");
 ABSL_FLAG(bool, curve_table, true, "HybridAStarOptions::curve_table");
 
 namespace pathd {
