@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <queue>
 #include <string>
 #include <utility>
 
@@ -16,15 +15,9 @@ namespace {
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
-// Settled cells between two polls of the stop condition (a few
-// milliseconds of work).
+// Settled cells between two polls of the stop condition (about a
+// millisecond of work).
 constexpr int64_t kPollCells = 1 << 16;
-
-struct Entry {
-  float cost;
-  uint32_t cell;
-  bool operator>(const Entry& other) const { return cost > other.cost; }
-};
 
 }  // namespace
 
@@ -67,38 +60,58 @@ std::shared_ptr<const ObstacleHeuristic> BuildObstacleHeuristic(
   field->width = w;
   field->cost.assign(grid.size(), kInfinity);
   if (!grid.InBounds(params.goal)) return field;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  // Dial's buckets of width 1: every move costs at least 1 (a length of 1
+  // or sqrt(2) times a factor >= 1), so a cell taken from bucket k (costs
+  // in [k, k + 1)) only ever lowers cells into later buckets, and every
+  // cell is final when its bucket comes up: exact, like Dijkstra, without
+  // the heap (several times faster on a 1000 x 1000 map). A ring of
+  // buckets one longer than the dearest move is enough.
+  constexpr float kDiagonal = static_cast<float>(kSqrt2);
+  const size_t ring =
+      static_cast<size_t>(std::ceil(kSqrt2 * CellFactor(kMaxTraversableCost, params.cost_penalty))) +
+      2;
+  std::vector<std::vector<uint32_t>> buckets(ring);
+  std::vector<uint8_t> settled(grid.size(), 0);
   const uint32_t goal = static_cast<uint32_t>(grid.Index(params.goal));
   field->cost[goal] = 0.0f;
-  queue.push({0.0f, goal});
-  constexpr float kDiagonal = static_cast<float>(kSqrt2);
-  int64_t settled = 0;
-  while (!queue.empty()) {
-    const Entry e = queue.top();
-    queue.pop();
-    if (e.cost > field->cost[e.cell]) continue;
-    if (++settled % kPollCells == 0 && stop.Stopped()) return nullptr;
-    const int32_t x = static_cast<int32_t>(e.cell % static_cast<uint32_t>(w));
-    const int32_t y = static_cast<int32_t>(e.cell / static_cast<uint32_t>(w));
-    // A robot moving from the neighbour into this cell pays this cell's
-    // factor.
-    const float f = factor[e.cell];
-    const auto is_open = [&](int32_t cx, int32_t cy) {
-      return cx >= 0 && cy >= 0 && cx < w && cy < h && open[grid.Index(cx, cy)];
-    };
-    for (const Move& m : kMoves) {
-      const int32_t nx = x + m.dx;
-      const int32_t ny = y + m.dy;
-      if (!is_open(nx, ny)) continue;
-      const bool diagonal = m.dx != 0 && m.dy != 0;
-      if (diagonal && !is_open(x + m.dx, y) && !is_open(x, y + m.dy)) continue;
-      const uint32_t next = static_cast<uint32_t>(grid.Index(nx, ny));
-      const float cost = e.cost + (diagonal ? kDiagonal : 1.0f) * f;
-      if (cost < field->cost[next]) {
-        field->cost[next] = cost;
-        queue.push({cost, next});
+  buckets[0].push_back(goal);
+  size_t pending = 1;
+  int64_t done = 0;
+  const auto is_open = [&](int32_t cx, int32_t cy) {
+    return cx >= 0 && cy >= 0 && cx < w && cy < h && open[grid.Index(cx, cy)];
+  };
+  for (size_t k = 0; pending > 0; ++k) {
+    std::vector<uint32_t>& bucket = buckets[k % ring];
+    // Cells pushed here while it is read are in later buckets: the ring is
+    // longer than any move, so none lands in this slot.
+    for (size_t i = 0; i < bucket.size(); ++i) {
+      const uint32_t cell = bucket[i];
+      --pending;
+      if (settled[cell]) continue;
+      settled[cell] = 1;
+      if (++done % kPollCells == 0 && stop.Stopped()) return nullptr;
+      const float here = field->cost[cell];
+      const int32_t x = static_cast<int32_t>(cell % static_cast<uint32_t>(w));
+      const int32_t y = static_cast<int32_t>(cell / static_cast<uint32_t>(w));
+      // A robot moving from the neighbour into this cell pays this cell's
+      // factor.
+      const float f = factor[cell];
+      for (const Move& m : kMoves) {
+        const int32_t nx = x + m.dx;
+        const int32_t ny = y + m.dy;
+        if (!is_open(nx, ny)) continue;
+        const bool diagonal = m.dx != 0 && m.dy != 0;
+        if (diagonal && !is_open(x + m.dx, y) && !is_open(x, y + m.dy)) continue;
+        const uint32_t next = static_cast<uint32_t>(grid.Index(nx, ny));
+        const float cost = here + (diagonal ? kDiagonal : 1.0f) * f;
+        if (cost < field->cost[next]) {
+          field->cost[next] = cost;
+          buckets[static_cast<size_t>(cost) % ring].push_back(next);
+          ++pending;
+        }
       }
     }
+    bucket.clear();
   }
   return field;
 }

@@ -3,8 +3,8 @@
 // holonomic-with-obstacles heuristic of Dolgov et al. ("Path Planning for
 // Autonomous Vehicles in Unknown Semi-structured Environments", 2010): the
 // cost to the goal of a robot that may move in any direction, ignoring its
-// heading but not the obstacles, by Dijkstra from the goal cell over the
-// 8-connected grid. Both come from the query's DerivedStore when it has one
+// heading but not the obstacles, by Dijkstra's algorithm (with Dial's
+// buckets) from the goal cell over the 8-connected grid. Both come from the query's DerivedStore when it has one
 // (the server's per-version cache: a replan towards the same goal on the same
 // map version reuses the field) and are built for the query otherwise.
 #ifndef PATHD_CORE_KINEMATICS_OBSTACLE_HEURISTIC_H_
@@ -66,7 +66,8 @@ struct ObstacleHeuristic {
 // The field for `params` on `grid`, built polling `stop` (null when it fired;
 // `stop` then says what was running). `distance` must be
 // ObstacleDistanceField(grid, params.unknown_is_free) when
-// params.blocked_within > 0 (may be null otherwise). O(cells log cells).
+// params.blocked_within > 0 (may be null otherwise). O(cells): every move
+// costs at least 1, so buckets of width 1 replace the heap exactly.
 std::shared_ptr<const ObstacleHeuristic> BuildObstacleHeuristic(
     const Grid& grid, const ObstacleHeuristicParams& params, const float* distance,
     DerivedStop& stop);

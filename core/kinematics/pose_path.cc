@@ -1,8 +1,6 @@
 #include "core/kinematics/pose_path.h"
 
 #include <cmath>
-#include <cstdlib>
-#include <limits>
 
 #include "core/map/cost_model.h"
 
@@ -75,63 +73,11 @@ double PathCost(const Grid& grid, const std::vector<PathPose>& poses,
   return cost;
 }
 
-namespace {
-
-// Appends the cells from a's cell (already the last cell of `out`) to b's
-// cell along the segment a-b, each sharing an edge with the one before
-// (Amanatides & Woo's voxel walk; at an exact corner, the side cell that is
-// traversable is taken first).
-void WalkSegment(const Grid& grid, CellPoint a, CellPoint b, bool unknown_is_free,
-                 std::vector<Cell>& out) {
-  const Cell from{static_cast<int32_t>(std::floor(a.x)), static_cast<int32_t>(std::floor(a.y))};
-  const Cell to{static_cast<int32_t>(std::floor(b.x)), static_cast<int32_t>(std::floor(b.y))};
-  const int32_t sx = to.x > from.x ? 1 : -1;
-  const int32_t sy = to.y > from.y ? 1 : -1;
-  const double dx = b.x - a.x;
-  const double dy = b.y - a.y;
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  // Parameter t in [0, 1] along a-b at which the next vertical (horizontal)
-  // cell boundary is crossed, and the step of t between boundaries.
-  double next_x = dx == 0.0 ? kInf : ((sx > 0 ? from.x + 1 : from.x) - a.x) / dx;
-  double next_y = dy == 0.0 ? kInf : ((sy > 0 ? from.y + 1 : from.y) - a.y) / dy;
-  const double step_x = dx == 0.0 ? kInf : std::fabs(1.0 / dx);
-  const double step_y = dy == 0.0 ? kInf : std::fabs(1.0 / dy);
-  const auto traversable = [&](Cell c) {
-    return grid.InBounds(c) && Traversable(grid.cost(c), unknown_is_free);
-  };
-  Cell c = from;
-  while (!(c == to)) {
-    bool step_in_x;
-    if (c.x == to.x) {
-      step_in_x = false;
-    } else if (c.y == to.y) {
-      step_in_x = true;
-    } else if (next_x != next_y) {
-      step_in_x = next_x < next_y;
-    } else {
-      step_in_x = traversable(Cell{c.x + sx, c.y}) || !traversable(Cell{c.x, c.y + sy});
-    }
-    if (step_in_x) {
-      c.x += sx;
-      next_x += step_x;
-    } else {
-      c.y += sy;
-      next_y += step_y;
-    }
-    out.push_back(c);
-  }
-}
-
-}  // namespace
-
-std::vector<Cell> PathCells(const Grid& grid, const std::vector<PathPose>& poses,
-                            bool unknown_is_free) {
+std::vector<Cell> PathCells(const std::vector<PathPose>& poses) {
   std::vector<Cell> cells;
-  if (poses.empty()) return cells;
-  cells.push_back(poses[0].pose.cell());
-  for (size_t i = 1; i < poses.size(); ++i) {
-    WalkSegment(grid, poses[i - 1].pose.point(), poses[i].pose.point(), unknown_is_free,
-                cells);
+  for (const PathPose& p : poses) {
+    const Cell c = p.pose.cell();
+    if (cells.empty() || !(cells.back() == c)) cells.push_back(c);
   }
   return cells;
 }

@@ -1,6 +1,6 @@
 // Measuring a path of poses (PlanResult::poses): the length of each piece
 // between consecutive poses, its price under Nav2 Smac's penalties, and the
-// cells the robot's centre passes through. The kinematic planners price their
+// cells of the poses. The kinematic planners price their
 // motions with these same functions, so a result's cost is exactly what
 // PathCost() says of its poses.
 #ifndef PATHD_CORE_KINEMATICS_POSE_PATH_H_
@@ -74,14 +74,10 @@ double PieceCost(double length, uint8_t cell_cost, const PieceKind& kind,
 double PathCost(const Grid& grid, const std::vector<PathPose>& poses,
                 const MotionPenalties& penalties);
 
-// The cells the centre passes through, start to end, consecutive duplicates
-// removed, each next to the one before by an edge: the cells of the poses,
-// and where two consecutive poses are in diagonal cells, the cell between
-// them that the straight segment joining them crosses (at an exact corner,
-// one that is traversable under `unknown_is_free`, when one is). Poses more
-// than half a cell apart are joined by their straight segment's cells.
-std::vector<Cell> PathCells(const Grid& grid, const std::vector<PathPose>& poses,
-                            bool unknown_is_free);
+// The cells of the poses, start to end, consecutive duplicates removed
+// (PlanResult::path of a kinematic plan). Consecutive cells are neighbours
+// (edge or corner) when the poses are at most a cell apart.
+std::vector<Cell> PathCells(const std::vector<PathPose>& poses);
 
 }  // namespace pathd
 

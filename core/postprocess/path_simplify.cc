@@ -74,8 +74,10 @@ bool PrefixCosts(const Grid& grid, const CostParams& cost,
 void SimplifyPath(const Grid& grid, const CostParams& cost,
                   PlanResult* result) {
   std::vector<Cell>& path = result->path;
-  // A geometric plan's polyline is its answer, and already straight.
-  if (path.empty() || !result->polyline.empty()) return;
+  // A geometric plan's polyline is its answer, and already straight; a
+  // kinematic plan's poses are the robot's motion, which a shortcut between
+  // cells would leave.
+  if (path.empty() || !result->polyline.empty() || !result->poses.empty()) return;
   std::vector<double> prefix;
   if (!PrefixCosts(grid, cost, path, &prefix)) return;
   // A pass can leave a shortcut between two kept cells that the scan did not

@@ -21,8 +21,9 @@ namespace pathd {
 // MeasureAnyAnglePath; it is never costlier than the input (up to a relative
 // 1e-12 per shortcut, for rounding of sums) and, by the triangle inequality,
 // never longer. Accepts cell paths and any-angle paths; leaves results without
-// a path untouched, and also paths that are not valid under `cost` (which no
-// planner returns). A pass runs in O(path cells x segment length); passes
+// a path untouched, and also geometric and kinematic results (a polyline, or
+// poses) and paths that are not valid under `cost` (which no planner
+// returns). A pass runs in O(path cells x segment length); passes
 // after the first only see the kept cells.
 void SimplifyPath(const Grid& grid, const CostParams& cost, PlanResult* result);
 

@@ -94,6 +94,15 @@ absl::StatusOr<ThroughResult> PlanThrough(
     plan.polyline.insert(plan.polyline.end(),
                          result.polyline.begin() + (result.polyline.empty() ? 0 : skip_point),
                          result.polyline.end());
+    // Kinematic legs: the poses of each, the junction once when the legs
+    // meet in the same pose (a grid request's default query starts the next
+    // leg at the cell's centre facing its goal, so the junction may turn).
+    const bool same_pose = !plan.poses.empty() && !result.poses.empty() &&
+                           plan.poses.back().pose.x == result.poses.front().pose.x &&
+                           plan.poses.back().pose.y == result.poses.front().pose.y &&
+                           plan.poses.back().pose.yaw == result.poses.front().pose.yaw;
+    plan.poses.insert(plan.poses.end(), result.poses.begin() + (same_pose ? 1 : 0),
+                      result.poses.end());
     plan.any_angle = plan.any_angle || result.any_angle;
     plan.cost += result.cost;
     plan.length += result.length;
@@ -108,6 +117,7 @@ absl::StatusOr<ThroughResult> PlanThrough(
   if (!plan.found() && !options.allow_partial) {
     plan.path.clear();
     plan.polyline.clear();
+    plan.poses.clear();
     plan.cost = 0.0;
     plan.length = 0.0;
     plan.any_angle = false;

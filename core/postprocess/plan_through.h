@@ -38,7 +38,8 @@ struct ThroughResult {
   // without allow_partial or when the first leg failed. cost, length,
   // expansions, episodes and planning_time are sums over the legs run
   // (cost and length over the legs in `path`); trajectory joins the legs'
-  // trajectories.
+  // trajectories, polyline the legs' polylines and poses the legs' poses
+  // (a junction pose once when both legs have it).
   PlanResult plan;
   // Index into (via..., goal) of the last goal `path` reaches: via.size()
   // when found, -1 when not even the first was reached.

@@ -68,28 +68,26 @@ PathMeasure MeasurePolyline(const Grid& grid,
 PathMeasure MeasurePosePath(const Grid& grid, const std::vector<PathPose>& poses,
                             const std::vector<Cell>& path, const CostParams& cost,
                             const MotionPenalties& penalties) {
-  PathMeasure m = MeasurePath(grid, path, cost);
-  if (!m.valid) return m;
-  m.valid = false;
+  PathMeasure m;
   if (poses.empty()) return m;
-  size_t at = 0;
-  for (size_t i = 0; i < poses.size(); ++i) {
+  for (size_t i = 1; i < poses.size(); ++i) {
     const Pose& p = poses[i].pose;
-    if (i > 0) {
-      const Pose& q = poses[i - 1].pose;
-      if (std::hypot(p.x - q.x, p.y - q.y) > 0.5 + 1e-9) {
-        m.first_invalid = i;
-        return m;
-      }
-    }
-    while (at < path.size() && !(path[at] == p.cell())) ++at;
-    if (at == path.size() || (i == 0 && at != 0)) {
+    const Pose& q = poses[i - 1].pose;
+    if (std::hypot(p.x - q.x, p.y - q.y) > 1.0 + 1e-9) {
       m.first_invalid = i;
       return m;
     }
   }
-  if (at + 1 != path.size()) {
-    m.first_invalid = path.size() - 1;
+  const std::vector<Cell> cells = PathCells(poses);
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (i >= path.size() || !(path[i] == cells[i]) || !grid.InBounds(cells[i]) ||
+        !Traversable(grid.cost(cells[i]), cost.unknown_is_free)) {
+      m.first_invalid = i;
+      return m;
+    }
+  }
+  if (path.size() != cells.size()) {
+    m.first_invalid = cells.size();
     return m;
   }
   m.valid = true;

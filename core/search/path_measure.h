@@ -53,12 +53,13 @@ PathMeasure MeasurePolyline(const Grid& grid,
                             const CostParams& cost);
 
 // Measures a kinematic path (PlanResult::poses, with `path` its cells):
-// valid when the cells are a chain of legal moves (MeasurePath's rule) that
-// visits every pose's cell in order from the first pose's to the last's, and
-// consecutive poses are at most half a cell apart (first_invalid: the index
-// of the first bad cell or pose). Length is PathLength(poses) and cost
-// PathCost(grid, poses, penalties) (core/kinematics/pose_path.h). Only the
-// centre's cells are checked, not the footprint.
+// valid when `path` is the poses' cells with consecutive duplicates removed
+// (PathCells), each on the grid and traversable under `cost`, and
+// consecutive poses are at most a cell apart (PlanResult::poses' contract;
+// first_invalid: the index of the first bad pose or cell). Length is
+// PathLength(poses) and cost PathCost(grid, poses, penalties)
+// (core/kinematics/pose_path.h). Only the centre's cells are checked, not
+// the footprint, and not the grid's move rule: a robot's motion is its own.
 PathMeasure MeasurePosePath(const Grid& grid, const std::vector<PathPose>& poses,
                             const std::vector<Cell>& path, const CostParams& cost,
                             const MotionPenalties& penalties);

@@ -599,7 +599,7 @@ PlanResult HybridSearch::Finish(uint32_t id, const Shot* shot, int64_t expansion
   PlanResult result;
   result.outcome = PlanOutcome::kFound;
   result.expansions = expansions;
-  result.path = PathCells(grid_, poses, request_.cost.unknown_is_free);
+  result.path = PathCells(poses);
   result.length = PathLength(poses);
   result.cost = PathCost(grid_, poses, penalties_);
   result.poses = std::move(poses);

@@ -64,11 +64,14 @@ struct HybridAStarOptions {
   // Off: the straight-line distance instead of the curve length.
   bool curve_heuristic = true;
   // Within this many turning radii of the goal the curve heuristic is the
-  // exact Dubins / Reeds-Shepp length (OMPL; a Reeds-Shepp length costs
-  // 5-10 us); farther, the straight-line distance, a lower bound of it, and
-  // there the obstacle heuristic dominates anyway. docs/performance.md
-  // ("hybrid_astar") has the measurements behind the default.
-  double curve_heuristic_radii = 8.0;
+  // Dubins / Reeds-Shepp length (a Reeds-Shepp length from OMPL costs 5-10
+  // us, hence curve_table); farther, the straight-line distance, a lower
+  // bound of it, and there the obstacle heuristic dominates anyway. On the
+  // benchmark's warehouse a wider window made searches slower, not faster
+  // (RS, field from the store, p90: 78 ms at 0, 2 and 4 radii, 255 ms at 8,
+  // 390 ms at 16; docs/performance.md): the final approach is where a
+  // heading matters.
+  double curve_heuristic_radii = 2.0;
   // Read the curve length from the shared table (TabledCurveLength in
   // core/kinematics/curves.h, Nav2's lookup table) instead of computing it.
   bool curve_table = true;

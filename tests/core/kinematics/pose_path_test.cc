@@ -69,22 +69,12 @@ TEST(KindOf, SteeringInTheWheelsSense) {
   EXPECT_EQ(KindOf(a, Drive(a, Steer::kStraight, 1, 0.3), false).steer, 0);
 }
 
-TEST(PathCells, EdgeNeighboursThroughTheCellCrossed) {
-  const Grid grid = MakeGrid({"....", "....", "....", "...."});
-  // From (0.9, 0.2) to (1.2, 1.1): crosses x = 1 at y = 0.5 first, so the
-  // cell between is (1, 0).
-  std::vector<PathPose> poses = {PathPose{Pose{0.9, 0.2, 0}}, PathPose{Pose{1.2, 1.1, 0}}};
-  EXPECT_EQ(PathCells(grid, poses, false), (std::vector<Cell>{{0, 0}, {1, 0}, {1, 1}}));
-  // Through the corner (1, 1) exactly: the traversable side.
-  const Grid blocked = MakeGrid({".#..", "....", "....", "...."});
-  poses = {PathPose{Pose{0.5, 0.5, 0}}, PathPose{Pose{1.5, 1.5, 0}}};
-  EXPECT_EQ(PathCells(blocked, poses, false), (std::vector<Cell>{{0, 0}, {0, 1}, {1, 1}}));
-  EXPECT_EQ(PathCells(grid, poses, false), (std::vector<Cell>{{0, 0}, {1, 0}, {1, 1}}));
-  // Duplicates dropped; a long segment walked cell by cell.
-  poses = {PathPose{Pose{0.5, 0.5, 0}}, PathPose{Pose{0.6, 0.5, 0}},
-           PathPose{Pose{3.5, 0.5, 0}}};
-  EXPECT_EQ(PathCells(grid, poses, false),
-            (std::vector<Cell>{{0, 0}, {1, 0}, {2, 0}, {3, 0}}));
+TEST(PathCells, ThePosesCellsOnce) {
+  const std::vector<PathPose> poses = {PathPose{Pose{0.5, 0.5, 0}}, PathPose{Pose{0.9, 0.6, 0}},
+                                       PathPose{Pose{1.2, 1.1, 0}}, PathPose{Pose{1.6, 1.4, 0}},
+                                       PathPose{Pose{2.1, 1.4, 0}}};
+  EXPECT_EQ(PathCells(poses), (std::vector<Cell>{{0, 0}, {1, 1}, {2, 1}}));
+  EXPECT_TRUE(PathCells({}).empty());
 }
 
 }  // namespace

@@ -3,9 +3,8 @@
 // the precision the file stores it with, the other optimal planners match
 // Dijkstra, fewest-move planners match a separate reference BFS in this file,
 // and the rest are checked by what their traits promise (PlannerStride and
-// kPlannerScenariosPerMap say how often; kinematic planners: a path from
-// the start cell to the goal cell through legal moves, when they find one).
-// Skips, saying so, when the benchmark folder is absent. Set
+// kPlannerScenariosPerMap say how often). Skips, saying so, when the
+// benchmark folder is absent. Set
 // PATHD_MOVINGAI_DIR to point elsewhere, PATHD_CONFORMANCE_STRIDE=N to check
 // every N-th scenario only (slow sanitizer builds), PATHD_CONFORMANCE_FULL=1
 // to check every planner on every scenario.
@@ -109,12 +108,6 @@ int PlannerStride(const Planner& planner) {
     // maps); cell_planners_test and geometric_planners_test check it
     // against brute force.
     stride = 50;
-  } else if (t.kinematic) {
-    // A search over poses and heading bins, with a budget (kKinematicBudget):
-    // here it plans DefaultKinematicQuery's point-like Reeds-Shepp robot;
-    // hybrid_astar_test checks kinematic planners against the independent
-    // checker.
-    stride = 100;
   } else if (t.any_angle || t.incremental) {
     stride = 4;
   } else if (t.real_time || !t.complete) {
@@ -139,11 +132,6 @@ constexpr size_t kPlannerScenariosPerMap = 750;
 // spent a sixth of a maze's time failing at 4,000,000.
 constexpr int64_t kWanderBudget = 1'500'000;
 
-// Budget for the kinematic planners: a robot with a one-cell turning radius
-// cannot turn in the mazes' one-cell corridors, and an exhausted lattice is
-// searched again at finer resolutions, so a query it cannot answer would
-// otherwise take minutes.
-constexpr int64_t kKinematicBudget = 200'000;
 
 struct PlannerTally {
   const Planner* planner = nullptr;
@@ -182,7 +170,7 @@ TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
     // Geometric planners answer in the plane, shorter than the grid optimum
     // these scenarios list: geometric_movingai_test checks them. Kinematic
     // planners answer for a robot that cannot follow every grid path:
-    // state_lattice_test checks them.
+    // state_lattice_test and hybrid_astar_test check them.
     if (p != dijkstra && !p->traits().geometric && !p->traits().kinematic) {
       tallies.push_back({p, PlannerStride(*p)});
     }
@@ -226,11 +214,10 @@ TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
       if (k % static_cast<size_t>(tally.stride) != 0) continue;
       const Planner& planner = *tally.planner;
       const PlannerTraits& t = planner.traits();
-      const bool wanders = t.real_time || (!t.complete && !t.kinematic);
+      const bool wanders = t.real_time || !t.complete;
       const StopCondition stop =
           wanders ? StopCondition(absl::InfiniteFuture(), nullptr, kWanderBudget)
-          : t.kinematic ? StopCondition(absl::InfiniteFuture(), nullptr, kKinematicBudget)
-                        : StopCondition::None();
+                  : StopCondition::None();
       const absl::Time started = absl::Now();
       auto r = planner.Plan(*grid, request, stop, scratch);
       tally.planning += absl::Now() - started;
@@ -239,13 +226,6 @@ TEST_P(MovingAiConformance, EveryPlannerOnEveryScenario) {
           absl::StrFormat("%s %s line %d", planner.name(), GetParam(), s.line);
       ++tally.checked;
       if (!r->found()) {
-        if (t.kinematic) {
-          // Not complete: its lattice keeps one pose per cell and heading.
-          ASSERT_TRUE(r->outcome == PlanOutcome::kExpansionLimit ||
-                      r->outcome == PlanOutcome::kNoPath)
-              << where << ": " << PlanOutcomeName(r->outcome);
-          continue;
-        }
         ASSERT_TRUE(wanders) << where << ": " << PlanOutcomeName(r->outcome);
         ASSERT_TRUE(r->outcome == PlanOutcome::kExpansionLimit ||
                     r->outcome == PlanOutcome::kLocalMinimum)
