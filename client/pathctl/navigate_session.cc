@@ -2,8 +2,10 @@
 #include "client/pathctl/navigate_session.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
@@ -12,6 +14,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/strip.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
@@ -42,7 +45,37 @@ std::string EventName(v1::NavigateEvent event) {
   return name.empty() ? absl::StrCat(static_cast<int>(event)) : std::string(name);
 }
 
-// One response as two lines: what happened and the path.
+// A position of the open message, for the log.
+std::string FormatPosition(const v1::Position& position) {
+  switch (position.kind_case()) {
+    case v1::Position::kCell:
+      return FormatCell(position.cell());
+    case v1::Position::kWorld:
+      return absl::StrFormat("(%g, %g) m", position.world().x(), position.world().y());
+    case v1::Position::kWorldPose:
+      return absl::StrFormat("(%g, %g) m facing %g rad", position.world_pose().x(),
+                             position.world_pose().y(), position.world_pose().yaw());
+    case v1::Position::kCellPose:
+      return absl::StrFormat("(%g, %g) facing %g rad", position.cell_pose().x(),
+                             position.cell_pose().y(), position.cell_pose().yaw());
+    case v1::Position::KIND_NOT_SET:
+      break;
+  }
+  return "(unset)";
+}
+
+std::string FormatPose(const v1::CellPose& p) {
+  return absl::StrFormat("(%.2f,%.2f,%.3f)", p.x(), p.y(), p.yaw());
+}
+
+// A kinematic session's answer carries its poses, its budget and the pose
+// it planned from.
+bool IsKinematicAnswer(const v1::NavigateResponse& response) {
+  return response.replan_max_expansions() > 0;
+}
+
+// One response as two lines: what happened and the path (kinematic
+// sessions: three, the poses too).
 std::string FormatResponse(const v1::NavigateResponse& response) {
   const v1::PlanResponse& plan = response.plan();
   std::string text = absl::StrFormat(
@@ -67,10 +100,23 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
     absl::StrAppend(&text, ", observation applied as map version ",
                     response.applied_version());
   }
+  const bool kinematic = IsKinematicAnswer(response);
+  if (kinematic) {
+    absl::StrAppendFormat(&text, ", budget %d, from %s", response.replan_max_expansions(),
+                          FormatPose(response.robot_pose()));
+    if (response.kept_previous_path()) absl::StrAppend(&text, ", kept the previous path");
+  }
   text.push_back('\n');
   if (plan.found()) {
     absl::StrAppend(&text, "  path (", plan.path_size(),
                     " cells): ", FormatPath(plan.path()), "\n");
+  }
+  if (kinematic && plan.poses_size() > 0) {
+    std::vector<std::string> poses;
+    poses.reserve(plan.poses_size());
+    for (const v1::CellPose& p : plan.poses()) poses.push_back(FormatPose(p));
+    absl::StrAppendFormat(&text, "  poses (%d, %g m, cell x,y,yaw): %s\n", plan.poses_size(),
+                          plan.length_m(), absl::StrJoin(poses, " "));
   }
   return text;
 }
@@ -123,10 +169,13 @@ class Session {
   absl::Status RunScript(const v1::NavigateOpen& open,
                          const std::vector<ScriptStep>& script) {
     robot_ = open.start().cell();
+    robot_pose_.set_x(robot_.x() + 0.5);
+    robot_pose_.set_y(robot_.y() + 0.5);
+    if (open.start().has_cell_pose()) robot_pose_ = open.start().cell_pose();
     v1::NavigateRequest request;
     *request.mutable_open() = open;
-    Log(absl::StrFormat("> open %s %s -> %s\n", open.map(), FormatCell(robot_),
-                        FormatCell(open.goal().cell())));
+    Log(absl::StrFormat("> open %s %s -> %s\n", open.map(), FormatPosition(open.start()),
+                        FormatPosition(open.goal())));
     if (absl::Status s = Exchange(request, "open"); !s.ok()) return s;
     for (const ScriptStep& step : script) {
       if (absl::Status s = RunStep(step); !s.ok()) return s;
@@ -139,6 +188,13 @@ class Session {
     switch (step.kind) {
       case ScriptStep::Kind::kMove:
         return Move(step.cell, step.where);
+      case ScriptStep::Kind::kPose: {
+        v1::NavigateRequest request;
+        *request.mutable_pose()->mutable_cell_pose() = step.pose;
+        if (absl::Status s = Exchange(request, step.where); !s.ok()) return s;
+        robot_pose_ = step.pose;
+        return absl::OkStatus();
+      }
       case ScriptStep::Kind::kFollow:
         return Follow(step);
       case ScriptStep::Kind::kObserve: {
@@ -175,6 +231,35 @@ class Session {
     *request.mutable_pose()->mutable_cell() = cell;
     if (absl::Status s = Exchange(request, where); !s.ok()) return s;
     robot_ = cell;
+    robot_pose_.set_x(cell.x() + 0.5);
+    robot_pose_.set_y(cell.y() + 0.5);
+    return absl::OkStatus();
+  }
+
+  // A kinematic session's path is poses: each step sends the pose after the
+  // one nearest the robot's.
+  absl::Status FollowPoses(const ScriptStep& step, int32_t i, const v1::PlanResponse& plan) {
+    int nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < plan.poses_size(); ++k) {
+      const double d = std::hypot(plan.poses(k).x() - robot_pose_.x(),
+                                  plan.poses(k).y() - robot_pose_.y());
+      if (d < best) {
+        best = d;
+        nearest = k;
+      }
+    }
+    if (nearest + 1 >= plan.poses_size()) {
+      Log(absl::StrFormat("  at the goal %s after %d of %d steps\n", FormatPose(robot_pose_), i,
+                          step.steps));
+      return absl::OutOfRangeError("at the goal");
+    }
+    const v1::CellPose next = plan.poses(nearest + 1);
+    Log(absl::StrFormat("> step %d/%d: pose %s\n", i + 1, step.steps, FormatPose(next)));
+    v1::NavigateRequest request;
+    *request.mutable_pose()->mutable_cell_pose() = next;
+    if (absl::Status s = Exchange(request, step.where); !s.ok()) return s;
+    robot_pose_ = next;
     return absl::OkStatus();
   }
 
@@ -183,9 +268,17 @@ class Session {
   absl::Status Follow(const ScriptStep& step) {
     for (int32_t i = 0; i < step.steps; ++i) {
       v1::PlanResponse plan;
+      bool last_kinematic;
       {
         absl::MutexLock lock(&mu_);
         plan = last_plan_;
+        last_kinematic = last_kinematic_;
+      }
+      if (last_kinematic && plan.poses_size() > 0) {
+        const absl::Status s = FollowPoses(step, i, plan);
+        if (absl::IsOutOfRange(s)) return absl::OkStatus();
+        if (!s.ok()) return s;
+        continue;
       }
       if (!plan.found()) {
         return absl::FailedPreconditionError(
@@ -264,6 +357,7 @@ class Session {
         answered_seq_ = std::max(answered_seq_, response.seq());
       }
       last_plan_ = response.plan();
+      last_kinematic_ = IsKinematicAnswer(response);
     }
     absl::MutexLock lock(&mu_);
     ended_ = true;
@@ -301,6 +395,8 @@ class Session {
   // Main thread only.
   uint64_t last_seq_ = 0;
   v1::Cell robot_;
+  // Kinematic sessions: the pose last sent (cell coordinates).
+  v1::CellPose robot_pose_;
   bool stream_lost_ = false;
 
   absl::Mutex mu_;
@@ -311,6 +407,7 @@ class Session {
   int64_t unclaimed_pushes_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t pushes_total_ ABSL_GUARDED_BY(mu_) = 0;
   v1::PlanResponse last_plan_ ABSL_GUARDED_BY(mu_);
+  bool last_kinematic_ ABSL_GUARDED_BY(mu_) = false;
 };
 
 }  // namespace

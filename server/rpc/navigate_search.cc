@@ -169,8 +169,9 @@ absl::Status NavigationSearch::OpenKinematic(const v1::NavigateOpen& open,
 }
 
 KinematicView NavigationSearch::ViewForKinematic() {
-  KinematicView view{grid_, snapshot_->version, nullptr, plans_ > 0, repaired_cells_};
-  repaired_cells_ = 0;
+  // No per-cell state is repaired or reused from a previous plan (the
+  // derived values are the cache's), so cache_hit and repaired_cells stay 0.
+  KinematicView view{grid_, snapshot_->version, nullptr};
   // The server's per-version values fit only the version's own grid.
   if (deps_.derived != nullptr && grid_ == snapshot_->grid) {
     if (shared_derived_ == nullptr || shared_derived_version_ != snapshot_->version) {

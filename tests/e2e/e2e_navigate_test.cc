@@ -1,6 +1,14 @@
-// e2e_test: navigate sessions and pushes, maps watch, cost-to-go, the cache
-// statistics, D* Lite reuse, the arena2 scenarios and SIGTERM.
+// e2e_test: navigate sessions and pushes (grid and kinematic robots), maps
+// watch, cost-to-go, the cache statistics, D* Lite reuse, the arena2 scenarios
+// and SIGTERM.
+#include <chrono>
+
+#include "grpcpp/create_channel.h"
+#include "grpcpp/security/credentials.h"
+#include "pathd/v1/planner_service.grpc.pb.h"
 #include "tests/e2e/e2e_fixture.h"
+#include "tests/testing/kinematic_checker.h"
+#include "tests/testing/test_grids.h"
 
 namespace pathd::e2e_test {
 
@@ -127,7 +135,7 @@ TEST_F(E2eTest, NavigateScriptErrorsAndFailedExpectations) {
       Ctl({"navigate", "room", "0", "0", "9", "9", "--script", bad});
   EXPECT_EQ(r.exit_code, 2) << r;
   EXPECT_EQ(r.err, absl::StrCat("error: ", bad,
-                                ":2: unknown command 'jump'; expected move, "
+                                ":2: unknown command 'jump'; expected move, pose, "
                                 "follow, block, free, cost, rect, private, "
                                 "wait or expect-push\n"));
   EXPECT_EQ(r.out, "") << r;
@@ -304,6 +312,179 @@ TEST_F(E2eTest, SigtermExitsCleanly) {
       {absl::StrCat("--server=", address), "--timeout=5s", "maps", "list"});
   EXPECT_EQ(r.exit_code, 5) << r;
   EXPECT_TRUE(absl::StartsWith(r.err, "error: UNAVAILABLE: ")) << r;
+}
+
+// A hall 30 x 12 cells walled round, for the kinematic session: rows as
+// tests/testing/test_grids.h reads them ('#' lethal), and the same map as
+// Moving AI text for pathd.
+std::vector<std::string> HallRows() {
+  std::vector<std::string> rows;
+  for (int y = 0; y < 12; ++y) {
+    rows.push_back(y == 0 || y == 11 ? std::string(30, '#')
+                                     : "#" + std::string(28, '.') + "#");
+  }
+  return rows;
+}
+
+std::string MovingAiText(const std::vector<std::string>& rows) {
+  std::string text = absl::StrCat("type octile\nheight ", rows.size(), "\nwidth ",
+                                  rows[0].size(), "\nmap\n");
+  for (std::string row : rows) {
+    std::replace(row.begin(), row.end(), '#', '@');
+    text += row + "\n";
+  }
+  return text;
+}
+
+std::vector<Pose> PosesOf(const v1::PlanResponse& plan) {
+  std::vector<Pose> poses;
+  for (const v1::CellPose& p : plan.poses()) poses.push_back(Pose{p.x(), p.y(), p.yaw()});
+  return poses;
+}
+
+v1::CellPose MakeCellPose(double x, double y, double yaw) {
+  v1::CellPose pose;
+  pose.set_x(x);
+  pose.set_y(y);
+  pose.set_yaw(yaw);
+  return pose;
+}
+
+v1::NavigateRequest PoseMessage(uint64_t seq, const v1::CellPose& pose) {
+  v1::NavigateRequest request;
+  request.set_seq(seq);
+  *request.mutable_pose()->mutable_cell_pose() = pose;
+  return request;
+}
+
+// The issue's kinematic session: a rectangular Dubins robot drives its
+// path, another client (pathctl) walls off the corridor ahead of it, and the
+// pushed replan starts at the robot's last reported pose and passes the
+// independent checker (footprint sampled densely against every obstacle
+// cell with Boost.Geometry, curvature within 1 / r_min) on the new map; an
+// update away from the path pushes nothing.
+TEST_F(E2eTest, KinematicNavigateSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
+  std::vector<std::string> rows = HallRows();
+  ASSERT_NO_FATAL_FAILURE(CreateMap("hall", MovingAiText(rows)));
+  auto channel = grpc::CreateChannel(address_, grpc::InsecureChannelCredentials());
+  auto planner = v1::PlannerService::NewStub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  auto stream = planner->Navigate(&context);
+
+  testing::KinematicCheck check;
+  check.footprint = {{1.0, 0.6}, {1.0, -0.6}, {-1.0, -0.6}, {-1.0, 0.6}};
+  check.min_turning_radius = 2.0;
+  check.curvature_slack = 0.02;
+  check.allow_reverse = false;
+  check.step_cells = 0.05;
+  check.goal = Pose{26.5, 3.5, 0.0};
+  check.goal_tolerance = 1e-3;
+  check.goal_yaw_tolerance = 1e-3;
+
+  v1::NavigateRequest open;
+  open.set_seq(1);
+  v1::NavigateOpen* o = open.mutable_open();
+  o->set_map("hall");
+  o->set_planner(v1::PLANNER_HYBRID_ASTAR);
+  o->set_replan_max_expansions(20000);
+  *o->mutable_start()->mutable_cell_pose() = MakeCellPose(3.5, 3.5, 0.0);
+  *o->mutable_goal()->mutable_cell_pose() = MakeCellPose(26.5, 3.5, 0.0);
+  for (const auto& [x, y] : check.footprint) {
+    v1::CellPoint* p = o->mutable_options()->mutable_footprint()->add_polygon_cells();
+    p->set_x(x);
+    p->set_y(y);
+  }
+  o->mutable_options()->set_min_turning_radius_cells(2.0);
+  o->mutable_options()->set_motion_model(v1::MOTION_MODEL_DUBINS);
+  ASSERT_TRUE(stream->Write(open));
+  v1::NavigateResponse answer;
+  ASSERT_TRUE(stream->Read(&answer));
+  ASSERT_EQ(answer.event(), v1::NAVIGATE_EVENT_OPENED);
+  ASSERT_TRUE(answer.plan().found()) << answer.ShortDebugString();
+  EXPECT_EQ(answer.replan_max_expansions(), 20000);
+  EXPECT_FALSE(answer.kept_previous_path());
+  EXPECT_GT(answer.plan().length_m(), 22.0);
+  Grid grid = MakeGrid(rows);
+  check.start = Pose{3.5, 3.5, 0.0};
+  EXPECT_EQ(testing::CheckKinematicPath(grid, PosesOf(answer.plan()), {}, check), "");
+
+  // Four steps along the path, each answered from the pose reported.
+  v1::CellPose robot;
+  uint64_t seq = 1;
+  for (int step = 0; step < 4; ++step) {
+    ASSERT_GE(answer.plan().poses_size(), 3);
+    robot = answer.plan().poses(2);
+    ASSERT_TRUE(stream->Write(PoseMessage(++seq, robot)));
+    ASSERT_TRUE(stream->Read(&answer));
+    ASSERT_EQ(answer.event(), v1::NAVIGATE_EVENT_MOVED);
+    ASSERT_EQ(answer.seq(), seq);
+    ASSERT_TRUE(answer.plan().found()) << answer.ShortDebugString();
+    check.start = Pose{robot.x(), robot.y(), robot.yaw()};
+    EXPECT_EQ(testing::CheckKinematicPath(grid, PosesOf(answer.plan()), {}, check), "")
+        << "step " << step;
+  }
+
+  // An update far from the path (it runs along row 3): no replan is pushed,
+  // so the next message read is the answer to the next pose. The push job
+  // would be queued before UpdateMap returns, ahead of the pose message.
+  ASSERT_EQ(Ctl({"maps", "set", "hall", "27", "10", "lethal"}).exit_code, 0);
+  rows[10][27] = '#';
+  ASSERT_TRUE(stream->Write(PoseMessage(++seq, robot)));
+  ASSERT_TRUE(stream->Read(&answer));
+  EXPECT_EQ(answer.event(), v1::NAVIGATE_EVENT_MOVED) << answer.ShortDebugString();
+  EXPECT_EQ(answer.seq(), seq);
+  EXPECT_EQ(answer.plan().map_version(), 2u);
+
+  // Another client walls off the corridor's lower half ahead of the robot.
+  const ProcessResult wall = Ctl({"maps", "rect", "hall", "15", "1", "16", "6", "lethal"});
+  ASSERT_EQ(wall.exit_code, 0) << wall;
+  for (int y = 1; y <= 6; ++y) rows[y][15] = rows[y][16] = '#';
+  ASSERT_TRUE(stream->Read(&answer));
+  ASSERT_EQ(answer.event(), v1::NAVIGATE_EVENT_MAP_CHANGED) << answer.ShortDebugString();
+  EXPECT_EQ(answer.seq(), 0u);
+  EXPECT_EQ(answer.plan().map_version(), 3u);
+  ASSERT_TRUE(answer.plan().found()) << answer.ShortDebugString();
+  EXPECT_NEAR(answer.robot_pose().x(), robot.x(), 1e-9);
+  EXPECT_NEAR(answer.robot_pose().y(), robot.y(), 1e-9);
+  grid = MakeGrid(rows);
+  check.start = Pose{robot.x(), robot.y(), robot.yaw()};
+  const std::vector<Pose> detour = PosesOf(answer.plan());
+  EXPECT_EQ(testing::CheckKinematicPath(grid, detour, {}, check), "");
+  // It goes round the wall: above row 7 somewhere.
+  EXPECT_TRUE(std::any_of(detour.begin(), detour.end(),
+                          [](const Pose& p) { return p.y > 7.0; }));
+  ASSERT_EQ(answer.plan().world_poses_size(), answer.plan().poses_size());
+  EXPECT_EQ(answer.plan().frame_id(), "map");
+
+  stream->WritesDone();
+  while (stream->Read(&answer)) {
+  }
+  const grpc::Status status = stream->Finish();
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+// pathctl navigate with the plan command's robot flags on the bundled
+// warehouse: a kinematic session that prints poses and follows them.
+TEST_F(E2eTest, PathctlNavigatesAKinematicRobotOnTheWarehouse) {
+  const std::string source_dir = PATHD_SOURCE_DIR;
+  ASSERT_EQ(Ctl({"maps", "create", "warehouse", "--from",
+                 source_dir + "/maps/warehouse.yaml"})
+                .exit_code,
+            0);
+  const std::string script = MapFile("kinematic.nav", "follow 3\npose 6.2 3.6 0.1\n");
+  const ProcessResult r =
+      Ctl({"navigate", "warehouse", "4", "3", "36", "3", "--planner", "hybrid_astar",
+           "--footprint", "[[0.15,0.1],[0.15,-0.1],[-0.15,-0.1],[-0.15,0.1]]",
+           "--min_turning_radius", "0.2", "--start_yaw", "0", "--goal_yaw", "0",
+           "--max_expansions", "5000", "--script", script});
+  ASSERT_EQ(r.exit_code, 0) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "[OPENED] seq 1")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "budget 5000, from (4.50,3.50,0.000)")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "  poses (")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "> step 3/3: pose (6.00,3.50,0.000)")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "from (6.20,3.60,0.100)")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "closed: 5 answers")) << r;
 }
 
 }  // namespace pathd::e2e_test
