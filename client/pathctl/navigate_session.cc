@@ -85,6 +85,11 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
   if (plan.found()) {
     absl::StrAppendFormat(&text, "found, cost %.6f, %d cells", plan.cost(),
                           plan.path_size());
+  } else if (response.kept_previous_path()) {
+    absl::string_view outcome = v1::PlanOutcome_Name(plan.outcome());
+    absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
+    absl::StrAppendFormat(&text, "replan stopped (%s), kept the previous path, %d cells",
+                          outcome, plan.path_size());
   } else {
     absl::string_view outcome = v1::PlanOutcome_Name(plan.outcome());
     absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
@@ -104,7 +109,6 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
   if (kinematic) {
     absl::StrAppendFormat(&text, ", budget %d, from %s", response.replan_max_expansions(),
                           FormatPose(response.robot_pose()));
-    if (response.kept_previous_path()) absl::StrAppend(&text, ", kept the previous path");
   }
   text.push_back('\n');
   if (plan.found()) {

@@ -472,19 +472,43 @@ TEST_F(E2eTest, PathctlNavigatesAKinematicRobotOnTheWarehouse) {
                  source_dir + "/maps/warehouse.yaml"})
                 .exit_code,
             0);
-  const std::string script = MapFile("kinematic.nav", "follow 3\npose 6.2 3.6 0.1\n");
+  // The shipped example script, as docs/pathctl.md runs it.
   const ProcessResult r =
       Ctl({"navigate", "warehouse", "4", "3", "36", "3", "--planner", "hybrid_astar",
            "--footprint", "[[0.15,0.1],[0.15,-0.1],[-0.15,-0.1],[-0.15,0.1]]",
            "--min_turning_radius", "0.2", "--start_yaw", "0", "--goal_yaw", "0",
-           "--max_expansions", "5000", "--script", script});
+           "--max_expansions", "5000", "--script",
+           source_dir + "/examples/navigate/warehouse_robot.nav"});
   ASSERT_EQ(r.exit_code, 0) << r;
   EXPECT_TRUE(absl::StrContains(r.out, "[OPENED] seq 1")) << r;
   EXPECT_TRUE(absl::StrContains(r.out, "budget 5000, from (4.50,3.50,0.000)")) << r;
   EXPECT_TRUE(absl::StrContains(r.out, "  poses (")) << r;
   EXPECT_TRUE(absl::StrContains(r.out, "> step 3/3: pose (6.00,3.50,0.000)")) << r;
   EXPECT_TRUE(absl::StrContains(r.out, "from (6.20,3.60,0.100)")) << r;
-  EXPECT_TRUE(absl::StrContains(r.out, "closed: 5 answers")) << r;
+  // The pallets' answer is a path round them, from the reported pose.
+  EXPECT_TRUE(absl::StrContains(r.out, "[OBSERVED] seq 6, session 1, map version 2: found"))
+      << r;
+  EXPECT_FALSE(absl::StrContains(r.out, "no path")) << r;
+  EXPECT_TRUE(absl::StrContains(r.out, "closed: 8 answers")) << r;
+
+  // A budget too small for the first step round the pallets (the step after
+  // the observation took 1085 expansions when this was written): the answer
+  // keeps the rest of the previous path, which the robot is on.
+  ASSERT_EQ(Ctl({"maps", "rect", "warehouse", "20", "1", "22", "5", "free"}).exit_code, 0);
+  const ProcessResult tight =
+      Ctl({"navigate", "warehouse", "4", "3", "36", "3", "--planner", "hybrid_astar",
+           "--footprint", "[[0.15,0.1],[0.15,-0.1],[-0.15,-0.1],[-0.15,0.1]]",
+           "--min_turning_radius", "0.2", "--start_yaw", "0", "--goal_yaw", "0",
+           "--max_expansions", "400", "--script",
+           source_dir + "/examples/navigate/warehouse_robot.nav"});
+  ASSERT_EQ(tight.exit_code, 0) << tight;
+  EXPECT_TRUE(absl::StrContains(tight.out, "[OBSERVED] seq 6, session 2, map version 4: found"))
+      << tight;
+  EXPECT_TRUE(absl::StrContains(
+      tight.out, "[MOVED] seq 7, session 2, map version 4: replan stopped (EXPANSION_LIMIT), "
+                 "kept the previous path"))
+      << tight;
+  EXPECT_TRUE(absl::StrContains(tight.out, "budget 400, from (6.58,3.64,0.100)")) << tight;
 }
 
 }  // namespace pathd::e2e_test
