@@ -457,6 +457,40 @@ TEST_F(E2eTest, KinematicNavigateSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
   ASSERT_EQ(answer.plan().world_poses_size(), answer.plan().poses_size());
   EXPECT_EQ(answer.plan().frame_id(), "map");
 
+  // The robot's own sensor, for this session only: a pillar on the detour.
+  // The answer plans on the shared map plus the pillar (version unchanged)
+  // and the session's bytes now count its private view of the map.
+  const Pose through = *std::find_if(detour.begin(), detour.end(),
+                                     [](const Pose& p) { return p.y > 7.0; });
+  const int pillar_x = static_cast<int>(through.x), pillar_y = static_cast<int>(through.y);
+  v1::NavigateRequest observe;
+  observe.set_seq(++seq);
+  observe.mutable_observe()->set_session_only(true);
+  v1::CellChange* change = observe.mutable_observe()->add_changes();
+  change->mutable_cell()->set_x(pillar_x);
+  change->mutable_cell()->set_y(pillar_y);
+  change->set_cost(254);
+  ASSERT_TRUE(stream->Write(observe));
+  ASSERT_TRUE(stream->Read(&answer));
+  ASSERT_EQ(answer.event(), v1::NAVIGATE_EVENT_OBSERVED) << answer.ShortDebugString();
+  EXPECT_EQ(answer.plan().map_version(), 3u);
+  ASSERT_TRUE(answer.plan().found()) << answer.ShortDebugString();
+  std::vector<std::string> private_rows = rows;
+  private_rows[pillar_y][pillar_x] = '#';
+  EXPECT_EQ(testing::CheckKinematicPath(MakeGrid(private_rows), PosesOf(answer.plan()), {},
+                                        check),
+            "");
+  // The detour pushed before would hit the pillar.
+  EXPECT_EQ(testing::CheckKinematicPath(MakeGrid(private_rows), detour, {}, check).empty(),
+            false);
+  grpc::ClientContext stats_context;
+  v1::GetCacheStatsResponse stats;
+  ASSERT_TRUE(planner->GetCacheStats(&stats_context, v1::GetCacheStatsRequest(), &stats).ok());
+  EXPECT_EQ(stats.sessions(), 1);
+  // Its obstacle distance field and heuristic (4 + 4 bytes per cell) and
+  // the private grid copy (1 per cell).
+  EXPECT_GE(stats.session_bytes(), 9 * 30 * 12);
+
   stream->WritesDone();
   while (stream->Read(&answer)) {
   }
