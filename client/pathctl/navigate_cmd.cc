@@ -21,14 +21,15 @@ int Navigate(CommandEnv& env, Args args) {
                            "per line");
   }
   static constexpr const char* kNames[] = {"SX", "SY", "GX", "GY"};
-  absl::StatusOr<std::vector<int32_t>> p = ParseInts(args.subspan(1), kNames);
-  if (!p.ok()) return env.Usage(p.status().message());
+  const bool world = env.options().plan.world;
   v1::NavigateOpen open;
   open.set_map(args[0]);
-  open.mutable_start()->mutable_cell()->set_x((*p)[0]);
-  open.mutable_start()->mutable_cell()->set_y((*p)[1]);
-  open.mutable_goal()->mutable_cell()->set_x((*p)[2]);
-  open.mutable_goal()->mutable_cell()->set_y((*p)[3]);
+  absl::StatusOr<v1::Position> start = PositionFromPair(args.subspan(1, 2), world, {kNames, 2});
+  if (!start.ok()) return env.Usage(start.status().message());
+  absl::StatusOr<v1::Position> goal = PositionFromPair(args.subspan(3, 2), world, {kNames + 2, 2});
+  if (!goal.ok()) return env.Usage(goal.status().message());
+  *open.mutable_start() = *std::move(start);
+  *open.mutable_goal() = *std::move(goal);
   if (absl::Status s = SetCostOptions(env.options().cost, open.mutable_options()); !s.ok()) {
     return env.Usage(s.message());
   }
@@ -75,7 +76,7 @@ int Navigate(CommandEnv& env, Args args) {
     script = *std::move(parsed);
   }
   if (absl::Status s =
-          RunNavigateSession(env.client(), open, script, env.json(), env.out());
+          RunNavigateSession(env.client(), open, script, env.json(), env.out(), world);
       !s.ok()) {
     return env.Fail(s);
   }
@@ -83,7 +84,7 @@ int Navigate(CommandEnv& env, Args args) {
 }
 
 constexpr absl::string_view kNavigateFlags[] = {
-    "script", "planner", "max_expansions", "connectivity", "cost_weight", "unknown_is_free",
+    "script", "world", "planner", "max_expansions", "connectivity", "cost_weight", "unknown_is_free",
     "robot_radius", "robot_radius_cells", "min_clearance", "min_clearance_cells",
     "inflation_radius", "inflation_radius_cells", "cost_scaling_factor", "footprint",
     "footprint_cells", "min_turning_radius", "min_turning_radius_cells", "motion_model",
@@ -94,7 +95,7 @@ constexpr absl::string_view kNavigateFlags[] = {
 
 const Command kNavigateCommand = {
     .name = "navigate",
-    .synopsis = "NAME SX SY GX GY [--script FILE] [cost options]\n"
+    .synopsis = "NAME SX SY GX GY [--world] [--script FILE] [cost options]\n"
                 " [--planner dstar_lite|hybrid_astar|state_lattice] [--max_expansions N]\n"
                 " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"
                 " [--motion_model dubins|reeds_shepp] [--start_yaw R] [--goal_yaw R]",
@@ -104,7 +105,8 @@ const Command kNavigateCommand = {
             "state_lattice (or --min_turning_radius / --motion_model) opens a\n"
             "kinematic session for the robot of --footprint, which answers poses\n"
             "and replans from each reported pose within --max_expansions (default\n"
-            "20000). --timeout bounds each wait for an answer, not the session.",
+            "20000). --world: SX SY GX GY in metres, and poses printed in metres.\n"
+            "--timeout bounds each wait for an answer, not the session.",
     .flags = kNavigateFlags,
     .run = Navigate,
     .map_arg = MapArg::kExisting,

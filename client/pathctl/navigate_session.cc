@@ -76,7 +76,7 @@ bool IsKinematicAnswer(const v1::NavigateResponse& response) {
 
 // One response as two lines: what happened and the path (kinematic
 // sessions: three, the poses too).
-std::string FormatResponse(const v1::NavigateResponse& response) {
+std::string FormatResponse(const v1::NavigateResponse& response, bool world) {
   const v1::PlanResponse& plan = response.plan();
   std::string text = absl::StrFormat(
       "[%s%s] seq %d, session %d, map version %d: ", EventName(response.event()),
@@ -118,9 +118,16 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
   if (kinematic && plan.poses_size() > 0) {
     std::vector<std::string> poses;
     poses.reserve(plan.poses_size());
-    for (const v1::CellPose& p : plan.poses()) poses.push_back(FormatPose(p));
-    absl::StrAppendFormat(&text, "  poses (%d, %g m, cell x,y,yaw): %s\n", plan.poses_size(),
-                          plan.length_m(), absl::StrJoin(poses, " "));
+    if (world) {
+      for (const v1::WorldPose& p : plan.world_poses()) {
+        poses.push_back(absl::StrFormat("(%.3f,%.3f,%.3f)", p.x(), p.y(), p.yaw()));
+      }
+    } else {
+      for (const v1::CellPose& p : plan.poses()) poses.push_back(FormatPose(p));
+    }
+    absl::StrAppendFormat(&text, "  poses (%d, %g m, %s): %s\n", plan.poses_size(),
+                          plan.length_m(), world ? "world x,y,yaw in m" : "cell x,y,yaw",
+                          absl::StrJoin(poses, " "));
   }
   return text;
 }
@@ -132,9 +139,10 @@ class Session {
  public:
   // `map`: the map `open` will name, which routes the stream.
   Session(const client::PathdClient& client, const std::string& map, bool json,
-          std::ostream& out)
+          std::ostream& out, bool world)
       : timeout_(client.timeout()),
         json_(json),
+        world_(world),
         out_(out),
         stream_(client.Navigate(&context_, map)) {}
 
@@ -181,6 +189,13 @@ class Session {
     Log(absl::StrFormat("> open %s %s -> %s\n", open.map(), FormatPosition(open.start()),
                         FormatPosition(open.goal())));
     if (absl::Status s = Exchange(request, "open"); !s.ok()) return s;
+    {
+      // A kinematic session says where it put the robot (a world start is
+      // in metres here, in cells there).
+      absl::MutexLock lock(&mu_);
+      if (last_kinematic_) robot_pose_ = last_robot_pose_;
+      if (open.start().has_world() && last_plan_.path_size() > 0) robot_ = last_plan_.path(0);
+    }
     for (const ScriptStep& step : script) {
       if (absl::Status s = RunStep(step); !s.ok()) return s;
     }
@@ -362,6 +377,7 @@ class Session {
       }
       last_plan_ = response.plan();
       last_kinematic_ = IsKinematicAnswer(response);
+      if (last_kinematic_) last_robot_pose_ = response.robot_pose();
     }
     absl::MutexLock lock(&mu_);
     ended_ = true;
@@ -370,7 +386,7 @@ class Session {
   void PrintLocked(const v1::NavigateResponse& response)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     if (!json_) {
-      out_ << FormatResponse(response) << std::flush;
+      out_ << FormatResponse(response, world_) << std::flush;
       return;
     }
     google::protobuf::util::JsonPrintOptions options;
@@ -391,6 +407,7 @@ class Session {
 
   const absl::Duration timeout_;
   const bool json_;
+  const bool world_;
   grpc::ClientContext context_;
   std::ostream& out_;  // guarded by mu_ once the reader runs
   std::unique_ptr<Stream> stream_;
@@ -412,6 +429,8 @@ class Session {
   int64_t pushes_total_ ABSL_GUARDED_BY(mu_) = 0;
   v1::PlanResponse last_plan_ ABSL_GUARDED_BY(mu_);
   bool last_kinematic_ ABSL_GUARDED_BY(mu_) = false;
+  // The pose a kinematic answer planned from (cell coordinates).
+  v1::CellPose last_robot_pose_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace
@@ -419,8 +438,8 @@ class Session {
 absl::Status RunNavigateSession(const client::PathdClient& client,
                                 const v1::NavigateOpen& open,
                                 const std::vector<ScriptStep>& script, bool json,
-                                std::ostream& out) {
-  Session session(client, open.map(), json, out);
+                                std::ostream& out, bool world) {
+  Session session(client, open.map(), json, out, world);
   return session.Run(open, script);
 }
 

@@ -123,11 +123,15 @@ absl::Status KinematicNavigation::Replan(const KinematicView& view, bool opening
     if (result.status().code() != absl::StatusCode::kInvalidArgument) return result.status();
     const std::string message(result.status().message());
     if (opening) {
-      // The planner's message says "start pose ... collides" or "goal ...":
-      // name the open message's field.
-      const char* field = absl::StartsWith(message, "goal") ? "open.goal" : "open.start";
-      return absl::Status(result.status().code(),
-                          absl::StrFormat("%s: %s", field, message));
+      // The planner's endpoint messages ("start pose ... collides", "goal
+      // ...") name the open message's field; others (an option the planner
+      // refuses) name theirs already.
+      for (const char* field : {"start", "goal"}) {
+        if (absl::StartsWith(message, field)) {
+          return absl::InvalidArgumentError(absl::StrFormat("open.%s: %s", field, message));
+        }
+      }
+      return result.status();
     }
     // The robot reported a pose in collision, or the map now blocks the
     // goal: an answer without a path, as a grid session's blocked cell is.

@@ -393,6 +393,13 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
           return Navigate({NavigateOpen(good), pose});
         },
         StatusCode::INVALID_ARGUMENT, "pose cell pose (3.5, 2.5, nan) is not finite");
+    v1::PlanRequest differential = kinematic(2.5, 2.5, 12.5, 12.5);
+    differential.mutable_options()->set_motion_model(v1::MOTION_MODEL_DIFFERENTIAL);
+    nav(
+        "kinematic open with a motion model the planner does not drive",
+        [=, this] { return Navigate({NavigateOpen(differential)}); },
+        StatusCode::INVALID_ARGUMENT,
+        "hybrid_astar plans dubins or reeds_shepp motion, not differential");
     v1::PlanRequest astar = GoodPlan();
     astar.set_planner(v1::PLANNER_ASTAR);
     nav(

@@ -543,6 +543,17 @@ TEST_F(E2eTest, PathctlNavigatesAKinematicRobotOnTheWarehouse) {
                  "kept the previous path"))
       << tight;
   EXPECT_TRUE(absl::StrContains(tight.out, "budget 400, from (6.58,3.64,0.100)")) << tight;
+
+  // --world: the start and goal in metres, the poses printed in metres.
+  const ProcessResult world =
+      Ctl({"navigate", "warehouse", "-2.55", "-1.65", "0.65", "-1.65", "--world", "--planner",
+           "hybrid_astar", "--footprint", "[[0.15,0.1],[0.15,-0.1],[-0.15,-0.1],[-0.15,0.1]]",
+           "--min_turning_radius", "0.2", "--start_yaw", "0", "--goal_yaw", "0"});
+  ASSERT_EQ(world.exit_code, 0) << world;
+  EXPECT_TRUE(absl::StrContains(world.out, "> open warehouse (-2.55, -1.65) m facing 0 rad"))
+      << world;
+  EXPECT_TRUE(absl::StrContains(world.out, "world x,y,yaw in m): (-2.550,-1.650,0.000) "))
+      << world;
 }
 
 }  // namespace pathd::e2e_test
