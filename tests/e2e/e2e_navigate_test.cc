@@ -362,8 +362,13 @@ v1::NavigateRequest PoseMessage(uint64_t seq, const v1::CellPose& pose) {
 // pushed replan starts at the robot's last reported pose and passes the
 // independent checker (footprint sampled densely against every obstacle
 // cell with Boost.Geometry, curvature within 1 / r_min) on the new map; an
-// update away from the path pushes nothing.
-TEST_F(E2eTest, KinematicNavigateSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
+// update away from the path pushes nothing. Once per kinematic planner.
+class KinematicNavigateTest : public E2eTest {
+ protected:
+  void Drive(v1::Planner planner_kind);
+};
+
+void KinematicNavigateTest::Drive(v1::Planner planner_kind) {
   std::vector<std::string> rows = HallRows();
   ASSERT_NO_FATAL_FAILURE(CreateMap("hall", MovingAiText(rows)));
   auto channel = grpc::CreateChannel(address_, grpc::InsecureChannelCredentials());
@@ -386,7 +391,7 @@ TEST_F(E2eTest, KinematicNavigateSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
   open.set_seq(1);
   v1::NavigateOpen* o = open.mutable_open();
   o->set_map("hall");
-  o->set_planner(v1::PLANNER_HYBRID_ASTAR);
+  o->set_planner(planner_kind);
   o->set_replan_max_expansions(20000);
   *o->mutable_start()->mutable_cell_pose() = MakeCellPose(3.5, 3.5, 0.0);
   *o->mutable_goal()->mutable_cell_pose() = MakeCellPose(26.5, 3.5, 0.0);
@@ -496,6 +501,14 @@ TEST_F(E2eTest, KinematicNavigateSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
   }
   const grpc::Status status = stream->Finish();
   EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+TEST_F(KinematicNavigateTest, HybridAStarSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
+  Drive(v1::PLANNER_HYBRID_ASTAR);
+}
+
+TEST_F(KinematicNavigateTest, StateLatticeSessionGetsAFeasiblePushWhenItsPathIsBlocked) {
+  Drive(v1::PLANNER_STATE_LATTICE);
 }
 
 // pathctl navigate with the plan command's robot flags on the bundled
