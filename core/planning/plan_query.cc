@@ -120,16 +120,10 @@ bool IsKinematic(std::string_view planner) {
 }
 
 // The rules of a kinematic planner's query: it plans between exact poses for
-// a footprint, so the grid planners' goal substitution, radius, via legs and
+// a footprint, so the grid planners' goal substitution, radius and
 // simplification do not apply (the decoder folds the radius into the
 // footprint and the tolerance into the kinematic query).
 absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
-  if (!query->via.empty()) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "via: planner %s plans between poses and does not plan through via "
-        "points; plan each leg as its own request",
-        query->planner));
-  }
   if (query->simplify) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "options.simplify: planner %s returns motions the robot can drive; "
@@ -151,7 +145,10 @@ absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
         query->planner));
   }
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, query->request));
-  return CheckCostShaping(*query);
+  PATHD_RETURN_IF_ERROR(CheckCostShaping(*query));
+  // Each via leg ends at its cell's centre with any heading and the next
+  // starts where it ended (PlanThrough); the planner names a colliding one.
+  return ValidateVia(stored, query->via, query->request.cost);
 }
 
 }  // namespace

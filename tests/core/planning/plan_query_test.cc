@@ -3,8 +3,10 @@
 // brute-force nearest cell; the order of its checks; and a stateful engine.
 #include "core/planning/plan_query.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <string>
@@ -12,6 +14,8 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "core/kinematics/footprint.h"
+#include "core/kinematics/vehicle.h"
 #include "core/map/clearance.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
@@ -21,6 +25,7 @@
 #include "core/search/registry.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "tests/testing/kinematic_checker.h"
 #include "tests/testing/test_grids.h"
 
 namespace pathd {
@@ -463,6 +468,87 @@ TEST(PlanQueryTest, GeometricViaPlansJoinTheirPolylinesAtTheViaCentres) {
     EXPECT_EQ(r.path[answer->leg_end_indices[1]], (Cell{0, 2}));
     EXPECT_EQ(r.path.back(), (Cell{6, 4}));
   }
+}
+
+// Kinematic planners through via points: each leg starts at the pose where
+// the previous one ended (so the robot never turns on the spot between
+// legs), a via leg ends at the via cell's centre with any heading, and the
+// whole path passes the independent checker for the footprint and the
+// turning radius; a colliding via point is named with its leg.
+TEST(PlanQueryTest, KinematicViaLegsJoinWherePreviousLegsEnded) {
+  // A hall 40 x 24 cells with a wall down the middle, open at both ends.
+  std::vector<std::string> rows(24, std::string(40, '.'));
+  for (int y = 6; y < 18; ++y) rows[y][20] = '#';
+  const PlanSnapshot snapshot = Snapshot(MakeGrid(rows));
+  const Footprint rect = Footprint::Polygon({{-0.6, -0.4}, {0.9, -0.4}, {0.9, 0.4}, {-0.6, 0.4}})
+                             .value();
+  for (const char* planner : {"hybrid_astar", "state_lattice"}) {
+    SCOPED_TRACE(planner);
+    KinematicQuery k;
+    k.start = Pose{4.5, 12.5, 0.0};
+    k.goal = Pose{4.5, 4.5, std::numbers::pi};
+    k.footprint = SharedFootprintChecker(rect).value();
+    k.min_turning_radius_cells = 2.0;
+    k.motion = MotionModel::kReedsShepp;
+    k.goal_tolerance_cells = 0.5;
+    k.goal_tolerance_yaw = 0.1;
+    PlanQuery query = Query(k.start.cell(), k.goal.cell());
+    query.planner = planner;
+    query.simplify = false;
+    query.request.kinematic = std::make_shared<KinematicQuery>(k);
+    query.via = {Cell{34, 12}, Cell{28, 20}};
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine(planner));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found()) << PlanOutcomeName(answer->result.outcome);
+    const PlanResult& r = answer->result;
+    ASSERT_EQ(answer->leg_end_indices.size(), 3u);
+    EXPECT_EQ(r.path[answer->leg_end_indices[0]], (Cell{34, 12}));
+    EXPECT_EQ(r.path[answer->leg_end_indices[1]], (Cell{28, 20}));
+    std::vector<Pose> poses;
+    std::vector<bool> reverse;
+    for (const PathPose& p : r.poses) {
+      poses.push_back(p.pose);
+      reverse.push_back(p.reverse);
+    }
+    testing::KinematicCheck check;
+    check.footprint = rect.vertices();
+    check.min_turning_radius = k.min_turning_radius_cells;
+    check.start = k.start;
+    check.goal = k.goal;
+    check.goal_tolerance = k.goal_tolerance_cells;
+    check.goal_yaw_tolerance = k.goal_tolerance_yaw;
+    // The state lattice's control set (cells of the map, not the lattice's
+    // 5 cm) turns on its own radii, at least the query's.
+    EXPECT_EQ(testing::CheckKinematicPath(*snapshot.grid, poses, reverse, check), "");
+    // Each via point is passed within the tolerance.
+    for (const Cell via : {Cell{34, 12}, Cell{28, 20}}) {
+      double nearest = 1e9;
+      for (const Pose& p : poses) {
+        nearest = std::min(nearest, std::hypot(p.x - (via.x + 0.5), p.y - (via.y + 0.5)));
+      }
+      EXPECT_LE(nearest, k.goal_tolerance_cells + 1e-9) << CellToString(via);
+    }
+  }
+  // A via point where the footprint fits at no heading: named with its leg.
+  std::vector<std::string> rows2(24, std::string(40, '.'));
+  for (int x = 0; x < 40; ++x) rows2[11][x] = '#';
+  rows2[11][30] = '.';
+  KinematicQuery k;
+  k.start = Pose{4.5, 4.5, 0.0};
+  k.goal = Pose{8.5, 4.5, 0.0};
+  k.footprint = SharedFootprintChecker(rect).value();
+  k.min_turning_radius_cells = 2.0;
+  PlanQuery query = Query(k.start.cell(), k.goal.cell());
+  query.planner = "hybrid_astar";
+  query.simplify = false;
+  query.request.kinematic = std::make_shared<KinematicQuery>(k);
+  query.via = {Cell{30, 11}};
+  absl::StatusOr<PlanAnswer> answer =
+      Plan(query, Snapshot(MakeGrid(rows2)), Engine("hybrid_astar"));
+  ASSERT_FALSE(answer.ok());
+  EXPECT_EQ(answer.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(answer.status().message(), HasSubstr("leg 0 (start -> via[0])"));
+  EXPECT_THAT(answer.status().message(), HasSubstr("collides"));
 }
 
 // A derived store that only says which store a planner was handed.
