@@ -551,6 +551,99 @@ TEST(PlanQueryTest, KinematicViaLegsJoinWherePreviousLegsEnded) {
   EXPECT_THAT(answer.status().message(), HasSubstr("collides"));
 }
 
+// Grid planners with smooth_for: the path also as poses smoothed for the
+// robot on the map as stored, which the independent checker finds free for
+// a disc the planner kept well clear of (the radius's inflation measures
+// between cell centres, as Nav2's does, so a disc of the robot radius itself
+// may touch a wall's corner: that is what footprint_collision reports); for
+// a robot longer than its inscribed disc, footprint_collision names the
+// first pose the checker finds colliding, and every pose before it is free.
+TEST(PlanQueryTest, SmoothForRobotAnswersPosesAndNamesTheFirstCollision) {
+  // A corridor 5 cells wide that turns a right angle.
+  std::vector<std::string> rows(24, std::string(24, '#'));
+  for (int y = 2; y <= 6; ++y) {
+    for (int x = 2; x <= 18; ++x) rows[y][x] = '.';
+  }
+  for (int y = 2; y <= 21; ++y) {
+    for (int x = 14; x <= 18; ++x) rows[y][x] = '.';
+  }
+  const PlanSnapshot snapshot = Snapshot(MakeGrid(rows));
+  const auto poses_of = [](const PlanResult& r) {
+    std::vector<Pose> poses;
+    for (const PathPose& p : r.poses) poses.push_back(p.pose);
+    return poses;
+  };
+  {
+    // Inflated by 2 cells: every path cell's centre is at least 1.58 cells
+    // from any wall, so the polyline itself (diagonal steps pass 0.71
+    // closer) is free for a 0.7 disc.
+    PlanQuery query = Query({4, 4}, {16, 19});
+    query.robot_radius_cells = 2.0;
+    query.smooth_for = SharedFootprintChecker(Footprint::Circle(0.7).value()).value();
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("astar"));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found());
+    const std::vector<Pose> poses = poses_of(answer->result);
+    ASSERT_GT(poses.size(), answer->result.path.size());
+    EXPECT_EQ(answer->footprint_collision, -1);
+    testing::KinematicCheck check;
+    check.circle_radius = 0.7;
+    // A grid path is not a car's: where smoothing cannot round a bend the
+    // heading turns over the piece after it.
+    check.allow_sideways = true;
+    check.allow_reverse = false;
+    check.start = poses.front();
+    check.goal = Pose{16.5, 19.5, 0.0};
+    check.goal_yaw_tolerance = 4.0;
+    EXPECT_EQ(testing::CheckKinematicPath(*snapshot.grid, poses,
+                                          std::vector<bool>(poses.size(), false), check),
+              "");
+    EXPECT_DOUBLE_EQ(poses.front().x, 4.5);
+    EXPECT_DOUBLE_EQ(poses.front().y, 4.5);
+    // Smoothing shortened the path: it left the cell centres' polyline.
+    double polyline = 0.0;
+    for (size_t i = 1; i < answer->result.path.size(); ++i) {
+      const Cell a = answer->result.path[i - 1], b = answer->result.path[i];
+      polyline += std::hypot(b.x - a.x, b.y - a.y);
+    }
+    double smoothed = 0.0;
+    double sharpest = 0.0;
+    for (size_t i = 1; i < poses.size(); ++i) {
+      smoothed += std::hypot(poses[i].x - poses[i - 1].x, poses[i].y - poses[i - 1].y);
+      sharpest = std::max(sharpest, std::fabs(NormalizeAngle(poses[i].yaw - poses[i - 1].yaw)));
+    }
+    EXPECT_LT(smoothed, polyline - 0.1);
+    // The 45-degree bends of the cell path are rounded (0.23 rad measured).
+    EXPECT_LT(sharpest, 0.5);
+  }
+  {
+    // A robot 4 cells long and 1 wide plans for its inscribed 0.5 and
+    // cannot turn the corner.
+    const Footprint long_robot =
+        Footprint::Polygon({{-2.0, -0.5}, {2.0, -0.5}, {2.0, 0.5}, {-2.0, 0.5}}).value();
+    PlanQuery query = Query({4, 4}, {16, 19});
+    query.robot_radius_cells = long_robot.inscribed_radius();
+    query.smooth_for = SharedFootprintChecker(long_robot).value();
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("astar"));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found());
+    const std::vector<Pose> poses = poses_of(answer->result);
+    ASSERT_GE(answer->footprint_collision, 0);
+    ASSERT_LT(answer->footprint_collision, static_cast<int64_t>(poses.size()));
+    const auto pose_free = [&](const Pose& p) {
+      testing::KinematicCheck check;
+      check.footprint = long_robot.vertices();
+      check.start = p;
+      check.goal = p;
+      return testing::CheckKinematicPath(*snapshot.grid, {p}, {false}, check).empty();
+    };
+    for (int64_t i = 0; i < answer->footprint_collision; ++i) {
+      EXPECT_TRUE(pose_free(poses[static_cast<size_t>(i)])) << i;
+    }
+    EXPECT_FALSE(pose_free(poses[static_cast<size_t>(answer->footprint_collision)]));
+  }
+}
+
 // A derived store that only says which store a planner was handed.
 class TaggedStore final : public DerivedStore {
  public:
