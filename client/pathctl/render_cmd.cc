@@ -243,8 +243,10 @@ int Render(CommandEnv& env, Args args) {
     for (const v1::CellPoint& p : response->polyline())
       overlay.polyline.push_back(CellPoint{p.x(), p.y()});
     const bool kinematic = IsKinematicPlanner(response->planner());
-    if (kinematic) {
-      // The poses are the path: drawn through their exact points.
+    if (kinematic || request->options().smooth()) {
+      // The poses are the path (a kinematic planner's, or a grid path
+      // smoothed for the robot): drawn through their exact points.
+      overlay.polyline.clear();
       for (const v1::CellPose& p : response->poses())
         overlay.polyline.push_back(CellPoint{p.x(), p.y()});
     }
@@ -325,7 +327,7 @@ constexpr absl::string_view kRenderFlags[] = {
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
-    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "lattice", "no_smooth", "smooth", "inflation_radius", "inflation_radius_cells",
     "cost_scaling_factor"};
 
 }  // namespace
