@@ -109,6 +109,9 @@ std::string FormatResponse(const v1::NavigateResponse& response, bool world) {
   if (kinematic) {
     absl::StrAppendFormat(&text, ", budget %d, from %s", response.replan_max_expansions(),
                           FormatPose(response.robot_pose()));
+    if (plan.found() && response.kept_previous_path()) {
+      absl::StrAppend(&text, ", the previous path (no dearer than the replan's)");
+    }
   }
   text.push_back('\n');
   if (plan.found()) {

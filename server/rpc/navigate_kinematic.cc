@@ -100,6 +100,18 @@ std::vector<PathPose> KinematicNavigation::RestOfPath() const {
   return std::vector<PathPose>(path_.begin() + static_cast<std::ptrdiff_t>(best), path_.end());
 }
 
+std::vector<PathPose> KinematicNavigation::RestFromRobot() const {
+  constexpr double kSame = 1e-9;
+  for (size_t i = 0; i < path_.size(); ++i) {
+    const Pose& p = path_[i].pose;
+    if (std::fabs(p.x - robot_.x) <= kSame && std::fabs(p.y - robot_.y) <= kSame &&
+        AngleBetween(p.yaw, robot_.yaw) <= kSame) {
+      return std::vector<PathPose>(path_.begin() + static_cast<std::ptrdiff_t>(i), path_.end());
+    }
+  }
+  return {};
+}
+
 absl::Status KinematicNavigation::Replan(const KinematicView& view, bool opening,
                                          SearchScratch& scratch,
                                          v1::NavigateResponse* response) {
@@ -140,6 +152,24 @@ absl::Status KinematicNavigation::Replan(const KinematicView& view, bool opening
     path_.clear();
   } else if (result->found()) {
     answer.result = *std::move(result);
+    std::vector<PathPose> rest = RestFromRobot();
+    if (rest.size() >= 2) {
+      const MotionPenalties penalties = PenaltiesOf(*kinematic);
+      const double rest_cost = PathCost(*view.grid, rest, penalties);
+      // Ties (the same straight path, priced by sums in another order) go
+      // to the path the robot is on.
+      const double replan_cost = PathCost(*view.grid, answer.result.poses, penalties);
+      if (rest_cost <= replan_cost * (1.0 + 1e-9) + 1e-9) {
+        PATHD_ASSIGN_OR_RETURN(const bool blocked, Blocked(view, rest));
+        if (!blocked) {
+          answer.result.poses = rest;
+          answer.result.path = PathCells(rest);
+          answer.result.length = PathLength(rest);
+          answer.result.cost = rest_cost;
+          kept = true;
+        }
+      }
+    }
     path_ = answer.result.poses;
   } else if (result->outcome == PlanOutcome::kExpansionLimit) {
     // Out of budget: keep what is left of the previous path when the robot

@@ -74,7 +74,11 @@ class KinematicNavigation {
 
   // Plans from the robot's pose to the goal on `view` within the budget and
   // fills `response` (plan, robot_pose, replan_max_expansions,
-  // kept_previous_path). When the budget runs out, the rest of the previous
+  // kept_previous_path). When the robot reported a pose of its current path
+  // exactly and the rest of that path is still free and no dearer (PathCost
+  // under the session's penalties) than the new plan, the rest is the answer
+  // (FOUND, kept_previous_path): a robot following its path is not sent a
+  // different one each message by a non-optimal search. When the budget runs out, the rest of the previous
   // path from its pose nearest the robot is kept if it is still free
   // (PathBlocked's test); a start or goal pose that collides is an answer
   // without a path (the reason says which), except with `opening`, where it
@@ -97,6 +101,9 @@ class KinematicNavigation {
   // The rest of path_ from its pose nearest the robot, when within the keep
   // tolerances; empty otherwise.
   std::vector<PathPose> RestOfPath() const;
+  // The rest of path_ from a pose the robot is exactly at (it reported a
+  // pose of its path, as a robot following it does); empty otherwise.
+  std::vector<PathPose> RestFromRobot() const;
   absl::StatusOr<bool> Blocked(const KinematicView& view, const std::vector<PathPose>& poses);
 
   PlanQuery query_;
