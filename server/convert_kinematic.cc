@@ -262,8 +262,10 @@ absl::Status DecodeKinematics(const WireQuery& wire, const Grid& grid, PlanQuery
   query->goal_tolerance_cells = 0.0;
 
   PATHD_ASSIGN_OR_RETURN(kinematic->footprint, RobotChecker(footprint, query->robot_radius_cells));
-  // The footprint does what the radius's inflation does for grid planners.
+  // The footprint does what the radius's inflation does for grid planners;
+  // the inflation costs still decay from its inscribed radius, as Nav2's.
   query->robot_radius_cells = 0.0;
+  query->inflation_inscribed_cells = kinematic->footprint->footprint().inscribed_radius();
 
   PATHD_ASSIGN_OR_RETURN(kinematic->motion, MotionFromProto(options.motion_model()));
   double radius = std::max(kDefaultTurningRadiusM / grid.resolution(), 1.0);

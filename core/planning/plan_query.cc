@@ -113,7 +113,7 @@ absl::Status SmoothForRobot(const PlanQuery& query, const PlanSnapshot& snapshot
 GridShape PlanningShape(const PlanQuery& query) {
   return GridShape::Of(query.robot_radius_cells, query.inflation_radius_cells,
                        query.cost_scaling_per_cell, query.min_clearance_cells,
-                       query.request.cost.unknown_is_free);
+                       query.request.cost.unknown_is_free, query.inflation_inscribed_cells);
 }
 
 absl::Status CheckCostShaping(const PlanQuery& query) {

@@ -55,6 +55,10 @@ struct PlanQuery {
   // (CheckPlanQuery).
   double inflation_radius_cells = 0.0;
   double cost_scaling_per_cell = 0.0;
+  // Kinematic planners: the footprint's inscribed radius, from which the
+  // inflation costs decay without blocking anything (GridShape::
+  // cost_inscribed_cells), as Nav2's decay from the inscribed radius.
+  double inflation_inscribed_cells = 0.0;
   // > 0: cells closer than this (cells) to an obstacle of the (inflated) map
   // cost more (core/map/clearance.h), and the answer reports the path's
   // clearance. Grid planners only (CheckPlanQuery).

@@ -106,9 +106,10 @@ absl::StatusOr<ThroughResult> PlanThrough(
         // Name the leg when there are several: "goal pose ... collides"
         // may be about a via point.
         if (goals.size() == 1) return planned.status();
+        const std::string name =
+            LegName(static_cast<int32_t>(leg), static_cast<int32_t>(via.size()));
         return absl::Status(planned.status().code(),
-                            absl::StrFormat("%s: %s", LegName(static_cast<int32_t>(leg), static_cast<int32_t>(via.size())),
-                                            planned.status().message()));
+                            absl::StrFormat("%s: %s", name, planned.status().message()));
       }
       result = *std::move(planned);
     }
