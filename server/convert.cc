@@ -322,7 +322,20 @@ WireQuery WireQueryOf(const v1::IsPathValidRequest& request) {
 }
 
 WireQuery WireQueryOf(const v1::NavigateOpen& open) {
+  // A session whose options give the robot kinematics but name no planner
+  // plans for them with hybrid_astar; otherwise D* Lite, which the façade
+  // sees as a grid planner (the name only words messages).
+  int planner = open.planner();
+  if (planner == v1::PLANNER_UNSPECIFIED) {
+    const v1::PlanOptions& options = open.options();
+    const bool kinematic =
+        options.min_turning_radius_case() !=
+            v1::PlanOptions::MIN_TURNING_RADIUS_NOT_SET ||
+        options.motion_model() != v1::MOTION_MODEL_UNSPECIFIED;
+    planner = kinematic ? v1::PLANNER_HYBRID_ASTAR : v1::PLANNER_DSTAR_LITE;
+  }
   return WireQuery{.map = &open.map(),
+                   .planner = planner,
                    .start = &open.start(),
                    .goal = &open.goal(),
                    .options = &open.options(),

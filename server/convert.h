@@ -172,7 +172,10 @@ WireQuery WireQueryOf(const v1::CostToGoRequest& request);
 // IsPathValid: cost parameters and radius (the poses are checked, not
 // planned between: is_path_valid.cc decodes them).
 WireQuery WireQueryOf(const v1::IsPathValidRequest& request);
-// Navigate's open message: endpoints, search options, radius, budget.
+// Navigate's open message: endpoints, search options, radius, budget; the
+// planner is open.planner, or when unspecified hybrid_astar for options that
+// give the robot kinematics (min_turning_radius, motion_model), else
+// dstar_lite.
 WireQuery WireQueryOf(const v1::NavigateOpen& open);
 
 // The server's limits that decoding applies.

@@ -177,7 +177,7 @@ absl::Status PathdServer::Start() {
   sessions_ = std::make_unique<NavigationSessions>(
       store_, *pool_, inflation_,
       NavigationSessions::Options{options_.session_idle_timeout, options_.max_sessions,
-                                  options_.max_expansions, budget_.get()});
+                                  options_.max_expansions, budget_.get(), &derived_});
   PlannerServiceImpl::Options planner_options;
   planner_options.max_expansions = options_.max_expansions;
   planner_options.max_path_points = options_.max_path_points;

@@ -21,17 +21,46 @@ int Navigate(CommandEnv& env, Args args) {
                            "per line");
   }
   static constexpr const char* kNames[] = {"SX", "SY", "GX", "GY"};
-  absl::StatusOr<std::vector<int32_t>> p = ParseInts(args.subspan(1), kNames);
-  if (!p.ok()) return env.Usage(p.status().message());
+  const bool world = env.options().plan.world;
   v1::NavigateOpen open;
   open.set_map(args[0]);
-  open.mutable_start()->mutable_cell()->set_x((*p)[0]);
-  open.mutable_start()->mutable_cell()->set_y((*p)[1]);
-  open.mutable_goal()->mutable_cell()->set_x((*p)[2]);
-  open.mutable_goal()->mutable_cell()->set_y((*p)[3]);
+  absl::StatusOr<v1::Position> start = PositionFromPair(args.subspan(1, 2), world, {kNames, 2});
+  if (!start.ok()) return env.Usage(start.status().message());
+  absl::StatusOr<v1::Position> goal = PositionFromPair(args.subspan(3, 2), world, {kNames + 2, 2});
+  if (!goal.ok()) return env.Usage(goal.status().message());
+  *open.mutable_start() = *std::move(start);
+  *open.mutable_goal() = *std::move(goal);
   if (absl::Status s = SetCostOptions(env.options().cost, open.mutable_options()); !s.ok()) {
     return env.Usage(s.message());
   }
+  // The robot (plan's flags): the footprint, and for a kinematic session its
+  // turning radius, motion model, penalties and headings.
+  v1::PlanRequest robot;
+  *robot.mutable_start() = open.start();
+  *robot.mutable_goal() = open.goal();
+  if (absl::Status s = SetRobotOptions(env.options().robot, &robot); !s.ok()) {
+    return env.Usage(s.message());
+  }
+  *open.mutable_start() = robot.start();
+  *open.mutable_goal() = robot.goal();
+  open.mutable_options()->MergeFrom(robot.options());
+  const PlanFlags& plan = env.options().plan;
+  if (!plan.planner.empty()) {
+    absl::StatusOr<v1::Planner> planner = PlannerFromName(plan.planner);
+    if (!planner.ok()) return env.Usage(planner.status().message());
+    if (*planner != v1::PLANNER_DSTAR_LITE && !IsKinematicPlanner(plan.planner)) {
+      return env.Usage(absl::StrCat("--planner: navigate plans with dstar_lite or a kinematic "
+                                    "planner (hybrid_astar, state_lattice), not ",
+                                    plan.planner));
+    }
+    open.set_planner(*planner);
+  }
+  if (plan.max_expansions < 0) {
+    return env.Usage("--max_expansions must be >= 0");
+  }
+  // The cap of each D* Lite plan, and the budget of each kinematic replan.
+  open.mutable_options()->set_max_expansions(plan.max_expansions);
+  open.set_replan_max_expansions(plan.max_expansions);
   std::vector<ScriptStep> script;
   const std::string& script_file = env.options().navigate.script;
   if (!script_file.empty()) {
@@ -47,7 +76,7 @@ int Navigate(CommandEnv& env, Args args) {
     script = *std::move(parsed);
   }
   if (absl::Status s =
-          RunNavigateSession(env.client(), open, script, env.json(), env.out());
+          RunNavigateSession(env.client(), open, script, env.json(), env.out(), world);
       !s.ok()) {
     return env.Fail(s);
   }
@@ -55,20 +84,29 @@ int Navigate(CommandEnv& env, Args args) {
 }
 
 constexpr absl::string_view kNavigateFlags[] = {
-    "script", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
-    "robot_radius_cells", "min_clearance",
-    "min_clearance_cells", "inflation_radius",
-    "inflation_radius_cells", "cost_scaling_factor"};
+    "script", "world", "planner", "max_expansions", "connectivity", "cost_weight", "unknown_is_free",
+    "robot_radius", "robot_radius_cells", "min_clearance", "min_clearance_cells",
+    "inflation_radius", "inflation_radius_cells", "cost_scaling_factor", "footprint",
+    "footprint_cells", "min_turning_radius", "min_turning_radius_cells", "motion_model",
+    "reverse_penalty", "change_penalty", "non_straight_penalty", "cost_penalty", "start_yaw",
+    "goal_yaw", "goal_yaw_tolerance", "lattice", "no_smooth"};
 
 }  // namespace
 
 const Command kNavigateCommand = {
     .name = "navigate",
-    .synopsis = "NAME SX SY GX GY [--script FILE] [cost options]",
-    .help = "Opens a Navigate session (D* Lite) on map NAME from cell (SX, SY) to\n"
-            "(GX, GY) and prints its path; --script replays a robot run through it\n"
-            "(format in 'pathctl --help'). Cells only: a script moves the robot cell\n"
-            "by cell. --timeout bounds each wait for an answer, not the session.",
+    .synopsis = "NAME SX SY GX GY [--world] [--script FILE] [cost options]\n"
+                " [--planner dstar_lite|hybrid_astar|state_lattice] [--max_expansions N]\n"
+                " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"
+                " [--motion_model dubins|reeds_shepp] [--start_yaw R] [--goal_yaw R]",
+    .help = "Opens a Navigate session on map NAME from cell (SX, SY) to (GX, GY) and\n"
+            "prints its path; --script replays a robot run through it (format in\n"
+            "'pathctl --help'). D* Lite by default; --planner hybrid_astar or\n"
+            "state_lattice (or --min_turning_radius / --motion_model) opens a\n"
+            "kinematic session for the robot of --footprint, which answers poses\n"
+            "and replans from each reported pose within --max_expansions (default\n"
+            "20000). --world: SX SY GX GY in metres, and poses printed in metres.\n"
+            "--timeout bounds each wait for an answer, not the session.",
     .flags = kNavigateFlags,
     .run = Navigate,
     .map_arg = MapArg::kExisting,

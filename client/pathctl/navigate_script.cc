@@ -2,6 +2,7 @@
 #include "client/pathctl/navigate_script.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 #include "absl/status/status.h"
@@ -40,6 +41,14 @@ class LineParser {
     int32_t value = 0;
     if (!absl::SimpleAtoi(words_[i], &value)) {
       return Error(absl::StrCat(name, ": '", words_[i], "' is not an integer"));
+    }
+    return value;
+  }
+
+  absl::StatusOr<double> Double(size_t i, absl::string_view name) const {
+    double value = 0;
+    if (!absl::SimpleAtod(words_[i], &value) || !std::isfinite(value)) {
+      return Error(absl::StrCat(name, ": '", words_[i], "' is not a finite number"));
     }
     return value;
   }
@@ -128,6 +137,20 @@ class LineParser {
       step.cell.set_y(*y);
       return step;
     }
+    if (command == "pose") {
+      if (absl::Status s = ExpectArgs(1, {"X", "Y", "YAW"}, "pose"); !s.ok()) return s;
+      absl::StatusOr<double> x = Double(1, "X");
+      if (!x.ok()) return x.status();
+      absl::StatusOr<double> y = Double(2, "Y");
+      if (!y.ok()) return y.status();
+      absl::StatusOr<double> yaw = Double(3, "YAW");
+      if (!yaw.ok()) return yaw.status();
+      step.kind = ScriptStep::Kind::kPose;
+      step.pose.set_x(*x);
+      step.pose.set_y(*y);
+      step.pose.set_yaw(*yaw);
+      return step;
+    }
     if (command == "follow") {
       if (absl::Status s = ExpectArgs(1, {"N"}, "follow"); !s.ok()) return s;
       absl::StatusOr<int32_t> n = Int(1, "N");
@@ -175,7 +198,7 @@ class LineParser {
       return Error("private must be followed by block, free, cost or rect");
     }
     return Error(absl::StrCat("unknown command '", command,
-                              "'; expected move, follow, block, free, cost, "
+                              "'; expected move, pose, follow, block, free, cost, "
                               "rect, private, wait or expect-push"));
   }
 

@@ -22,9 +22,13 @@ inline constexpr absl::Duration kDefaultExpectPushWait = absl::Milliseconds(1000
 inline constexpr char kNavigateScriptHelp[] =
     R"(navigate scripts: one command per line; '#' starts a comment, blank lines
 are ignored; X Y are cells (x = column, y = row), COST as for maps set:
-  move X Y             the robot is now at (X, Y): send a pose
+  move X Y             the robot is now at (X, Y): send a pose (kinematic
+                       sessions keep the robot's heading)
+  pose X Y YAW         the robot is at (X, Y) in cell coordinates (fractions
+                       allowed) facing YAW radians: send a cell pose
   follow N             drive N steps along the last received path, one pose
-                       per step (stops early at the goal)
+                       per step (stops early at the goal); kinematic
+                       sessions step from pose to pose of the path
   block X Y            the sensors saw an obstacle (cost 254) at (X, Y)
   free X Y             ... saw (X, Y) free (cost 0)
   cost X Y COST        ... saw (X, Y) at COST
@@ -43,6 +47,7 @@ are ignored; X Y are cells (x = column, y = row), COST as for maps set:
 struct ScriptStep {
   enum class Kind {
     kMove,        // cell
+    kPose,        // pose
     kFollow,      // steps
     kObserve,     // observation
     kWait,        // duration
@@ -54,6 +59,7 @@ struct ScriptStep {
   // The line without its comment, for the run's log.
   std::string text;
   v1::Cell cell;
+  v1::CellPose pose;
   int32_t steps = 0;
   v1::NavigateObservation observation;
   absl::Duration duration;

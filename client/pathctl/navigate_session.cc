@@ -2,8 +2,10 @@
 #include "client/pathctl/navigate_session.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
@@ -12,6 +14,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/strip.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
@@ -42,8 +45,38 @@ std::string EventName(v1::NavigateEvent event) {
   return name.empty() ? absl::StrCat(static_cast<int>(event)) : std::string(name);
 }
 
-// One response as two lines: what happened and the path.
-std::string FormatResponse(const v1::NavigateResponse& response) {
+// A position of the open message, for the log.
+std::string FormatPosition(const v1::Position& position) {
+  switch (position.kind_case()) {
+    case v1::Position::kCell:
+      return FormatCell(position.cell());
+    case v1::Position::kWorld:
+      return absl::StrFormat("(%g, %g) m", position.world().x(), position.world().y());
+    case v1::Position::kWorldPose:
+      return absl::StrFormat("(%g, %g) m facing %g rad", position.world_pose().x(),
+                             position.world_pose().y(), position.world_pose().yaw());
+    case v1::Position::kCellPose:
+      return absl::StrFormat("(%g, %g) facing %g rad", position.cell_pose().x(),
+                             position.cell_pose().y(), position.cell_pose().yaw());
+    case v1::Position::KIND_NOT_SET:
+      break;
+  }
+  return "(unset)";
+}
+
+std::string FormatPose(const v1::CellPose& p) {
+  return absl::StrFormat("(%.2f,%.2f,%.3f)", p.x(), p.y(), p.yaw());
+}
+
+// A kinematic session's answer carries its poses, its budget and the pose
+// it planned from.
+bool IsKinematicAnswer(const v1::NavigateResponse& response) {
+  return response.replan_max_expansions() > 0;
+}
+
+// One response as two lines: what happened and the path (kinematic
+// sessions: three, the poses too).
+std::string FormatResponse(const v1::NavigateResponse& response, bool world) {
   const v1::PlanResponse& plan = response.plan();
   std::string text = absl::StrFormat(
       "[%s%s] seq %d, session %d, map version %d: ", EventName(response.event()),
@@ -52,6 +85,11 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
   if (plan.found()) {
     absl::StrAppendFormat(&text, "found, cost %.6f, %d cells", plan.cost(),
                           plan.path_size());
+  } else if (response.kept_previous_path()) {
+    absl::string_view outcome = v1::PlanOutcome_Name(plan.outcome());
+    absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
+    absl::StrAppendFormat(&text, "replan stopped (%s), kept the previous path, %d cells",
+                          outcome, plan.path_size());
   } else {
     absl::string_view outcome = v1::PlanOutcome_Name(plan.outcome());
     absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
@@ -67,10 +105,32 @@ std::string FormatResponse(const v1::NavigateResponse& response) {
     absl::StrAppend(&text, ", observation applied as map version ",
                     response.applied_version());
   }
+  const bool kinematic = IsKinematicAnswer(response);
+  if (kinematic) {
+    absl::StrAppendFormat(&text, ", budget %d, from %s", response.replan_max_expansions(),
+                          FormatPose(response.robot_pose()));
+    if (plan.found() && response.kept_previous_path()) {
+      absl::StrAppend(&text, ", the previous path (no dearer than the replan's)");
+    }
+  }
   text.push_back('\n');
   if (plan.found()) {
     absl::StrAppend(&text, "  path (", plan.path_size(),
                     " cells): ", FormatPath(plan.path()), "\n");
+  }
+  if (kinematic && plan.poses_size() > 0) {
+    std::vector<std::string> poses;
+    poses.reserve(plan.poses_size());
+    if (world) {
+      for (const v1::WorldPose& p : plan.world_poses()) {
+        poses.push_back(absl::StrFormat("(%.3f,%.3f,%.3f)", p.x(), p.y(), p.yaw()));
+      }
+    } else {
+      for (const v1::CellPose& p : plan.poses()) poses.push_back(FormatPose(p));
+    }
+    absl::StrAppendFormat(&text, "  poses (%d, %g m, %s): %s\n", plan.poses_size(),
+                          plan.length_m(), world ? "world x,y,yaw in m" : "cell x,y,yaw",
+                          absl::StrJoin(poses, " "));
   }
   return text;
 }
@@ -82,9 +142,10 @@ class Session {
  public:
   // `map`: the map `open` will name, which routes the stream.
   Session(const client::PathdClient& client, const std::string& map, bool json,
-          std::ostream& out)
+          std::ostream& out, bool world)
       : timeout_(client.timeout()),
         json_(json),
+        world_(world),
         out_(out),
         stream_(client.Navigate(&context_, map)) {}
 
@@ -123,11 +184,21 @@ class Session {
   absl::Status RunScript(const v1::NavigateOpen& open,
                          const std::vector<ScriptStep>& script) {
     robot_ = open.start().cell();
+    robot_pose_.set_x(robot_.x() + 0.5);
+    robot_pose_.set_y(robot_.y() + 0.5);
+    if (open.start().has_cell_pose()) robot_pose_ = open.start().cell_pose();
     v1::NavigateRequest request;
     *request.mutable_open() = open;
-    Log(absl::StrFormat("> open %s %s -> %s\n", open.map(), FormatCell(robot_),
-                        FormatCell(open.goal().cell())));
+    Log(absl::StrFormat("> open %s %s -> %s\n", open.map(), FormatPosition(open.start()),
+                        FormatPosition(open.goal())));
     if (absl::Status s = Exchange(request, "open"); !s.ok()) return s;
+    {
+      // A kinematic session says where it put the robot (a world start is
+      // in metres here, in cells there).
+      absl::MutexLock lock(&mu_);
+      if (last_kinematic_) robot_pose_ = last_robot_pose_;
+      if (open.start().has_world() && last_plan_.path_size() > 0) robot_ = last_plan_.path(0);
+    }
     for (const ScriptStep& step : script) {
       if (absl::Status s = RunStep(step); !s.ok()) return s;
     }
@@ -139,6 +210,13 @@ class Session {
     switch (step.kind) {
       case ScriptStep::Kind::kMove:
         return Move(step.cell, step.where);
+      case ScriptStep::Kind::kPose: {
+        v1::NavigateRequest request;
+        *request.mutable_pose()->mutable_cell_pose() = step.pose;
+        if (absl::Status s = Exchange(request, step.where); !s.ok()) return s;
+        robot_pose_ = step.pose;
+        return absl::OkStatus();
+      }
       case ScriptStep::Kind::kFollow:
         return Follow(step);
       case ScriptStep::Kind::kObserve: {
@@ -175,6 +253,35 @@ class Session {
     *request.mutable_pose()->mutable_cell() = cell;
     if (absl::Status s = Exchange(request, where); !s.ok()) return s;
     robot_ = cell;
+    robot_pose_.set_x(cell.x() + 0.5);
+    robot_pose_.set_y(cell.y() + 0.5);
+    return absl::OkStatus();
+  }
+
+  // A kinematic session's path is poses: each step sends the pose after the
+  // one nearest the robot's.
+  absl::Status FollowPoses(const ScriptStep& step, int32_t i, const v1::PlanResponse& plan) {
+    int nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < plan.poses_size(); ++k) {
+      const double d = std::hypot(plan.poses(k).x() - robot_pose_.x(),
+                                  plan.poses(k).y() - robot_pose_.y());
+      if (d < best) {
+        best = d;
+        nearest = k;
+      }
+    }
+    if (nearest + 1 >= plan.poses_size()) {
+      Log(absl::StrFormat("  at the goal %s after %d of %d steps\n", FormatPose(robot_pose_), i,
+                          step.steps));
+      return absl::OutOfRangeError("at the goal");
+    }
+    const v1::CellPose next = plan.poses(nearest + 1);
+    Log(absl::StrFormat("> step %d/%d: pose %s\n", i + 1, step.steps, FormatPose(next)));
+    v1::NavigateRequest request;
+    *request.mutable_pose()->mutable_cell_pose() = next;
+    if (absl::Status s = Exchange(request, step.where); !s.ok()) return s;
+    robot_pose_ = next;
     return absl::OkStatus();
   }
 
@@ -183,9 +290,17 @@ class Session {
   absl::Status Follow(const ScriptStep& step) {
     for (int32_t i = 0; i < step.steps; ++i) {
       v1::PlanResponse plan;
+      bool last_kinematic;
       {
         absl::MutexLock lock(&mu_);
         plan = last_plan_;
+        last_kinematic = last_kinematic_;
+      }
+      if (last_kinematic && plan.poses_size() > 0) {
+        const absl::Status s = FollowPoses(step, i, plan);
+        if (absl::IsOutOfRange(s)) return absl::OkStatus();
+        if (!s.ok()) return s;
+        continue;
       }
       if (!plan.found()) {
         return absl::FailedPreconditionError(
@@ -264,6 +379,8 @@ class Session {
         answered_seq_ = std::max(answered_seq_, response.seq());
       }
       last_plan_ = response.plan();
+      last_kinematic_ = IsKinematicAnswer(response);
+      if (last_kinematic_) last_robot_pose_ = response.robot_pose();
     }
     absl::MutexLock lock(&mu_);
     ended_ = true;
@@ -272,7 +389,7 @@ class Session {
   void PrintLocked(const v1::NavigateResponse& response)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     if (!json_) {
-      out_ << FormatResponse(response) << std::flush;
+      out_ << FormatResponse(response, world_) << std::flush;
       return;
     }
     google::protobuf::util::JsonPrintOptions options;
@@ -293,6 +410,7 @@ class Session {
 
   const absl::Duration timeout_;
   const bool json_;
+  const bool world_;
   grpc::ClientContext context_;
   std::ostream& out_;  // guarded by mu_ once the reader runs
   std::unique_ptr<Stream> stream_;
@@ -301,6 +419,8 @@ class Session {
   // Main thread only.
   uint64_t last_seq_ = 0;
   v1::Cell robot_;
+  // Kinematic sessions: the pose last sent (cell coordinates).
+  v1::CellPose robot_pose_;
   bool stream_lost_ = false;
 
   absl::Mutex mu_;
@@ -311,6 +431,9 @@ class Session {
   int64_t unclaimed_pushes_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t pushes_total_ ABSL_GUARDED_BY(mu_) = 0;
   v1::PlanResponse last_plan_ ABSL_GUARDED_BY(mu_);
+  bool last_kinematic_ ABSL_GUARDED_BY(mu_) = false;
+  // The pose a kinematic answer planned from (cell coordinates).
+  v1::CellPose last_robot_pose_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace
@@ -318,8 +441,8 @@ class Session {
 absl::Status RunNavigateSession(const client::PathdClient& client,
                                 const v1::NavigateOpen& open,
                                 const std::vector<ScriptStep>& script, bool json,
-                                std::ostream& out) {
-  Session session(client, open.map(), json, out);
+                                std::ostream& out, bool world) {
+  Session session(client, open.map(), json, out, world);
   return session.Run(open, script);
 }
 

@@ -25,10 +25,12 @@ namespace pathd::pathctl {
 // the server's status when it ended the stream with an error;
 // DEADLINE_EXCEEDED naming the script line for a missing answer or a failed
 // expect-push; FAILED_PRECONDITION when `follow` has no path to follow.
+// A kinematic session's poses are printed in cell coordinates, or with
+// `world` in metres and the world frame's headings.
 absl::Status RunNavigateSession(const client::PathdClient& client,
                                 const v1::NavigateOpen& open,
                                 const std::vector<ScriptStep>& script, bool json,
-                                std::ostream& out);
+                                std::ostream& out, bool world = false);
 
 }  // namespace pathd::pathctl
 

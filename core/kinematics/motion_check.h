@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/kinematics/footprint.h"
@@ -133,6 +134,17 @@ class MotionChecker {
   const float* distance_ = nullptr;
   double reach_ = 0.0;
 };
+
+// Rechecks a path a planner returned earlier against `checker`'s grid (a
+// newer map version): the index i of the first piece poses[i] -> poses[i+1]
+// whose sweep may touch an obstacle (the chord between the two poses, heading
+// turned evenly, tested as a motion whose reported poses may stray
+// kMotionDeviation from it, as a returned arc's chord does), or of the pose
+// itself for a one-pose path; -1 when the whole path is free. The first and
+// last poses are tested exactly (MotionEnd::kExact), the rest with the margin.
+// Conservative: a path a planner proved free on a map can fail the recheck on
+// the same map only near obstacles closer than the margin.
+int64_t FirstBlockedPiece(const MotionChecker& checker, const std::vector<PathPose>& poses);
 
 }  // namespace pathd
 

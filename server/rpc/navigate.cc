@@ -45,7 +45,8 @@ class NavigationSession final : public NavigateReactor {
         opened_at_(absl::Now()),
         search_(NavigationSearch::Deps{owner.store_, owner.inflation_,
                                        owner.options_.budget,
-                                       owner.options_.max_expansions},
+                                       owner.options_.max_expansions,
+                                       owner.options_.derived},
                 std::move(caller), std::move(shared_observations), &cancelled_,
                 &bytes_, [this](const std::string& map_name) {
                   absl::MutexLock lock(&mu_);
@@ -82,7 +83,7 @@ class NavigationSession final : public NavigateReactor {
     push_pending_ = true;
     ++outstanding_;
     const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this](SearchScratch&) { RunPush(); }, [this] { Release(); },
+        [this](SearchScratch& scratch) { RunPush(scratch); }, [this] { Release(); },
         [this](const absl::Status& failed) {
           // The search may be half-repaired: the session cannot go on.
           {
@@ -132,7 +133,7 @@ class NavigationSession final : public NavigateReactor {
     auto message = std::make_shared<v1::NavigateRequest>(std::move(request_));
     request_.Clear();
     const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this, message](SearchScratch&) { RunMessage(*message); },
+        [this, message](SearchScratch& scratch) { RunMessage(*message, scratch); },
         [this] {
           {
             absl::MutexLock lock(&mu_);
@@ -247,12 +248,12 @@ class NavigationSession final : public NavigateReactor {
 
   // ---- jobs (worker threads) ----
 
-  void RunMessage(const v1::NavigateRequest& message) {
+  void RunMessage(const v1::NavigateRequest& message, SearchScratch& scratch) {
     v1::NavigateResponse response;
     absl::Status status;
     {
       absl::MutexLock plan_lock(&plan_mu_);
-      status = search_.Handle(message, &response);
+      status = search_.Handle(message, scratch, &response);
     }
     {
       absl::MutexLock lock(&mu_);
@@ -272,7 +273,7 @@ class NavigationSession final : public NavigateReactor {
     Release();
   }
 
-  void RunPush() {
+  void RunPush(SearchScratch& scratch) {
     {
       absl::MutexLock lock(&mu_);
       // Cleared before planning so a version published meanwhile schedules
@@ -284,7 +285,7 @@ class NavigationSession final : public NavigateReactor {
     absl::Status status;
     {
       absl::MutexLock plan_lock(&plan_mu_);
-      if (search_.is_open()) status = search_.Push(&response, &changed);
+      if (search_.is_open()) status = search_.Push(scratch, &response, &changed);
     }
     {
       absl::MutexLock lock(&mu_);

@@ -17,6 +17,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "pathd/v1/planner_service.grpc.pb.h"
+#include "server/derived_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
@@ -45,9 +46,16 @@ class NavigationSessions {
     // (about kSessionBytesPerCell per map cell); null = no byte limit. Must
     // outlive this object.
     MemoryBudget* budget = nullptr;
+    // The server's derived values per map version (kinematic sessions take
+    // the obstacle heuristic of a version from it); null: each session
+    // builds its own. Must outlive this object.
+    DerivedCache* derived = nullptr;
   };
   // What an open session's D* Lite state costs per map cell, reserved before
-  // it is built (the reservation then follows the real size).
+  // it is built (the reservation then follows the real size). Kinematic
+  // sessions reserve the same: a private view of the map (session_only
+  // observations) holds a grid copy, its obstacle distance field and the
+  // goal's obstacle heuristic, 9 bytes per cell.
   static constexpr int64_t kSessionBytesPerCell = 16;
 
   // `store`, `pool` and `inflation` must outlive this object. Registers a

@@ -1,6 +1,7 @@
 // The planning half of a Navigate session (navigate_search.h).
 #include "server/rpc/navigate_search.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -8,6 +9,7 @@
 #include "core/map/inflation.h"
 #include "core/planning/plan_query.h"
 #include "core/search/endpoints.h"
+#include "core/search/registry.h"
 #include "core/search/stop_condition.h"
 #include "core/status_macros.h"
 #include "server/convert.h"
@@ -28,11 +30,12 @@ NavigationSearch::NavigationSearch(
       on_open_(std::move(on_open)) {}
 
 absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
+                                      SearchScratch& scratch,
                                       v1::NavigateResponse* response) {
   response->set_seq(message.seq());
   switch (message.kind_case()) {
     case v1::NavigateRequest::kOpen:
-      if (search_ != nullptr) {
+      if (is_open()) {
         return absl::InvalidArgumentError(absl::StrFormat(
             "message seq %d: the session is already open", message.seq()));
       }
@@ -42,6 +45,16 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
     case v1::NavigateRequest::kPose: {
       PATHD_RETURN_IF_ERROR(RequireOpen(message));
       response->set_event(v1::NAVIGATE_EVENT_MOVED);
+      if (kinematic_ != nullptr) {
+        PATHD_ASSIGN_OR_RETURN(const PositionPose pose,
+                               PoseFromPosition(message.pose(), *snapshot_->grid, "pose"));
+        PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
+        Pose robot = pose.pose;
+        // A point without a heading: the robot turned no more than it said.
+        if (!pose.has_yaw) robot.yaw = kinematic_->robot().yaw;
+        kinematic_->SetRobot(robot);
+        break;
+      }
       PATHD_ASSIGN_OR_RETURN(
           const Cell cell,
           CellFromPosition(message.pose(), *snapshot_->grid, "pose"));
@@ -66,11 +79,18 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
       return absl::InvalidArgumentError(absl::StrFormat(
           "message seq %d sets none of open, pose, observe", message.seq()));
   }
+  if (kinematic_ != nullptr) {
+    const bool opening = message.kind_case() == v1::NavigateRequest::kOpen;
+    PATHD_RETURN_IF_ERROR(kinematic_->Replan(ViewForKinematic(), opening, scratch, response));
+    AccountBytes(kinematic_->bytes());
+    ++plans_;
+    return absl::OkStatus();
+  }
   return PlanInto(response->mutable_plan(), /*changed=*/nullptr);
 }
 
 absl::Status NavigationSearch::RequireOpen(const v1::NavigateRequest& message) {
-  if (search_ != nullptr) return absl::OkStatus();
+  if (is_open()) return absl::OkStatus();
   return absl::InvalidArgumentError(absl::StrFormat(
       "message seq %d: the first message of a session must be 'open'",
       message.seq()));
@@ -81,6 +101,16 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
       DecodedQuery decoded,
       DecodePlanQuery(WireQueryOf(open), deps_.store,
                       QueryLimits{.max_expansions = deps_.max_expansions}));
+  const Planner* named = PlannerRegistry::Default().Get(decoded.query.planner);
+  if (named != nullptr && named->traits().kinematic) {
+    return OpenKinematic(open, std::move(decoded));
+  }
+  if (open.planner() != v1::PLANNER_UNSPECIFIED && open.planner() != v1::PLANNER_DSTAR_LITE) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "open.planner: a Navigate session plans with dstar_lite (grid robots) or a "
+        "kinematic planner (hybrid_astar, state_lattice), not %s",
+        std::string(decoded.query.planner)));
+  }
   snapshot_ = std::move(decoded.snapshot);
   const Grid& stored = *snapshot_->grid;
   // The session's search is its own D* Lite; the façade's rules still apply
@@ -102,6 +132,65 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
   PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
   on_open_(snapshot_->name);
   return absl::OkStatus();
+}
+
+absl::Status NavigationSearch::OpenKinematic(const v1::NavigateOpen& open,
+                                             DecodedQuery decoded) {
+  if (open.replan_max_expansions() < 0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "open.replan_max_expansions %d must be >= 0 (0: options.max_expansions, else %d)",
+        open.replan_max_expansions(), KinematicNavigation::kDefaultReplanExpansions));
+  }
+  snapshot_ = std::move(decoded.snapshot);
+  const Grid& stored = *snapshot_->grid;
+  PATHD_RETURN_IF_ERROR(CheckPlanQuery(stored, /*stateful=*/false, &decoded.query));
+  // decoded.query.max_expansions is options.max_expansions under the
+  // server's cap (0: neither set).
+  int64_t budget = open.replan_max_expansions();
+  if (budget == 0) budget = decoded.query.max_expansions;
+  if (budget == 0) budget = KinematicNavigation::kDefaultReplanExpansions;
+  if (deps_.max_expansions > 0) budget = std::min(budget, deps_.max_expansions);
+  const Planner* planner = PlannerRegistry::Default().Get(decoded.query.planner);
+  if (planner == nullptr) {
+    return absl::InternalError(absl::StrFormat("planner %s is not registered",
+                                               std::string(decoded.query.planner)));
+  }
+  start_ = decoded.query.request.start;
+  goal_ = decoded.query.request.goal;
+  cost_ = decoded.query.request.cost;
+  shape_ = PlanningShape(decoded.query);
+  max_expansions_ = budget;
+  PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
+  PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
+  kinematic_ = std::make_unique<KinematicNavigation>(std::move(decoded.query), planner, budget,
+                                                     cancelled_);
+  on_open_(snapshot_->name);
+  return absl::OkStatus();
+}
+
+KinematicView NavigationSearch::ViewForKinematic() {
+  // No per-cell state is repaired or reused from a previous plan (the
+  // derived values are the cache's), so cache_hit and repaired_cells stay 0.
+  KinematicView view{grid_, snapshot_->version, nullptr};
+  // The server's per-version values fit only the version's own grid.
+  if (deps_.derived != nullptr && grid_ == snapshot_->grid) {
+    if (shared_derived_ == nullptr || shared_derived_version_ != snapshot_->version) {
+      shared_derived_ = deps_.derived->For(snapshot_, grid_, /*robot_radius_cells=*/0.0);
+      shared_derived_version_ = snapshot_->version;
+    }
+    view.shared_derived = shared_derived_.get();
+  } else {
+    shared_derived_.reset();
+  }
+  return view;
+}
+
+void NavigationSearch::AccountBytes(int64_t state_bytes) {
+  // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
+  const int64_t bytes = state_bytes + static_cast<int64_t>(overlay_.size()) * 48 +
+                        (overlay_.empty() ? 0 : static_cast<int64_t>(grid_->size()));
+  bytes_->store(bytes, std::memory_order_relaxed);
+  reservation_.Update(bytes);
 }
 
 // Reserves the search state's estimated bytes before anything is built, so
@@ -183,6 +272,20 @@ absl::Status NavigationSearch::Refresh(bool overlay_changed) {
     return absl::OkStatus();
   }
   const Grid& before = *grid_;
+  if (kinematic_ != nullptr) {
+    // Kinematic sessions keep no per-cell state to repair: the next replan
+    // plans on the new view (its field from the version's cache).
+    if ((*latest)->grid->width() != before.width() ||
+        (*latest)->grid->height() != before.height()) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "map '%s' was replaced by a %d x %d map; open a new session", snapshot_->name,
+          (*latest)->grid->width(), (*latest)->grid->height()));
+    }
+    PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> after, EffectiveGrid(**latest));
+    snapshot_ = *std::move(latest);
+    grid_ = std::move(after);
+    return absl::OkStatus();
+  }
   if ((*latest)->grid->width() != before.width() ||
       (*latest)->grid->height() != before.height()) {
     return absl::FailedPreconditionError(absl::StrFormat(
@@ -202,12 +305,28 @@ absl::Status NavigationSearch::Refresh(bool overlay_changed) {
   return absl::OkStatus();
 }
 
-absl::Status NavigationSearch::Push(v1::NavigateResponse* response,
+absl::Status NavigationSearch::Push(SearchScratch& scratch, v1::NavigateResponse* response,
                                     bool* changed) {
   const uint64_t version = snapshot_->version;
   PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
   if (snapshot_->version == version) return absl::OkStatus();
   response->set_event(v1::NAVIGATE_EVENT_MAP_CHANGED);
+  if (kinematic_ != nullptr) {
+    // Replanned only when the change may touch the path's sweep (or there
+    // was no path): an unrelated update leaves a feasible path feasible.
+    KinematicView view = ViewForKinematic();
+    PATHD_ASSIGN_OR_RETURN(const bool blocked, kinematic_->PathBlocked(view));
+    if (!blocked) {
+      AccountBytes(kinematic_->bytes());
+      return absl::OkStatus();
+    }
+    const bool had_path = kinematic_->has_path();
+    PATHD_RETURN_IF_ERROR(kinematic_->Replan(view, /*opening=*/false, scratch, response));
+    AccountBytes(kinematic_->bytes());
+    ++plans_;
+    *changed = had_path || kinematic_->has_path();
+    return absl::OkStatus();
+  }
   return PlanInto(response->mutable_plan(), changed);
 }
 
@@ -244,12 +363,7 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
   std::vector<Cell> path = std::move(answer.result.path);
   if (changed != nullptr) *changed = path != last_path_;
   last_path_ = std::move(path);
-  // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
-  const int64_t bytes =
-      static_cast<int64_t>(search_->MemoryBytes() + overlay_.size() * 48 +
-                           (overlay_.empty() ? 0 : grid_->size()));
-  bytes_->store(bytes, std::memory_order_relaxed);
-  reservation_.Update(bytes);
+  AccountBytes(static_cast<int64_t>(search_->MemoryBytes()));
   return absl::OkStatus();
 }
 

@@ -1,6 +1,8 @@
 // The planning half of a Navigate session: a D* Lite search on the newest
 // version of the session's map with the session's private cells laid over it,
-// repaired from the cells that changed between versions, and the session's
+// repaired from the cells that changed between versions, or for a robot with
+// a footprint and kinematics the kinematic replanning of
+// navigate_kinematic.h on the same view of the map; and the session's
 // reservation in the memory budget. The stream half (reads, writes,
 // lifetime) is NavigationSession in navigate.cc.
 #ifndef PATHD_SERVER_RPC_NAVIGATE_SEARCH_H_
@@ -21,9 +23,13 @@
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "pathd/v1/planner_service.pb.h"
+#include "core/search/search_scratch.h"
+#include "server/convert.h"
+#include "server/derived_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
+#include "server/rpc/navigate_kinematic.h"
 
 namespace pathd::server {
 
@@ -37,6 +43,9 @@ class NavigationSearch {
     MemoryBudget* budget;
     // The server's expansion cap (--max_expansions); 0 = none.
     int64_t max_expansions;
+    // The server's derived values per map version (kinematic sessions read
+    // the obstacle heuristic there); null: each session builds its own.
+    DerivedCache* derived = nullptr;
   };
 
   // `caller`: whose share of the budget the session counts against.
@@ -50,26 +59,34 @@ class NavigationSearch {
                    std::atomic<int64_t>* bytes,
                    std::function<void(const std::string&)> on_open);
 
-  bool is_open() const { return search_ != nullptr; }
+  bool is_open() const { return search_ != nullptr || kinematic_ != nullptr; }
 
   // Answers one client message (open, pose or observe) into `response`, with
-  // the new plan. An error ends the session.
-  absl::Status Handle(const v1::NavigateRequest& message,
+  // the new plan. An error ends the session. `scratch` is the worker's.
+  absl::Status Handle(const v1::NavigateRequest& message, SearchScratch& scratch,
                       v1::NavigateResponse* response);
   // Moves to the map's newest version; when there was one, fills `response`
-  // with the new plan and sets `changed` when the path differs from the last
-  // one sent. Requires is_open().
-  absl::Status Push(v1::NavigateResponse* response, bool* changed);
+  // with the new plan and sets `changed` when it is worth pushing: the path
+  // differs from the last one sent (D* Lite), or the change hit the
+  // kinematic path's swept footprint (or there was no path) and this is the
+  // replan. Requires is_open().
+  absl::Status Push(SearchScratch& scratch, v1::NavigateResponse* response, bool* changed);
 
  private:
   absl::Status RequireOpen(const v1::NavigateRequest& message);
   absl::Status Open(const v1::NavigateOpen& open);
+  // The kinematic part of Open, for a query naming a kinematic planner.
+  absl::Status OpenKinematic(const v1::NavigateOpen& open, DecodedQuery decoded);
+  // The kinematic session's view of the map for a replan.
+  KinematicView ViewForKinematic();
   absl::Status ReserveMemory(const Grid& grid);
   absl::StatusOr<uint64_t> Observe(const v1::NavigateObservation& observe);
   absl::StatusOr<std::shared_ptr<const Grid>> EffectiveGrid(
       const MapSnapshot& snapshot);
   absl::Status Refresh(bool overlay_changed);
   absl::Status PlanInto(v1::PlanResponse* plan, bool* changed);
+  // Stores the session's bytes and updates the reservation.
+  void AccountBytes(int64_t state_bytes);
 
   // First, so it is destroyed last: the bytes it returns (and the trim it
   // may trigger) come after every other member is freed.
@@ -83,7 +100,14 @@ class NavigationSearch {
 
   std::shared_ptr<const MapSnapshot> snapshot_;
   std::shared_ptr<const Grid> grid_;
+  // Exactly one of these once open: a grid session's D* Lite, or a kinematic
+  // session's replanning.
   std::unique_ptr<DStarLite> search_;
+  std::unique_ptr<KinematicNavigation> kinematic_;
+  // Kinematic sessions: the server's derived store for snapshot_ (when the
+  // session plans on the version's own grid) and the version it is for.
+  std::unique_ptr<DerivedStore> shared_derived_;
+  uint64_t shared_derived_version_ = 0;
   // Session-only cell costs (cell index -> cost), laid over every version.
   std::map<size_t, uint8_t> overlay_;
   Cell start_;

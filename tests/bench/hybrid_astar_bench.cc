@@ -16,6 +16,14 @@
 //    FootprintChecker: time to the first solution and its length, against
 //    hybrid_astar's (unsmoothed, the field from the store), and state_lattice's
 //    on the same queries (at --lattice_weight, the server's default).
+//  - (c) Replans of a Navigate kinematic session: the robot drives its path
+//    and is replanned from every --navigate_every-th pose under the
+//    session's default budget (20000 expansions), with the goal's obstacle
+//    heuristic reused from the version's store (what a session does) and
+//    rebuilt per replan (a whole-map Dijkstra per message). Beside it, what
+//    the session's D* Lite state over the radius-inflated grid would give as
+//    that heuristic: how many cells its g-values leave unknown (+inf: D*
+//    Lite expands only towards the robot) or overestimate.
 // Figures, not assertions.
 #include <algorithm>
 #include <atomic>
@@ -45,8 +53,11 @@
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "core/kinematics/footprint.h"
+#include "core/kinematics/motion_check.h"
 #include "core/kinematics/obstacle_heuristic.h"
+#include "core/incremental/incremental_search.h"
 #include "core/kinematics/vehicle.h"
+#include "core/map/inflation.h"
 #include "core/planners/kinematic/hybrid_astar.h"
 #include "core/planners/kinematic/state_lattice.h"
 #include "core/search/derived.h"
@@ -62,6 +73,10 @@ ABSL_FLAG(bool, verbose, false, "print every query of (a)");
 ABSL_FLAG(double, analytic_slack, 1.2, "HybridAStarOptions::analytic_slack");
 ABSL_FLAG(double, curve_radii, 2.0, "HybridAStarOptions::curve_heuristic_radii");
 ABSL_FLAG(bool, curve_table, true, "HybridAStarOptions::curve_table");
+ABSL_FLAG(int, navigate_runs, 10, "robot runs for (c); 0 skips it");
+ABSL_FLAG(int, navigate_every, 16, "(c): replan at every N-th pose of the path");
+ABSL_FLAG(int, navigate_replans, 12, "(c): replans per run at most");
+ABSL_FLAG(bool, navigate_only, false, "run (c) only");
 ABSL_FLAG(double, lattice_weight, 1.5,
           "state_lattice's heuristic_weight in (b) (the server's default, 1.5)");
 
@@ -452,6 +467,122 @@ void PartB(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
   }
 }
 
+// (c) Replans of a kinematic Navigate session.
+void PartC(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
+           const std::vector<float>& distance) {
+  constexpr int64_t kBudget = 20000;  // KinematicNavigation::kDefaultReplanExpansions
+  const int runs = absl::GetFlag(FLAGS_navigate_runs);
+  const int every = std::max(1, absl::GetFlag(FLAGS_navigate_every));
+  std::printf("\n(c) Navigate kinematic session replans: %d runs, Reeds-Shepp, a replan "
+              "every %d poses (<= %d per run), budget %lld expansions (ms)\n\n",
+              runs, every, absl::GetFlag(FLAGS_navigate_replans),
+              static_cast<long long>(kBudget));
+  std::mt19937 rng(absl::GetFlag(FLAGS_seed) + 2000);
+  Stats reused, rebuilt, expansions, recheck;
+  int replans = 0, over_budget = 0, found = 0;
+  // D* Lite's g-values against the obstacle heuristic, over the cells where
+  // the heuristic is finite.
+  int64_t finite_cells = 0, unknown_g = 0, over_g = 0;
+  Stats dstar_first, dstar_moved, field_build;
+  const double inscribed = checker->footprint().inscribed_radius();
+  const auto inflated =
+      std::make_shared<const Grid>(InflateObstacles(grid, inscribed).value());
+  for (int run = 0; run < runs; ++run) {
+    KinematicQuery q = Robot(MotionModel::kReedsShepp, checker);
+    q.goal = FreePose(rng, grid, *checker, distance);
+    q.start = FreePose(rng, grid, *checker, distance);
+    OneVersionStore store(grid);
+    (void)GetObstacleDistance(&store, grid, false);
+    auto first = PlanHybridAStar(grid, RequestFor(q, &store), StopCondition::None(), Options());
+    if (!first.ok() || !first->found()) continue;
+    const std::vector<PathPose> path = first->poses;
+    int done = 0;
+    for (size_t i = every; i + 1 < path.size() && done < absl::GetFlag(FLAGS_navigate_replans);
+         i += every, ++done) {
+      q.start = path[i].pose;
+      const StopCondition stop(absl::InfiniteFuture(), nullptr, kBudget);
+      absl::Time t = absl::Now();
+      auto a = PlanHybridAStar(grid, RequestFor(q, &store), stop, Options());
+      reused.Add(Ms(absl::Now() - t));
+      t = absl::Now();
+      auto b = PlanHybridAStar(grid, RequestFor(q, nullptr), stop, Options());
+      rebuilt.Add(Ms(absl::Now() - t));
+      // What a push after an update elsewhere costs: the rest of the path
+      // rechecked for the footprint's sweep.
+      t = absl::Now();
+      const MotionChecker motion =
+          MotionChecker::Create(checker, grid, false, distance.data()).value();
+      const std::vector<PathPose> rest(path.begin() + static_cast<std::ptrdiff_t>(i), path.end());
+      if (FirstBlockedPiece(motion, rest) >= 0) std::printf("  (a rest of a path is blocked?)\n");
+      recheck.Add(Ms(absl::Now() - t));
+      ++replans;
+      if (a.ok()) {
+        expansions.Add(static_cast<double>(a->expansions));
+        if (a->outcome == PlanOutcome::kExpansionLimit) ++over_budget;
+        if (a->found()) ++found;
+      }
+    }
+    // The session's D* Lite from the goal to the robot's start on the grid
+    // inflated by the footprint's inscribed radius (what a grid session keeps).
+    const Cell goal = q.goal.cell();
+    const Cell start = path.front().pose.cell();
+    if (!Traversable(inflated->cost(goal), false) || !Traversable(inflated->cost(start), false)) {
+      continue;
+    }
+    auto dstar = DStarLite::Create(inflated, goal, CostParams{}).value();
+    (void)dstar->SetStart(start);
+    absl::Time t = absl::Now();
+    (void)dstar->Plan(StopCondition::None());
+    dstar_first.Add(Ms(absl::Now() - t));
+    (void)dstar->SetStart(path[path.size() / 2].pose.cell());
+    t = absl::Now();
+    (void)dstar->Plan(StopCondition::None());
+    dstar_moved.Add(Ms(absl::Now() - t));
+    ObstacleHeuristicParams params;
+    params.goal = goal;
+    params.cost_penalty = q.cost_penalty;
+    params.blocked_within = std::max(0.0, inscribed - std::numbers::sqrt2 / 2.0);
+    DerivedStop never;
+    t = absl::Now();
+    const auto field = BuildObstacleHeuristic(grid, params, distance.data(), never);
+    field_build.Add(Ms(absl::Now() - t));
+    for (int32_t y = 0; y < grid.height(); ++y) {
+      for (int32_t x = 0; x < grid.width(); ++x) {
+        const double h = field->At(Cell{x, y});
+        if (!(h < std::numeric_limits<double>::infinity())) continue;
+        ++finite_cells;
+        const double g = dstar->g(Cell{x, y});
+        if (!(g < std::numeric_limits<double>::infinity())) {
+          ++unknown_g;
+        } else if (g > h + 1.5) {
+          // More than the field's own discretisation (about a cell).
+          ++over_g;
+        }
+      }
+    }
+  }
+  std::printf("| replan | median | p90 | expansions (median) | over budget | found |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  std::printf("| field reused (the version's store, as a session) | %.1f | %.1f | %.0f | %d / %d | "
+              "%d / %d |\n",
+              reused.Percentile(0.5), reused.Percentile(0.9), expansions.Percentile(0.5),
+              over_budget, replans, found, replans);
+  std::printf("| field rebuilt per replan | %.1f | %.1f | same | | |\n",
+              rebuilt.Percentile(0.5), rebuilt.Percentile(0.9));
+  std::printf("| no replan: the rest of the path rechecked (an update elsewhere) | %.2f | %.2f "
+              "| | | |\n",
+              recheck.Percentile(0.5), recheck.Percentile(0.9));
+  std::printf("\nD* Lite (grid inflated by the inscribed radius, %.1f cells) as the obstacle "
+              "heuristic, over %lld cells where the heuristic is finite: g unknown (+inf) at "
+              "%.1f%%, g over the heuristic by more than 1.5 cells at %.1f%%. D* Lite's first "
+              "plan %.1f ms median, its repair after the robot moved half way %.2f ms; the "
+              "heuristic field's build %.1f ms.\n",
+              inscribed, static_cast<long long>(finite_cells),
+              finite_cells > 0 ? 100.0 * unknown_g / finite_cells : 0.0,
+              finite_cells > 0 ? 100.0 * over_g / finite_cells : 0.0, dstar_first.Percentile(0.5),
+              dstar_moved.Percentile(0.5), field_build.Percentile(0.5));
+}
+
 }  // namespace
 }  // namespace pathd
 
@@ -473,7 +604,10 @@ int main(int argc, char** argv) {
   std::printf("hybrid_astar_bench: 1000 x 1000 cells at 0.05 m, robot 0.6 m x 0.4 m "
               "(12 x 8 cells), turning radius 0.4 m (8 cells), %d heading bins\n",
               checker->headings());
-  pathd::PartA(grid, checker, distance);
-  if (absl::GetFlag(FLAGS_ompl_queries) > 0) pathd::PartB(grid, checker, distance);
+  if (!absl::GetFlag(FLAGS_navigate_only)) {
+    pathd::PartA(grid, checker, distance);
+    if (absl::GetFlag(FLAGS_ompl_queries) > 0) pathd::PartB(grid, checker, distance);
+  }
+  if (absl::GetFlag(FLAGS_navigate_runs) > 0) pathd::PartC(grid, checker, distance);
   return 0;
 }

@@ -338,6 +338,44 @@ class RealServerTest(unittest.TestCase, PathChecks):
             self.assertEqual(len(nav.pushes), 1)
         self.assertEqual(self.client.get_map("nav").version, update.version + 1)
 
+    def test_kinematic_navigation_takes_and_returns_world_poses(self):
+        # An open hall, 20 x 10 cells of 1 m: a 0.8 m x 0.6 m robot turning
+        # on 1.5 m drives along row 3; another client walls off the row.
+        rows = ["." * 20] * 10
+        self.client.create_map("kin", rows, replace=True)
+        self.addCleanup(self._delete_quietly, "kin")
+        rectangle = [(0.4, 0.3), (0.4, -0.3), (-0.4, -0.3), (-0.4, 0.3)]
+        options = pathd_client.plan_options(footprint_m=rectangle, motion_model="dubins",
+                                            min_turning_radius_m=1.5)
+        start = pathd_client.WorldPose(2.5, 3.5, 0.0)
+        goal = pathd_client.WorldPose(17.5, 3.5, 0.0)
+        with self.client.navigate("kin", start, goal, options=options,
+                                  planner="hybrid_astar", replan_max_expansions=5000) as nav:
+            self.assertTrue(nav.opened.plan.found)
+            self.assertEqual(nav.opened.replan_max_expansions, 5000)
+            self.assertEqual(nav.opened.plan.planner, "hybrid_astar")
+            self.assertAlmostEqual(nav.poses[0].x, 2.5)
+            self.assertAlmostEqual(nav.poses[-1].x, 17.5)
+            robot = nav.poses[4]
+            answer = nav.move(robot)
+            self.assertEqual(answer.event, "MOVED")
+            # A pose of its own path, whose rest is as cheap as the replan:
+            # the robot keeps the path it is on.
+            self.assertTrue(answer.kept_previous_path)
+            self.assertTrue(answer.plan.found)
+            self.assertAlmostEqual(answer.plan.poses[0].x, robot.x)
+            self.assertAlmostEqual(answer.plan.poses[0].y, robot.y)
+            self.assertAlmostEqual(answer.plan.poses[0].yaw, robot.yaw)
+            self.assertAlmostEqual(answer.robot_cell_pose[0], robot.x)
+            update = self.operator.update_map("kin", [SetRect(9, 0, 10, 5, LETHAL)])
+            push = nav.wait_push(10.0)
+            self.assertIsNotNone(push, "no replan pushed after the path was walled off")
+            self.assertEqual(push.plan.map_version, update.version)
+            self.assertTrue(push.plan.found)
+            self.assertAlmostEqual(push.plan.poses[0].x, robot.x)
+            # Round the wall: the robot's centre passes above row 6 there.
+            self.assertTrue(any(p.y > 6.0 for p in push.plan.poses if 8.5 <= p.x <= 11.5))
+
     def test_bad_navigate_message_ends_the_session(self):
         self.make_map("nav_bad")
         with self.client.navigate("nav_bad", (0, 0), (13, 7)) as nav:

@@ -389,6 +389,7 @@ class BadInputTest : public ::testing::Test {
     *open.mutable_open()->mutable_start() = plan.start();
     *open.mutable_open()->mutable_goal() = plan.goal();
     *open.mutable_open()->mutable_options() = plan.options();
+    open.mutable_open()->set_planner(plan.planner());
     return open;
   }
   // An open session on "room", then `message`.

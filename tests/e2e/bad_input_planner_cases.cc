@@ -337,6 +337,76 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
         [=, this] { return Navigate({NavigateOpen(p)}); },
         StatusCode::INVALID_ARGUMENT, "options.inflation_radius_m 1 is smaller");
   }
+  {
+    // A kinematic session for a 2 x 1 cell robot on "room", whose (5, 5)
+    // is blocked.
+    const auto kinematic = [](double sx, double sy, double gx, double gy) {
+      v1::PlanRequest p = GoodPlan();
+      p.set_planner(v1::PLANNER_HYBRID_ASTAR);
+      p.mutable_start()->mutable_cell_pose()->set_x(sx);
+      p.mutable_start()->mutable_cell_pose()->set_y(sy);
+      p.mutable_goal()->mutable_cell_pose()->set_x(gx);
+      p.mutable_goal()->mutable_cell_pose()->set_y(gy);
+      for (const auto& [x, y] : {std::pair{1.0, 0.5}, {1.0, -0.5}, {-1.0, -0.5}, {-1.0, 0.5}}) {
+        v1::CellPoint* c = p.mutable_options()->mutable_footprint()->add_polygon_cells();
+        c->set_x(x);
+        c->set_y(y);
+      }
+      p.mutable_options()->set_min_turning_radius_cells(2.0);
+      return p;
+    };
+    // The start cell (4, 5) is free; the robot's front overlaps (5, 5).
+    const v1::PlanRequest start_collides = kinematic(4.5, 5.5, 12.5, 12.5);
+    nav(
+        "kinematic open with a start pose whose footprint collides",
+        [=, this] { return Navigate({NavigateOpen(start_collides)}); },
+        StatusCode::INVALID_ARGUMENT, "open.start: start pose (4.5, 5.5, 0 rad) collides");
+    const v1::PlanRequest goal_collides = kinematic(2.5, 2.5, 6.5, 5.5);
+    nav(
+        "kinematic open with a goal pose whose footprint collides",
+        [=, this] { return Navigate({NavigateOpen(goal_collides)}); },
+        StatusCode::INVALID_ARGUMENT, "open.goal: goal pose (6.5, 5.5, 0 rad) collides");
+    v1::PlanRequest two_vertices = kinematic(2.5, 2.5, 12.5, 12.5);
+    two_vertices.mutable_options()->mutable_footprint()->mutable_polygon_cells()->DeleteSubrange(
+        0, 2);
+    nav(
+        "kinematic open with a two-vertex footprint",
+        [=, this] { return Navigate({NavigateOpen(two_vertices)}); },
+        StatusCode::INVALID_ARGUMENT, "options.footprint");
+    const v1::PlanRequest good = kinematic(2.5, 2.5, 12.5, 12.5);
+    nav(
+        "kinematic open with a negative replan budget",
+        [=, this] {
+          v1::NavigateRequest open = NavigateOpen(good);
+          open.mutable_open()->set_replan_max_expansions(-1);
+          return Navigate({open});
+        },
+        StatusCode::INVALID_ARGUMENT, "open.replan_max_expansions -1 must be >= 0");
+    nav(
+        "kinematic pose with a NaN heading",
+        [=, this] {
+          v1::NavigateRequest pose;
+          pose.set_seq(2);
+          pose.mutable_pose()->mutable_cell_pose()->set_x(3.5);
+          pose.mutable_pose()->mutable_cell_pose()->set_y(2.5);
+          pose.mutable_pose()->mutable_cell_pose()->set_yaw(kNaN);
+          return Navigate({NavigateOpen(good), pose});
+        },
+        StatusCode::INVALID_ARGUMENT, "pose cell pose (3.5, 2.5, nan) is not finite");
+    v1::PlanRequest differential = kinematic(2.5, 2.5, 12.5, 12.5);
+    differential.mutable_options()->set_motion_model(v1::MOTION_MODEL_DIFFERENTIAL);
+    nav(
+        "kinematic open with a motion model the planner does not drive",
+        [=, this] { return Navigate({NavigateOpen(differential)}); },
+        StatusCode::INVALID_ARGUMENT,
+        "hybrid_astar plans dubins or reeds_shepp motion, not differential");
+    v1::PlanRequest astar = GoodPlan();
+    astar.set_planner(v1::PLANNER_ASTAR);
+    nav(
+        "open with a planner that is not incremental or kinematic",
+        [=, this] { return Navigate({NavigateOpen(astar)}); },
+        StatusCode::INVALID_ARGUMENT, "open.planner: a Navigate session plans with dstar_lite");
+  }
   nav(
       "pose off the map",
       [this] {

@@ -155,10 +155,20 @@ class PathdClient:
         return PlanResult.from_proto(
             self._call(self._planner.Plan, request, map_name, timeout))
 
-    def navigate(self, map_name: str, start: CellLike, goal: CellLike, *,
+    def navigate(self, map_name: str, start: PositionLike, goal: PositionLike, *,
                  options: planner_service_pb2.PlanOptions | None = None,
+                 planner: str | None = None,
+                 replan_max_expansions: int = 0,
                  timeout: float | None = None) -> NavigationSession:
-        """Opens a Navigate session (D* Lite) and waits for its first path.
+        """Opens a Navigate session and waits for its first path.
+
+        D* Lite by default. With planner "hybrid_astar" or "state_lattice"
+        (or options giving a turning radius or motion model) it is a
+        kinematic session for the robot of `options` (footprint, turning
+        radius, ...): start, goal and move() take WorldPose values, and each
+        answer's plan.poses are world poses from the robot's pose, each
+        replan spending at most `replan_max_expansions` (0: the server's
+        default, 20000).
 
         `timeout` bounds each wait for an answer, not the session, which
         lasts until closed (the server ends it after --session_idle_timeout
@@ -166,6 +176,7 @@ class PathdClient:
         """
         open_request = planner_service_pb2.NavigateOpen(
             map=map_name, start=_position(start), goal=_position(goal),
-            options=options)
+            options=options, planner=_planner(planner),
+            replan_max_expansions=replan_max_expansions)
         return NavigationSession(self._planner, map_name, open_request,
                                  self.timeout if timeout is None else timeout)

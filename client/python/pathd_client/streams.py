@@ -17,8 +17,9 @@ from pathd.v1 import planner_service_pb2_grpc
 
 from pathd_client.errors import (DeadlineExceededError, PathdError,
                                  _from_rpc_error, make_error)
-from pathd_client.values import (MAP_HEADER, Cell, CellLike, Change, MapEvent,
-                                 NavigateUpdate, _change_proto, _position)
+from pathd_client.values import (MAP_HEADER, Cell, Change, MapEvent,
+                                 NavigateUpdate, PositionLike, WorldPose,
+                                 _change_proto, _position)
 
 
 
@@ -107,6 +108,12 @@ class NavigationSession:
         """The newest path, from the robot's cell to the goal."""
         return self.latest.plan.path
 
+    @property
+    def poses(self) -> list[WorldPose]:
+        """The newest path as world poses (a kinematic session's own poses,
+        from the robot's pose to the goal)."""
+        return self.latest.plan.poses
+
     # ---- sending ----
 
     def _send(self, request: planner_service_pb2.NavigateRequest) -> int:
@@ -117,9 +124,11 @@ class NavigationSession:
         self._requests.put(request)
         return request.seq
 
-    def send_pose(self, cell: CellLike) -> int:
-        """The robot is now at `cell`; returns the message's seq."""
-        return self._send(planner_service_pb2.NavigateRequest(pose=_position(cell)))
+    def send_pose(self, where: PositionLike) -> int:
+        """The robot is now at `where` (a cell, or a WorldPose with its
+        heading; a cell keeps a kinematic robot's heading); returns the
+        message's seq."""
+        return self._send(planner_service_pb2.NavigateRequest(pose=_position(where)))
 
     def send_observation(self, changes: Iterable[Change], *,
                          session_only: bool = False) -> int:
@@ -129,9 +138,9 @@ class NavigationSession:
             changes=[_change_proto(c) for c in changes], session_only=session_only)
         return self._send(planner_service_pb2.NavigateRequest(observe=observation))
 
-    def move(self, cell: CellLike, *, timeout: float | None = None) -> NavigateUpdate:
-        """Sends a pose and returns its answer (the path from `cell`)."""
-        return self._answer(self.send_pose(cell), timeout)
+    def move(self, where: PositionLike, *, timeout: float | None = None) -> NavigateUpdate:
+        """Sends a pose and returns its answer (the path from `where`)."""
+        return self._answer(self.send_pose(where), timeout)
 
     def observe(self, changes: Iterable[Change], *, session_only: bool = False,
                 timeout: float | None = None) -> NavigateUpdate:

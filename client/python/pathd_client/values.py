@@ -173,6 +173,12 @@ class NavigateUpdate:
     applied_version: int
     raw: planner_service_pb2.NavigateResponse = dataclasses.field(
         repr=False, compare=False)
+    # Kinematic sessions: the replan ran out of its budget and `plan` is the
+    # rest of the previous path, rechecked collision-free; the budget; the
+    # pose planned from, in cell coordinates (x, y, yaw).
+    kept_previous_path: bool = False
+    replan_max_expansions: int = 0
+    robot_cell_pose: tuple[float, float, float] | None = None
 
     @property
     def pushed(self) -> bool:
@@ -188,7 +194,12 @@ class NavigateUpdate:
             session_id=response.session_id,
             plan=PlanResult.from_proto(response.plan),
             applied_version=response.applied_version,
-            raw=response)
+            raw=response,
+            kept_previous_path=response.kept_previous_path,
+            replan_max_expansions=response.replan_max_expansions,
+            robot_cell_pose=((response.robot_pose.x, response.robot_pose.y,
+                              response.robot_pose.yaw)
+                             if response.HasField("robot_pose") else None))
 
 
 @dataclasses.dataclass(frozen=True)

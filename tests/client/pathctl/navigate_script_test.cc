@@ -78,6 +78,16 @@ TEST(NavigateScriptTest, ParsesEveryCommand) {
   EXPECT_EQ(s[11].duration, absl::Milliseconds(40));
 }
 
+TEST(NavigateScriptTest, PoseTakesFractionalCellsAndAHeading) {
+  const auto steps = ParseNavigateScript("pose 3.25 2.5 -1.5708\n", "pose.nav");
+  ASSERT_TRUE(steps.ok()) << steps.status();
+  ASSERT_EQ(steps->size(), 1u);
+  EXPECT_EQ((*steps)[0].kind, Kind::kPose);
+  EXPECT_DOUBLE_EQ((*steps)[0].pose.x(), 3.25);
+  EXPECT_DOUBLE_EQ((*steps)[0].pose.y(), 2.5);
+  EXPECT_DOUBLE_EQ((*steps)[0].pose.yaw(), -1.5708);
+}
+
 TEST(NavigateScriptTest, EmptyScriptHasNoSteps) {
   const auto steps = ParseNavigateScript("# nothing\n\n   \n", "empty.nav");
   ASSERT_TRUE(steps.ok()) << steps.status();
@@ -94,6 +104,9 @@ TEST(NavigateScriptTest, BadLinesNameFileLineAndProblem) {
       {"move 1", "move takes X Y, got 'move 1'"},
       {"move 1 2 3", "move takes X Y"},
       {"move one 2", "X: 'one' is not an integer"},
+      {"pose 1 2", "pose takes X Y YAW"},
+      {"pose 1 2 east", "YAW: 'east' is not a finite number"},
+      {"pose nan 2 0", "X: 'nan' is not a finite number"},
       {"follow", "follow takes N"},
       {"follow 0", "follow needs N >= 1"},
       {"block 1", "block takes X Y"},

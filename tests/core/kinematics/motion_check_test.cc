@@ -99,5 +99,85 @@ TEST(MotionChecker, ExactEndsCloserThanTheMargin) {
   EXPECT_FALSE(motion.MotionFree(away, 2.0, 0.0, MotionEnd::kSample, MotionEnd::kSample));
 }
 
+// FirstBlockedPiece, the recheck of a kept Navigate path: a path it calls
+// free passes the independent checker (footprint sampled every 0.02 cells
+// along each chord), and a cell blocked under the path is found in the
+// piece that reaches it.
+TEST(FirstBlockedPiece, FreeVerdictsHoldWhenSampledDensely) {
+  std::mt19937 rng(47);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Footprint footprint =
+      Footprint::Polygon({{-0.6, -0.4}, {0.9, -0.4}, {0.9, 0.4}, {-0.6, 0.4}}).value();
+  const auto checker = SharedFootprintChecker(footprint).value();
+  testing::KinematicCheck exact = Exact(footprint);
+  exact.step_cells = 0.02;
+  int free = 0, blocked = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Grid grid = Grid::Create(24, 24).value();
+    for (int b = 0; b < 6; ++b) {
+      const int x0 = static_cast<int>(rng() % 24), y0 = static_cast<int>(rng() % 24);
+      for (int y = y0; y < std::min(24, y0 + 2); ++y) {
+        for (int x = x0; x < std::min(24, x0 + 2); ++x) grid.set_cost(x, y, kLethalCost);
+      }
+    }
+    const std::vector<float> distance = ObstacleDistanceField(grid, false);
+    const MotionChecker motion =
+        MotionChecker::Create(checker, grid, false, distance.data()).value();
+    // Poses 0.4 cells apart along an arc of radius 3 to 10 cells.
+    const double radius = (3.0 + 7.0 * u(rng)) * (rng() % 2 == 0 ? 1.0 : -1.0);
+    Pose p{4.0 + 16.0 * u(rng), 4.0 + 16.0 * u(rng), 2 * kPi * u(rng) - kPi};
+    std::vector<PathPose> path = {{p, false}};
+    std::vector<Pose> poses = {p};
+    for (int i = 0; i < 20; ++i) {
+      const double turn = 0.4 / radius;
+      p = Pose{p.x + 0.4 * std::cos(p.yaw + turn / 2), p.y + 0.4 * std::sin(p.yaw + turn / 2),
+               NormalizeAngle(p.yaw + turn)};
+      path.push_back({p, false});
+      poses.push_back(p);
+    }
+    const int64_t piece = FirstBlockedPiece(motion, path);
+    if (piece < 0) {
+      ++free;
+      EXPECT_EQ(testing::CheckKinematicPath(grid, poses, {}, exact), "") << "trial " << trial;
+    } else {
+      ++blocked;
+      EXPECT_LT(piece, static_cast<int64_t>(path.size()) - 1);
+    }
+  }
+  EXPECT_GT(free, 20);
+  EXPECT_GT(blocked, 20);
+}
+
+TEST(FirstBlockedPiece, FindsTheCellBlockedUnderTheTenthPose) {
+  Grid grid = Grid::Create(30, 10).value();
+  const auto checker =
+      SharedFootprintChecker(Footprint::Polygon({{-0.5, -0.3}, {0.5, -0.3}, {0.5, 0.3},
+                                                 {-0.5, 0.3}})
+                                 .value())
+          .value();
+  std::vector<PathPose> path;
+  for (int i = 0; i <= 40; ++i) path.push_back({Pose{3.0 + 0.5 * i, 5.0, 0.0}, false});
+  {
+    const std::vector<float> distance = ObstacleDistanceField(grid, false);
+    const MotionChecker motion =
+        MotionChecker::Create(checker, grid, false, distance.data()).value();
+    EXPECT_EQ(FirstBlockedPiece(motion, path), -1);
+    EXPECT_EQ(FirstBlockedPiece(motion, {}), -1);
+  }
+  // Pose 10 is at x = 8; the robot's front (+0.5) reaches cell 8 from pose 9
+  // on (x = 7.5), with the margin a little before.
+  grid.set_cost(8, 5, kLethalCost);
+  const std::vector<float> distance = ObstacleDistanceField(grid, false);
+  const MotionChecker motion =
+      MotionChecker::Create(checker, grid, false, distance.data()).value();
+  const int64_t piece = FirstBlockedPiece(motion, path);
+  EXPECT_GE(piece, 7);
+  EXPECT_LE(piece, 8);
+  // One pose on the blocked cell.
+  EXPECT_EQ(FirstBlockedPiece(motion, {{Pose{8.5, 5.5, 0.0}, false}}), 0);
+  // The rest of the path beyond the cell is free.
+  EXPECT_EQ(FirstBlockedPiece(motion, std::vector<PathPose>(path.begin() + 14, path.end())), -1);
+}
+
 }  // namespace
 }  // namespace pathd

@@ -4,6 +4,7 @@
 // concurrent sessions checked against Dijkstra on the version each answer
 // names. Waits are generous upper bounds; nothing asserts on speed except the
 // issue's "pushed within one second".
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -14,6 +15,7 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <grpcpp/create_channel.h>
@@ -506,6 +508,104 @@ TEST_F(NavigationTest, ConcurrentSessionsOnOneMapDoNotInterfere) {
   stop.store(true);
   disturber.join();
   EXPECT_GE(answers.load(), 4 * 30);
+}
+
+// A kinematic session's open message: a 2 x 1 cell Dubins robot turning on
+// 2 cells, from (2.5, 2.5) facing east to (16.5, 2.5) facing east.
+v1::NavigateRequest KinematicOpen(const std::string& map, int64_t replan_budget,
+                                  int64_t options_budget) {
+  v1::NavigateRequest request;
+  request.set_seq(1);
+  v1::NavigateOpen* open = request.mutable_open();
+  open->set_map(map);
+  open->set_planner(v1::PLANNER_HYBRID_ASTAR);
+  open->set_replan_max_expansions(replan_budget);
+  open->mutable_options()->set_max_expansions(options_budget);
+  for (const auto& [x, y] : {std::pair{1.0, 0.5}, {1.0, -0.5}, {-1.0, -0.5}, {-1.0, 0.5}}) {
+    v1::CellPoint* p = open->mutable_options()->mutable_footprint()->add_polygon_cells();
+    p->set_x(x);
+    p->set_y(y);
+  }
+  open->mutable_options()->set_min_turning_radius_cells(2.0);
+  v1::CellPose* start = open->mutable_start()->mutable_cell_pose();
+  start->set_x(2.5);
+  start->set_y(2.5);
+  v1::CellPose* goal = open->mutable_goal()->mutable_cell_pose();
+  goal->set_x(16.5);
+  goal->set_y(2.5);
+  return request;
+}
+
+// The replan budget: NavigateOpen.replan_max_expansions, else
+// options.max_expansions, else 20000; --max_expansions caps each.
+TEST_F(NavigationTest, KinematicReplanBudgetTakesItsDefaultsAndTheServersCap) {
+  for (const int64_t cap : {int64_t{0}, int64_t{300}}) {
+    ServerOptions options;
+    options.max_expansions = cap;
+    StartServer(options);
+    AddMap("open", Grid::Create(20, 8).value());
+    const auto budget_of = [&](int64_t replan, int64_t in_options) {
+      Session session(*planner_);
+      EXPECT_TRUE(session.Write(KinematicOpen("open", replan, in_options)));
+      const std::optional<v1::NavigateResponse> opened = session.Next(kAnswerWait);
+      EXPECT_TRUE(opened.has_value());
+      EXPECT_TRUE(session.Finish().ok());
+      return opened.has_value() ? opened->replan_max_expansions() : -1;
+    };
+    const auto capped = [cap](int64_t b) { return cap > 0 ? std::min(b, cap) : b; };
+    EXPECT_EQ(budget_of(0, 0), capped(20000)) << "cap " << cap;
+    EXPECT_EQ(budget_of(0, 1234), capped(1234)) << "cap " << cap;
+    EXPECT_EQ(budget_of(777, 1234), capped(777)) << "cap " << cap;
+    server_->Shutdown();
+    server_.reset();
+  }
+}
+
+// A pose message without a heading keeps the robot's; one whose footprint
+// collides is answered without a path, and the session goes on.
+TEST_F(NavigationTest, KinematicPosesKeepTheHeadingAndACollidingPoseIsAnAnswer) {
+  StartServer();
+  Grid grid = Grid::Create(20, 8).value();
+  grid.set_cost(10, 6, kLethalCost);
+  AddMap("open", std::move(grid));
+  Session session(*planner_);
+  ASSERT_TRUE(session.Write(KinematicOpen("open", 0, 0)));
+  std::optional<v1::NavigateResponse> answer = session.Next(kAnswerWait);
+  ASSERT_TRUE(answer.has_value());
+  ASSERT_TRUE(answer->plan().found()) << answer->ShortDebugString();
+
+  v1::NavigateRequest turned;
+  turned.set_seq(2);
+  v1::CellPose* pose = turned.mutable_pose()->mutable_cell_pose();
+  pose->set_x(4.5);
+  pose->set_y(3.0);
+  pose->set_yaw(0.3);
+  ASSERT_TRUE(session.Write(turned));
+  answer = session.Next(kAnswerWait);
+  ASSERT_TRUE(answer.has_value());
+  EXPECT_DOUBLE_EQ(answer->robot_pose().yaw(), 0.3);
+  ASSERT_TRUE(answer->plan().found()) << answer->ShortDebugString();
+  EXPECT_DOUBLE_EQ(answer->plan().poses(0).yaw(), 0.3);
+
+  ASSERT_TRUE(session.Move(Cell{6, 3}, 3));  // a cell: still facing 0.3 rad
+  answer = session.Next(kAnswerWait);
+  ASSERT_TRUE(answer.has_value());
+  EXPECT_DOUBLE_EQ(answer->robot_pose().x(), 6.5);
+  EXPECT_DOUBLE_EQ(answer->robot_pose().yaw(), 0.3);
+
+  ASSERT_TRUE(session.Move(Cell{9, 6}, 4));  // its front on the blocked cell
+  answer = session.Next(kAnswerWait);
+  ASSERT_TRUE(answer.has_value());
+  EXPECT_EQ(answer->seq(), 4u);
+  EXPECT_FALSE(answer->plan().found());
+  EXPECT_EQ(answer->plan().poses_size(), 0);
+  EXPECT_THAT(answer->plan().reason(), HasSubstr("start pose (9.5, 6.5, 0.3 rad) collides"));
+
+  ASSERT_TRUE(session.Move(Cell{12, 3}, 5));  // clear again
+  answer = session.Next(kAnswerWait);
+  ASSERT_TRUE(answer.has_value());
+  EXPECT_TRUE(answer->plan().found()) << answer->ShortDebugString();
+  EXPECT_TRUE(session.Finish().ok());
 }
 
 }  // namespace
