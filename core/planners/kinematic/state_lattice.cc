@@ -933,7 +933,7 @@ class LatticeSearch {
       result->cost += MotionCost(grid_, m, previous, q_);
       previous = &m;
     }
-    result->path = PathCells(grid_, result->poses, request_.cost.unknown_is_free);
+    result->path = PathCells(result->poses);
   }
 
   const Grid& grid_;
