@@ -1,0 +1,109 @@
+// Many-to-many cost tables (OSRM's `table`): the cheapest cost and its path's
+// length between N sources and M destinations, by one goal-rooted
+// cost-to-go field per destination (the backward method, which a caller can
+// serve from a cache of fields) or one multi-target Dijkstra search per
+// source (the forward method). Pure functions of a grid; thread-compatible.
+#ifndef PATHD_CORE_FLEET_TABLE_H_
+#define PATHD_CORE_FLEET_TABLE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/types/span.h"
+#include "core/incremental/incremental_search.h"
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "core/search/plan_types.h"
+#include "core/search/stop_condition.h"
+
+namespace pathd {
+
+enum class TableMethod { kAuto, kBackward, kForward };
+
+// The method kAuto runs: kBackward when destinations <= sources (M fields
+// then beat N searches, and the fields are what a cache keeps), else
+// kForward. A forward search from a source stops when its farthest
+// destination is settled, a field covers the whole reachable map, so on a
+// square table the fields cost more per search but are the ones a repeated
+// table finds in the cache.
+TableMethod ChooseTableMethod(size_t sources, size_t destinations);
+
+// One source-destination pair.
+struct TableCell {
+  bool reachable = false;
+  // Under the cost model (DESIGN.md), in cells; 0 when unreachable.
+  double cost = 0.0;
+  // Geometric length of the cheapest path found (1 per straight and sqrt(2)
+  // per diagonal move). Paths of equal cost may differ in length; each
+  // method reports the one it found.
+  double length = 0.0;
+};
+
+// A table and what computing it took.
+struct CostTable {
+  // kFound when complete, else the stop condition's outcome (entries then
+  // are not all set).
+  PlanOutcome outcome = PlanOutcome::kFound;
+  TableMethod method = TableMethod::kForward;
+  size_t rows = 0;
+  size_t columns = 0;
+  // Row-major: entries[i * columns + j] is source i to destination j.
+  std::vector<TableCell> entries;
+  // Cells settled by the searches and field builds.
+  int64_t expansions = 0;
+  // kBackward: destinations whose field the provider had already.
+  int32_t fields_cached = 0;
+
+  const TableCell& at(size_t i, size_t j) const { return entries[i * columns + j]; }
+};
+
+// A destination's cost-to-go field as the backward method gets it.
+struct FieldLookup {
+  // kFound: `field` is set; otherwise the build was stopped.
+  PlanOutcome outcome = PlanOutcome::kFound;
+  std::shared_ptr<const ShortestPathMap> field;
+  bool cached = false;
+  int64_t expansions = 0;
+};
+// Provides the field of goal `goal` on the table's grid (the server: its
+// shortest path map cache). Errors end the table.
+using FieldProvider =
+    std::function<absl::StatusOr<FieldLookup>(Cell goal, const StopCondition& stop)>;
+
+// The table from every source to every destination on `grid` under `cost`.
+// Preconditions: every source and destination is on the grid and
+// traversable (the caller validates and names them). kBackward reads each
+// destination's field from `fields` (empty: ShortestPathMap::Build on
+// `grid`) and descends each source's path in it for the length; kForward
+// runs a Dijkstra search per source until every destination is settled.
+// Expansions count across the whole table against `stop`'s budget. Errors:
+// those of the provider, INTERNAL when a field is broken.
+absl::StatusOr<CostTable> ComputeTable(std::shared_ptr<const Grid> grid,
+                                       const CostParams& cost,
+                                       absl::Span<const Cell> sources,
+                                       absl::Span<const Cell> destinations,
+                                       TableMethod method, const FieldProvider& fields,
+                                       const StopCondition& stop);
+
+// Cheapest costs from `source` to every cell, by Dijkstra's algorithm over
+// the cost model's moves, with the length of the path found to each; stops
+// once every cell of `targets` is settled (empty targets: when `max_cost` is
+// passed or the open list is empty). Cells not settled hold +infinity. The
+// building block of the forward table and of isochrones.
+struct CostField {
+  PlanOutcome outcome = PlanOutcome::kFound;
+  std::vector<double> cost;
+  std::vector<double> length;
+  int64_t expansions = 0;
+};
+CostField DijkstraFrom(const Grid& grid, const CostParams& cost, Cell source,
+                       absl::Span<const Cell> targets, double max_cost,
+                       const StopCondition& stop, int64_t expansions_before = 0);
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_FLEET_TABLE_H_
