@@ -109,8 +109,8 @@ absl::StatusOr<CostTable> ComputeTable(std::shared_ptr<const Grid> grid,
                      : method;
   if (table.method == TableMethod::kForward) {
     for (size_t i = 0; i < sources.size(); ++i) {
-      const CostField field = DijkstraFrom(*grid, cost, sources[i], destinations, kInf,
-                                           stop, table.expansions);
+      const CostField field =
+          DijkstraFrom(*grid, cost, sources[i], destinations, kInf, stop);
       table.expansions += field.expansions;
       if (field.outcome != PlanOutcome::kFound) {
         table.outcome = field.outcome;
@@ -128,12 +128,7 @@ absl::StatusOr<CostTable> ComputeTable(std::shared_ptr<const Grid> grid,
   for (size_t j = 0; j < destinations.size(); ++j) {
     FieldLookup lookup;
     if (fields) {
-      // The provider's budget is what is left of the table's.
-      const int64_t budget = stop.max_expansions();
-      const StopCondition left =
-          budget > 0 ? stop.WithMaxExpansions(std::max<int64_t>(1, budget - table.expansions))
-                     : stop;
-      PATHD_ASSIGN_OR_RETURN(lookup, fields(destinations[j], left));
+      PATHD_ASSIGN_OR_RETURN(lookup, fields(destinations[j], stop));
     } else {
       absl::StatusOr<std::unique_ptr<ShortestPathMap>> built =
           ShortestPathMap::Build(grid, destinations[j], cost, stop);

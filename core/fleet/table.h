@@ -80,7 +80,8 @@ using FieldProvider =
 // destination's field from `fields` (empty: ShortestPathMap::Build on
 // `grid`) and descends each source's path in it for the length; kForward
 // runs a Dijkstra search per source until every destination is settled.
-// Expansions count across the whole table against `stop`'s budget. Errors:
+// `stop`'s expansion budget applies to each search or field build (as to
+// one Plan), its deadline and cancellation to the whole table. Errors:
 // those of the provider, INTERNAL when a field is broken.
 absl::StatusOr<CostTable> ComputeTable(std::shared_ptr<const Grid> grid,
                                        const CostParams& cost,
