@@ -378,7 +378,7 @@ const Command kNearestCommand = {
                 " [--robot_radius M | --footprint '[[x, y], ...]' [--yaw R]]",
     .help = "Prints the nearest cell to (X, Y) where the robot may stand: outside the\n"
             "robot radius of every obstacle, or with a polygon footprint (at heading\n"
-            "--yaw) touching no blocked cell. Exit code 2 when there is none within\n"
+            "--yaw) touching no blocked cell. Exit code 3 when there is none within\n"
             "the distance (default 1024 cells).",
     .flags = kNearestFlags,
     .run = RunNearest,
@@ -393,7 +393,7 @@ const Command kTripCommand = {
             "it (round_trip, the default), ending at the last (fixed_last) or wherever\n"
             "is cheapest (any). Exact up to 12 stops (Held-Karp), 2-opt + Or-opt local\n"
             "search above, with a lower bound and the gap to it; the legs are planned\n"
-            "as one path (--output json has it in plan). Exit code 2 when no order\n"
+            "as one path (--output json has it in plan). Exit code 3 when no order\n"
             "joins every stop.",
     .flags = kTripFlags,
     .run = RunTrip,

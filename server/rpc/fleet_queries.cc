@@ -355,17 +355,20 @@ absl::Status PrepareTrip(const PlanDeps& deps, TripCall& call) {
         "planner: the legs are planned through via points, which the cached planners "
         "(spm, dstar_lite) cannot do; use astar or dijkstra");
   }
-  PATHD_ASSIGN_OR_RETURN(call.q, DecodeFleetQuery(deps, r.map(), r.options(), r.planner()));
-  call.planner = PlannerRegistry::Default().Get(call.q->query().planner);
+  // The planner first: a kinematic one would make the decoder ask for the
+  // start and goal poses a trip does not have.
+  PATHD_ASSIGN_OR_RETURN(const std::string_view name, PlannerName(r.planner()));
+  call.planner = PlannerRegistry::Default().Get(name);
   if (call.planner == nullptr) {
-    return absl::UnimplementedError(absl::StrFormat(
-        "planner '%s' is not available on this server", call.q->query().planner));
+    return absl::UnimplementedError(
+        absl::StrFormat("planner '%s' is not available on this server", name));
   }
   if (call.planner->traits().kinematic) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "planner: %s plans between poses, not through via points; use a grid planner",
-        call.q->query().planner));
+        name));
   }
+  PATHD_ASSIGN_OR_RETURN(call.q, DecodeFleetQuery(deps, r.map(), r.options(), r.planner()));
   PATHD_ASSIGN_OR_RETURN(call.stops, DecodeCells(r.waypoints(), "waypoints", *call.q));
   return absl::OkStatus();
 }
