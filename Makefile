@@ -99,7 +99,8 @@ ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_
   LSAN_OPTIONS=suppressions=$(CURDIR)/tests/asan/lsan.supp:print_suppressions=0 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE) \
-  PATHD_GEOMETRIC_SCENARIOS=10 PATHD_GEOMETRIC_PLANNERS=navmesh,minimal_construct
+  PATHD_GEOMETRIC_SCENARIOS=10 PATHD_GEOMETRIC_PLANNERS=navmesh,minimal_construct \
+  PATHD_FLEET_CASES=8
 
 test-asan: setup-test
 	@$(CMAKE_CONFIGURE) -B $(ASAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_ASAN=ON >/dev/null
