@@ -20,77 +20,118 @@ TableMethod ChooseTableMethod(size_t sources, size_t destinations) {
   return destinations <= sources ? TableMethod::kBackward : TableMethod::kForward;
 }
 
-CostField DijkstraFrom(const Grid& grid, const CostParams& cost, Cell source,
-                       absl::Span<const Cell> targets, double max_cost,
-                       const StopCondition& stop, int64_t expansions_before) {
-  CostField out;
-  const size_t n = grid.size();
-  out.cost.assign(n, kInf);
-  out.length.assign(n, kInf);
-  std::vector<uint8_t> state(n, 0);  // 0 unseen, 1 open, 2 settled, bit 2: target
+ForwardDijkstra::ForwardDijkstra(const Grid& grid, const CostParams& cost)
+    : grid_(grid), moves_(MoveCount(cost.connectivity)) {
+  stride_ = static_cast<size_t>(grid.width()) + 2;
+  const size_t padded = stride_ * (static_cast<size_t>(grid.height()) + 2);
+  factor_.assign(padded, 0.0);
+  for (int32_t y = 0; y < grid.height(); ++y) {
+    for (int32_t x = 0; x < grid.width(); ++x) {
+      const uint8_t c = grid.cost(x, y);
+      if (Traversable(c, cost.unknown_is_free)) {
+        factor_[Padded(Cell{x, y})] = CellFactor(c, cost.cost_weight);
+      }
+    }
+  }
+  dist_.assign(padded, kInf);
+  length_.assign(padded, kInf);
+  settled_.assign(padded, 0);
+  target_.assign(padded, 0);
+  const auto stride = static_cast<int64_t>(stride_);
+  for (int k = 0; k < moves_; ++k) {
+    offset_[k] = kMoves[k].dx + kMoves[k].dy * stride;
+    step_[k] = kMoves[k].length;
+    // A diagonal's two side cells; a straight move's "sides" are its
+    // target cell again, so one test serves both.
+    const bool diagonal = kMoves[k].dx != 0 && kMoves[k].dy != 0;
+    side_a_[k] = diagonal ? kMoves[k].dx : offset_[k];
+    side_b_[k] = diagonal ? kMoves[k].dy * stride : offset_[k];
+  }
+}
+
+PlanOutcome ForwardDijkstra::Run(Cell source, absl::Span<const Cell> targets,
+                                 double max_cost, const StopCondition& stop,
+                                 int64_t* expansions) {
+  for (const uint32_t i : touched_) {
+    dist_[i] = kInf;
+    length_[i] = kInf;
+    settled_[i] = 0;
+    target_[i] = 0;
+  }
+  touched_.clear();
   size_t targets_left = 0;
   for (const Cell t : targets) {
-    uint8_t& s = state[grid.Index(t)];
-    if ((s & 4) == 0) {
-      s |= 4;
+    const size_t i = Padded(t);
+    if (target_[i] == 0) {
+      target_[i] = 1;
+      touched_.push_back(static_cast<uint32_t>(i));
       ++targets_left;
     }
   }
-  using Entry = std::pair<double, size_t>;
+  using Entry = std::pair<double, uint32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
-  const size_t start = grid.Index(source);
-  out.cost[start] = 0.0;
-  out.length[start] = 0.0;
-  open.push({0.0, start});
-  const int moves = MoveCount(cost.connectivity);
-  const bool unknown_free = cost.unknown_is_free;
-  const int32_t w = grid.width();
-  const int32_t h = grid.height();
-  auto free_at = [&](int32_t x, int32_t y) {
-    return x >= 0 && y >= 0 && x < w && y < h && Traversable(grid.cost(x, y), unknown_free);
-  };
-  int64_t expansions = expansions_before;
+  const size_t start = Padded(source);
+  dist_[start] = 0.0;
+  length_[start] = 0.0;
+  touched_.push_back(static_cast<uint32_t>(start));
+  open.push({0.0, static_cast<uint32_t>(start)});
+  int64_t settled = 0;
+  PlanOutcome outcome = PlanOutcome::kFound;
   while (!open.empty()) {
     const auto [g, u] = open.top();
     open.pop();
-    if ((state[u] & 3) == 2 || g > out.cost[u]) continue;
+    if (g > dist_[u]) continue;  // a stale entry: u was reached cheaper
     if (g > max_cost) break;
-    state[u] = static_cast<uint8_t>((state[u] & 4) | 2);
-    ++expansions;
-    if (const PlanOutcome o = stop.Check(expansions, g); o != PlanOutcome::kFound) {
-      out.outcome = o;
+    settled_[u] = 1;
+    ++settled;
+    if (const PlanOutcome o = stop.Check(settled, g); o != PlanOutcome::kFound) {
+      outcome = o;
       break;
     }
-    if ((state[u] & 4) != 0 && --targets_left == 0) break;
-    const Cell c = grid.CellAt(u);
-    for (int k = 0; k < moves; ++k) {
-      const Move& m = kMoves[k];
-      const int32_t x = c.x + m.dx;
-      const int32_t y = c.y + m.dy;
-      if (!free_at(x, y)) continue;
-      // No corner cutting: both side cells of a diagonal must be free.
-      if (m.dx != 0 && m.dy != 0 && (!free_at(c.x + m.dx, c.y) || !free_at(c.x, c.y + m.dy))) {
+    if (target_[u] != 0 && --targets_left == 0) break;
+    for (int k = 0; k < moves_; ++k) {
+      const size_t v = static_cast<size_t>(static_cast<int64_t>(u) + offset_[k]);
+      const double f = factor_[v];
+      // Blocked or outside; a diagonal also needs both side cells free.
+      if (f == 0.0 || factor_[u + side_a_[k]] == 0.0 || factor_[u + side_b_[k]] == 0.0) {
         continue;
       }
-      const size_t v = grid.Index(x, y);
-      if ((state[v] & 3) == 2) continue;
-      const double nv = g + m.length * CellFactor(grid.cost(x, y), cost.cost_weight);
-      if (nv < out.cost[v]) {
-        out.cost[v] = nv;
-        out.length[v] = out.length[u] + m.length;
-        state[v] = static_cast<uint8_t>((state[v] & 4) | 1);
-        open.push({nv, v});
+      const double nv = g + step_[k] * f;
+      if (nv < dist_[v]) {
+        if (dist_[v] == kInf) touched_.push_back(static_cast<uint32_t>(v));
+        dist_[v] = nv;
+        length_[v] = length_[u] + step_[k];
+        open.push({nv, static_cast<uint32_t>(v)});
       }
     }
   }
-  // Cells reached but not settled may hold a cost above the optimum.
-  for (size_t i = 0; i < n; ++i) {
-    if ((state[i] & 3) != 2) {
-      out.cost[i] = kInf;
-      out.length[i] = kInf;
-    }
+  *expansions = settled;
+  return outcome;
+}
+
+double ForwardDijkstra::cost(Cell c) const {
+  const size_t i = Padded(c);
+  return settled_[i] != 0 ? dist_[i] : kInf;
+}
+
+double ForwardDijkstra::length(Cell c) const {
+  const size_t i = Padded(c);
+  return settled_[i] != 0 ? length_[i] : kInf;
+}
+
+CostField DijkstraFrom(const Grid& grid, const CostParams& cost, Cell source,
+                       absl::Span<const Cell> targets, double max_cost,
+                       const StopCondition& stop) {
+  ForwardDijkstra search(grid, cost);
+  CostField out;
+  out.outcome = search.Run(source, targets, max_cost, stop, &out.expansions);
+  out.cost.resize(grid.size());
+  out.length.resize(grid.size());
+  for (size_t i = 0; i < grid.size(); ++i) {
+    const Cell c = grid.CellAt(i);
+    out.cost[i] = search.cost(c);
+    out.length[i] = search.length(c);
   }
-  out.expansions = expansions - expansions_before;
   return out;
 }
 
@@ -108,19 +149,20 @@ absl::StatusOr<CostTable> ComputeTable(std::shared_ptr<const Grid> grid,
                      ? ChooseTableMethod(sources.size(), destinations.size())
                      : method;
   if (table.method == TableMethod::kForward) {
+    ForwardDijkstra search(*grid, cost);
     for (size_t i = 0; i < sources.size(); ++i) {
-      const CostField field =
-          DijkstraFrom(*grid, cost, sources[i], destinations, kInf, stop);
-      table.expansions += field.expansions;
-      if (field.outcome != PlanOutcome::kFound) {
-        table.outcome = field.outcome;
+      int64_t expansions = 0;
+      const PlanOutcome outcome = search.Run(sources[i], destinations, kInf, stop, &expansions);
+      table.expansions += expansions;
+      if (outcome != PlanOutcome::kFound) {
+        table.outcome = outcome;
         return table;
       }
       for (size_t j = 0; j < destinations.size(); ++j) {
-        const size_t k = grid->Index(destinations[j]);
-        if (!std::isfinite(field.cost[k])) continue;
+        const double c = search.cost(destinations[j]);
+        if (!std::isfinite(c)) continue;
         table.entries[i * table.columns + j] =
-            TableCell{true, field.cost[k], field.length[k]};
+            TableCell{true, c, search.length(destinations[j])};
       }
     }
     return table;

@@ -90,11 +90,52 @@ absl::StatusOr<CostTable> ComputeTable(std::shared_ptr<const Grid> grid,
                                        TableMethod method, const FieldProvider& fields,
                                        const StopCondition& stop);
 
-// Cheapest costs from `source` to every cell, by Dijkstra's algorithm over
-// the cost model's moves, with the length of the path found to each; stops
-// once every cell of `targets` is settled (empty targets: when `max_cost` is
-// passed or the open list is empty). Cells not settled hold +infinity. The
-// building block of the forward table and of isochrones.
+// Dijkstra's algorithm from one source over the cost model's moves, with
+// the length of the path found to each cell: the forward table's search and
+// the isochrone's. The grid is prepared once (a padded table of step
+// factors, so neighbours need no bounds checks) and each Run resets only
+// the cells it touched, so many runs on one grid cost their searches only.
+// Thread-compatible; `grid` must outlive it.
+class ForwardDijkstra {
+ public:
+  ForwardDijkstra(const Grid& grid, const CostParams& cost);
+
+  // Searches from `source` (on the grid, traversable) until every cell of
+  // `targets` is settled (empty targets: until the open list is empty or
+  // its smallest cost exceeds `max_cost`). Returns kFound, or the stop
+  // condition's outcome; `*expansions` gets the cells settled.
+  PlanOutcome Run(Cell source, absl::Span<const Cell> targets, double max_cost,
+                  const StopCondition& stop, int64_t* expansions);
+
+  // After Run: the cheapest cost from the source and the length of the path
+  // found, +infinity for cells the run did not settle.
+  double cost(Cell c) const;
+  double length(Cell c) const;
+
+ private:
+  size_t Padded(Cell c) const {
+    return static_cast<size_t>(c.y + 1) * stride_ + static_cast<size_t>(c.x + 1);
+  }
+
+  const Grid& grid_;
+  const int moves_;
+  size_t stride_ = 0;
+  // Per padded cell: the factor of entering it (0: blocked or outside).
+  std::vector<double> factor_;
+  std::vector<double> dist_;
+  std::vector<double> length_;
+  std::vector<uint8_t> settled_;
+  std::vector<uint8_t> target_;
+  std::vector<uint32_t> touched_;
+  // Padded offsets and lengths of the moves, in kMoves order.
+  int64_t offset_[8] = {};
+  double step_[8] = {};
+  int64_t side_a_[8] = {};
+  int64_t side_b_[8] = {};
+};
+
+// A whole run's costs and lengths, row-major over the grid (+infinity where
+// not settled).
 struct CostField {
   PlanOutcome outcome = PlanOutcome::kFound;
   std::vector<double> cost;
@@ -103,7 +144,7 @@ struct CostField {
 };
 CostField DijkstraFrom(const Grid& grid, const CostParams& cost, Cell source,
                        absl::Span<const Cell> targets, double max_cost,
-                       const StopCondition& stop, int64_t expansions_before = 0);
+                       const StopCondition& stop);
 
 }  // namespace pathd
 

@@ -6,8 +6,8 @@
 // (as a cold server cache builds them) and again with every field cached
 // (as a repeated table finds them); forward tables search per source.
 //
-//   table_bench --movingai_dir=../shared/benchmarks/movingai \
-//     --maps=street/Berlin_0_512.map,room/32room_000.map --sizes=10,100,500
+//   build/tests/bench/table_bench --movingai_dir=../shared/benchmarks/movingai
+//       --maps=street/Berlin_0_512.map,room/32room_000.map --sizes=10,100,500
 #include <cstdio>
 #include <filesystem>
 #include <map>

@@ -103,7 +103,9 @@ TEST(FleetTable, EntriesEqualAStarForBothMethods) {
           EXPECT_TRUE(Near(e.cost, plan->cost)) << e.cost << " vs " << plan->cost;
           EXPECT_GE(e.length + 1e-9, GridDistance(sources[i], dests[j], cost.connectivity));
           // Without cell costs a path's cost is its length.
-          if (!weighted) EXPECT_TRUE(Near(e.length, e.cost));
+          if (!weighted) {
+            EXPECT_TRUE(Near(e.length, e.cost));
+          }
         }
       }
     }
@@ -175,7 +177,9 @@ void ExpectValidOrder(const CostMatrix& c, TripEnd end, const TripOrder& t) {
   const size_t n = c.size();
   ASSERT_EQ(t.order.size(), n);
   EXPECT_EQ(t.order.front(), 0);
-  if (end == TripEnd::kFixedLast) EXPECT_EQ(t.order.back(), static_cast<int32_t>(n - 1));
+  if (end == TripEnd::kFixedLast) {
+    EXPECT_EQ(t.order.back(), static_cast<int32_t>(n - 1));
+  }
   std::vector<int32_t> sorted = t.order;
   std::sort(sorted.begin(), sorted.end());
   for (size_t i = 0; i < n; ++i) ASSERT_EQ(sorted[i], static_cast<int32_t>(i));
@@ -292,7 +296,9 @@ TEST(FleetNearest, PolygonFootprintEqualsAScan) {
     const std::optional<NearestCell> got = NearestAllowedCell(grid, target, 1000.0, fits);
     const std::optional<Cell> want = ScanNearest(grid, target, 1000.0, fits);
     ASSERT_EQ(got.has_value(), want.has_value());
-    if (want) EXPECT_EQ(got->cell, *want);
+    if (want) {
+      EXPECT_EQ(got->cell, *want);
+    }
   }
 }
 
