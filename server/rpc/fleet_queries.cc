@@ -72,17 +72,18 @@ absl::StatusOr<std::vector<Cell>> DecodeCells(
 }
 
 // The grid a query plans on: the snapshot's, or its shaped copy from the
-// cache; then no named cell may be inscribed by the radius.
+// cache; then no cell may be inscribed by the radius (errors name
+// `field`[i], or `field` alone for a single unindexed position).
 absl::StatusOr<std::shared_ptr<const Grid>> PlanningGridFor(
     InflationCache& inflation, const FleetQuery& q, const std::vector<Cell>& cells,
-    const std::string& field) {
+    const std::string& field, bool indexed = true) {
   const GridShape shape = PlanningShape(q.query());
   if (!shape.shaped()) return q.decoded.snapshot->grid;
   PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> grid,
                          inflation.Get(*q.decoded.snapshot, shape));
   if (q.query().robot_radius_cells > 0.0) {
     for (size_t i = 0; i < cells.size(); ++i) {
-      const std::string what = absl::StrFormat("%s[%d]", field, i);
+      const std::string what = indexed ? absl::StrFormat("%s[%d]", field, i) : field;
       PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(q.stored(), *grid,
                                                  q.query().robot_radius_cells,
                                                  {{cells[i], what}}));
@@ -148,13 +149,14 @@ absl::StatusOr<CostTable> RunTable(InflationCache& inflation, IncrementalCache& 
                                    const std::string& map, const FleetQuery& q,
                                    const std::vector<Cell>& sources,
                                    const std::vector<Cell>& destinations, TableMethod method,
-                                   const StopCondition& stop, uint64_t* map_version) {
-  std::vector<Cell> all = sources;
-  all.insert(all.end(), destinations.begin(), destinations.end());
+                                   const StopCondition& stop, uint64_t* map_version,
+                                   const char* source_field = "sources",
+                                   const char* destination_field = "destinations") {
   PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> grid,
-                         PlanningGridFor(inflation, q, sources, "sources"));
-  if (q.query().robot_radius_cells > 0.0) {
-    PATHD_RETURN_IF_ERROR(PlanningGridFor(inflation, q, destinations, "destinations").status());
+                         PlanningGridFor(inflation, q, sources, source_field));
+  if (q.query().robot_radius_cells > 0.0 && destinations.data() != sources.data()) {
+    PATHD_RETURN_IF_ERROR(
+        PlanningGridFor(inflation, q, destinations, destination_field).status());
   }
   *map_version = q.decoded.snapshot->version;
   const PlanQuery& query = q.query();
@@ -394,7 +396,8 @@ absl::Status AnswerTrip(TripCall& call, InflationCache& inflation, IncrementalCa
   uint64_t version = 0;
   PATHD_ASSIGN_OR_RETURN(const CostTable table,
                          RunTable(inflation, cache, call.request->map(), q, call.stops,
-                                  call.stops, TableMethod::kAuto, stop, &version));
+                                  call.stops, TableMethod::kAuto, stop, &version,
+                                  "waypoints", "waypoints"));
   if (table.outcome != PlanOutcome::kFound) {
     return StoppedStatus(table.outcome, "trip's table", q.query().max_expansions,
                          q.decoded.expansion_limit_source);
@@ -523,7 +526,8 @@ absl::Status AnswerIsochrone(IsochroneCall& call, InflationCache& inflation,
                              int64_t max_message_bytes) {
   const FleetQuery& q = *call.q;
   PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> grid,
-                         PlanningGridFor(inflation, q, {call.start}, "start"));
+                         PlanningGridFor(inflation, q, {call.start}, "start",
+                                         /*indexed=*/false));
   const StopCondition stop(call.deadline, &call.cancelled, q.query().max_expansions);
   const Isochrone iso =
       ComputeIsochrone(*grid, q.query().request.cost, call.start, call.budget_cells, stop);

@@ -139,6 +139,18 @@ void BadInputTest::AddFleetCases(std::vector<Case>& cases) {
            "budget_m or budget_cells is required");
   iso_case("start blocked", [](I& r) { *r.mutable_start() = CellPos(5, 5); },
            StatusCode::INVALID_ARGUMENT, "start (5, 5) is on a blocked cell");
+  iso_case("start inscribed by the robot radius",
+           [](I& r) {
+             *r.mutable_start() = CellPos(4, 4);
+             r.mutable_options()->set_robot_radius_cells(1.5);
+           },
+           StatusCode::INVALID_ARGUMENT, "start (4, 4) is within the robot radius");
+  trip_case("waypoint inscribed by the robot radius",
+            [](R& r) {
+              *r.mutable_waypoints(2) = CellPos(4, 4);
+              r.mutable_options()->set_robot_radius_cells(1.5);
+            },
+            StatusCode::INVALID_ARGUMENT, "waypoints[2] (4, 4) is within the robot radius");
   iso_case("start off the map", [](I& r) { *r.mutable_start() = CellPos(-4, 1); },
            StatusCode::INVALID_ARGUMENT, "start");
 
