@@ -92,7 +92,8 @@ test-tsan: setup-test
 # 10 scenarios a map and leaves out the structures whose builds dominate it
 # (the visibility graph, 13 s on one maze uninstrumented, and the per-goal
 # shortest path maps); geometric_planners_test runs every geometric planner
-# under the sanitizers on its thousands of small maps.
+# under the sanitizers on its thousands of small maps. The crash test kills
+# pathd 6 + 20 times instead of 12 + 40 (still at every checkpoint step).
 ASAN_BUILD_DIR ?= build-asan
 ASAN_CONFORMANCE_STRIDE ?= 50
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1:abort_on_error=1 \
@@ -100,7 +101,8 @@ ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE) \
   PATHD_GEOMETRIC_SCENARIOS=10 PATHD_GEOMETRIC_PLANNERS=navmesh,minimal_construct \
-  PATHD_FLEET_CASES=8
+  PATHD_FLEET_CASES=8 \
+  PATHD_CRASH_KILLS=6 PATHD_CRASH_CHECKPOINT_KILLS=20
 
 test-asan: setup-test
 	@$(CMAKE_CONFIGURE) -B $(ASAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_ASAN=ON >/dev/null

@@ -600,6 +600,9 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
     response->set_reason(
         absl::StrFormat("%s (%s)", response->reason(), expansion_limit_source));
   }
+  if (answer.footprint_collision >= 0) {
+    response->set_footprint_collision(answer.footprint_collision);
+  }
   response->set_robot_radius_cells(query.robot_radius_cells);
   response->set_robot_radius_m(query.robot_radius_cells * grid.resolution());
   response->set_map_version(answer.source.map_version);

@@ -169,6 +169,47 @@ absl::StatusOr<std::optional<Footprint>> FootprintFromOptions(const v1::PlanOpti
   return *std::move(footprint);
 }
 
+namespace {
+
+// The robot's checker: the footprint, else a disc of the robot radius, else
+// a point-like disc checked with 4 subcells (so one-cell corridors stay
+// open).
+absl::StatusOr<std::shared_ptr<const FootprintChecker>> RobotChecker(
+    const std::optional<Footprint>& footprint, double robot_radius_cells) {
+  FootprintCheckerOptions checker{.headings = kHeadingBins};
+  Footprint shape = footprint.has_value() ? *footprint : *Footprint::Circle(0.05);
+  if (!footprint.has_value()) {
+    if (robot_radius_cells > 0.0) {
+      shape = *Footprint::Circle(robot_radius_cells);
+    } else {
+      checker.subcells = 4;
+    }
+  }
+  return SharedFootprintChecker(shape, checker);
+}
+
+// options.min_turning_radius_m/_cells (set) in cells, validated.
+absl::StatusOr<double> TurningRadiusCells(const v1::PlanOptions& options, const Grid& grid) {
+  const bool metres = options.min_turning_radius_case() ==
+                      v1::PlanOptions::MinTurningRadiusCase::kMinTurningRadiusM;
+  double radius = metres ? options.min_turning_radius_m() : options.min_turning_radius_cells();
+  if (!std::isfinite(radius) || radius <= 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("options.min_turning_radius_%s %s must be finite and > 0",
+                        metres ? "m" : "cells", Num(radius)));
+  }
+  if (metres) radius /= grid.resolution();
+  const double reach = std::hypot(grid.width(), grid.height());
+  if (radius > reach) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.min_turning_radius is %s cells, more than the map's diagonal (%s cells)",
+        Num(radius), Num(reach)));
+  }
+  return radius;
+}
+
+}  // namespace
+
 absl::Status DecodeKinematics(const WireQuery& wire, const Grid& grid, PlanQuery* query) {
   const v1::PlanOptions& options = *wire.options;
   PATHD_ASSIGN_OR_RETURN(const std::optional<Footprint> footprint,
@@ -179,6 +220,16 @@ absl::Status DecodeKinematics(const WireQuery& wire, const Grid& grid, PlanQuery
     // as Nav2's costmap inflates by it.
     if (footprint.has_value() && query->robot_radius_cells == 0.0) {
       query->robot_radius_cells = footprint->inscribed_radius();
+    }
+    if (!options.smooth()) return absl::OkStatus();
+    // options.smooth = true: the path also as smoothed poses for the robot
+    // (the footprint, else the radius's disc, else a point), checked on the
+    // map as stored.
+    PATHD_ASSIGN_OR_RETURN(query->smooth_for, RobotChecker(footprint, query->robot_radius_cells));
+    if (options.min_turning_radius_case() !=
+        v1::PlanOptions::MinTurningRadiusCase::MIN_TURNING_RADIUS_NOT_SET) {
+      PATHD_ASSIGN_OR_RETURN(query->smooth_min_turning_radius_cells,
+                             TurningRadiusCells(options, grid));
     }
     return absl::OkStatus();
   }
@@ -210,37 +261,17 @@ absl::Status DecodeKinematics(const WireQuery& wire, const Grid& grid, PlanQuery
   // the grid planners' blocked-goal substitute.
   query->goal_tolerance_cells = 0.0;
 
-  FootprintCheckerOptions checker{.headings = kHeadingBins};
-  Footprint shape = footprint.has_value() ? *footprint : *Footprint::Circle(0.05);
-  if (!footprint.has_value()) {
-    if (query->robot_radius_cells > 0.0) {
-      shape = *Footprint::Circle(query->robot_radius_cells);
-    } else {
-      checker.subcells = 4;
-    }
-  }
-  // The footprint does what the radius's inflation does for grid planners.
+  PATHD_ASSIGN_OR_RETURN(kinematic->footprint, RobotChecker(footprint, query->robot_radius_cells));
+  // The footprint does what the radius's inflation does for grid planners;
+  // the inflation costs still decay from its inscribed radius, as Nav2's.
   query->robot_radius_cells = 0.0;
-  PATHD_ASSIGN_OR_RETURN(kinematic->footprint, SharedFootprintChecker(shape, checker));
+  query->inflation_inscribed_cells = kinematic->footprint->footprint().inscribed_radius();
 
   PATHD_ASSIGN_OR_RETURN(kinematic->motion, MotionFromProto(options.motion_model()));
-  using Radius = v1::PlanOptions::MinTurningRadiusCase;
   double radius = std::max(kDefaultTurningRadiusM / grid.resolution(), 1.0);
-  if (options.min_turning_radius_case() != Radius::MIN_TURNING_RADIUS_NOT_SET) {
-    const bool metres = options.min_turning_radius_case() == Radius::kMinTurningRadiusM;
-    radius = metres ? options.min_turning_radius_m() : options.min_turning_radius_cells();
-    if (!std::isfinite(radius) || radius <= 0.0) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("options.min_turning_radius_%s %s must be finite and > 0",
-                          metres ? "m" : "cells", Num(radius)));
-    }
-    if (metres) radius /= grid.resolution();
-    const double reach = std::hypot(grid.width(), grid.height());
-    if (radius > reach) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "options.min_turning_radius is %s cells, more than the map's diagonal (%s cells)",
-          Num(radius), Num(reach)));
-    }
+  if (options.min_turning_radius_case() !=
+      v1::PlanOptions::MinTurningRadiusCase::MIN_TURNING_RADIUS_NOT_SET) {
+    PATHD_ASSIGN_OR_RETURN(radius, TurningRadiusCells(options, grid));
   }
   kinematic->min_turning_radius_cells = radius;
   const v1::KinematicPenalties& p = options.penalties();

@@ -262,7 +262,7 @@ constexpr absl::string_view kBatchFlags[] = {
     "robot_radius_cells", "min_clearance",
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
-    "non_straight_penalty", "cost_penalty", "goal_yaw_tolerance", "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "non_straight_penalty", "cost_penalty", "goal_yaw_tolerance", "lattice", "no_smooth", "smooth", "inflation_radius", "inflation_radius_cells",
     "cost_scaling_factor"};
 
 const Command kBatchCommand = {

@@ -271,7 +271,11 @@ absl::Status SetRobotOptions(const RobotOptions& robot, v1::PlanRequest* request
   if (robot.cost_penalty) penalties->set_cost(*robot.cost_penalty);
   if (robot.goal_yaw_tolerance) options->set_goal_yaw_tolerance(*robot.goal_yaw_tolerance);
   options->set_lattice(robot.lattice);
+  if (robot.no_smooth && robot.smooth) {
+    return absl::InvalidArgumentError("--smooth and --no_smooth contradict each other; give one");
+  }
   if (robot.no_smooth) options->set_smooth(false);
+  if (robot.smooth) options->set_smooth(true);
   if (robot.start_yaw) SetYaw(*robot.start_yaw, request->mutable_start());
   if (robot.goal_yaw) SetYaw(*robot.goal_yaw, request->mutable_goal());
   return absl::OkStatus();

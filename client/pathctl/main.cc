@@ -110,6 +110,9 @@ ABSL_FLAG(std::string, lattice, "",
           "plan, batch, render: state_lattice's control set (a shipped name or a "
           "file on the server)");
 ABSL_FLAG(bool, no_smooth, false, "plan, batch, render: do not smooth kinematic paths");
+ABSL_FLAG(bool, smooth, false,
+          "plan, batch, render: also return a grid or geometric planner's path as poses "
+          "smoothed for the robot (footprint or radius)");
 ABSL_FLAG(std::string, via, "",
           "plan: via points X,Y[;X,Y...] visited in order before the goal");
 ABSL_FLAG(bool, allow_partial, false,
@@ -308,6 +311,7 @@ int main(int argc, char** argv) {
   robot.goal_yaw_tolerance = absl::GetFlag(FLAGS_goal_yaw_tolerance);
   robot.lattice = absl::GetFlag(FLAGS_lattice);
   robot.no_smooth = absl::GetFlag(FLAGS_no_smooth);
+  robot.smooth = absl::GetFlag(FLAGS_smooth);
   plan.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
   plan.pf_attractive = absl::GetFlag(FLAGS_pf_attractive);
   plan.pf_attractive_gain = absl::GetFlag(FLAGS_pf_attractive_gain);

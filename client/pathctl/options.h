@@ -75,6 +75,7 @@ struct RobotOptions {
   std::optional<double> goal_yaw_tolerance;
   std::string lattice;
   bool no_smooth = false;
+  bool smooth = false;
 };
 
 // maps create / import / get / set / rect / watch.

@@ -311,6 +311,13 @@ int Plan(CommandEnv& env, Args args) {
           << " vertices, cell coordinates): " << absl::StrJoin(points, " ") << "\n";
     }
     const bool kinematic = IsKinematicPlanner(response->planner());
+    if (!kinematic && request.options().smooth() && response->poses_size() > 0) {
+      out << absl::StrFormat("poses:       %d, smoothed for the robot%s\n", response->poses_size(),
+                             response->has_footprint_collision()
+                                 ? absl::StrFormat("; the footprint collides at pose %d",
+                                                   response->footprint_collision())
+                                 : "; the footprint is free at every pose");
+    }
     if (kinematic && response->poses_size() > 0) {
       int cusps = 0;
       for (int i = 1; i < response->reverse_size(); ++i) {
@@ -352,7 +359,7 @@ constexpr absl::string_view kPlanFlagNames[] = {
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
-    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "lattice", "no_smooth", "smooth", "inflation_radius", "inflation_radius_cells",
     "cost_scaling_factor"};
 
 }  // namespace
@@ -373,7 +380,7 @@ const Command kPlanCommand = {
                 " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"
                 " [--motion_model dubins|reeds_shepp|differential|omnidirectional]\n"
                 " [--start_yaw R] [--goal_yaw R] [--goal_yaw_tolerance R]\n"
-                " [--reverse_penalty P] [--lattice L] [--no_smooth]\n"
+                " [--reverse_penalty P] [--lattice L] [--no_smooth] [--smooth]\n"
                 " [--via X,Y[;X,Y...] [--allow_partial]] [--expansions]\n"
                 " [--progress]",
     .help = "Plans a path on map NAME from cell (SX, SY) to (GX, GY) (world metres\n"

@@ -134,6 +134,8 @@ absl::StatusOr<double> GridRobotRadius(const Grid& stored, const v1::PlanOptions
                : options.robot_radius_cells();
   }
   const v1::Footprint& f = options.footprint();
+  if (f.radius_m() > 0.0) return f.radius_m() / stored.resolution();
+  if (f.radius_cells() > 0.0) return f.radius_cells();
   std::vector<CellPoint> polygon;
   for (const v1::WorldPoint& p : f.polygon_m()) {
     polygon.push_back(CellPoint{p.x() / stored.resolution(), p.y() / stored.resolution()});
@@ -150,11 +152,13 @@ absl::StatusOr<double> GridRobotRadius(const Grid& stored, const v1::PlanOptions
 // (server/convert.cc: metres / resolution, capped at the map's diagonal;
 // the cost scaling factor per metre times the resolution, unset 10).
 // `robot_radius_cells` is the radius the plan applied (PlanResponse), or
-// GridRobotRadius without a plan. Drawn here rather than fetched: the API
+// GridRobotRadius without a plan; `cost_inscribed_cells` the radius the
+// inflation costs decay from when larger (a kinematic plan's footprint,
+// GridShape::cost_inscribed_cells). Drawn here rather than fetched: the API
 // has no call that returns a shaped grid, and the same function on the same
 // cells gives the same bytes.
 absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& options,
-                                    double robot_radius_cells) {
+                                    double robot_radius_cells, double cost_inscribed_cells) {
   const double diagonal = std::hypot(stored.width(), stored.height());
   auto cells = [&](bool metres, double value) {
     return std::min(metres ? value / stored.resolution() : value, diagonal);
@@ -172,7 +176,8 @@ absl::StatusOr<Grid> PlanningGridOf(const Grid& stored, const v1::PlanOptions& o
   const double factor = options.has_cost_scaling_factor() ? options.cost_scaling_factor()
                                                           : kDefaultCostScalingFactor;
   const GridShape shape = GridShape::Of(robot, inflation, factor * stored.resolution(),
-                                        clearance, options.unknown_is_free());
+                                        clearance, options.unknown_is_free(),
+                                        std::min(cost_inscribed_cells, diagonal));
   if (!shape.shaped()) return stored;
   return ShapeGrid(stored, shape);
 }
@@ -234,17 +239,21 @@ int Render(CommandEnv& env, Args args) {
   int code = kExitOk;
   std::string summary;
   std::optional<double> applied_radius;
+  bool kinematic_plan = false;
   if (request.has_value()) {
     absl::StatusOr<v1::PlanResponse> response = env.client().Plan(*request);
     if (!response.ok()) return env.Fail(response.status());
     applied_radius = response->robot_radius_cells();
+    kinematic_plan = IsKinematicPlanner(response->planner());
     for (const v1::Cell& c : response->path())
       overlay.path.push_back(CoreCell(c));
     for (const v1::CellPoint& p : response->polyline())
       overlay.polyline.push_back(CellPoint{p.x(), p.y()});
     const bool kinematic = IsKinematicPlanner(response->planner());
-    if (kinematic) {
-      // The poses are the path: drawn through their exact points.
+    if (kinematic || request->options().smooth()) {
+      // The poses are the path (a kinematic planner's, or a grid path
+      // smoothed for the robot): drawn through their exact points.
+      overlay.polyline.clear();
       for (const v1::CellPose& p : response->poses())
         overlay.polyline.push_back(CellPoint{p.x(), p.y()});
     }
@@ -279,12 +288,19 @@ int Render(CommandEnv& env, Args args) {
   }
   // After the plan, so a bad option is reported by the server first, with
   // its field's name.
-  if (!applied_radius.has_value()) {
+  double cost_inscribed = 0.0;
+  if (!applied_radius.has_value() || kinematic_plan) {
     absl::StatusOr<double> radius = GridRobotRadius(*grid, cost_options);
     if (!radius.ok()) return env.Usage(radius.status().message());
-    applied_radius = *radius;
+    // A kinematic plan applies no radius; its costs decay from the
+    // footprint's inscribed one, as the server's do.
+    if (kinematic_plan) {
+      cost_inscribed = *radius;
+    } else {
+      applied_radius = *radius;
+    }
   }
-  grid = PlanningGridOf(*grid, cost_options, *applied_radius);
+  grid = PlanningGridOf(*grid, cost_options, *applied_radius, cost_inscribed);
   if (!grid.ok()) return env.Usage(grid.status().message());
   if (!options.overlay.empty()) {
     absl::StatusOr<GeometricStructure> structure =
@@ -325,7 +341,7 @@ constexpr absl::string_view kRenderFlags[] = {
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "start_yaw", "goal_yaw", "goal_yaw_tolerance",
-    "lattice", "no_smooth", "inflation_radius", "inflation_radius_cells",
+    "lattice", "no_smooth", "smooth", "inflation_radius", "inflation_radius_cells",
     "cost_scaling_factor"};
 
 }  // namespace

@@ -224,6 +224,8 @@ robot options (plan, batch, render):
   --cost_penalty P     Nav2 Smac's penalties (defaults 2, 0, 1.2, 2)
   --lattice NAME|FILE  state_lattice's control set
   --no_smooth          return kinematic paths unsmoothed
+  --smooth             grid/geometric planners: also return the path as poses
+                       smoothed for the footprint (or radius)
 
 cost options (plan, navigate, cost-to-go, check):
   --connectivity N     4 or 8 (default 8)

@@ -58,9 +58,9 @@ void ShapeInPlace(const GridShape& shape, EuclideanDistanceField& transform,
   }
   InflateInPlace(shape.robot_radius_cells, transform, blocked, grid);
   if (shape.has_inflation_cost()) {
-    ApplyInflationCost(shape.robot_radius_cells, shape.inflation_radius_cells,
-                       shape.cost_scaling_per_cell, shape.unknown_is_free, transform,
-                       area, grid);
+    ApplyInflationCost(shape.robot_radius_cells, shape.decay_radius_cells(),
+                       shape.inflation_radius_cells, shape.cost_scaling_per_cell,
+                       shape.unknown_is_free, transform, area, grid);
   }
   if (shape.min_clearance_cells > 0.0) {
     ApplyClearanceCost(shape.min_clearance_cells, shape.unknown_is_free, transform, area,
@@ -145,8 +145,12 @@ absl::Status CheckGridShape(const GridShape& shape) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "robot radius %g cells must be finite and >= 0", shape.robot_radius_cells));
   }
+  if (!std::isfinite(shape.cost_inscribed_cells) || shape.cost_inscribed_cells < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "inscribed radius %g cells must be finite and >= 0", shape.cost_inscribed_cells));
+  }
   if (shape.has_inflation_cost()) {
-    PATHD_RETURN_IF_ERROR(CheckInflationCost(shape.robot_radius_cells,
+    PATHD_RETURN_IF_ERROR(CheckInflationCost(shape.decay_radius_cells(),
                                              shape.inflation_radius_cells,
                                              shape.cost_scaling_per_cell));
   }
@@ -169,7 +173,8 @@ double ShapeReach(const GridShape& shape) {
   const double r = shape.robot_radius_cells;
   double reach = r;
   if (shape.has_inflation_cost()) {
-    reach = std::max(reach, InflationCostReach(r, shape.inflation_radius_cells,
+    reach = std::max(reach, InflationCostReach(shape.decay_radius_cells(),
+                                               shape.inflation_radius_cells,
                                                shape.cost_scaling_per_cell));
   }
   // A cell the radius blocks or frees moves the clearance of cells up to the

@@ -6,6 +6,8 @@
 #ifndef PATHD_CORE_MAP_INFLATION_H_
 #define PATHD_CORE_MAP_INFLATION_H_
 
+#include <algorithm>
+
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/types/span.h"
@@ -35,6 +37,15 @@ struct GridShape {
   // Nav2's cost_scaling_factor (per metre) times the map's resolution
   // (metres per cell): the decay per cell. Kept 0 without inflation costs.
   double cost_scaling_per_cell = 0.0;
+  // > robot_radius_cells: the inflation costs decay from this radius, as
+  // Nav2's do from the inscribed radius, but nothing within it is blocked:
+  // cells between the robot radius and it cost 252, the most a traversable
+  // cell costs (the kinematic planners, whose footprint check decides
+  // collisions: the footprint's inscribed radius with a robot radius of 0).
+  // Kept 0 without inflation costs or when not above the robot radius; at
+  // most the inflation radius (a footprint wider than the inflation: every
+  // cell within the inflation radius costs 252, as Nav2's are inscribed).
+  double cost_inscribed_cells = 0.0;
   // 0: no clearance costs.
   double min_clearance_cells = 0.0;
   // Only the inflation and clearance costs read it (an unknown cell
@@ -47,11 +58,20 @@ struct GridShape {
   // requests planning on the same grid have equal shapes.
   static GridShape Of(double robot_radius_cells, double inflation_radius_cells,
                       double cost_scaling_per_cell, double min_clearance_cells,
-                      bool unknown_is_free) {
+                      bool unknown_is_free, double cost_inscribed_cells = 0.0) {
     const bool inflation = inflation_radius_cells != 0.0;
     return GridShape{robot_radius_cells, inflation ? inflation_radius_cells : 0.0,
-                     inflation ? cost_scaling_per_cell : 0.0, min_clearance_cells,
+                     inflation ? cost_scaling_per_cell : 0.0,
+                     inflation && cost_inscribed_cells > robot_radius_cells
+                         ? std::min(cost_inscribed_cells, inflation_radius_cells)
+                         : 0.0,
+                     min_clearance_cells,
                      (inflation || min_clearance_cells > 0.0) && unknown_is_free};
+  }
+  // The radius the inflation costs decay from.
+  double decay_radius_cells() const {
+    return cost_inscribed_cells > robot_radius_cells ? cost_inscribed_cells
+                                                     : robot_radius_cells;
   }
   bool has_inflation_cost() const { return inflation_radius_cells != 0.0; }
   // False: the stored map is the planning grid. (A nonsensical inflation

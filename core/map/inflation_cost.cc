@@ -73,25 +73,27 @@ absl::Status ApplyInflationCost(double robot_radius_cells, double inflation_radi
     return s;
   }
   EuclideanDistanceField transform;
-  ApplyInflationCost(robot_radius_cells, inflation_radius_cells, cost_scaling_per_cell,
-                     unknown_is_free, transform, CellRect::Of(*grid), grid);
+  ApplyInflationCost(robot_radius_cells, robot_radius_cells, inflation_radius_cells,
+                     cost_scaling_per_cell, unknown_is_free, transform, CellRect::Of(*grid),
+                     grid);
   return absl::OkStatus();
 }
 
-void ApplyInflationCost(double robot_radius_cells, double inflation_radius_cells,
-                        double cost_scaling_per_cell, bool unknown_is_free,
-                        EuclideanDistanceField& transform, const CellRect& area,
-                        Grid* grid) {
+void ApplyInflationCost(double robot_radius_cells, double decay_radius_cells,
+                        double inflation_radius_cells, double cost_scaling_per_cell,
+                        bool unknown_is_free, EuclideanDistanceField& transform,
+                        const CellRect& area, Grid* grid) {
   if (grid->size() == 0) return;
   // Squared distances in (inner, outer] get a cost: beyond the robot radius
   // (exactly: d2 <= inner is within it) and within the reach.
   const int64_t inner = SquaredRadiusBound(robot_radius_cells);
   const int64_t outer = SquaredRadiusBound(InflationCostReach(
-      robot_radius_cells, inflation_radius_cells, cost_scaling_per_cell));
+      decay_radius_cells, inflation_radius_cells, cost_scaling_per_cell));
   if (outer <= inner) return;
   auto cost_at = [&](int64_t d2) {
-    return DecayCost(std::sqrt(static_cast<double>(d2)), robot_radius_cells,
-                     cost_scaling_per_cell);
+    const double d = std::sqrt(static_cast<double>(d2));
+    if (d <= decay_radius_cells) return static_cast<uint8_t>(kInscribedCost - 1);
+    return DecayCost(d, decay_radius_cells, cost_scaling_per_cell);
   };
   std::vector<uint8_t> table;
   if (outer - inner <= kMaxTable) {

@@ -70,12 +70,15 @@ absl::Status ApplyInflationCost(double robot_radius_cells, double inflation_radi
                                 Grid* grid);
 // The same with the caller's transform, reused across calls (ShapeGrid's
 // steps share one), writing only the cells of `area` (a rectangle of the
-// grid; distances still count every lethal cell of the grid). Precondition:
-// CheckInflationCost is OK.
-void ApplyInflationCost(double robot_radius_cells, double inflation_radius_cells,
-                        double cost_scaling_per_cell, bool unknown_is_free,
-                        EuclideanDistanceField& transform, const CellRect& area,
-                        Grid* grid);
+// grid; distances still count every lethal cell of the grid), with the
+// costs decaying from `decay_radius_cells` (>= robot_radius_cells; cells
+// between the two cost 252, the most a traversable cell costs: a footprint
+// checked cell by cell decides collisions there, GridShape). Precondition:
+// CheckInflationCost(decay_radius_cells, ...) is OK.
+void ApplyInflationCost(double robot_radius_cells, double decay_radius_cells,
+                        double inflation_radius_cells, double cost_scaling_per_cell,
+                        bool unknown_is_free, EuclideanDistanceField& transform,
+                        const CellRect& area, Grid* grid);
 
 }  // namespace pathd
 

@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/kinematics/smoother.h"
 #include "core/map/clearance.h"
 #include "core/map/cost_model.h"
 #include "core/map/inflation.h"
@@ -106,10 +107,41 @@ void ReportClearance(const PlanQuery& query, PlanAnswer* answer) {
                     query.request.cost.unknown_is_free);
 }
 
+// PlanQuery::smooth_for: the found path's points (the polyline, or the cell
+// centres) as smoothed poses on the stored map, and the first pose where the
+// footprint does not fit. Skipped when a stateful search answered on a newer
+// version than `stored` (its poses would be checked on the wrong map).
+absl::Status SmoothForRobot(const PlanQuery& query, const PlanSnapshot& snapshot,
+                            PlanAnswer* answer) {
+  PlanResult& result = answer->result;
+  if (query.smooth_for == nullptr || !result.found() || !result.poses.empty() ||
+      answer->source.map_version != snapshot.version) {
+    return absl::OkStatus();
+  }
+  std::vector<CellPoint> points = result.polyline;
+  if (points.empty()) {
+    points.reserve(result.path.size());
+    for (const Cell& c : result.path) points.push_back(CellPoint{c.x + 0.5, c.y + 0.5});
+  }
+  SmootherOptions options;
+  options.min_turning_radius = query.smooth_min_turning_radius_cells;
+  PATHD_ASSIGN_OR_RETURN(result.poses,
+                         SmoothPolyline(*snapshot.grid, points, query.smooth_for,
+                                        query.request.cost.unknown_is_free, options));
+  for (size_t i = 0; i < result.poses.size(); ++i) {
+    if (query.smooth_for->CollidesExactly(*snapshot.grid, result.poses[i].pose,
+                                          query.request.cost.unknown_is_free)) {
+      answer->footprint_collision = static_cast<int64_t>(i);
+      break;
+    }
+  }
+  return absl::OkStatus();
+}
+
 GridShape PlanningShape(const PlanQuery& query) {
   return GridShape::Of(query.robot_radius_cells, query.inflation_radius_cells,
                        query.cost_scaling_per_cell, query.min_clearance_cells,
-                       query.request.cost.unknown_is_free);
+                       query.request.cost.unknown_is_free, query.inflation_inscribed_cells);
 }
 
 absl::Status CheckCostShaping(const PlanQuery& query) {
@@ -148,16 +180,10 @@ bool IsKinematic(std::string_view planner) {
 }
 
 // The rules of a kinematic planner's query: it plans between exact poses for
-// a footprint, so the grid planners' goal substitution, radius, via legs and
+// a footprint, so the grid planners' goal substitution, radius and
 // simplification do not apply (the decoder folds the radius into the
 // footprint and the tolerance into the kinematic query).
 absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
-  if (!query->via.empty()) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "via: planner %s plans between poses and does not plan through via "
-        "points; plan each leg as its own request",
-        query->planner));
-  }
   if (query->simplify) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "options.simplify: planner %s returns motions the robot can drive; "
@@ -185,7 +211,10 @@ absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
         query->planner));
   }
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, query->request));
-  return CheckCostShaping(*query);
+  PATHD_RETURN_IF_ERROR(CheckCostShaping(*query));
+  // Each via leg ends at its cell's centre with any heading and the next
+  // starts where it ended (PlanThrough); the planner names a colliding one.
+  return ValidateVia(stored, query->via, query->request.cost);
 }
 
 }  // namespace
@@ -281,6 +310,7 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
     answer.leg_end_indices = std::move(through.leg_end_indices);
     answer.failed_leg = through.failed_leg;
     ReportClearance(query, &answer);
+    PATHD_RETURN_IF_ERROR(SmoothForRobot(query, snapshot, &answer));
     return answer;
   }
   if (engine.stateful != nullptr) {
@@ -295,6 +325,7 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
   }
   SetSingleLeg(&answer);
   ReportClearance(query, &answer);
+  PATHD_RETURN_IF_ERROR(SmoothForRobot(query, snapshot, &answer));
   return answer;
 }
 

@@ -16,6 +16,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/incremental/incremental_search.h"
+#include "core/kinematics/footprint.h"
 #include "core/map/grid.h"
 #include "core/map/inflation.h"
 #include "core/search/plan_types.h"
@@ -61,12 +62,23 @@ struct PlanQuery {
   // (CheckPlanQuery).
   double inflation_radius_cells = 0.0;
   double cost_scaling_per_cell = 0.0;
+  // Kinematic planners: the footprint's inscribed radius, from which the
+  // inflation costs decay without blocking anything (GridShape::
+  // cost_inscribed_cells), as Nav2's decay from the inscribed radius.
+  double inflation_inscribed_cells = 0.0;
   // > 0: cells closer than this (cells) to an obstacle of the (inflated) map
   // cost more (core/map/clearance.h), and the answer reports the path's
   // clearance. Grid planners only (CheckPlanQuery).
   double min_clearance_cells = 0.0;
   // Simplify the path (each leg's, for via plans).
   bool simplify = false;
+  // Grid and geometric planners: also answer the path as poses for this
+  // robot, smoothed (SmoothPolyline, core/kinematics/smoother.h) on the map
+  // as stored, curving at most 1 / smooth_min_turning_radius_cells where
+  // that is > 0 and the polyline allows it; null: no poses (kinematic
+  // planners smooth their own, KinematicQuery::smooth).
+  std::shared_ptr<const FootprintChecker> smooth_for;
+  double smooth_min_turning_radius_cells = 0.0;
   // Expansion budget of the whole query (every leg); 0 = none. The caller
   // puts it into the StopCondition it passes.
   int64_t max_expansions = 0;
@@ -109,6 +121,12 @@ struct PlanAnswer {
   // shortest path map) rather than result.cost_to_go: that field, row-major
   // over source.grid, handed out as is (neither copied nor widened here).
   std::shared_ptr<const ShortestPathMap> cost_to_go_field;
+  // PlanQuery::smooth_for: the index into result.poses of the first pose at
+  // which the footprint overlaps an obstacle or leaves the map (grid
+  // planners plan for the footprint's inscribed disc, so a longer robot may
+  // not fit where its centre does; smoothing never adds such a pose), -1
+  // when every pose is free or nothing was smoothed.
+  int64_t footprint_collision = -1;
 };
 
 // Fills the leg fields of a plan without via points: a plan with one leg

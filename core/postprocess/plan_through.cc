@@ -1,6 +1,8 @@
 // PlanThrough: legs planned one after another on one grid, joined.
 #include "core/postprocess/plan_through.h"
 
+#include <memory>
+#include <numbers>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -46,6 +48,27 @@ std::string LegName(int32_t leg, int32_t via_count) {
                          point(leg));
 }
 
+namespace {
+
+// A kinematic leg's query: the first starts at the request's start pose,
+// every later one at the pose where the previous leg ended (so the robot
+// drives on without turning on the spot); a via leg ends at the via cell's
+// centre with any heading, the last at the request's goal pose.
+std::shared_ptr<const KinematicQuery> KinematicLeg(const KinematicQuery& query,
+                                                   const PlanResult& so_far,
+                                                   const std::vector<Cell>& goals,
+                                                   size_t leg) {
+  auto leg_query = std::make_shared<KinematicQuery>(query);
+  if (!so_far.poses.empty()) leg_query->start = so_far.poses.back().pose;
+  if (leg + 1 < goals.size()) {
+    leg_query->goal = Pose::AtCellCenter(goals[leg]);
+    leg_query->goal_tolerance_yaw = std::numbers::pi;
+  }
+  return leg_query;
+}
+
+}  // namespace
+
 absl::StatusOr<ThroughResult> PlanThrough(
     const Planner& planner, const Grid& grid, const PlanRequest& request,
     const std::vector<Cell>& via, const StopCondition& stop,
@@ -67,6 +90,9 @@ absl::StatusOr<ThroughResult> PlanThrough(
     PlanRequest leg_request = request;
     leg_request.start = plan.path.empty() ? request.start : plan.path.back();
     leg_request.goal = goals[leg];
+    if (request.kinematic != nullptr) {
+      leg_request.kinematic = KinematicLeg(*request.kinematic, plan, goals, leg);
+    }
     PlanResult result;
     if (budget > 0 && plan.expansions >= budget) {
       // An exhausted budget would read as "no budget" (0) to the next leg.
@@ -74,8 +100,18 @@ absl::StatusOr<ThroughResult> PlanThrough(
     } else {
       const StopCondition leg_stop =
           budget > 0 ? stop.WithMaxExpansions(budget - plan.expansions) : stop;
-      PATHD_ASSIGN_OR_RETURN(
-          result, planner.Plan(grid, leg_request, leg_stop, scratch));
+      absl::StatusOr<PlanResult> planned =
+          planner.Plan(grid, leg_request, leg_stop, scratch);
+      if (!planned.ok()) {
+        // Name the leg when there are several: "goal pose ... collides"
+        // may be about a via point.
+        if (goals.size() == 1) return planned.status();
+        const std::string name =
+            LegName(static_cast<int32_t>(leg), static_cast<int32_t>(via.size()));
+        return absl::Status(planned.status().code(),
+                            absl::StrFormat("%s: %s", name, planned.status().message()));
+      }
+      result = *std::move(planned);
     }
     plan.expansions += result.expansions;
     plan.episodes += result.episodes;

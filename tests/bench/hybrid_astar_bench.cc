@@ -14,7 +14,8 @@
 //    (RRTConnect, RRT*, InformedRRT*, BIT*) through SimpleSetup on a
 //    ReedsSheppStateSpace whose state validity checker is the same
 //    FootprintChecker: time to the first solution and its length, against
-//    hybrid_astar's (unsmoothed, the field from the store).
+//    hybrid_astar's (unsmoothed, the field from the store), and state_lattice's
+//    on the same queries (at --lattice_weight, the server's default).
 // Figures, not assertions.
 #include <algorithm>
 #include <atomic>
@@ -47,6 +48,7 @@
 #include "core/kinematics/obstacle_heuristic.h"
 #include "core/kinematics/vehicle.h"
 #include "core/planners/kinematic/hybrid_astar.h"
+#include "core/planners/kinematic/state_lattice.h"
 #include "core/search/derived.h"
 #include "core/search/stop_condition.h"
 
@@ -60,6 +62,8 @@ ABSL_FLAG(bool, verbose, false, "print every query of (a)");
 ABSL_FLAG(double, analytic_slack, 1.2, "HybridAStarOptions::analytic_slack");
 ABSL_FLAG(double, curve_radii, 2.0, "HybridAStarOptions::curve_heuristic_radii");
 ABSL_FLAG(bool, curve_table, true, "HybridAStarOptions::curve_table");
+ABSL_FLAG(double, lattice_weight, 1.5,
+          "state_lattice's heuristic_weight in (b) (the server's default, 1.5)");
 
 namespace pathd {
 namespace {
@@ -360,15 +364,17 @@ void PartB(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
               "planner the time to its first solution / that solution's length, and the "
               "time until its solution was no longer than hybrid_astar's (%.0f s each)\n\n",
               absl::GetFlag(FLAGS_ompl_queries), absl::GetFlag(FLAGS_ompl_timeout));
-  std::printf("| query | straight line | hybrid_astar ms / length |");
+  std::printf("| query | straight line | hybrid_astar ms / length | state_lattice ms / length |");
   for (const std::string& p : planners) std::printf(" %s first ms / length; as short, ms |", p.c_str());
-  std::printf("\n|---|---|---|");
+  std::printf("\n|---|---|---|---|");
   for (size_t i = 0; i < planners.size(); ++i) std::printf("---|");
   std::printf("\n");
   std::mt19937 rng(absl::GetFlag(FLAGS_seed) + 1000);
   std::map<std::string, Stats> first_ratio, length_ratio, target_ratio;
+  std::map<std::string, Stats> lattice_first_ratio, lattice_length_ratio;
   std::map<std::string, int> solved, reached;
   int hybrid_found = 0;
+  int lattice_found = 0;
   OneVersionStore store(grid);
   for (int i = 0; i < absl::GetFlag(FLAGS_ompl_queries); ++i) {
     KinematicQuery q = Robot(MotionModel::kReedsShepp, checker);
@@ -384,8 +390,21 @@ void PartB(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
     const double hybrid_ms = Ms(absl::Now() - t);
     const bool found = r.ok() && r->found();
     hybrid_found += found;
-    std::printf("| %d | %.0f | %s |", i, std::hypot(q.goal.x - q.start.x, q.goal.y - q.start.y),
-                found ? absl::StrFormat("%.1f / %.0f", hybrid_ms, r->length).c_str() : "none");
+    // state_lattice on the same query, its control set (generated for this
+    // radius) and field made by a first run outside the timing.
+    PlanRequest lattice_request = RequestFor(q, &store);
+    lattice_request.heuristic_weight = absl::GetFlag(FLAGS_lattice_weight);
+    (void)PlanStateLattice(grid, lattice_request, StopCondition::None());
+    const absl::Time tl = absl::Now();
+    auto l = PlanStateLattice(grid, lattice_request, StopCondition::None());
+    const double lattice_ms = Ms(absl::Now() - tl);
+    const bool lattice_ok = l.ok() && l->found();
+    lattice_found += lattice_ok;
+    std::printf("| %d | %.0f | %s | %s |", i,
+                std::hypot(q.goal.x - q.start.x, q.goal.y - q.start.y),
+                found ? absl::StrFormat("%.1f / %.0f", hybrid_ms, r->length).c_str() : "none",
+                lattice_ok ? absl::StrFormat("%.1f / %.0f", lattice_ms, l->length).c_str()
+                           : "none");
     for (const std::string& p : planners) {
       const OmplRun run = RunOmpl(p, grid, *checker, distance, q.start, q.goal,
                                   q.min_turning_radius_cells, found ? r->length : 0.0);
@@ -397,6 +416,10 @@ void PartB(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
       std::printf(" %.1f / %.0f; %s |", run.first_ms, run.first_length,
                   run.target_ms < 0 ? "not within the timeout"
                                     : absl::StrFormat("%.1f", run.target_ms).c_str());
+      if (lattice_ok) {
+        lattice_first_ratio[p].Add(run.first_ms / lattice_ms);
+        lattice_length_ratio[p].Add(run.first_length / l->length);
+      }
       if (!found) continue;
       first_ratio[p].Add(run.first_ms / hybrid_ms);
       length_ratio[p].Add(run.first_length / r->length);
@@ -407,8 +430,9 @@ void PartB(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
     }
     std::printf("\n");
   }
-  std::printf("\nhybrid_astar found %d of %d.\n\n", hybrid_found,
-              absl::GetFlag(FLAGS_ompl_queries));
+  std::printf("\nhybrid_astar found %d of %d, state_lattice (heuristic_weight %g) %d.\n\n",
+              hybrid_found, absl::GetFlag(FLAGS_ompl_queries),
+              absl::GetFlag(FLAGS_lattice_weight), lattice_found);
   std::printf("| OMPL planner | solved | first solution: time / hybrid_astar's (median) | "
               "its length / hybrid_astar's (median) | as short as hybrid_astar's within %.0f s | "
               "then, time / hybrid_astar's (median) |\n|---|---|---|---|---|---|\n",
@@ -419,6 +443,12 @@ void PartB(const Grid& grid, std::shared_ptr<const FootprintChecker> checker,
                 length_ratio[p].Percentile(0.5), reached[p],
                 reached[p] > 0 ? absl::StrFormat("%.0fx", target_ratio[p].Percentile(0.5)).c_str()
                                : "-");
+  }
+  std::printf("\n| OMPL planner | first solution: time / state_lattice's (median) | its length / "
+              "state_lattice's (median) |\n|---|---|---|\n");
+  for (const std::string& p : planners) {
+    std::printf("| %s | %.2fx | %.2f |\n", p.c_str(), lattice_first_ratio[p].Percentile(0.5),
+                lattice_length_ratio[p].Percentile(0.5));
   }
 }
 

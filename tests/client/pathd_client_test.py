@@ -225,6 +225,15 @@ class RealServerTest(unittest.TestCase, PathChecks):
         # A grid planner plans for the footprint's inscribed radius (0.2 m).
         shaped = self.client.plan("poses", start, goal, options=options)
         self.assertAlmostEqual(shaped.raw.robot_radius_m, 0.2)
+        self.assertIsNone(shaped.footprint_collision)
+        # smooth=True: the grid path also as poses smoothed for the robot.
+        smoothed = self.client.plan(
+            "poses", start, goal,
+            options=pathd_client.plan_options(footprint_m=rectangle, smooth=True))
+        self.assertTrue(smoothed.found)
+        self.assertGreater(len(smoothed.poses), len(smoothed.path))
+        self.assertAlmostEqual(smoothed.poses[0].x, 1.5)
+        self.assertAlmostEqual(smoothed.poses[0].y, 3.5)
 
     def test_inflation_costs_are_sent(self):
         self.make_map("inflate")

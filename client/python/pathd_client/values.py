@@ -129,6 +129,9 @@ class PlanResult:
     cost_m: float = 0.0
     length_m: float = 0.0
     frame_id: str = ""
+    # Grid/geometric planners with smooth=True: the index into `poses` of the
+    # first pose where the footprint touches an obstacle (None: it fits).
+    footprint_collision: int | None = None
     raw: planner_service_pb2.PlanResponse = dataclasses.field(
         default=None, repr=False, compare=False)
 
@@ -150,6 +153,8 @@ class PlanResult:
             cost_m=plan.cost_m,
             length_m=plan.length_m,
             frame_id=plan.frame_id,
+            footprint_collision=(plan.footprint_collision
+                                 if plan.HasField("footprint_collision") else None),
             raw=plan)
 
 
@@ -400,7 +405,9 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     state_lattice) check it at every pose with min_turning_radius_m,
     motion_model ("dubins", "reeds_shepp", "differential",
     "omnidirectional"), goal_yaw_tolerance (radians), reverse_penalty,
-    lattice and smooth; the others plan for its inscribed radius.
+    lattice and smooth; the others plan for its inscribed radius, and with
+    smooth=True also return the path as poses smoothed for it
+    (PlanResult.footprint_collision says where it does not fit).
     inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
     grid planners: cells up to inflation_radius_m from a lethal cell, beyond
     the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -

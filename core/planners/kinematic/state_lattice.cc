@@ -20,9 +20,11 @@
 #include "core/kinematics/curves.h"
 #include "core/kinematics/footprint.h"
 #include "core/kinematics/lattice.h"
+#include "core/kinematics/motion_check.h"
 #include "core/kinematics/obstacle_heuristic.h"
 #include "core/kinematics/pose.h"
 #include "core/kinematics/pose_path.h"
+#include "core/kinematics/smoother.h"
 #include "core/kinematics/vehicle.h"
 #include "core/map/cost_model.h"
 #include "core/planners/planners.h"
@@ -208,7 +210,7 @@ Motion Translation(const Pose& from, const Pose& to) {
 
 // The query's checker, two grown copies, the grid and its distance field.
 // One per query, used on its thread.
-struct MotionChecker {
+struct LatticeChecker {
   const Grid* grid = nullptr;
   bool unknown_is_free = false;
   const float* distance = nullptr;
@@ -288,7 +290,7 @@ std::vector<Pose> MotionSamples(const std::vector<Pose>& poses, double reach) {
 // else it must be free with the margin (it becomes a search state). An
 // exact end that is not free with the margin is covered by samples with a
 // quarter of the margin at a quarter-margin step, reaching the pose itself.
-bool MotionFree(const MotionChecker& checker, const std::vector<Pose>& poses, bool begin_proven,
+bool MotionFree(const LatticeChecker& checker, const std::vector<Pose>& poses, bool begin_proven,
                 bool end_exact) {
   const SweepWalk walk(poses, checker.reach);
   const double total = walk.total();
@@ -453,7 +455,7 @@ class LatticeSearch {
  public:
   LatticeSearch(const Grid& grid, const PlanRequest& request, const KinematicQuery& q,
                 const ControlSet& set, const StopCondition& stop, const StateLatticeOptions& options,
-                const MotionChecker& checker, const ObstacleHeuristic* field, bool goal_free)
+                const LatticeChecker& checker, const ObstacleHeuristic* field, bool goal_free)
       : grid_(grid),
         request_(request),
         q_(q),
@@ -942,7 +944,7 @@ class LatticeSearch {
   const ControlSet& set_;
   const StopCondition& stop_;
   const StateLatticeOptions& options_;
-  const MotionChecker& checker_;
+  const LatticeChecker& checker_;
   const ObstacleHeuristic* field_;
   const bool goal_free_;
 
@@ -1036,7 +1038,7 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
   const bool unknown_is_free = request.cost.unknown_is_free;
   const std::shared_ptr<const std::vector<float>> distance =
       GetObstacleDistance(request.derived, grid, unknown_is_free);
-  MotionChecker checker;
+  LatticeChecker checker;
   checker.grid = &grid;
   checker.unknown_is_free = unknown_is_free;
   checker.distance = distance->data();
@@ -1078,7 +1080,23 @@ absl::StatusOr<PlanResult> PlanStateLattice(const Grid& grid, const PlanRequest&
   }
   LatticeSearch search(grid, request, q, *set, stop, options, checker, field.get(), goal_free);
   absl::StatusOr<PlanResult> result = search.Run();
-  if (result.ok()) result->planning_time = absl::Now() - started;
+  if (!result.ok()) return result;
+  // Smoothing (KinematicQuery::smooth): cars only. A differential or
+  // omnidirectional robot's path turns in place or slides, which the
+  // smoother's recomputed headings would undo. Cost stays the lattice's
+  // price of the path found; poses, cells and length are the smoothed ones.
+  const bool car = q.motion == MotionModel::kDubins || q.motion == MotionModel::kReedsShepp;
+  if (car && q.smooth && options.smooth && result->found() && result->poses.size() > 2) {
+    PATHD_ASSIGN_OR_RETURN(const MotionChecker motion,
+                           MotionChecker::Create(q.footprint, grid, unknown_is_free,
+                                                 distance->data()));
+    SmootherOptions smoothing;
+    smoothing.min_turning_radius = q.min_turning_radius_cells;
+    result->poses = SmoothPath(result->poses, motion, smoothing);
+    result->path = PathCells(result->poses);
+    result->length = PathLength(result->poses);
+  }
+  result->planning_time = absl::Now() - started;
   return result;
 }
 

@@ -74,6 +74,9 @@ struct StateLatticeOptions {
   bool curve_heuristic = true;
   // Nav2's analytic_expansion_ratio.
   double analytic_expansion_ratio = 3.5;
+  // Off: no smoothing whatever KinematicQuery::smooth says (tests of the
+  // lattice's own motions).
+  bool smooth = true;
 };
 
 // Plans request.kinematic (DefaultKinematicQuery of request.start/goal when

@@ -252,7 +252,8 @@ uint8_t ThroughTrinary(uint8_t cost) {
 
 TEST(RoundTripTest, BundledMapsExportAndReadBackTheSameCells) {
   for (const char* name : {"maps/arena2.map", "maps/wavefront16.map",
-                           "maps/dstar_example.map", "maps/warehouse.yaml"}) {
+                           "maps/dstar_example.map", "maps/warehouse.yaml",
+                           "maps/depot.yaml"}) {
     SCOPED_TRACE(name);
     const absl::StatusOr<Grid> original = ReadMapFile(name);
     ASSERT_TRUE(original.ok()) << original.status();

@@ -62,10 +62,12 @@ double BruteClearance(const Grid& grid, Cell c, bool unknown_is_free) {
 }
 
 // The whole shape by brute force: the radius (inscribed unless lethal or
-// unknown), Nav2's costs beyond it (unknown cells only when free), then the
+// unknown), Nav2's costs beyond it (unknown cells only when free; from the
+// cost-only inscribed radius when it is larger, 252 up to it), then the
 // clearance ramp.
 Grid BruteShape(const Grid& grid, const GridShape& shape) {
   const double r = shape.robot_radius_cells;
+  const double decay = std::max(r, shape.cost_inscribed_cells);
   Grid out = grid;
   for (int32_t y = 0; y < grid.height(); ++y) {
     for (int32_t x = 0; x < grid.width(); ++x) {
@@ -79,7 +81,8 @@ Grid BruteShape(const Grid& grid, const GridShape& shape) {
       if (c == kInscribedCost || c == kLethalCost) continue;
       if (c == kUnknownCost && !shape.unknown_is_free) continue;
       const uint8_t own = c == kUnknownCost ? 0 : c;
-      const uint8_t cost = Nav2Cost(d, r, shape.cost_scaling_per_cell);
+      const uint8_t cost =
+          d <= decay ? uint8_t{252} : Nav2Cost(d, decay, shape.cost_scaling_per_cell);
       if (cost > own) out.set_cost(x, y, cost);
     }
   }
@@ -129,7 +132,10 @@ GridShape RandomShape(std::mt19937& rng) {
   const double big = u(rng) < 0.6 ? r + length(8.0) : 0.0;
   const double s = 0.1 + 2.0 * u(rng);
   const double m = u(rng) < 0.5 ? 0.5 + length(4.0) : 0.0;
-  return GridShape::Of(r, big, s, m, u(rng) < 0.5);
+  // A kinematic planner's footprint: costs decaying from its inscribed
+  // radius (up to the inflation radius, GridShape::Of) with nothing blocked.
+  const double inscribed = u(rng) < 0.4 ? r + length(6.0) : 0.0;
+  return GridShape::Of(r, big, s, m, u(rng) < 0.5, inscribed);
 }
 
 TEST(InflationCost, FollowsNav2ComputeCost) {
@@ -166,7 +172,7 @@ TEST(InflationCost, ShapeMatchesBruteForceOnRandomMaps) {
             << int{grid.cost(x, y)} << " r " << shape.robot_radius_cells << " R "
             << shape.inflation_radius_cells << " s " << shape.cost_scaling_per_cell
             << " m " << shape.min_clearance_cells << " unknown_is_free "
-            << shape.unknown_is_free;
+            << shape.unknown_is_free << " inscribed " << shape.cost_inscribed_cells;
         const uint8_t c = got->cost(x, y);
         costed += c > 0 && c < kInscribedCost && c != grid.cost(x, y);
       }
@@ -236,6 +242,29 @@ TEST(GridShape, OfClearsWhatDoesNotApply) {
   EXPECT_TRUE(GridShape::Of(0, 3.0, 0.5, 0, false).shaped());
   EXPECT_NE(GridShape::Of(0, 3.0, 0.5, 0, true), GridShape::Of(0, 3.0, 0.5, 0, false));
   EXPECT_NE(GridShape::Of(0, 3.0, 0.5, 0, false), GridShape::Of(0, 3.0, 0.6, 0, false));
+  // The cost-only inscribed radius: only with inflation costs, only above
+  // the robot radius, at most the inflation radius.
+  EXPECT_EQ(GridShape::Of(0, 0, 0.5, 2.0, false, 1.5).cost_inscribed_cells, 0.0);
+  EXPECT_EQ(GridShape::Of(2.0, 5.0, 0.5, 0, false, 1.5).cost_inscribed_cells, 0.0);
+  EXPECT_EQ(GridShape::Of(0, 5.0, 0.5, 0, false, 1.5).cost_inscribed_cells, 1.5);
+  EXPECT_EQ(GridShape::Of(0, 5.0, 0.5, 0, false, 7.0).cost_inscribed_cells, 5.0);
+  EXPECT_NE(GridShape::Of(0, 5.0, 0.5, 0, false, 1.5), GridShape::Of(0, 5.0, 0.5, 0, false));
+}
+
+// Nav2's numbers for a footprint: costs decay from its inscribed radius and
+// nothing is blocked (a kinematic planner checks the footprint itself).
+TEST(GridShape, CostOnlyInscribedRadiusDecaysAsNav2AndBlocksNothing) {
+  Grid grid = Grid::Create(41, 41).value();
+  grid.set_cost(20, 20, kLethalCost);
+  // 5 cm cells: inflation 0.55 m, 10 per metre, a footprint 0.2 m inscribed.
+  const Grid shaped = ShapeGrid(grid, GridShape::Of(0.0, 11.0, 0.5, 0.0, false, 4.0)).value();
+  EXPECT_EQ(shaped.cost(20, 20), kLethalCost);
+  EXPECT_EQ(shaped.cost(21, 20), 252);  // inside the inscribed radius: not blocked
+  EXPECT_EQ(shaped.cost(24, 20), 252);
+  EXPECT_EQ(shaped.cost(25, 20), InflationCost(5.0, 4.0, 0.5));  // 152, Nav2's
+  EXPECT_EQ(shaped.cost(31, 20), InflationCost(11.0, 4.0, 0.5));
+  EXPECT_EQ(shaped.cost(32, 20), kFreeCost);
+  for (const uint8_t c : shaped.cells()) EXPECT_NE(c, kInscribedCost);
 }
 
 // A random change of an update: a single cell or a rectangle, to a random

@@ -3,8 +3,10 @@
 // brute-force nearest cell; the order of its checks; and a stateful engine.
 #include "core/planning/plan_query.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <string>
@@ -12,6 +14,8 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "core/kinematics/footprint.h"
+#include "core/kinematics/vehicle.h"
 #include "core/map/clearance.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
@@ -21,6 +25,7 @@
 #include "core/search/registry.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "tests/testing/kinematic_checker.h"
 #include "tests/testing/test_grids.h"
 
 namespace pathd {
@@ -462,6 +467,180 @@ TEST(PlanQueryTest, GeometricViaPlansJoinTheirPolylinesAtTheViaCentres) {
     EXPECT_EQ(r.path[answer->leg_end_indices[0]], (Cell{6, 0}));
     EXPECT_EQ(r.path[answer->leg_end_indices[1]], (Cell{0, 2}));
     EXPECT_EQ(r.path.back(), (Cell{6, 4}));
+  }
+}
+
+// Kinematic planners through via points: each leg starts at the pose where
+// the previous one ended (so the robot never turns on the spot between
+// legs), a via leg ends at the via cell's centre with any heading, and the
+// whole path passes the independent checker for the footprint and the
+// turning radius; a colliding via point is named with its leg.
+TEST(PlanQueryTest, KinematicViaLegsJoinWherePreviousLegsEnded) {
+  // A hall 40 x 24 cells with a wall down the middle, open at both ends.
+  std::vector<std::string> rows(24, std::string(40, '.'));
+  for (int y = 6; y < 18; ++y) rows[y][20] = '#';
+  const PlanSnapshot snapshot = Snapshot(MakeGrid(rows));
+  const Footprint rect = Footprint::Polygon({{-0.6, -0.4}, {0.9, -0.4}, {0.9, 0.4}, {-0.6, 0.4}})
+                             .value();
+  for (const char* planner : {"hybrid_astar", "state_lattice"}) {
+    SCOPED_TRACE(planner);
+    KinematicQuery k;
+    k.start = Pose{4.5, 12.5, 0.0};
+    k.goal = Pose{4.5, 4.5, std::numbers::pi};
+    k.footprint = SharedFootprintChecker(rect).value();
+    k.min_turning_radius_cells = 2.0;
+    k.motion = MotionModel::kReedsShepp;
+    k.goal_tolerance_cells = 0.5;
+    k.goal_tolerance_yaw = 0.1;
+    PlanQuery query = Query(k.start.cell(), k.goal.cell());
+    query.planner = planner;
+    query.simplify = false;
+    query.request.kinematic = std::make_shared<KinematicQuery>(k);
+    query.via = {Cell{34, 12}, Cell{28, 20}};
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine(planner));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found()) << PlanOutcomeName(answer->result.outcome);
+    const PlanResult& r = answer->result;
+    ASSERT_EQ(answer->leg_end_indices.size(), 3u);
+    EXPECT_EQ(r.path[answer->leg_end_indices[0]], (Cell{34, 12}));
+    EXPECT_EQ(r.path[answer->leg_end_indices[1]], (Cell{28, 20}));
+    std::vector<Pose> poses;
+    std::vector<bool> reverse;
+    for (const PathPose& p : r.poses) {
+      poses.push_back(p.pose);
+      reverse.push_back(p.reverse);
+    }
+    testing::KinematicCheck check;
+    check.footprint = rect.vertices();
+    check.min_turning_radius = k.min_turning_radius_cells;
+    check.start = k.start;
+    check.goal = k.goal;
+    check.goal_tolerance = k.goal_tolerance_cells;
+    check.goal_yaw_tolerance = k.goal_tolerance_yaw;
+    // The state lattice's control set (cells of the map, not the lattice's
+    // 5 cm) turns on its own radii, at least the query's.
+    EXPECT_EQ(testing::CheckKinematicPath(*snapshot.grid, poses, reverse, check), "");
+    // Each via point is passed within the tolerance.
+    for (const Cell via : {Cell{34, 12}, Cell{28, 20}}) {
+      double nearest = 1e9;
+      for (const Pose& p : poses) {
+        nearest = std::min(nearest, std::hypot(p.x - (via.x + 0.5), p.y - (via.y + 0.5)));
+      }
+      EXPECT_LE(nearest, k.goal_tolerance_cells + 1e-9) << CellToString(via);
+    }
+  }
+  // A via point where the footprint fits at no heading: named with its leg.
+  std::vector<std::string> rows2(24, std::string(40, '.'));
+  for (int x = 0; x < 40; ++x) rows2[11][x] = '#';
+  rows2[11][30] = '.';
+  KinematicQuery k;
+  k.start = Pose{4.5, 4.5, 0.0};
+  k.goal = Pose{8.5, 4.5, 0.0};
+  k.footprint = SharedFootprintChecker(rect).value();
+  k.min_turning_radius_cells = 2.0;
+  PlanQuery query = Query(k.start.cell(), k.goal.cell());
+  query.planner = "hybrid_astar";
+  query.simplify = false;
+  query.request.kinematic = std::make_shared<KinematicQuery>(k);
+  query.via = {Cell{30, 11}};
+  absl::StatusOr<PlanAnswer> answer =
+      Plan(query, Snapshot(MakeGrid(rows2)), Engine("hybrid_astar"));
+  ASSERT_FALSE(answer.ok());
+  EXPECT_EQ(answer.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(answer.status().message(), HasSubstr("leg 0 (start -> via[0])"));
+  EXPECT_THAT(answer.status().message(), HasSubstr("collides"));
+}
+
+// Grid planners with smooth_for: the path also as poses smoothed for the
+// robot on the map as stored, which the independent checker finds free for
+// a disc the planner kept well clear of (the radius's inflation measures
+// between cell centres, as Nav2's does, so a disc of the robot radius itself
+// may touch a wall's corner: that is what footprint_collision reports); for
+// a robot longer than its inscribed disc, footprint_collision names the
+// first pose the checker finds colliding, and every pose before it is free.
+TEST(PlanQueryTest, SmoothForRobotAnswersPosesAndNamesTheFirstCollision) {
+  // A corridor 5 cells wide that turns a right angle.
+  std::vector<std::string> rows(24, std::string(24, '#'));
+  for (int y = 2; y <= 6; ++y) {
+    for (int x = 2; x <= 18; ++x) rows[y][x] = '.';
+  }
+  for (int y = 2; y <= 21; ++y) {
+    for (int x = 14; x <= 18; ++x) rows[y][x] = '.';
+  }
+  const PlanSnapshot snapshot = Snapshot(MakeGrid(rows));
+  const auto poses_of = [](const PlanResult& r) {
+    std::vector<Pose> poses;
+    for (const PathPose& p : r.poses) poses.push_back(p.pose);
+    return poses;
+  };
+  {
+    // Inflated by 2 cells: every path cell's centre is at least 1.58 cells
+    // from any wall, so the polyline itself (diagonal steps pass 0.71
+    // closer) is free for a 0.7 disc.
+    PlanQuery query = Query({4, 4}, {16, 19});
+    query.robot_radius_cells = 2.0;
+    query.smooth_for = SharedFootprintChecker(Footprint::Circle(0.7).value()).value();
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("astar"));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found());
+    const std::vector<Pose> poses = poses_of(answer->result);
+    ASSERT_GT(poses.size(), answer->result.path.size());
+    EXPECT_EQ(answer->footprint_collision, -1);
+    testing::KinematicCheck check;
+    check.circle_radius = 0.7;
+    // A grid path is not a car's: where smoothing cannot round a bend the
+    // heading turns over the piece after it.
+    check.allow_sideways = true;
+    check.allow_reverse = false;
+    check.start = poses.front();
+    check.goal = Pose{16.5, 19.5, 0.0};
+    check.goal_yaw_tolerance = 4.0;
+    EXPECT_EQ(testing::CheckKinematicPath(*snapshot.grid, poses,
+                                          std::vector<bool>(poses.size(), false), check),
+              "");
+    EXPECT_DOUBLE_EQ(poses.front().x, 4.5);
+    EXPECT_DOUBLE_EQ(poses.front().y, 4.5);
+    // Smoothing shortened the path: it left the cell centres' polyline.
+    double polyline = 0.0;
+    for (size_t i = 1; i < answer->result.path.size(); ++i) {
+      const Cell a = answer->result.path[i - 1], b = answer->result.path[i];
+      polyline += std::hypot(b.x - a.x, b.y - a.y);
+    }
+    double smoothed = 0.0;
+    double sharpest = 0.0;
+    for (size_t i = 1; i < poses.size(); ++i) {
+      smoothed += std::hypot(poses[i].x - poses[i - 1].x, poses[i].y - poses[i - 1].y);
+      sharpest = std::max(sharpest, std::fabs(NormalizeAngle(poses[i].yaw - poses[i - 1].yaw)));
+    }
+    EXPECT_LT(smoothed, polyline - 0.1);
+    // The 45-degree bends of the cell path are rounded (0.23 rad measured).
+    EXPECT_LT(sharpest, 0.5);
+  }
+  {
+    // A robot 4 cells long and 1 wide plans for its inscribed 0.5 and
+    // cannot turn the corner.
+    const Footprint long_robot =
+        Footprint::Polygon({{-2.0, -0.5}, {2.0, -0.5}, {2.0, 0.5}, {-2.0, 0.5}}).value();
+    PlanQuery query = Query({4, 4}, {16, 19});
+    query.robot_radius_cells = long_robot.inscribed_radius();
+    query.smooth_for = SharedFootprintChecker(long_robot).value();
+    absl::StatusOr<PlanAnswer> answer = Plan(query, snapshot, Engine("astar"));
+    ASSERT_TRUE(answer.ok()) << answer.status();
+    ASSERT_TRUE(answer->result.found());
+    const std::vector<Pose> poses = poses_of(answer->result);
+    ASSERT_GE(answer->footprint_collision, 0);
+    ASSERT_LT(answer->footprint_collision, static_cast<int64_t>(poses.size()));
+    const auto pose_free = [&](const Pose& p) {
+      testing::KinematicCheck check;
+      check.footprint = long_robot.vertices();
+      check.start = p;
+      check.goal = p;
+      return testing::CheckKinematicPath(*snapshot.grid, {p}, {false}, check).empty();
+    };
+    for (int64_t i = 0; i < answer->footprint_collision; ++i) {
+      EXPECT_TRUE(pose_free(poses[static_cast<size_t>(i)])) << i;
+    }
+    EXPECT_FALSE(pose_free(poses[static_cast<size_t>(answer->footprint_collision)]));
   }
 }
 

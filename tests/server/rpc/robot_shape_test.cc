@@ -142,6 +142,61 @@ TEST_F(RobotShapeTest, GridPlannersPlanForTheFootprintsInscribedRadius) {
   EXPECT_NEAR(plan.robot_radius_cells(), 2.0, 1e-9);
 }
 
+// options.smooth on a grid planner through the service: poses smoothed for
+// the footprint on the stored map, footprint_collision unset when it fits
+// everywhere; a robot too long for the corner its centre turns gets the
+// first pose where it does not; kinematic planners are not touched.
+TEST_F(RobotShapeTest, SmoothedGridPathsComeAsPosesWithTheFirstCollision) {
+  // A corridor 9 cells (0.45 m) wide turning a right angle, walls 1 cell.
+  std::vector<Cell> walls;
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 40; ++x) {
+      const bool corridor = (y >= 2 && y <= 10 && x >= 2 && x <= 30) ||
+                            (x >= 22 && x <= 30 && y >= 2 && y <= 37);
+      if (!corridor) walls.push_back(Cell{x, y});
+    }
+  }
+  ASSERT_NO_FATAL_FAILURE(CreateMap("bend", 40, 40, 0.05, 0, 0, 0, walls));
+  v1::PlanRequest request = testing::PlanBetween("bend", 6, 6, 26, 33, v1::PLANNER_ASTAR);
+  request.mutable_options()->mutable_footprint()->set_radius_m(0.05);
+  request.mutable_options()->set_robot_radius_m(0.15);
+  request.mutable_options()->set_smooth(true);
+  v1::PlanResponse plan;
+  ASSERT_TRUE(Plan(request, &plan).ok());
+  ASSERT_TRUE(plan.found()) << plan.reason();
+  EXPECT_GT(plan.poses_size(), plan.path_size());
+  EXPECT_FALSE(plan.has_footprint_collision());
+  EXPECT_DOUBLE_EQ(plan.poses(0).x(), 6.5);
+  EXPECT_DOUBLE_EQ(plan.poses(0).y(), 6.5);
+  // Unsmoothed: one pose per cell.
+  request.mutable_options()->clear_smooth();
+  ASSERT_TRUE(Plan(request, &plan).ok());
+  EXPECT_EQ(plan.poses_size(), plan.path_size());
+  EXPECT_FALSE(plan.has_footprint_collision());
+  // 0.6 m long, 0.1 m wide: planned for 0.05 m, it cannot turn the corner.
+  request = testing::PlanBetween("bend", 6, 6, 26, 33, v1::PLANNER_ASTAR);
+  Rectangle(request.mutable_options(), 0.3, 0.05);
+  request.mutable_options()->set_smooth(true);
+  ASSERT_TRUE(Plan(request, &plan).ok());
+  ASSERT_TRUE(plan.found()) << plan.reason();
+  ASSERT_TRUE(plan.has_footprint_collision());
+  ASSERT_LT(plan.footprint_collision(), plan.poses_size());
+  // IsPathValid (the exact oriented test) agrees: the poses before it are
+  // free, the one named is not.
+  v1::PlanOptions check_options;
+  Rectangle(&check_options, 0.3, 0.05);
+  const auto pose_valid = [&](int i) {
+    v1::IsPathValidResponse valid;
+    const grpc::Status s = Check(
+        "bend", {CellPosePos(plan.poses(i).x(), plan.poses(i).y(), plan.poses(i).yaw())},
+        check_options, &valid);
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    return valid.valid();
+  };
+  EXPECT_FALSE(pose_valid(static_cast<int>(plan.footprint_collision())));
+  for (int i = 0; i < plan.footprint_collision(); i += 5) EXPECT_TRUE(pose_valid(i)) << i;
+}
+
 TEST_F(RobotShapeTest, BadFootprintsAreNamed) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("badfp", 20, 20, 0.05, 0, 0, 0));
   v1::PlanRequest request = testing::PlanBetween("badfp", 2, 2, 10, 10, v1::PLANNER_ASTAR);
