@@ -331,6 +331,38 @@ absl::StatusOr<v1::CostToGoResponse> PathdClient::CostToGo(
       });
 }
 
+absl::StatusOr<v1::TableResponse> PathdClient::Table(const v1::TableRequest& request) const {
+  return InvokeOnMap<v1::TableResponse>(
+      timeout_, request.map(),
+      [&](grpc::ClientContext* context, v1::TableResponse* response) {
+        return planner_->Table(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::NearestResponse> PathdClient::Nearest(const v1::NearestRequest& request) const {
+  return InvokeOnMap<v1::NearestResponse>(
+      timeout_, request.map(),
+      [&](grpc::ClientContext* context, v1::NearestResponse* response) {
+        return planner_->Nearest(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::TripResponse> PathdClient::Trip(const v1::TripRequest& request) const {
+  return InvokeOnMap<v1::TripResponse>(
+      timeout_, request.map(),
+      [&](grpc::ClientContext* context, v1::TripResponse* response) {
+        return planner_->Trip(context, request, response);
+      });
+}
+
+absl::StatusOr<v1::IsochroneResponse> PathdClient::Isochrone(const v1::IsochroneRequest& request) const {
+  return InvokeOnMap<v1::IsochroneResponse>(
+      timeout_, request.map(),
+      [&](grpc::ClientContext* context, v1::IsochroneResponse* response) {
+        return planner_->Isochrone(context, request, response);
+      });
+}
+
 absl::StatusOr<v1::IsPathValidResponse> PathdClient::IsPathValid(
     const v1::IsPathValidRequest& request) const {
   return InvokeOnMap<v1::IsPathValidResponse>(

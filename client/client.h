@@ -137,6 +137,13 @@ class PathdClient {
   absl::StatusOr<v1::CostToGoResponse> CostToGo(
       const v1::CostToGoRequest& request) const;
   absl::StatusOr<v1::GetCacheStatsResponse> GetCacheStats() const;
+  // Fleet map queries. Unreachable pairs, "none within the distance" and
+  // "no trip" are OK responses.
+  absl::StatusOr<v1::TableResponse> Table(const v1::TableRequest& request) const;
+  absl::StatusOr<v1::NearestResponse> Nearest(const v1::NearestRequest& request) const;
+  absl::StatusOr<v1::TripResponse> Trip(const v1::TripRequest& request) const;
+  absl::StatusOr<v1::IsochroneResponse> Isochrone(
+      const v1::IsochroneRequest& request) const;
   // An invalid path is an OK response with valid = false.
   absl::StatusOr<v1::IsPathValidResponse> IsPathValid(
       const v1::IsPathValidRequest& request) const;

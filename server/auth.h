@@ -59,6 +59,10 @@ inline constexpr char kMethodIsPathValid[] =
 inline constexpr char kMethodPlanStream[] =
     "/pathd.v1.PlannerService/PlanStream";
 inline constexpr char kMethodPlanBatch[] = "/pathd.v1.PlannerService/PlanBatch";
+inline constexpr char kMethodTable[] = "/pathd.v1.PlannerService/Table";
+inline constexpr char kMethodNearest[] = "/pathd.v1.PlannerService/Nearest";
+inline constexpr char kMethodTrip[] = "/pathd.v1.PlannerService/Trip";
+inline constexpr char kMethodIsochrone[] = "/pathd.v1.PlannerService/Isochrone";
 // Not an RPC: a Navigate observation with session_only = false writes the
 // shared map like UpdateMap, so it needs the role UpdateMap needs.
 inline constexpr char kNavigateSharedObservation[] =

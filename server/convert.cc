@@ -241,6 +241,44 @@ absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
   return cells;
 }
 
+absl::Status DecodeSnapStart(const v1::PlanOptions& options, const Grid& grid,
+                             PlanQuery* query) {
+  query->requested_start = query->request.start;
+  query->snap_start = options.snap_start();
+  double limit = 0.0;
+  std::string_view field;
+  switch (options.snap_start_max_case()) {
+    case v1::PlanOptions::kSnapStartMaxM:
+      field = "snap_start_max_m";
+      limit = options.snap_start_max_m();
+      break;
+    case v1::PlanOptions::kSnapStartMaxCells:
+      field = "snap_start_max_cells";
+      limit = options.snap_start_max_cells();
+      break;
+    case v1::PlanOptions::SNAP_START_MAX_NOT_SET:
+      break;
+  }
+  if (!std::isfinite(limit) || limit < 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("options.%s %s must be finite and >= 0", field, Num(limit)));
+  }
+  double cells = options.snap_start_max_case() == v1::PlanOptions::kSnapStartMaxM
+                     ? limit / grid.resolution()
+                     : limit;
+  if (cells > kMaxGoalToleranceCells) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("options.%s %s is %s cells; the limit is %s cells", field,
+                        Num(limit), Num(cells), Num(kMaxGoalToleranceCells)));
+  }
+  if (cells == 0.0) {
+    cells = std::min(kMaxGoalToleranceCells,
+                     std::max(kDefaultSnapStartCells, 2.0 * query->robot_radius_cells));
+  }
+  query->snap_start_max_cells = cells;
+  return absl::OkStatus();
+}
+
 absl::Status PlanOptionsToRequest(const v1::PlanOptions& options,
                                   PlanRequest* request) {
   PATHD_ASSIGN_OR_RETURN(request->cost, CostParamsFromOptions(options));
@@ -389,6 +427,9 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
   PATHD_RETURN_IF_ERROR(DecodeKinematics(wire, grid, &query));
   // After the footprint, whose inscribed radius is then the robot radius.
   PATHD_RETURN_IF_ERROR(DecodeInflationCost(options, grid, &query));
+  if (wire.goal_tolerance) {  // Plan's options: snap_start too
+    PATHD_RETURN_IF_ERROR(DecodeSnapStart(options, grid, &query));
+  }
   if (wire.via != nullptr && !wire.via->empty()) {
     // Counted before anything is sized by the request.
     PATHD_RETURN_IF_ERROR(CheckViaCount(static_cast<size_t>(wire.via->size())));
@@ -558,7 +599,7 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
                        v1::PlanResponse* response) {
   const PlanResult& result = answer.result;
   const Grid& grid = *answer.source.grid;
-  PlanRequest planned = PlanRequest::Between(query.request.start, answer.goal);
+  PlanRequest planned = PlanRequest::Between(answer.start, answer.goal);
   FillResult(result, planned, grid, query.max_expansions, response);
   if (answer.cost_to_go_field != nullptr && query.request.want_cost_to_go) {
     // Widened float -> double once, into the message (the wire type).
@@ -583,6 +624,17 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
   response->set_repaired_cells(answer.source.repaired_cells);
   *response->mutable_requested_goal() = ToProto(query.requested_goal);
   response->set_goal_substituted(!(answer.goal == query.requested_goal));
+  if (query.snap_start) {
+    *response->mutable_requested_start() = ToProto(query.requested_start);
+    if (!(answer.start == query.requested_start)) {
+      const double dx = answer.start.x - query.requested_start.x;
+      const double dy = answer.start.y - query.requested_start.y;
+      const double cells = std::sqrt(dx * dx + dy * dy);
+      response->set_start_snapped(true);
+      response->set_snap_distance_cells(cells);
+      response->set_snap_distance_m(cells * grid.resolution());
+    }
+  }
   response->set_reached_goal_index(answer.reached_goal_index);
   response->mutable_leg_end_indices()->Add(answer.leg_end_indices.begin(),
                                            answer.leg_end_indices.end());

@@ -137,6 +137,17 @@ inline constexpr double kMaxGoalToleranceCells = 1024.0;
 absl::StatusOr<double> GoalToleranceCells(const v1::PlanOptions& options,
                                           const Grid& grid);
 
+// Least default reach of options.snap_start, cells.
+inline constexpr double kDefaultSnapStartCells = 2.0;
+
+// options.snap_start into query->snap_start, snap_start_max_cells (unset or
+// 0: twice the robot radius, at least kDefaultSnapStartCells; at most
+// kMaxGoalToleranceCells) and requested_start (query->request.start, so it
+// comes after the start and the robot radius are decoded). INVALID_ARGUMENT
+// naming snap_start_max_m/_cells when negative, not finite or too large.
+absl::Status DecodeSnapStart(const v1::PlanOptions& options, const Grid& grid,
+                             PlanQuery* query);
+
 // Registry name of a wire planner value (UNSPECIFIED means A*).
 // INVALID_ARGUMENT "unknown planner 17" for a value the enum does not define.
 absl::StatusOr<std::string_view> PlannerName(int planner);

@@ -59,6 +59,11 @@ ABSL_FLAG(int64_t, max_cost_to_go_cells, int64_t{1} << 22,
           "most cells of a cost-to-go field returned in one message (Plan "
           "return_cost_to_go: INVALID_ARGUMENT beyond; CostToGo windows: "
           "RESOURCE_EXHAUSTED beyond)");
+ABSL_FLAG(int64_t, max_table_entries, 250'000,
+          "most entries (sources x destinations) a Table call may ask for "
+          "(RESOURCE_EXHAUSTED beyond)");
+ABSL_FLAG(int64_t, max_trip_stops, 256,
+          "most waypoints a Trip call may order (RESOURCE_EXHAUSTED beyond)");
 ABSL_FLAG(int64_t, max_message_bytes, 0,
           "largest gRPC message received or sent (gRPC answers "
           "RESOURCE_EXHAUSTED beyond); 0 = max_map_cells + 1 MiB, so a "
@@ -304,6 +309,10 @@ pathd::server::ServerOptions OptionsFromFlags() {
   if (options.max_cost_to_go_cells < 1) {
     FlagError("max_cost_to_go_cells", "must be >= 1");
   }
+  options.max_table_entries = absl::GetFlag(FLAGS_max_table_entries);
+  if (options.max_table_entries < 1) FlagError("max_table_entries", "must be >= 1");
+  options.max_trip_stops = absl::GetFlag(FLAGS_max_trip_stops);
+  if (options.max_trip_stops < 2) FlagError("max_trip_stops", "must be >= 2");
   options.max_message_bytes = absl::GetFlag(FLAGS_max_message_bytes);
   if (options.max_message_bytes < 0 || options.max_message_bytes > INT32_MAX) {
     FlagError("max_message_bytes", "must be in 0..2147483647 (gRPC's limit)");

@@ -47,6 +47,10 @@ struct ServerOptions {
   int64_t max_path_points = int64_t{1} << 20;
   // Most cells of a cost-to-go field returned in one message.
   int64_t max_cost_to_go_cells = int64_t{1} << 22;
+  // Table: most entries (sources x destinations) per call.
+  int64_t max_table_entries = 250'000;
+  // Trip: most waypoints per call.
+  int64_t max_trip_stops = 256;
   // Largest gRPC message received or sent; 0 = max_map_cells + 1 MiB, so a
   // raw CreateMap of the largest map fits.
   int64_t max_message_bytes = 0;

@@ -25,6 +25,8 @@ const Command* const kCommands[] = {
     &kPlanCommand,       &kBatchCommand,      &kNavigateCommand,
     &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand,
     &kHealthCommand,     &kMetricsCommand,    &kBenchCommand,
+    &kTableCommand,      &kNearestCommand,    &kTripCommand,
+    &kIsochroneCommand,
     &kRenderCommand,     &kCompletionCommand, &kHelpCommand,
 };
 
@@ -160,6 +162,10 @@ int Run(const Options& options, const std::vector<std::string>& args,
     if (!Lists(kGlobalFlags, flag) && !Lists(command->flags, flag)) {
       return env.Usage(FlagDoesNotApply(flag, *command));
     }
+  }
+  if (env.options().global.output == OutputFormat::kGeoJson && !command->geojson) {
+    return env.Usage(absl::StrCat("--output geojson: ", command->name,
+                                  " prints table, json or csv (geojson is for isochrone)"));
   }
   const Args rest = Args(args).subspan(words);
   if (command->map_arg != MapArg::kNone && !rest.empty()) {

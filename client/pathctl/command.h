@@ -48,6 +48,8 @@ struct Command {
   // It calls pathd, so the TLS and token files are read first (metrics and
   // help do not).
   bool connects = true;
+  // It prints --output geojson (the others refuse it).
+  bool geojson = false;
 };
 
 // The flags every command takes.
@@ -103,6 +105,10 @@ extern const Command kPlanCommand;
 extern const Command kBatchCommand;
 extern const Command kNavigateCommand;
 extern const Command kCostToGoCommand;
+extern const Command kTableCommand;
+extern const Command kNearestCommand;
+extern const Command kTripCommand;
+extern const Command kIsochroneCommand;
 extern const Command kCheckCommand;
 extern const Command kCacheStatsCommand;
 extern const Command kHealthCommand;

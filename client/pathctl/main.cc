@@ -137,6 +137,27 @@ ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
 ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
 ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
+ABSL_FLAG(std::string, sources, "", "table: source points X,Y[;X,Y...]");
+ABSL_FLAG(std::string, destinations, "", "table: destination points X,Y[;X,Y...]");
+ABSL_FLAG(std::string, waypoints, "", "trip: the stops X,Y[;X,Y...], the first where it starts");
+ABSL_FLAG(std::string, method, "", "table: auto (default), backward or forward");
+ABSL_FLAG(std::string, end, "", "trip: round_trip (default), fixed_last or any");
+ABSL_FLAG(std::optional<double>, yaw, std::nullopt,
+          "nearest: heading (radians) of a polygon footprint");
+ABSL_FLAG(std::optional<double>, max_distance, std::nullopt,
+          "nearest: farthest answer, metres");
+ABSL_FLAG(std::optional<double>, max_distance_cells, std::nullopt,
+          "nearest: farthest answer, cells");
+ABSL_FLAG(std::optional<double>, budget, std::nullopt, "isochrone: cost budget, metres");
+ABSL_FLAG(std::optional<double>, budget_cells, std::nullopt,
+          "isochrone: cost budget, cells");
+ABSL_FLAG(bool, snap_start, false,
+          "plan: a start in an obstacle or within the robot radius of one moves "
+          "to the nearest free cell");
+ABSL_FLAG(std::optional<double>, snap_start_max, std::nullopt,
+          "plan --snap_start: farthest move, metres");
+ABSL_FLAG(std::optional<double>, snap_start_max_cells, std::nullopt,
+          "plan --snap_start: farthest move, cells");
 ABSL_FLAG(std::string, metrics_address, pathd::pathctl::kDefaultMetricsAddress,
           "metrics: pathd's --metrics_address (HOST:PORT)");
 ABSL_FLAG(bool, progress, false,
@@ -300,6 +321,9 @@ int main(int argc, char** argv) {
   plan.pf_step = absl::GetFlag(FLAGS_pf_step);
   plan.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
   plan.progress = absl::GetFlag(FLAGS_progress);
+  plan.snap_start = absl::GetFlag(FLAGS_snap_start);
+  plan.snap_start_max_m = absl::GetFlag(FLAGS_snap_start_max);
+  plan.snap_start_max_cells = absl::GetFlag(FLAGS_snap_start_max_cells);
 
   options.check.world = absl::GetFlag(FLAGS_world);
   options.check.path_file = absl::GetFlag(FLAGS_path_file);
@@ -308,6 +332,19 @@ int main(int argc, char** argv) {
   options.cost_to_go.window = absl::GetFlag(FLAGS_window);
   options.cost_to_go.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);
   options.metrics.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  pathctl::FleetOptions& fleet = options.fleet;
+  fleet.world = absl::GetFlag(FLAGS_world);
+  fleet.sources = absl::GetFlag(FLAGS_sources);
+  fleet.destinations = absl::GetFlag(FLAGS_destinations);
+  fleet.waypoints = absl::GetFlag(FLAGS_waypoints);
+  fleet.method = absl::GetFlag(FLAGS_method);
+  fleet.end = absl::GetFlag(FLAGS_end);
+  fleet.planner = absl::GetFlag(FLAGS_planner);
+  fleet.yaw = absl::GetFlag(FLAGS_yaw);
+  fleet.max_distance_m = absl::GetFlag(FLAGS_max_distance);
+  fleet.max_distance_cells = absl::GetFlag(FLAGS_max_distance_cells);
+  fleet.budget_m = absl::GetFlag(FLAGS_budget);
+  fleet.budget_cells = absl::GetFlag(FLAGS_budget_cells);
 
   pathctl::BenchOptions& bench = options.bench;
   bench.concurrency = absl::GetFlag(FLAGS_concurrency);

@@ -125,6 +125,11 @@ struct PlanFlags {
   int64_t pf_max_steps = 0;
   // Use PlanStream and show its progress on stderr.
   bool progress = false;
+  // Start in an obstacle or the inflated zone: plan from the nearest free
+  // cell within the limit (metres or cells; unset: the server's default).
+  bool snap_start = false;
+  std::optional<double> snap_start_max_m;
+  std::optional<double> snap_start_max_cells;
 };
 
 struct CheckOptions {
@@ -142,6 +147,27 @@ struct CostToGoOptions {
   bool world = false;
   std::string window;  // "X,Y,W,H"; empty: the whole map
   std::string cost_to_go_file;
+};
+
+// table, nearest, trip, isochrone.
+struct FleetOptions {
+  bool world = false;  // coordinates are world metres
+  // "X,Y;X,Y..." lists.
+  std::string sources;
+  std::string destinations;
+  std::string waypoints;
+  // table: auto, backward, forward.
+  std::string method;
+  // trip: round_trip, fixed_last, any; the legs' planner.
+  std::string end;
+  std::string planner;
+  // nearest: the heading for a polygon footprint, the farthest answer.
+  std::optional<double> yaw;
+  std::optional<double> max_distance_m;
+  std::optional<double> max_distance_cells;
+  // isochrone: the budget.
+  std::optional<double> budget_m;
+  std::optional<double> budget_cells;
 };
 
 struct MetricsOptions {
@@ -188,6 +214,7 @@ struct Options {
   CheckOptions check;
   NavigateOptions navigate;
   CostToGoOptions cost_to_go;
+  FleetOptions fleet;
   MetricsOptions metrics;
   BenchOptions bench;
   RenderFlags render;

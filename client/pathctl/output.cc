@@ -24,6 +24,7 @@ constexpr struct {
     {"table", OutputFormat::kTable},
     {"json", OutputFormat::kJson},
     {"csv", OutputFormat::kCsv},
+    {"geojson", OutputFormat::kGeoJson},
 };
 
 bool IsNumber(absl::string_view text) {
@@ -49,7 +50,7 @@ absl::StatusOr<OutputFormat> ParseOutputFormat(absl::string_view text) {
     if (f.name == text) return f.format;
   }
   return absl::InvalidArgumentError(absl::StrCat(
-      "--output: unknown format '", text, "'; expected table, json or csv"));
+      "--output: unknown format '", text, "'; expected table, json, csv or geojson"));
 }
 
 absl::string_view OutputFormatName(OutputFormat format) {

@@ -17,7 +17,9 @@ namespace pathd::pathctl {
 
 // What --output selects. kTable is the human text each command has always
 // printed; kJson is proto3 JSON (the old --json); kCsv a header row and rows.
-enum class OutputFormat { kTable, kJson, kCsv };
+// kGeoJson (RFC 7946) only for commands that answer with regions
+// (isochrone); the others refuse it.
+enum class OutputFormat { kTable, kJson, kCsv, kGeoJson };
 
 // "table", "json" or "csv"; INVALID_ARGUMENT naming the flag and the choices.
 absl::StatusOr<OutputFormat> ParseOutputFormat(absl::string_view text);

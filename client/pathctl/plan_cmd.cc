@@ -159,6 +159,18 @@ int Plan(CommandEnv& env, Args args) {
     return env.Usage(s.message());
   }
   request.set_allow_partial(options.allow_partial);
+  if (options.snap_start_max_m.has_value() && options.snap_start_max_cells.has_value()) {
+    return env.Usage("give --snap_start_max (metres) or --snap_start_max_cells, not both");
+  }
+  if (!options.snap_start &&
+      (options.snap_start_max_m.has_value() || options.snap_start_max_cells.has_value())) {
+    return env.Usage("--snap_start_max/--snap_start_max_cells need --snap_start");
+  }
+  plan_options->set_snap_start(options.snap_start);
+  if (options.snap_start_max_m) plan_options->set_snap_start_max_m(*options.snap_start_max_m);
+  if (options.snap_start_max_cells) {
+    plan_options->set_snap_start_max_cells(*options.snap_start_max_cells);
+  }
   plan_options->set_return_expansions(options.expansions);
   plan_options->set_simplify(options.simplify);
   plan_options->set_lookahead(options.lookahead);
@@ -216,10 +228,16 @@ int Plan(CommandEnv& env, Args args) {
   out << absl::StrFormat(
       "planner:     %s\n"
       "map version: %d\n"
-      "start:       %s\n"
+      "start:       %s%s\n"
       "goal:        %s",
       response->planner(), response->map_version(),
-      FormatCell(response->start()), FormatCell(response->goal()));
+      FormatCell(response->start()),
+      response->start_snapped()
+          ? absl::StrFormat(" (snapped from blocked %s, %.3f m away)",
+                            FormatCell(response->requested_start()),
+                            response->snap_distance_m())
+          : std::string(),
+      FormatCell(response->goal()));
   if (response->goal_substituted()) {
     out << " (substituted for blocked "
         << FormatCell(response->requested_goal()) << ")";
@@ -333,6 +351,7 @@ int Plan(CommandEnv& env, Args args) {
 constexpr absl::string_view kPlanFlagNames[] = {
     "world", "planner", "max_expansions", "heuristic_weight", "simplify", "lookahead",
     "via", "allow_partial", "expansions", "goal_tolerance", "goal_tolerance_cells",
+    "snap_start", "snap_start_max", "snap_start_max_cells",
     "cost_to_go_file", "pf_attractive", "pf_attractive_gain", "pf_switch_distance",
     "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "progress",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
@@ -357,6 +376,7 @@ const Command kPlanCommand = {
                 " [--heuristic_weight W] [--lookahead N]\n"
                 " [--cost_to_go_file F] [--pf_* ...]\n"
                 " [--goal_tolerance M | --goal_tolerance_cells C]\n"
+                " [--snap_start [--snap_start_max M | --snap_start_max_cells C]]\n"
                 " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"
                 " [--motion_model dubins|reeds_shepp|differential|omnidirectional]\n"
                 " [--start_yaw R] [--goal_yaw R] [--goal_yaw_tolerance R]\n"

@@ -2,6 +2,7 @@
 // the radius rules and the search on the planning grid.
 #include "core/planning/plan_query.h"
 
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -46,13 +47,40 @@ absl::StatusOr<Cell> GoalOnInflated(const PlanQuery& query, const Grid& inflated
                              query.robot_radius_cells);
 }
 
+// The start to plan from with snap_start: the requested one when it is off
+// the grid (ValidateEndpoints reports it) or the robot centre may occupy it
+// on `grid`, else the nearest cell within snap_start_max_cells it may occupy,
+// else INVALID_ARGUMENT naming the option with kStartBlocked. `grid` is the
+// planning grid: inflated when radius_cells > 0.
+absl::StatusOr<Cell> SnapStart(const Grid& grid, const PlanQuery& query,
+                               double radius_cells) {
+  const Cell requested = query.requested_start;
+  const bool unknown_is_free = query.request.cost.unknown_is_free;
+  if (!grid.InBounds(requested) || Traversable(grid.cost(requested), unknown_is_free)) {
+    return requested;
+  }
+  if (std::optional<Cell> nearest = NearestTraversableCell(
+          grid, requested, query.snap_start_max_cells, query.request.cost)) {
+    return *nearest;
+  }
+  return WithEndpointFault(
+      absl::InvalidArgumentError(absl::StrFormat(
+          "start %s is on a blocked cell (cost %d) and options.snap_start found no "
+          "cell within snap_start_max (%g cells) that is free%s",
+          CellToString(requested), grid.cost(requested), query.snap_start_max_cells,
+          radius_cells > 0.0
+              ? absl::StrFormat(" for the robot radius (%g cells)", radius_cells)
+              : std::string())),
+      EndpointFault::kStartBlocked);
+}
+
 // INVALID_ARGUMENT for the first endpoint (start, goal, via[i]) the radius
 // made inscribed.
-absl::Status CheckInscribed(const PlanQuery& query, Cell goal, const Grid& stored,
-                            const Grid& inflated) {
+absl::Status CheckInscribed(const PlanQuery& query, Cell start, Cell goal,
+                            const Grid& stored, const Grid& inflated) {
   const double radius = query.robot_radius_cells;
   PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(
-      stored, inflated, radius, {{query.request.start, "start"}, {goal, "goal"}}));
+      stored, inflated, radius, {{start, "start"}, {goal, "goal"}}));
   for (size_t i = 0; i < query.via.size(); ++i) {
     const std::string what = absl::StrFormat("via[%d]", i);
     PATHD_RETURN_IF_ERROR(
@@ -169,6 +197,12 @@ absl::Status CheckKinematicQuery(const Grid& stored, PlanQuery* query) {
         "has no cost-to-go field",
         query->planner));
   }
+  if (query->snap_start) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.snap_start: planner %s plans from an exact pose checked with "
+        "its footprint; find a free pose with Nearest and plan from it",
+        query->planner));
+  }
   if (query->robot_radius_cells > 0.0 || query->goal_tolerance_cells > 0.0) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "planner %s takes the robot's shape as a footprint and the goal "
@@ -194,6 +228,9 @@ absl::Status CheckPlanQuery(const Grid& stored, bool stateful, PlanQuery* query)
       request.goal, GoalWithinTolerance(stored, query->requested_goal,
                                         query->goal_tolerance_cells, request.cost,
                                         /*radius_cells=*/0.0));
+  if (query->snap_start) {
+    PATHD_ASSIGN_OR_RETURN(request.start, SnapStart(stored, *query, /*radius_cells=*/0.0));
+  }
   PATHD_RETURN_IF_ERROR(ValidateEndpoints(stored, request));
   PATHD_RETURN_IF_ERROR(CheckCostShaping(*query));
   if (query->via.empty()) return absl::OkStatus();
@@ -222,20 +259,31 @@ absl::StatusOr<PlanAnswer> RunPlanQuery(const PlanQuery& query,
   }
   PlanAnswer answer;
   answer.goal = query.request.goal;
+  answer.start = query.request.start;
   answer.source = PlanSource{snapshot.grid, snapshot.version};
   PATHD_ASSIGN_OR_RETURN(answer.source.grid, PlanningGrid(query, snapshot, engine));
   // Clearance costs block nothing: only the radius moves or refuses endpoints.
   if (query.robot_radius_cells > 0.0) {
     PATHD_ASSIGN_OR_RETURN(answer.goal, GoalOnInflated(query, *answer.source.grid));
-    PATHD_RETURN_IF_ERROR(
-        CheckInscribed(query, answer.goal, *snapshot.grid, *answer.source.grid));
+    if (query.snap_start) {
+      // As the goal: the stored map's choice stands while still free.
+      const Grid& inflated = *answer.source.grid;
+      if (!inflated.InBounds(answer.start) ||
+          !Traversable(inflated.cost(answer.start), query.request.cost.unknown_is_free)) {
+        PATHD_ASSIGN_OR_RETURN(answer.start,
+                               SnapStart(inflated, query, query.robot_radius_cells));
+      }
+    }
+    PATHD_RETURN_IF_ERROR(CheckInscribed(query, answer.start, answer.goal, *snapshot.grid,
+                                         *answer.source.grid));
   }
   // The query as searched: with the goal the radius may have moved.
   const PlanQuery* settled = &query;
   PlanQuery moved;
-  if (!(answer.goal == query.request.goal)) {
+  if (!(answer.goal == query.request.goal) || !(answer.start == query.request.start)) {
     moved = query;
     moved.request.goal = answer.goal;
+    moved.request.start = answer.start;
     settled = &moved;
   }
   std::unique_ptr<DerivedStore> derived;

@@ -45,6 +45,13 @@ struct PlanQuery {
   // 0: a blocked goal is an error; otherwise the nearest cell within this
   // distance (cells) that the robot centre may occupy is planned to.
   double goal_tolerance_cells = 0.0;
+  // A start the robot centre may not occupy (blocked, or inscribed by the
+  // robot radius) is replaced by the nearest cell it may occupy within
+  // snap_start_max_cells (the goal tolerance's rule), instead of being an
+  // error. Grid planners only. requested_start is the start as asked.
+  bool snap_start = false;
+  double snap_start_max_cells = 0.0;
+  Cell requested_start;
   // 0: plan on the map as stored; otherwise on the map with obstacles
   // inflated by this radius (cells).
   double robot_radius_cells = 0.0;
@@ -100,6 +107,8 @@ struct PlanAnswer {
   PlanResult result;
   // The goal planned to (query.request.goal after the tolerance).
   Cell goal;
+  // The start planned from (query.request.start after snap_start).
+  Cell start;
   PlanSource source;
   // Index into (via..., goal) of the last goal result.path reaches; -1 when
   // not even the first was reached. A plain plan is a plan with one leg.

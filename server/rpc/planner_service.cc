@@ -9,6 +9,7 @@
 #include "absl/time/clock.h"
 #include "server/request_log.h"
 #include "server/rpc/cost_to_go.h"
+#include "server/rpc/fleet_queries.h"
 #include "server/rpc/is_path_valid.h"
 #include "server/rpc/plan_batch.h"
 #include "server/rpc/plan_call.h"
@@ -130,6 +131,42 @@ PlannerServiceImpl::PlanBatch(grpc::CallbackServerContext* context) {
           ? static_cast<size_t>(options_.batch_max_inflight)
           : static_cast<size_t>(2 * pool_.threads());
   return ServePlanBatch(Deps(), max_inflight, context);
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::Table(
+    grpc::CallbackServerContext* context, const v1::TableRequest* request,
+    v1::TableResponse* response) {
+  if (auto* refused = RefuseUnauthorized(options_.authenticator, context, kMethodTable)) {
+    return refused;
+  }
+  return ServeTable(Deps(), context, request, response);
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::Nearest(
+    grpc::CallbackServerContext* context, const v1::NearestRequest* request,
+    v1::NearestResponse* response) {
+  if (auto* refused = RefuseUnauthorized(options_.authenticator, context, kMethodNearest)) {
+    return refused;
+  }
+  return ServeNearest(Deps(), context, request, response);
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::Trip(
+    grpc::CallbackServerContext* context, const v1::TripRequest* request,
+    v1::TripResponse* response) {
+  if (auto* refused = RefuseUnauthorized(options_.authenticator, context, kMethodTrip)) {
+    return refused;
+  }
+  return ServeTrip(Deps(), context, request, response);
+}
+
+grpc::ServerUnaryReactor* PlannerServiceImpl::Isochrone(
+    grpc::CallbackServerContext* context, const v1::IsochroneRequest* request,
+    v1::IsochroneResponse* response) {
+  if (auto* refused = RefuseUnauthorized(options_.authenticator, context, kMethodIsochrone)) {
+    return refused;
+  }
+  return ServeIsochrone(Deps(), context, request, response);
 }
 
 }  // namespace pathd::server

@@ -43,6 +43,10 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     // Most cells of a cost-to-go field returned in one message: a Plan's
     // return_cost_to_go map, a CostToGo window (--max_cost_to_go_cells).
     int64_t max_cost_to_go_cells = int64_t{1} << 22;
+    // Table: most sources x destinations (--max_table_entries).
+    int64_t max_table_entries = 250'000;
+    // Trip: most waypoints (--max_trip_stops).
+    int64_t max_trip_stops = 256;
     // gRPC's send limit (--max_message_bytes); a Plan or CostToGo response
     // above it answers RESOURCE_EXHAUSTED naming the flag instead of gRPC's
     // bare "Sent message larger than max". 0 = not checked.
@@ -101,6 +105,21 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   // the pool as Plan's; at most options.batch_max_inflight per stream.
   grpc::ServerBidiReactor<v1::PlanBatchRequest, v1::PlanBatchResponse>* PlanBatch(
       grpc::CallbackServerContext* context) override;
+
+  // The fleet map queries (server/rpc/fleet_queries.h), on the pool like
+  // Plan.
+  grpc::ServerUnaryReactor* Table(grpc::CallbackServerContext* context,
+                                  const v1::TableRequest* request,
+                                  v1::TableResponse* response) override;
+  grpc::ServerUnaryReactor* Nearest(grpc::CallbackServerContext* context,
+                                    const v1::NearestRequest* request,
+                                    v1::NearestResponse* response) override;
+  grpc::ServerUnaryReactor* Trip(grpc::CallbackServerContext* context,
+                                 const v1::TripRequest* request,
+                                 v1::TripResponse* response) override;
+  grpc::ServerUnaryReactor* Isochrone(grpc::CallbackServerContext* context,
+                                      const v1::IsochroneRequest* request,
+                                      v1::IsochroneResponse* response) override;
 
   // A D* Lite session (server/rpc/navigate.h).
   grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>* Navigate(

@@ -9,6 +9,7 @@ PATHD_BIN to the daemon; by hand:
 """
 
 import heapq
+import itertools
 import math
 import os
 import pathlib
@@ -250,6 +251,61 @@ class RealServerTest(unittest.TestCase, PathChecks):
             self.client.plan("inflate", start, goal, options=pathd_client.plan_options(
                 inflation_radius_m=3.0, cost_scaling_factor=0.0))
         self.assertIn("options.cost_scaling_factor", bad.exception.details)
+
+    def test_fleet_queries(self):
+        self.make_map("fleet")
+        blocked = blocked_cells(ROWS)
+        sources = [Cell(1, 3), Cell(12, 4)]
+        destinations = [Cell(12, 1), Cell(3, 6), Cell(6, 0)]
+        # More destinations than sources: the server searches per source.
+        table = self.client.table("fleet", sources, destinations)
+        self.assertEqual(table.method, "FORWARD")
+        for i, s in enumerate(sources):
+            for j, d in enumerate(destinations):
+                self.assertAlmostEqual(table.cost[i][j],
+                                       shortest_cost(14, 8, blocked, s, d), places=6)
+        backward = self.client.table("fleet", sources, destinations, method="backward")
+        self.assertEqual(backward.method, "BACKWARD")
+        again = self.client.table("fleet", sources, destinations, method="backward")
+        self.assertEqual(again.fields_cached, 3)
+        self.assertEqual(again.cost, backward.cost)
+
+        near = self.client.nearest("fleet", (6, 3))
+        self.assertTrue(near.found)
+        self.assertIn(near.cell, (Cell(5, 3), Cell(7, 3)))
+        self.assertAlmostEqual(near.distance_cells, 1.0)
+
+        stops = [Cell(1, 1), Cell(12, 6), Cell(1, 6), Cell(12, 1)]
+        trip = self.client.trip("fleet", stops)
+        self.assertTrue(trip.found and trip.exact)
+        self.assertEqual(sorted(trip.order), [0, 1, 2, 3])
+        self.assertEqual(trip.order[0], 0)
+        best = min(
+            sum(shortest_cost(14, 8, blocked, stops[a], stops[b])
+                for a, b in zip([0, *perm], [*perm, 0]))
+            for perm in itertools.permutations([1, 2, 3]))
+        self.assertAlmostEqual(trip.cost_m, best, places=6)
+        self.assertTrue(trip.plan.found)
+        self.assertEqual(trip.plan.path[0], stops[0])
+        self.assertEqual(trip.plan.path[-1], stops[0])
+
+        iso = self.client.isochrone("fleet", (1, 3), budget_cells=2.5)
+        within = sum(1 for y in range(8) for x in range(14)
+                     if Cell(x, y) not in blocked
+                     and shortest_cost(14, 8, blocked, Cell(1, 3), Cell(x, y)) <= 2.5)
+        self.assertEqual(iso.reachable_cells, within)
+        self.assertEqual(len(iso.polygons), 1)
+        self.assertEqual(iso.geojson()["geometry"]["type"], "MultiPolygon")
+        with self.assertRaisesRegex(ValueError, "one of them"):
+            self.client.isochrone("fleet", (1, 3))
+
+        snapped = self.client.plan("fleet", (6, 3), (12, 4),
+                                   options=pathd_client.plan_options(snap_start=True))
+        self.assertTrue(snapped.found)
+        self.assertTrue(snapped.raw.start_snapped)
+        self.assertEqual(snapped.path[0], Cell(5, 3))  # ties: smaller row, then column
+        with self.assertRaisesRegex(pathd_client.InvalidArgumentError, r"sources\[0\]"):
+            self.client.table("fleet", [(6, 3)], destinations)
 
     def test_errors_carry_the_status(self):
         self.make_map("errors")

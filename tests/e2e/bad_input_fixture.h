@@ -58,6 +58,9 @@ inline constexpr int64_t kMaxMessageBytes = 1536 * 1024;
 inline constexpr int64_t kMaxMapCells = int64_t{1} << 21;
 inline constexpr int kMaxPathPoints = 1000;
 inline constexpr int kMaxCostToGoCells = 10000;
+// --max_table_entries and --max_trip_stops of the daemon under test.
+inline constexpr int kMaxTableEntries = 100;
+inline constexpr int kMaxTripStops = 16;
 // "big" (kBigSide^2 cells) fits --max_map_cells but not one message.
 inline constexpr int kBigSide = 1300;
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -260,6 +263,8 @@ class BadInputTest : public ::testing::Test {
             absl::StrCat("--max_map_cells=", kMaxMapCells),
             absl::StrCat("--max_path_points=", kMaxPathPoints),
             absl::StrCat("--max_cost_to_go_cells=", kMaxCostToGoCells),
+            absl::StrCat("--max_table_entries=", kMaxTableEntries),
+            absl::StrCat("--max_trip_stops=", kMaxTripStops),
             "--threads=2"});
     ASSERT_TRUE(daemon_->listening()) << daemon_->status();
     grpc::ChannelArguments args;
@@ -494,6 +499,7 @@ class BadInputTest : public ::testing::Test {
   void AddNameCases(std::vector<Case>& cases);
   void AddMapCases(std::vector<Case>& cases);
   void AddPlannerCases(std::vector<Case>& cases);
+  void AddFleetCases(std::vector<Case>& cases);
 
   // A map file start-up must skip.
   struct File {

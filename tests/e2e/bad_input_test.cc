@@ -170,6 +170,7 @@ TEST_F(BadInputTest, EveryRpcAnswersBadInputAndKeepsServing) {
   AddNameCases(cases);
   AddMapCases(cases);
   AddPlannerCases(cases);
+  AddFleetCases(cases);
 
   ASSERT_NO_FATAL_FAILURE(Run(cases));
 

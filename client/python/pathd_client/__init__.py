@@ -37,13 +37,17 @@ from pathd_client.values import (
     Change,
     WorldPose,
     ChangedRect,
+    IsochroneResult,
     MapCells,
     MapEvent,
     MapInfo,
     NavigateUpdate,
+    NearestResult,
     PlanResult,
     SetCell,
     SetRect,
+    TableResult,
+    TripResult,
     UpdateResult,
     plan_options,
 )
@@ -56,4 +60,5 @@ __all__ = [
     "NavigationSession", "NotFoundError", "PathdClient", "PathdError",
     "PlanResult", "ResourceExhaustedError", "SetCell", "SetRect",
     "UnavailableError", "UpdateResult", "WorldPose", "make_error", "plan_options",
+    "TableResult", "NearestResult", "TripResult", "IsochroneResult",
 ]

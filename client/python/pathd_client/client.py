@@ -22,7 +22,8 @@ from pathd_client.errors import _from_rpc_error
 from pathd_client.streams import MapWatch, NavigationSession
 from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CellLike, Change,
                                  PositionLike,
-                                 MapCells, MapInfo, PlanResult, UpdateResult,
+                                 IsochroneResult, MapCells, MapInfo, NearestResult,
+                                 PlanResult, TableResult, TripResult, UpdateResult,
                                  _change_proto, _planner, _position)
 
 
@@ -154,6 +155,69 @@ class PathdClient:
             planner=_planner(planner), options=options)
         return PlanResult.from_proto(
             self._call(self._planner.Plan, request, map_name, timeout))
+
+    def table(self, map_name: str, sources: Sequence[PositionLike],
+              destinations: Sequence[PositionLike], *, method: str | None = None,
+              options: planner_service_pb2.PlanOptions | None = None,
+              timeout: float | None = None) -> TableResult:
+        """Cheapest costs from every source to every destination (OSRM's
+        table); None where no path exists. `method` "backward" (one cached
+        cost-to-go field per destination), "forward" (one search per source)
+        or None (the server's choice). `options` carries the cost options and
+        robot radius (plan_options())."""
+        request = planner_service_pb2.TableRequest(
+            map=map_name, sources=[_position(p) for p in sources],
+            destinations=[_position(p) for p in destinations], options=options)
+        if method:
+            request.method = planner_service_pb2.TableMethod.Value(
+                "TABLE_METHOD_" + method.upper())
+        return TableResult.from_proto(
+            self._call(self._planner.Table, request, map_name, timeout))
+
+    def nearest(self, map_name: str, point: PositionLike, *,
+                max_distance_m: float | None = None,
+                options: planner_service_pb2.PlanOptions | None = None,
+                timeout: float | None = None) -> NearestResult:
+        """The nearest cell to `point` where the robot (options' robot radius,
+        or polygon footprint at the point's heading) may stand."""
+        request = planner_service_pb2.NearestRequest(
+            map=map_name, point=_position(point), options=options)
+        if max_distance_m is not None:
+            request.max_distance_m = max_distance_m
+        return NearestResult.from_proto(
+            self._call(self._planner.Nearest, request, map_name, timeout))
+
+    def trip(self, map_name: str, waypoints: Sequence[PositionLike], *,
+             end: str = "round_trip", planner: str | None = None,
+             options: planner_service_pb2.PlanOptions | None = None,
+             timeout: float | None = None) -> TripResult:
+        """The order to visit `waypoints` starting at the first: `end`
+        "round_trip" (back to it), "fixed_last" or "any"; exact up to 12
+        stops, a local search with a lower bound above. The legs come back
+        as one plan."""
+        request = planner_service_pb2.TripRequest(
+            map=map_name, waypoints=[_position(p) for p in waypoints],
+            end=planner_service_pb2.TripEnd.Value("TRIP_END_" + end.upper()),
+            planner=_planner(planner), options=options)
+        return TripResult.from_proto(
+            self._call(self._planner.Trip, request, map_name, timeout))
+
+    def isochrone(self, map_name: str, start: PositionLike, *,
+                  budget_m: float | None = None, budget_cells: float | None = None,
+                  options: planner_service_pb2.PlanOptions | None = None,
+                  timeout: float | None = None) -> IsochroneResult:
+        """The region reachable from `start` within a cost budget (metres or
+        cells, one of them), as polygons with holes in world metres."""
+        if (budget_m is None) == (budget_cells is None):
+            raise ValueError("give budget_m or budget_cells, one of them")
+        request = planner_service_pb2.IsochroneRequest(
+            map=map_name, start=_position(start), options=options)
+        if budget_m is not None:
+            request.budget_m = budget_m
+        else:
+            request.budget_cells = budget_cells
+        return IsochroneResult.from_proto(
+            self._call(self._planner.Isochrone, request, map_name, timeout))
 
     def navigate(self, map_name: str, start: PositionLike, goal: PositionLike, *,
                  options: planner_service_pb2.PlanOptions | None = None,

@@ -159,6 +159,120 @@ class PlanResult:
 
 
 @dataclasses.dataclass(frozen=True)
+class TableResult:
+    """A Table answer: cost_m[i][j] and length_m[i][j] from source i to
+    destination j in metres (cost in cells too), None where no path exists.
+    `method` is "BACKWARD" (one cost-to-go field per destination, from the
+    server's cache when `fields_cached` says so) or "FORWARD"."""
+
+    cost: list[list[float | None]]
+    cost_m: list[list[float | None]]
+    length_m: list[list[float | None]]
+    method: str
+    fields_cached: int
+    map_version: int
+    raw: planner_service_pb2.TableResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.TableResponse) -> TableResult:
+        m = len(r.destinations)
+        rows = [r.entries[i * m:(i + 1) * m] for i in range(len(r.sources))]
+
+        def grid(field):
+            return [[getattr(e, field) if e.reachable else None for e in row] for row in rows]
+        return cls(cost=grid("cost"), cost_m=grid("cost_m"), length_m=grid("length_m"),
+                   method=_enum_name(planner_service_pb2.TableMethod, r.method,
+                                     "TABLE_METHOD_"),
+                   fields_cached=r.fields_cached, map_version=r.map_version, raw=r)
+
+
+@dataclasses.dataclass(frozen=True)
+class NearestResult:
+    """The nearest cell where the robot may stand (`found` False: none within
+    the distance), its centre in the world frame and its distance."""
+
+    found: bool
+    cell: Cell | None
+    world: tuple[float, float] | None
+    distance_m: float
+    distance_cells: float
+    raw: planner_service_pb2.NearestResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.NearestResponse) -> NearestResult:
+        return cls(found=r.found, cell=Cell(r.cell.x, r.cell.y) if r.found else None,
+                   world=(r.world.x, r.world.y) if r.found else None,
+                   distance_m=r.distance_m, distance_cells=r.distance_cells, raw=r)
+
+
+@dataclasses.dataclass(frozen=True)
+class TripResult:
+    """A Trip answer: the waypoint indices in visiting order (starting with
+    0; a round trip does not repeat it), its cost and a lower bound in
+    metres, and the legs as one plan. `found` False with `reason` when no
+    order joins every stop."""
+
+    found: bool
+    reason: str
+    order: list[int]
+    cost_m: float
+    lower_bound_m: float
+    gap: float
+    exact: bool
+    method: str
+    bound_method: str
+    plan: PlanResult | None
+    raw: planner_service_pb2.TripResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.TripResponse) -> TripResult:
+        return cls(found=r.found, reason=r.reason, order=list(r.order), cost_m=r.cost_m,
+                   lower_bound_m=r.lower_bound_m, gap=r.gap, exact=r.exact,
+                   method=r.method, bound_method=r.bound_method,
+                   plan=PlanResult.from_proto(r.plan) if r.HasField("plan") else None, raw=r)
+
+
+@dataclasses.dataclass(frozen=True)
+class IsochroneResult:
+    """The region reachable within a budget: `polygons` in world metres, each
+    a list of rings [(x, y), ...] (open: the last point joins the first), the
+    exterior first and then its holes. A cell is reachable exactly when its
+    centre is inside a polygon."""
+
+    polygons: list[list[list[tuple[float, float]]]]
+    reachable_cells: int
+    area_m2: float
+    budget_m: float
+    map_version: int
+    raw: planner_service_pb2.IsochroneResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.IsochroneResponse) -> IsochroneResult:
+        def ring(rg):
+            return [(p.x, p.y) for p in rg.points]
+        return cls(polygons=[[ring(p.world_exterior)] + [ring(h) for h in p.world_holes]
+                             for p in r.polygons],
+                   reachable_cells=r.reachable_cells, area_m2=r.area_m2,
+                   budget_m=r.budget_m, map_version=r.map_version, raw=r)
+
+    def geojson(self) -> dict:
+        """The region as a GeoJSON (RFC 7946) Feature with a MultiPolygon,
+        each ring closed, as `pathctl isochrone --output geojson` prints."""
+        def closed(r):
+            return [list(p) for p in r] + ([list(r[0])] if r else [])
+        return {"type": "Feature",
+                "geometry": {"type": "MultiPolygon",
+                             "coordinates": [[closed(r) for r in poly] for poly in self.polygons]},
+                "properties": {"budget_m": self.budget_m,
+                               "reachable_cells": self.reachable_cells,
+                               "area_m2": self.area_m2}}
+
+
+@dataclasses.dataclass(frozen=True)
 class NavigateUpdate:
     """One message of a Navigate session's server side.
 
@@ -289,7 +403,9 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  goal_yaw_tolerance: float | None = None,
                  reverse_penalty: float | None = None,
                  lattice: str = "",
-                 smooth: bool | None = None) -> planner_service_pb2.PlanOptions:
+                 smooth: bool | None = None,
+                 snap_start: bool = False,
+                 snap_start_max_m: float | None = None) -> planner_service_pb2.PlanOptions:
     """The common PlanOptions; build the message yourself for the rest.
 
     min_clearance_m: grid planners prefer keeping this far from obstacles
@@ -307,6 +423,10 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     grid planners: cells up to inflation_radius_m from a lethal cell, beyond
     the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
     robot radius)); the factor is per metre, unset means Nav2's 10.
+    snap_start: a start on a blocked cell or within the robot radius of an
+    obstacle moves to the nearest free cell within snap_start_max_m (unset:
+    twice the robot radius, at least 2 cells); the PlanResult's
+    raw.start_snapped says it did.
     """
     if robot_radius_cells is not None and robot_radius_m is not None:
         raise ValueError("give robot_radius_cells or robot_radius_m, not both")
@@ -344,4 +464,7 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
         options.inflation_radius_m = inflation_radius_m
     if cost_scaling_factor is not None:
         options.cost_scaling_factor = cost_scaling_factor
+    options.snap_start = snap_start
+    if snap_start_max_m is not None:
+        options.snap_start_max_m = snap_start_max_m
     return options

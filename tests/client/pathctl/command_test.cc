@@ -72,7 +72,8 @@ TEST(RunTest, UnknownAndMissingCommandsListTheCommands) {
   EXPECT_TRUE(absl::StrContains(
       r.err,
       "unknown command 'frobnicate'; expected maps, plan, batch, navigate, cost-to-go, "
-      "check, cache-stats, health, metrics, bench, render, completion, help"))
+      "check, cache-stats, health, metrics, bench, table, nearest, trip, isochrone, "
+      "render, completion, help"))
       << r.err;
   r = RunArgs({"maps", "shred"});
   EXPECT_TRUE(absl::StrContains(r.err, "unknown maps subcommand 'shred'; expected "

@@ -1,0 +1,184 @@
+// bad_input_test's rows for the fleet map queries: Table, Nearest, Trip and
+// Isochrone, and Plan's snap_start options. pathd runs with
+// --max_table_entries=kMaxTableEntries and --max_trip_stops=kMaxTripStops.
+#include <utility>
+
+#include "tests/e2e/bad_input_fixture.h"
+
+namespace pathd::bad_input_test {
+
+void BadInputTest::AddFleetCases(std::vector<Case>& cases) {
+  const auto table_case = [&](const std::string& what,
+                              std::function<void(v1::TableRequest&)> change, StatusCode code,
+                              const std::string& message) {
+    v1::TableRequest request;
+    request.set_map("room");
+    *request.add_sources() = CellPos(1, 1);
+    *request.add_sources() = CellPos(2, 1);
+    *request.add_destinations() = CellPos(14, 14);
+    change(request);
+    cases.push_back({"Table", what,
+                     [=, this] {
+                       v1::TableResponse response;
+                       return planner_->Table(Context().get(), request, &response);
+                     },
+                     code, message});
+  };
+  using T = v1::TableRequest;
+  table_case("no sources", [](T& r) { r.clear_sources(); }, StatusCode::INVALID_ARGUMENT,
+             "sources: give at least one");
+  table_case("no destinations", [](T& r) { r.clear_destinations(); },
+             StatusCode::INVALID_ARGUMENT, "destinations: give at least one");
+  table_case(
+      "too many sources",
+      [](T& r) {
+        for (int i = 0; i < kMaxTableEntries; ++i) *r.add_sources() = CellPos(1, 1);
+      },
+      StatusCode::RESOURCE_EXHAUSTED, "--max_table_entries");
+  table_case(
+      "source off the map",
+      [](T& r) {
+        *r.add_sources() = CellPos(3, 1);
+        *r.add_sources() = CellPos(99, 1);
+      },
+      StatusCode::INVALID_ARGUMENT, "sources[3]");
+  table_case("source unset", [](T& r) { r.add_sources(); }, StatusCode::INVALID_ARGUMENT,
+             "sources[2] is not set");
+  table_case("destination on a blocked cell",
+             [](T& r) { *r.add_destinations() = CellPos(5, 5); }, StatusCode::INVALID_ARGUMENT,
+             "destinations[1] (5, 5) is on a blocked cell");
+  table_case("NaN world source", [](T& r) { *r.mutable_sources(0) = WorldPos(kNaN, 1); },
+             StatusCode::INVALID_ARGUMENT, "sources[0] world point (nan, 1) is not finite");
+  table_case("negative cost weight",
+             [](T& r) { r.mutable_options()->set_cost_weight(-1); },
+             StatusCode::INVALID_ARGUMENT, "cost_weight");
+  table_case("negative robot radius",
+             [](T& r) { r.mutable_options()->set_robot_radius_m(-1); },
+             StatusCode::INVALID_ARGUMENT, "robot_radius_m");
+
+  const auto nearest_case = [&](const std::string& what,
+                                std::function<void(v1::NearestRequest&)> change,
+                                StatusCode code, const std::string& message) {
+    v1::NearestRequest request;
+    request.set_map("room");
+    *request.mutable_point() = CellPos(5, 5);
+    change(request);
+    cases.push_back({"Nearest", what,
+                     [=, this] {
+                       v1::NearestResponse response;
+                       return planner_->Nearest(Context().get(), request, &response);
+                     },
+                     code, message});
+  };
+  using N = v1::NearestRequest;
+  nearest_case("point unset", [](N& r) { r.clear_point(); }, StatusCode::INVALID_ARGUMENT,
+               "point is not set");
+  nearest_case("infinite point", [](N& r) { *r.mutable_point() = WorldPos(kInf, 1); },
+               StatusCode::INVALID_ARGUMENT, "point");
+  nearest_case("negative max distance", [](N& r) { r.set_max_distance_m(-2); },
+               StatusCode::INVALID_ARGUMENT, "max_distance_m -2 must be finite and >= 0");
+  nearest_case("max distance over the limit", [](N& r) { r.set_max_distance_cells(5000); },
+               StatusCode::INVALID_ARGUMENT, "max_distance_cells 5000 is 5000 cells");
+
+  const auto trip_case = [&](const std::string& what,
+                             std::function<void(v1::TripRequest&)> change, StatusCode code,
+                             const std::string& message) {
+    v1::TripRequest request;
+    request.set_map("room");
+    *request.add_waypoints() = CellPos(1, 1);
+    *request.add_waypoints() = CellPos(14, 14);
+    *request.add_waypoints() = CellPos(1, 14);
+    change(request);
+    cases.push_back({"Trip", what,
+                     [=, this] {
+                       v1::TripResponse response;
+                       return planner_->Trip(Context().get(), request, &response);
+                     },
+                     code, message});
+  };
+  using R = v1::TripRequest;
+  trip_case(
+      "one waypoint", [](R& r) { r.mutable_waypoints()->DeleteSubrange(1, 2); },
+      StatusCode::INVALID_ARGUMENT, "a trip needs at least 2, not 1");
+  trip_case(
+      "too many waypoints",
+      [](R& r) {
+        for (int i = 0; i < kMaxTripStops; ++i) *r.add_waypoints() = CellPos(1, 1);
+      },
+      StatusCode::RESOURCE_EXHAUSTED, "--max_trip_stops");
+  trip_case("waypoint on a blocked cell", [](R& r) { *r.mutable_waypoints(1) = CellPos(5, 5); },
+            StatusCode::INVALID_ARGUMENT, "waypoints[1] (5, 5) is on a blocked cell");
+  trip_case("spm legs", [](R& r) { r.set_planner(v1::PLANNER_SPM); },
+            StatusCode::INVALID_ARGUMENT, "planner: the legs are planned through via points");
+  trip_case("kinematic legs", [](R& r) { r.set_planner(v1::PLANNER_HYBRID_ASTAR); },
+            StatusCode::INVALID_ARGUMENT, "plans between poses");
+  trip_case("unknown planner", [](R& r) { r.set_planner(static_cast<v1::Planner>(999)); },
+            StatusCode::INVALID_ARGUMENT, "unknown planner 999");
+
+  const auto iso_case = [&](const std::string& what,
+                            std::function<void(v1::IsochroneRequest&)> change,
+                            StatusCode code, const std::string& message) {
+    v1::IsochroneRequest request;
+    request.set_map("room");
+    *request.mutable_start() = CellPos(1, 1);
+    request.set_budget_m(5);
+    change(request);
+    cases.push_back({"Isochrone", what,
+                     [=, this] {
+                       v1::IsochroneResponse response;
+                       return planner_->Isochrone(Context().get(), request, &response);
+                     },
+                     code, message});
+  };
+  using I = v1::IsochroneRequest;
+  iso_case("negative budget", [](I& r) { r.set_budget_m(-1); }, StatusCode::INVALID_ARGUMENT,
+           "budget_m -1 must be finite and >= 0");
+  iso_case("NaN budget", [](I& r) { r.set_budget_cells(kNaN); },
+           StatusCode::INVALID_ARGUMENT, "budget_cells nan must be finite and >= 0");
+  iso_case("budget unset", [](I& r) { r.clear_budget(); }, StatusCode::INVALID_ARGUMENT,
+           "budget_m or budget_cells is required");
+  iso_case("start blocked", [](I& r) { *r.mutable_start() = CellPos(5, 5); },
+           StatusCode::INVALID_ARGUMENT, "start (5, 5) is on a blocked cell");
+  iso_case("start inscribed by the robot radius",
+           [](I& r) {
+             *r.mutable_start() = CellPos(4, 4);
+             r.mutable_options()->set_robot_radius_cells(1.5);
+           },
+           StatusCode::INVALID_ARGUMENT, "start (4, 4) is within the robot radius");
+  trip_case("waypoint inscribed by the robot radius",
+            [](R& r) {
+              *r.mutable_waypoints(2) = CellPos(4, 4);
+              r.mutable_options()->set_robot_radius_cells(1.5);
+            },
+            StatusCode::INVALID_ARGUMENT, "waypoints[2] (4, 4) is within the robot radius");
+  iso_case("start off the map", [](I& r) { *r.mutable_start() = CellPos(-4, 1); },
+           StatusCode::INVALID_ARGUMENT, "start");
+
+  // ---- Plan: snap_start ----
+  const auto snap_case = [&](const std::string& what,
+                             std::function<void(v1::PlanRequest&)> change, StatusCode code,
+                             const std::string& message) {
+    v1::PlanRequest request = GoodPlan();
+    request.mutable_options()->set_snap_start(true);
+    change(request);
+    cases.push_back({"Plan", what, [=, this] { return Plan(request); }, code, message});
+  };
+  using P = v1::PlanRequest;
+  snap_case("negative snap_start_max",
+            [](P& r) { r.mutable_options()->set_snap_start_max_m(-1); },
+            StatusCode::INVALID_ARGUMENT, "options.snap_start_max_m -1 must be finite and >= 0");
+  snap_case("snap_start_max over the limit",
+            [](P& r) { r.mutable_options()->set_snap_start_max_cells(2000); },
+            StatusCode::INVALID_ARGUMENT, "options.snap_start_max_cells 2000 is 2000 cells");
+  snap_case("snap_start with no free cell near",
+            [](P& r) {
+              *r.mutable_start() = CellPos(5, 5);
+              r.mutable_options()->set_snap_start_max_cells(0.5);
+            },
+            StatusCode::INVALID_ARGUMENT, "options.snap_start found no cell within");
+  snap_case("snap_start with a kinematic planner",
+            [](P& r) { r.set_planner(v1::PLANNER_HYBRID_ASTAR); },
+            StatusCode::INVALID_ARGUMENT, "options.snap_start: planner hybrid_astar");
+}
+
+}  // namespace pathd::bad_input_test
