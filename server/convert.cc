@@ -599,7 +599,10 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
                        v1::PlanResponse* response) {
   const PlanResult& result = answer.result;
   const Grid& grid = *answer.source.grid;
-  PlanRequest planned = PlanRequest::Between(answer.start, answer.goal);
+  // answer.start is RunPlanQuery's; callers that build an answer themselves
+  // (Navigate sessions) plan from the query's start and never snap.
+  const Cell start = query.snap_start ? answer.start : query.request.start;
+  PlanRequest planned = PlanRequest::Between(start, answer.goal);
   FillResult(result, planned, grid, query.max_expansions, response);
   if (answer.cost_to_go_field != nullptr && query.request.want_cost_to_go) {
     // Widened float -> double once, into the message (the wire type).

@@ -107,7 +107,8 @@ struct PlanAnswer {
   PlanResult result;
   // The goal planned to (query.request.goal after the tolerance).
   Cell goal;
-  // The start planned from (query.request.start after snap_start).
+  // The start planned from (query.request.start after snap_start); set by
+  // RunPlanQuery, read by BuildPlanResponse only for a snap_start query.
   Cell start;
   PlanSource source;
   // Index into (via..., goal) of the last goal result.path reaches; -1 when
