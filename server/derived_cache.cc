@@ -171,7 +171,7 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
 }
 
 bool DerivedCache::AwaitLocked(Entry* entry, const DerivedStop& stop) {
-  const absl::Condition done(+[](Entry* e) { return e->done; }, entry);
+  const absl::Condition done(+[](Entry* e) -> bool { return e->done.load(); }, entry);
   // The deadline wakes the wait on time; the cancel flag is only read, so
   // the wait comes up for it every kStopPollInterval.
   while (!mu_.AwaitWithDeadline(

@@ -7,6 +7,7 @@
 #ifndef PATHD_SERVER_DERIVED_CACHE_H_
 #define PATHD_SERVER_DERIVED_CACHE_H_
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <list>
@@ -108,7 +109,11 @@ class DerivedCache {
     // Under the cache's mu_: the maker sets them with done, waiters Await it.
     // Done with a null value: the maker gave up (stopped or threw) and the
     // entry left the list.
-    bool done = false;
+    // Atomic although only read and written under mu_: absl evaluates a
+    // waiter's Condition inside Mutex::Unlock of another thread, where
+    // ThreadSanitizer (with Debian's uninstrumented absl) sees no lock and
+    // reported the flag as a race.
+    std::atomic<bool> done{false};
     std::shared_ptr<const void> value;
     size_t bytes = 0;
     bool advanced = false;
