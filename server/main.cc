@@ -29,6 +29,7 @@
 #include "absl/types/span.h"
 #include "server/config_file.h"
 #include "server/listening_line.h"
+#include "server/memory_budget.h"
 #include "server/server.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
@@ -403,6 +404,7 @@ pathd::server::ServerOptions OptionsFromFlags() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pathd::server::PinAllocatorThresholds();
   SetUpFlagsUsage();
   // --data-dir reads as --data_dir (see NormalizeFlagSpelling).
   std::vector<std::string> spelled =

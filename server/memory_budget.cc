@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -25,6 +27,17 @@ int64_t Share(int64_t limit, double share) {
 }
 
 }  // namespace
+
+void PinAllocatorThresholds() {
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  if (tunables != nullptr && (std::strstr(tunables, "malloc.mmap_threshold") != nullptr ||
+                              std::strstr(tunables, "malloc.trim_threshold") != nullptr)) {
+    return;  // the operator's choice
+  }
+  // Both set: mallopt of either turns off glibc's dynamic adjustment of both.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 4 << 20);
+}
 
 // ---- Reservation ----
 

@@ -26,6 +26,18 @@
 
 namespace pathd::server {
 
+// Fixes glibc's trim threshold at 4 MiB and its mmap threshold at 32 MiB
+// (the most it allows), unless GLIBC_TUNABLES sets either. By default glibc
+// raises the trim threshold to twice the largest block freed so far: after a
+// closed session's 16 MiB of D* Lite arrays, every thread arena may keep 32
+// MiB of free top chunk resident, which malloc_trim does not reach, and
+// limits_test saw RSS stay 75 MiB above its baseline after everything
+// closed. A fixed 4 MiB returns an arena's free top at once; the 32 MiB mmap
+// threshold keeps blocks up to that size on the heap, where they are reused
+// without fresh page faults (a 1 MiB threshold made limits_test's workload
+// twice as slow). Call once, before any thread starts.
+void PinAllocatorThresholds();
+
 // Thread-safe. Reservations are estimates made at admission (a session's D*
 // Lite arrays, a watcher's worst-case backlog) and kept up to date as the
 // holder learns its real size; the caches are bounded by their own flags and
