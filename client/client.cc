@@ -363,6 +363,15 @@ absl::StatusOr<v1::IsochroneResponse> PathdClient::Isochrone(const v1::Isochrone
       });
 }
 
+absl::StatusOr<v1::PlanFleetResponse> PathdClient::PlanFleet(
+    const v1::PlanFleetRequest& request) const {
+  return InvokeOnMap<v1::PlanFleetResponse>(
+      timeout_, request.map(),
+      [&](grpc::ClientContext* context, v1::PlanFleetResponse* response) {
+        return planner_->PlanFleet(context, request, response);
+      });
+}
+
 absl::StatusOr<v1::IsPathValidResponse> PathdClient::IsPathValid(
     const v1::IsPathValidRequest& request) const {
   return InvokeOnMap<v1::IsPathValidResponse>(

@@ -144,6 +144,9 @@ class PathdClient {
   absl::StatusOr<v1::TripResponse> Trip(const v1::TripRequest& request) const;
   absl::StatusOr<v1::IsochroneResponse> Isochrone(
       const v1::IsochroneRequest& request) const;
+  // Conflict-free timed paths for many robots; "no plan" (found = false)
+  // is an OK response.
+  absl::StatusOr<v1::PlanFleetResponse> PlanFleet(const v1::PlanFleetRequest& request) const;
   // An invalid path is an OK response with valid = false.
   absl::StatusOr<v1::IsPathValidResponse> IsPathValid(
       const v1::IsPathValidRequest& request) const;

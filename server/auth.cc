@@ -54,6 +54,7 @@ constexpr MethodRole kMethodRoles[] = {
     {kMethodNearest, Role::kRead},
     {kMethodTrip, Role::kRead},
     {kMethodIsochrone, Role::kRead},
+    {kMethodPlanFleet, Role::kRead},
     {"/grpc.health.v1.Health/Check", Role::kPublic},
     {"/grpc.health.v1.Health/Watch", Role::kPublic},
     {"/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",

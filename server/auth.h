@@ -63,6 +63,7 @@ inline constexpr char kMethodTable[] = "/pathd.v1.PlannerService/Table";
 inline constexpr char kMethodNearest[] = "/pathd.v1.PlannerService/Nearest";
 inline constexpr char kMethodTrip[] = "/pathd.v1.PlannerService/Trip";
 inline constexpr char kMethodIsochrone[] = "/pathd.v1.PlannerService/Isochrone";
+inline constexpr char kMethodPlanFleet[] = "/pathd.v1.PlannerService/PlanFleet";
 // Not an RPC: a Navigate observation with session_only = false writes the
 // shared map like UpdateMap, so it needs the role UpdateMap needs.
 inline constexpr char kNavigateSharedObservation[] =

@@ -65,6 +65,8 @@ ABSL_FLAG(int64_t, max_table_entries, 250'000,
           "(RESOURCE_EXHAUSTED beyond)");
 ABSL_FLAG(int64_t, max_trip_stops, 256,
           "most waypoints a Trip call may order (RESOURCE_EXHAUSTED beyond)");
+ABSL_FLAG(int64_t, max_fleet_robots, 1000,
+          "most robots a PlanFleet call may plan (RESOURCE_EXHAUSTED beyond)");
 ABSL_FLAG(int64_t, max_message_bytes, 0,
           "largest gRPC message received or sent (gRPC answers "
           "RESOURCE_EXHAUSTED beyond); 0 = max_map_cells + 1 MiB, so a "
@@ -314,6 +316,8 @@ pathd::server::ServerOptions OptionsFromFlags() {
   if (options.max_table_entries < 1) FlagError("max_table_entries", "must be >= 1");
   options.max_trip_stops = absl::GetFlag(FLAGS_max_trip_stops);
   if (options.max_trip_stops < 2) FlagError("max_trip_stops", "must be >= 2");
+  options.max_fleet_robots = absl::GetFlag(FLAGS_max_fleet_robots);
+  if (options.max_fleet_robots < 1) FlagError("max_fleet_robots", "must be >= 1");
   options.max_message_bytes = absl::GetFlag(FLAGS_max_message_bytes);
   if (options.max_message_bytes < 0 || options.max_message_bytes > INT32_MAX) {
     FlagError("max_message_bytes", "must be in 0..2147483647 (gRPC's limit)");

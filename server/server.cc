@@ -184,6 +184,7 @@ absl::Status PathdServer::Start() {
   planner_options.max_cost_to_go_cells = options_.max_cost_to_go_cells;
   planner_options.max_table_entries = options_.max_table_entries;
   planner_options.max_trip_stops = options_.max_trip_stops;
+  planner_options.max_fleet_robots = options_.max_fleet_robots;
   planner_options.max_message_bytes = max_message_bytes();
   planner_options.progress_interval = options_.progress_interval;
   planner_options.batch_max_inflight = options_.batch_max_inflight;

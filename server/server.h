@@ -51,6 +51,8 @@ struct ServerOptions {
   int64_t max_table_entries = 250'000;
   // Trip: most waypoints per call.
   int64_t max_trip_stops = 256;
+  // PlanFleet: most robots per call.
+  int64_t max_fleet_robots = 1000;
   // Largest gRPC message received or sent; 0 = max_map_cells + 1 MiB, so a
   // raw CreateMap of the largest map fits.
   int64_t max_message_bytes = 0;

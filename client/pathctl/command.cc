@@ -26,7 +26,7 @@ const Command* const kCommands[] = {
     &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand,
     &kHealthCommand,     &kMetricsCommand,    &kBenchCommand,
     &kTableCommand,      &kNearestCommand,    &kTripCommand,
-    &kIsochroneCommand,
+    &kIsochroneCommand,  &kFleetPlanCommand,
     &kRenderCommand,     &kCompletionCommand, &kHelpCommand,
 };
 

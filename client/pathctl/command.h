@@ -109,6 +109,7 @@ extern const Command kTableCommand;
 extern const Command kNearestCommand;
 extern const Command kTripCommand;
 extern const Command kIsochroneCommand;
+extern const Command kFleetPlanCommand;
 extern const Command kCheckCommand;
 extern const Command kCacheStatsCommand;
 extern const Command kHealthCommand;

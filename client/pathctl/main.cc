@@ -151,6 +151,19 @@ ABSL_FLAG(std::optional<double>, max_distance_cells, std::nullopt,
 ABSL_FLAG(std::optional<double>, budget, std::nullopt, "isochrone: cost budget, metres");
 ABSL_FLAG(std::optional<double>, budget_cells, std::nullopt,
           "isochrone: cost budget, cells");
+ABSL_FLAG(std::string, robots, "",
+          "fleet plan: file with one 'SX SY GX GY [RADIUS_M]' line per robot (cells; "
+          "metres with --world)");
+ABSL_FLAG(std::string, solver, "", "fleet plan: lacam (default), pibt, prioritized or cbs");
+ABSL_FLAG(std::optional<double>, time_limit, std::nullopt,
+          "fleet plan: the solver's time limit, seconds (then it answers with the best "
+          "plan so far; default 10)");
+ABSL_FLAG(std::optional<double>, suboptimality, std::nullopt,
+          "fleet plan --solver cbs: above 1, ECBS within this factor of optimal");
+ABSL_FLAG(std::optional<int32_t>, restarts, std::nullopt,
+          "fleet plan --solver prioritized: priority orders tried after the first");
+ABSL_FLAG(std::optional<int32_t>, max_steps, std::nullopt,
+          "fleet plan: longest timed path, steps");
 ABSL_FLAG(bool, snap_start, false,
           "plan: a start in an obstacle or within the robot radius of one moves "
           "to the nearest free cell");
@@ -171,7 +184,9 @@ ABSL_FLAG(absl::Duration, warmup, absl::Seconds(1),
 ABSL_FLAG(int64_t, requests, 0, "bench: stop after N measured requests (0: no limit)");
 ABSL_FLAG(std::string, movingai, "",
           "bench: load this Moving AI .map and take queries from its .scen");
-ABSL_FLAG(uint64_t, seed, 1, "bench: seed of the random queries and the shuffle");
+ABSL_FLAG(uint64_t, seed, 1,
+          "bench: seed of the random queries and the shuffle; fleet plan: seed of the "
+          "solver's random choices");
 ABSL_FLAG(bool, plan, false,
           "render: plan from SX SY to GX GY and draw the path");
 ABSL_FLAG(std::string, out, "", "render: write the picture to this PNG file");
@@ -345,6 +360,13 @@ int main(int argc, char** argv) {
   fleet.max_distance_cells = absl::GetFlag(FLAGS_max_distance_cells);
   fleet.budget_m = absl::GetFlag(FLAGS_budget);
   fleet.budget_cells = absl::GetFlag(FLAGS_budget_cells);
+  fleet.robots = absl::GetFlag(FLAGS_robots);
+  fleet.solver = absl::GetFlag(FLAGS_solver);
+  fleet.time_limit_s = absl::GetFlag(FLAGS_time_limit);
+  fleet.suboptimality = absl::GetFlag(FLAGS_suboptimality);
+  fleet.restarts = absl::GetFlag(FLAGS_restarts);
+  fleet.max_steps = absl::GetFlag(FLAGS_max_steps);
+  fleet.seed = absl::GetFlag(FLAGS_seed);
 
   pathctl::BenchOptions& bench = options.bench;
   bench.concurrency = absl::GetFlag(FLAGS_concurrency);

@@ -168,6 +168,15 @@ struct FleetOptions {
   // isochrone: the budget.
   std::optional<double> budget_m;
   std::optional<double> budget_cells;
+  // fleet plan: the robots file, the solver and its options (unset: the
+  // server's defaults).
+  std::string robots;
+  std::string solver;
+  std::optional<double> time_limit_s;
+  std::optional<double> suboptimality;
+  std::optional<int32_t> restarts;
+  std::optional<int32_t> max_steps;
+  uint64_t seed = 1;
 };
 
 struct MetricsOptions {

@@ -115,6 +115,16 @@ Rgb CostColour(uint8_t cost) {
   return kUnknownColour;
 }
 
+Rgb FleetColour(size_t robot) {
+  // Twelve of Sasha Trubetskoy's "20 simple distinct colours" (no white,
+  // black, greys or pastels, which vanish on the map's greys).
+  static constexpr Rgb kPalette[] = {
+      {230, 25, 75},  {60, 180, 75},  {0, 130, 200}, {245, 130, 48},
+      {145, 30, 180}, {70, 200, 220}, {240, 50, 230}, {170, 110, 40},
+      {128, 0, 0},    {0, 128, 128},  {128, 128, 0}, {0, 0, 128}};
+  return kPalette[robot % std::size(kPalette)];
+}
+
 int DefaultScale(int32_t width, int32_t height) {
   const int32_t side = std::max(width, height);
   if (side <= 0) return 1;
@@ -220,6 +230,27 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
   };
   marker(overlay.start, kStartColour);
   marker(overlay.goal, kGoalColour);
+  for (size_t i = 0; i < overlay.fleet_paths.size(); ++i) {
+    const std::vector<Cell>& path = overlay.fleet_paths[i];
+    const Rgb colour = FleetColour(i);
+    for (size_t t = 0; t + 1 < path.size(); ++t) {
+      if (!grid.InBounds(path[t]) || !grid.InBounds(path[t + 1])) continue;
+      ForEachLinePoint(centre_x(path[t]), centre_y(path[t]), centre_x(path[t + 1]),
+                       centre_y(path[t + 1]), [&](int64_t x, int64_t y) {
+                         canvas.FillRect(x - half_width, y - half_width, 2 * half_width + 1,
+                                         colour);
+                       });
+    }
+    if (path.empty()) continue;
+    marker(path.front(), colour);
+    // The goal: a ring (the colour around a white centre).
+    marker(path.back(), colour);
+    if (grid.InBounds(path.back())) {
+      canvas.FillDisc((path.back().x + 0.5) * scale,
+                      (DrawnRow(grid, path.back().y, options.y_up) + 0.5) * scale,
+                      radius * 0.5, kFreeColour);
+    }
+  }
   return canvas.Take();
 }
 
@@ -249,6 +280,14 @@ absl::StatusOr<std::string> RenderText(const Grid& grid,
   }
   if (overlay.start.has_value()) put(*overlay.start, kStartGlyph);
   if (overlay.goal.has_value()) put(*overlay.goal, kGoalGlyph);
+  for (size_t i = 0; i < overlay.fleet_paths.size(); ++i) {
+    const std::vector<Cell>& path = overlay.fleet_paths[i];
+    const char letter = static_cast<char>('a' + i % 26);
+    for (const Cell& c : path) put(c, letter);
+    if (path.empty()) continue;
+    put(path.front(), static_cast<char>(letter - 'a' + 'A'));
+    put(path.back(), static_cast<char>(letter - 'a' + 'A'));
+  }
 
   std::string text;
   text.reserve(static_cast<size_t>(grid.width() + 1) * grid.height());

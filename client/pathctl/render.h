@@ -75,7 +75,14 @@ struct PlanOverlay {
   std::vector<std::vector<CellPoint>> outlines;
   std::optional<Cell> start;
   std::optional<Cell> goal;
+  // A fleet plan's timed paths (PlanFleet), one colour per robot
+  // (FleetColour): each path, its start as a disc and its goal as a ring.
+  std::vector<std::vector<Cell>> fleet_paths;
 };
+
+// Robot i's colour in a fleet picture: twelve well-separated hues, then
+// they repeat.
+Rgb FleetColour(size_t robot);
 
 struct RenderOptions {
   // Pixels per cell, 1..kMaxScale; 0: DefaultScale.
@@ -108,7 +115,8 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
 
 // The same as text: one line per row, CellGlyph per cell, overdrawn by
 // kExpandedGlyph, then kPathGlyph along the path's lines, then kStartGlyph and
-// kGoalGlyph. INVALID_ARGUMENT above kMaxTextWidth x kMaxTextHeight, saying
+// kGoalGlyph; a fleet's robot i draws its path with the letter 'a' + i % 26
+// and its start and goal with the capital. INVALID_ARGUMENT above kMaxTextWidth x kMaxTextHeight, saying
 // to write a PNG instead.
 absl::StatusOr<std::string> RenderText(const Grid& grid,
                                        const PlanOverlay& overlay,

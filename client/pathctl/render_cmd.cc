@@ -13,6 +13,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "client/pathctl/command.h"
+#include "client/pathctl/fleet_plan.h"
 #include "client/pathctl/maps_stats_cmd.h"
 #include "client/pathctl/png_io.h"
 #include "client/pathctl/render.h"
@@ -192,9 +193,11 @@ int Render(CommandEnv& env, Args args) {
         "render", "it draws a picture; 'plan --output json' prints the path");
   }
   if (args.size() != 1 && args.size() != 5) {
-    return env.Usage("render takes NAME, or NAME --plan SX SY GX GY");
+    return env.Usage("render takes NAME, or NAME --plan SX SY GX GY, or NAME --robots FILE");
   }
   const bool plan = args.size() == 5;
+  const bool fleet = !env.options().fleet.robots.empty();
+  if (fleet && plan) return env.Usage("render draws --plan or --robots (a fleet plan), not both");
   if (options.plan && !plan)
     return env.Usage("--plan needs SX SY GX GY after NAME");
   if (plan_flags.expansions && !plan) {
@@ -221,6 +224,16 @@ int Render(CommandEnv& env, Args args) {
                           args.subspan(1));
     if (!built.ok()) return env.Usage(built.status().message());
     request = *std::move(built);
+  }
+  std::optional<v1::PlanFleetRequest> fleet_request;
+  if (fleet) {
+    absl::StatusOr<v1::PlanFleetRequest> built = FleetPlanRequest(env.options(), args[0]);
+    if (!built.ok()) {
+      return built.status().code() == absl::StatusCode::kInvalidArgument
+                 ? env.Usage(built.status().message())
+                 : env.Fail(built.status());
+    }
+    fleet_request = *std::move(built);
   }
 
   // The cost options (and a footprint's inscribed radius) shape the drawn
@@ -286,6 +299,16 @@ int Render(CommandEnv& env, Args args) {
               : "");
     }
   }
+  if (fleet_request.has_value()) {
+    absl::StatusOr<v1::PlanFleetResponse> response = env.client().PlanFleet(*fleet_request);
+    if (!response.ok()) return env.Fail(response.status());
+    for (const v1::FleetPath& p : response->paths()) {
+      std::vector<Cell>& cells = overlay.fleet_paths.emplace_back();
+      for (const v1::Cell& c : p.cells()) cells.push_back(CoreCell(c));
+    }
+    code = response->found() ? kExitOk : kExitNoPath;
+    summary = FleetPlanSummary(*response);
+  }
   // After the plan, so a bad option is reported by the server first, with
   // its field's name.
   double cost_inscribed = 0.0;
@@ -335,6 +358,7 @@ int Render(CommandEnv& env, Args args) {
 
 constexpr absl::string_view kRenderFlags[] = {
     "plan", "out", "o", "ascii", "scale", "y_up", "overlay", "planner", "world", "via",
+    "robots", "solver", "time_limit", "suboptimality", "restarts", "max_steps", "seed",
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
@@ -350,7 +374,8 @@ const Command kRenderCommand = {
     .name = "render",
     .synopsis = "NAME [--plan SX SY GX GY [--planner P] [--expansions]\n"
                 " [plan and cost options]]\n"
-                " (-o FILE.png [--scale N] | --ascii) [--y_up] [--overlay KIND]",
+                " (-o FILE.png [--scale N] | --ascii) [--y_up] [--overlay KIND]\n"
+                "NAME --robots FILE [fleet plan options] (-o FILE.png | --ascii)",
     .help = "Draws map NAME as a PNG (-o) or as text (--ascii), and with --plan the\n"
             "path from (SX, SY) to (GX, GY), its start and goal, and with\n"
             "--expansions the cells the search expanded. Cost options that shape the\n"
@@ -361,6 +386,9 @@ const Command kRenderCommand = {
             "the planners' own code.\n"
             "With a --footprint (or a robot radius) the robot's outline is drawn\n"
             "along the path, about one robot length apart.\n"
+            "--robots FILE plans the robots of FILE with PlanFleet (as 'pathctl fleet\n"
+            "plan') and draws each robot's path in its own colour, its start as a disc\n"
+            "and its goal as a ring (text: letters a, b, ... and capitals).\n"
             "Exit code 3 when the plan found no path (the map is still drawn).",
     .flags = kRenderFlags,
     .run = Render,

@@ -23,113 +23,13 @@
 #include "core/status_macros.h"
 #include "server/convert.h"
 #include "server/request_log.h"
+#include "server/rpc/fleet_common.h"
 #include "server/rpc/unary_call.h"
 
 namespace pathd::server {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// What every fleet query decodes: the map snapshot and the cost options as
-// a plan query (cost, robot radius or footprint, inflation and clearance
-// costs, expansion budget).
-struct FleetQuery {
-  DecodedQuery decoded;
-  const Grid& stored() const { return *decoded.snapshot->grid; }
-  const PlanQuery& query() const { return decoded.query; }
-};
-
-absl::StatusOr<FleetQuery> DecodeFleetQuery(const PlanDeps& deps, const std::string& map,
-                                            const v1::PlanOptions& options,
-                                            int planner = 0) {
-  WireQuery wire;
-  wire.map = &map;
-  wire.planner = planner;
-  wire.options = &options;
-  wire.expansion_budget = true;
-  FleetQuery out;
-  PATHD_ASSIGN_OR_RETURN(out.decoded,
-                         DecodePlanQuery(wire, deps.store,
-                                         QueryLimits{.max_expansions = deps.limits.max_expansions}));
-  PATHD_RETURN_IF_ERROR(CheckCostShaping(out.decoded.query));
-  return out;
-}
-
-// Each position as a cell that is on the map and traversable on the stored
-// map, errors naming `field`[i].
-absl::StatusOr<std::vector<Cell>> DecodeCells(
-    const google::protobuf::RepeatedPtrField<v1::Position>& positions,
-    const std::string& field, const FleetQuery& q) {
-  std::vector<Cell> cells;
-  cells.reserve(positions.size());
-  for (int i = 0; i < positions.size(); ++i) {
-    const std::string what = absl::StrFormat("%s[%d]", field, i);
-    PATHD_ASSIGN_OR_RETURN(const Cell c, CellFromPosition(positions[i], q.stored(), what));
-    PATHD_RETURN_IF_ERROR(ValidateEndpoint(q.stored(), c, what, q.query().request.cost));
-    cells.push_back(c);
-  }
-  return cells;
-}
-
-// The grid a query plans on: the snapshot's, or its shaped copy from the
-// cache; then no cell may be inscribed by the radius (errors name
-// `field`[i], or `field` alone for a single unindexed position).
-absl::StatusOr<std::shared_ptr<const Grid>> PlanningGridFor(
-    InflationCache& inflation, const FleetQuery& q, const std::vector<Cell>& cells,
-    const std::string& field, bool indexed = true) {
-  const GridShape shape = PlanningShape(q.query());
-  if (!shape.shaped()) return q.decoded.snapshot->grid;
-  PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> grid,
-                         inflation.Get(*q.decoded.snapshot, shape));
-  if (q.query().robot_radius_cells > 0.0) {
-    for (size_t i = 0; i < cells.size(); ++i) {
-      const std::string what = indexed ? absl::StrFormat("%s[%d]", field, i) : field;
-      PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(q.stored(), *grid,
-                                                 q.query().robot_radius_cells,
-                                                 {{cells[i], what}}));
-    }
-  }
-  return grid;
-}
-
-// The status a stopped computation answers with.
-absl::Status StoppedStatus(PlanOutcome outcome, const char* what, int64_t budget,
-                           const char* budget_source) {
-  switch (outcome) {
-    case PlanOutcome::kCancelled:
-      return absl::CancelledError(absl::StrFormat("cancelled while computing the %s", what));
-    case PlanOutcome::kExpansionLimit:
-      return absl::ResourceExhaustedError(
-          absl::StrFormat("expansion limit of %d (%s) reached while computing the %s", budget,
-                          budget_source, what));
-    default:
-      return absl::DeadlineExceededError(
-          absl::StrFormat("deadline passed while computing the %s", what));
-  }
-}
-
-template <typename Call>
-void FinishFleetCall(Call& call, const absl::Status& status, std::string_view outcome) {
-  LogRequest(Call::kRpc, call.request->map(), absl::StrFormat("outcome=%s", outcome), status,
-             call.received);
-  call.reactor->Finish(ToGrpcStatus(status));
-}
-
-// Submits a prepared call whose work is `work`.
-template <typename Call, typename Work>
-grpc::ServerUnaryReactor* Admit(const PlanDeps& deps, std::shared_ptr<Call> call,
-                                const absl::Status& prepared, Work work,
-                                const char* failed) {
-  auto job = std::make_unique<CallJob<Call>>(
-      call,
-      [work = std::move(work)](Call& c, SearchScratch&) -> Verdict {
-        absl::Status s = work(c);
-        return {s, s.ok() ? "OK" : "ERROR"};
-      },
-      &FinishFleetCall<Call>, JobFailureText{"out of memory", failed});
-  return AdmitUnaryCall(deps.pool, std::move(call), prepared, std::move(job),
-                        &FinishFleetCall<Call>);
-}
 
 // ---- Table ----
 

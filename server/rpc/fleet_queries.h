@@ -29,6 +29,11 @@ grpc::ServerUnaryReactor* ServeIsochrone(const PlanDeps& deps,
                                          grpc::CallbackServerContext* context,
                                          const v1::IsochroneRequest* request,
                                          v1::IsochroneResponse* response);
+// In fleet_plan.cc.
+grpc::ServerUnaryReactor* ServePlanFleet(const PlanDeps& deps,
+                                         grpc::CallbackServerContext* context,
+                                         const v1::PlanFleetRequest* request,
+                                         v1::PlanFleetResponse* response);
 
 }  // namespace pathd::server
 

@@ -169,4 +169,13 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::Isochrone(
   return ServeIsochrone(Deps(), context, request, response);
 }
 
+grpc::ServerUnaryReactor* PlannerServiceImpl::PlanFleet(
+    grpc::CallbackServerContext* context, const v1::PlanFleetRequest* request,
+    v1::PlanFleetResponse* response) {
+  if (auto* refused = RefuseUnauthorized(options_.authenticator, context, kMethodPlanFleet)) {
+    return refused;
+  }
+  return ServePlanFleet(Deps(), context, request, response);
+}
+
 }  // namespace pathd::server

@@ -47,6 +47,8 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
     int64_t max_table_entries = 250'000;
     // Trip: most waypoints (--max_trip_stops).
     int64_t max_trip_stops = 256;
+    // PlanFleet: most robots (--max_fleet_robots).
+    int64_t max_fleet_robots = 1000;
     // gRPC's send limit (--max_message_bytes); a Plan or CostToGo response
     // above it answers RESOURCE_EXHAUSTED naming the flag instead of gRPC's
     // bare "Sent message larger than max". 0 = not checked.
@@ -120,6 +122,9 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   grpc::ServerUnaryReactor* Isochrone(grpc::CallbackServerContext* context,
                                       const v1::IsochroneRequest* request,
                                       v1::IsochroneResponse* response) override;
+  grpc::ServerUnaryReactor* PlanFleet(grpc::CallbackServerContext* context,
+                                      const v1::PlanFleetRequest* request,
+                                      v1::PlanFleetResponse* response) override;
 
   // A D* Lite session (server/rpc/navigate.h).
   grpc::ServerBidiReactor<v1::NavigateRequest, v1::NavigateResponse>* Navigate(

@@ -49,6 +49,38 @@ ROWS = [
 ]
 
 
+def fleet_conflicts(paths, robots, blocked) -> list[str]:
+    """What breaks PlanFleet's rule in `paths`: each path runs from its
+    robot's start to its goal in legal 8-connected moves (no corner
+    cutting), and in each step no two robots sweep one cell (their cells
+    before and after, and a diagonal move's two side cells)."""
+    problems = []
+    horizon = max(len(p) for p in paths)
+
+    def at(p, t):
+        return p[min(t, len(p) - 1)]
+    for i, (path, (start, goal)) in enumerate(zip(paths, robots)):
+        if path[0] != start or path[-1] != goal:
+            problems.append(f"robot {i} runs {path[0]} -> {path[-1]}")
+    for t in range(horizon):
+        owner = {}
+        for i, path in enumerate(paths):
+            a, b = at(path, t), at(path, t + 1)
+            dx, dy = b.x - a.x, b.y - a.y
+            if max(abs(dx), abs(dy)) > 1 or b in blocked:
+                problems.append(f"robot {i} jumps {a} -> {b} at {t}")
+            swept = {a, b}
+            if dx and dy:
+                swept |= {Cell(a.x + dx, a.y), Cell(a.x, a.y + dy)}
+                if swept & blocked:
+                    problems.append(f"robot {i} cuts a corner at {t}")
+            for c in swept:
+                if c in owner and owner[c] != i:
+                    problems.append(f"robots {owner[c]} and {i} share {c} at step {t}")
+                owner[c] = i
+    return problems
+
+
 def blocked_cells(rows: list[str]) -> set[Cell]:
     return {Cell(x, y) for y, row in enumerate(rows) for x, c in enumerate(row) if c == "@"}
 
@@ -306,6 +338,25 @@ class RealServerTest(unittest.TestCase, PathChecks):
         self.assertEqual(snapped.path[0], Cell(5, 3))  # ties: smaller row, then column
         with self.assertRaisesRegex(pathd_client.InvalidArgumentError, r"sources\[0\]"):
             self.client.table("fleet", [(6, 3)], destinations)
+
+    def test_plan_fleet(self):
+        self.make_map("fleet")
+        blocked = blocked_cells(ROWS)
+        # Four robots trading sides of the wall, two of them through the
+        # same gap.
+        robots = [(Cell(1, 0), Cell(12, 7)), (Cell(12, 7), Cell(1, 0)),
+                  (Cell(1, 7), Cell(12, 0)), (Cell(12, 0), Cell(1, 7))]
+        for solver in ("lacam", "pibt", "prioritized", "cbs"):
+            fleet = self.client.plan_fleet("fleet", robots, solver=solver, time_limit_s=5)
+            self.assertTrue(fleet.found, (solver, fleet.reason))
+            self.assertEqual(fleet.solver, solver)
+            self.assertEqual(fleet_conflicts(fleet.paths, robots, blocked), [], solver)
+            self.assertEqual(fleet.sum_of_costs, sum(fleet.costs))
+            self.assertGreaterEqual(fleet.sum_of_costs, fleet.lower_bound)
+            self.assertEqual(len(fleet.world_paths[0]), len(fleet.paths[0]))
+        with self.assertRaisesRegex(pathd_client.InvalidArgumentError,
+                                    r"robots\[1\]\.start \(1, 0\) is the start of robots\[0\]"):
+            self.client.plan_fleet("fleet", [robots[0], (Cell(1, 0), Cell(5, 0))])
 
     def test_errors_carry_the_status(self):
         self.make_map("errors")

@@ -61,6 +61,7 @@ inline constexpr int kMaxCostToGoCells = 10000;
 // --max_table_entries and --max_trip_stops of the daemon under test.
 inline constexpr int kMaxTableEntries = 100;
 inline constexpr int kMaxTripStops = 16;
+inline constexpr int kMaxFleetRobots = 8;
 // "big" (kBigSide^2 cells) fits --max_map_cells but not one message.
 inline constexpr int kBigSide = 1300;
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -265,6 +266,7 @@ class BadInputTest : public ::testing::Test {
             absl::StrCat("--max_cost_to_go_cells=", kMaxCostToGoCells),
             absl::StrCat("--max_table_entries=", kMaxTableEntries),
             absl::StrCat("--max_trip_stops=", kMaxTripStops),
+            absl::StrCat("--max_fleet_robots=", kMaxFleetRobots),
             "--threads=2"});
     ASSERT_TRUE(daemon_->listening()) << daemon_->status();
     grpc::ChannelArguments args;

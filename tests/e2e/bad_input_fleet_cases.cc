@@ -1,6 +1,7 @@
 // bad_input_test's rows for the fleet map queries: Table, Nearest, Trip and
-// Isochrone, and Plan's snap_start options. pathd runs with
-// --max_table_entries=kMaxTableEntries and --max_trip_stops=kMaxTripStops.
+// Isochrone, Plan's snap_start options, and PlanFleet. pathd runs with
+// --max_table_entries=kMaxTableEntries, --max_trip_stops=kMaxTripStops and
+// --max_fleet_robots=kMaxFleetRobots.
 #include <utility>
 
 #include "tests/e2e/bad_input_fixture.h"
@@ -179,6 +180,72 @@ void BadInputTest::AddFleetCases(std::vector<Case>& cases) {
   snap_case("snap_start with a kinematic planner",
             [](P& r) { r.set_planner(v1::PLANNER_HYBRID_ASTAR); },
             StatusCode::INVALID_ARGUMENT, "options.snap_start: planner hybrid_astar");
+
+  // ---- PlanFleet ----
+  const auto fleet_case = [&](const std::string& what,
+                              std::function<void(v1::PlanFleetRequest&)> change,
+                              StatusCode code, const std::string& message) {
+    v1::PlanFleetRequest request;
+    request.set_map("room");
+    for (const auto& [s, g] : {std::pair{CellPos(1, 1), CellPos(14, 14)},
+                               std::pair{CellPos(14, 1), CellPos(1, 14)}}) {
+      v1::FleetRobot* robot = request.add_robots();
+      *robot->mutable_start() = s;
+      *robot->mutable_goal() = g;
+    }
+    change(request);
+    cases.push_back({"PlanFleet", what,
+                     [=, this] {
+                       v1::PlanFleetResponse response;
+                       return planner_->PlanFleet(Context().get(), request, &response);
+                     },
+                     code, message});
+  };
+  using F = v1::PlanFleetRequest;
+  fleet_case("no robots", [](F& r) { r.clear_robots(); }, StatusCode::INVALID_ARGUMENT,
+             "robots: give at least one");
+  fleet_case(
+      "too many robots",
+      [](F& r) {
+        for (int i = 0; i < kMaxFleetRobots; ++i) *r.add_robots() = r.robots(0);
+      },
+      StatusCode::RESOURCE_EXHAUSTED, "--max_fleet_robots");
+  fleet_case("start off the map", [](F& r) { *r.mutable_robots(1)->mutable_start() = CellPos(16, 1); },
+             StatusCode::INVALID_ARGUMENT, "robots[1].start");
+  fleet_case("goal unset", [](F& r) { r.mutable_robots(0)->clear_goal(); },
+             StatusCode::INVALID_ARGUMENT, "robots[0].goal is not set");
+  fleet_case("goal on a blocked cell, named",
+             [](F& r) {
+               r.mutable_robots(1)->set_name("forklift-2");
+               *r.mutable_robots(1)->mutable_goal() = CellPos(5, 5);
+             },
+             StatusCode::INVALID_ARGUMENT,
+             "robots[1] ('forklift-2').goal (5, 5) is on a blocked cell");
+  fleet_case("two robots on one start",
+             [](F& r) { *r.mutable_robots(1)->mutable_start() = CellPos(1, 1); },
+             StatusCode::INVALID_ARGUMENT,
+             "robots[1].start (1, 1) is the start of robots[0] too");
+  fleet_case("two robots on one goal",
+             [](F& r) { *r.mutable_robots(0)->mutable_goal() = CellPos(1, 14); },
+             StatusCode::INVALID_ARGUMENT, "robots[1].goal (1, 14) is the goal of robots[0] too");
+  fleet_case("negative radius", [](F& r) { r.mutable_robots(0)->set_radius_m(-0.5); },
+             StatusCode::INVALID_ARGUMENT, "robots[0].radius_m -0.5 must be finite and >= 0");
+  fleet_case("goal inscribed by the robot's radius",
+             [](F& r) {
+               *r.mutable_robots(0)->mutable_goal() = CellPos(4, 4);
+               r.mutable_robots(0)->set_radius_m(1.5);
+             },
+             StatusCode::INVALID_ARGUMENT, "robots[0].goal (4, 4) is within the robot radius");
+  fleet_case("suboptimality below 1", [](F& r) { r.set_suboptimality(0.5); },
+             StatusCode::INVALID_ARGUMENT, "suboptimality 0.5 must be 0 (optimal)");
+  fleet_case("negative restarts", [](F& r) { r.set_restarts(-1); },
+             StatusCode::INVALID_ARGUMENT, "restarts -1 must be >= 0");
+  fleet_case("negative time limit", [](F& r) { r.set_time_limit_ms(-5); },
+             StatusCode::INVALID_ARGUMENT, "time_limit_ms -5 must be >= 0");
+  fleet_case("negative max_steps", [](F& r) { r.set_max_steps(-1); },
+             StatusCode::INVALID_ARGUMENT, "max_steps -1 must be >= 0");
+  fleet_case("unknown map", [](F& r) { r.set_map("nowhere"); }, StatusCode::NOT_FOUND,
+             "nowhere");
 }
 
 }  // namespace pathd::bad_input_test

@@ -37,6 +37,7 @@ from pathd_client.values import (
     Change,
     WorldPose,
     ChangedRect,
+    FleetPlanResult,
     IsochroneResult,
     MapCells,
     MapEvent,
@@ -61,4 +62,5 @@ __all__ = [
     "PlanResult", "ResourceExhaustedError", "SetCell", "SetRect",
     "UnavailableError", "UpdateResult", "WorldPose", "make_error", "plan_options",
     "TableResult", "NearestResult", "TripResult", "IsochroneResult",
+    "FleetPlanResult",
 ]

@@ -23,7 +23,8 @@ from pathd_client.streams import MapWatch, NavigationSession
 from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CellLike, Change,
                                  PositionLike,
                                  IsochroneResult, MapCells, MapInfo, NearestResult,
-                                 PlanResult, TableResult, TripResult, UpdateResult,
+                                 FleetPlanResult, PlanResult, TableResult, TripResult,
+                                 UpdateResult,
                                  _change_proto, _planner, _position)
 
 
@@ -218,6 +219,41 @@ class PathdClient:
             request.budget_cells = budget_cells
         return IsochroneResult.from_proto(
             self._call(self._planner.Isochrone, request, map_name, timeout))
+
+    def plan_fleet(self, map_name: str,
+                   robots: Sequence[tuple[PositionLike, PositionLike]
+                                    | tuple[PositionLike, PositionLike, float]], *,
+                   solver: str = "lacam", time_limit_s: float | None = None,
+                   suboptimality: float | None = None, restarts: int | None = None,
+                   seed: int | None = None, max_steps: int | None = None,
+                   options: planner_service_pb2.PlanOptions | None = None,
+                   timeout: float | None = None) -> FleetPlanResult:
+        """Conflict-free timed paths for many robots: `robots` holds (start,
+        goal) or (start, goal, radius_m) per robot. `solver` "lacam"
+        (complete, scales to hundreds), "pibt" (fastest, incomplete),
+        "prioritized" (cooperative A* with restarts) or "cbs" (optimal sum of
+        costs; `suboptimality` > 1 for ECBS). The solver answers with its
+        best plan when `time_limit_s` (default 10 s) runs out; `timeout` is
+        the call's deadline."""
+        request = planner_service_pb2.PlanFleetRequest(
+            map=map_name, options=options,
+            solver=planner_service_pb2.FleetSolver.Value("FLEET_SOLVER_" + solver.upper()))
+        for robot in robots:
+            r = request.robots.add(start=_position(robot[0]), goal=_position(robot[1]))
+            if len(robot) > 2:
+                r.radius_m = robot[2]
+        if time_limit_s is not None:
+            request.time_limit_ms = max(1, round(time_limit_s * 1000))
+        if suboptimality is not None:
+            request.suboptimality = suboptimality
+        if restarts is not None:
+            request.restarts = restarts
+        if seed is not None:
+            request.seed = seed
+        if max_steps is not None:
+            request.max_steps = max_steps
+        return FleetPlanResult.from_proto(
+            self._call(self._planner.PlanFleet, request, map_name, timeout))
 
     def navigate(self, map_name: str, start: PositionLike, goal: PositionLike, *,
                  options: planner_service_pb2.PlanOptions | None = None,

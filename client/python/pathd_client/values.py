@@ -273,6 +273,44 @@ class IsochroneResult:
 
 
 @dataclasses.dataclass(frozen=True)
+class FleetPlanResult:
+    """A PlanFleet answer: `paths[i][t]` is robot i's cell at time step t
+    (a wait repeats the cell; after its last entry the robot stays at its
+    goal), `world_paths` the same in world metres. Costs are in steps.
+    `found` False with `reason` when there is no plan; `stopped_early` when
+    the time limit cut the solver short (a plan is then the best so far)."""
+
+    found: bool
+    reason: str
+    paths: list[list[Cell]]
+    world_paths: list[list[tuple[float, float]]]
+    costs: list[int]
+    makespan: int
+    sum_of_costs: int
+    lower_bound: int
+    optimal: bool
+    stopped_early: bool
+    solver: str
+    solver_time_ms: float
+    map_version: int
+    raw: planner_service_pb2.PlanFleetResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.PlanFleetResponse) -> FleetPlanResult:
+        return cls(found=r.found, reason=r.reason,
+                   paths=[[Cell(c.x, c.y) for c in p.cells] for p in r.paths],
+                   world_paths=[[(w.x, w.y) for w in p.world] for p in r.paths],
+                   costs=[p.cost for p in r.paths], makespan=r.makespan,
+                   sum_of_costs=r.sum_of_costs, lower_bound=r.lower_bound,
+                   optimal=r.optimal, stopped_early=r.stopped_early,
+                   solver=_enum_name(planner_service_pb2.FleetSolver, r.solver,
+                                     "FLEET_SOLVER_").lower(),
+                   solver_time_ms=r.solver_time_us / 1000.0,
+                   map_version=r.map_version, raw=r)
+
+
+@dataclasses.dataclass(frozen=True)
 class NavigateUpdate:
     """One message of a Navigate session's server side.
 

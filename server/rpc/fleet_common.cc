@@ -1,0 +1,73 @@
+// The fleet RPCs' shared decoding, planning grid and stopped statuses.
+#include "server/rpc/fleet_common.h"
+
+#include "core/planning/plan_query.h"
+#include "core/search/endpoints.h"
+#include "core/status_macros.h"
+
+namespace pathd::server {
+
+absl::StatusOr<FleetQuery> DecodeFleetQuery(const PlanDeps& deps, const std::string& map,
+                                            const v1::PlanOptions& options,
+                                            int planner) {
+  WireQuery wire;
+  wire.map = &map;
+  wire.planner = planner;
+  wire.options = &options;
+  wire.expansion_budget = true;
+  FleetQuery out;
+  PATHD_ASSIGN_OR_RETURN(out.decoded,
+                         DecodePlanQuery(wire, deps.store,
+                                         QueryLimits{.max_expansions = deps.limits.max_expansions}));
+  PATHD_RETURN_IF_ERROR(CheckCostShaping(out.decoded.query));
+  return out;
+}
+
+absl::StatusOr<std::vector<Cell>> DecodeCells(
+    const google::protobuf::RepeatedPtrField<v1::Position>& positions,
+    const std::string& field, const FleetQuery& q) {
+  std::vector<Cell> cells;
+  cells.reserve(positions.size());
+  for (int i = 0; i < positions.size(); ++i) {
+    const std::string what = absl::StrFormat("%s[%d]", field, i);
+    PATHD_ASSIGN_OR_RETURN(const Cell c, CellFromPosition(positions[i], q.stored(), what));
+    PATHD_RETURN_IF_ERROR(ValidateEndpoint(q.stored(), c, what, q.query().request.cost));
+    cells.push_back(c);
+  }
+  return cells;
+}
+
+absl::StatusOr<std::shared_ptr<const Grid>> PlanningGridFor(
+    InflationCache& inflation, const FleetQuery& q, const std::vector<Cell>& cells,
+    const std::string& field, bool indexed) {
+  const GridShape shape = PlanningShape(q.query());
+  if (!shape.shaped()) return q.decoded.snapshot->grid;
+  PATHD_ASSIGN_OR_RETURN(std::shared_ptr<const Grid> grid,
+                         inflation.Get(*q.decoded.snapshot, shape));
+  if (q.query().robot_radius_cells > 0.0) {
+    for (size_t i = 0; i < cells.size(); ++i) {
+      const std::string what = indexed ? absl::StrFormat("%s[%d]", field, i) : field;
+      PATHD_RETURN_IF_ERROR(CheckRadiusEndpoints(q.stored(), *grid,
+                                                 q.query().robot_radius_cells,
+                                                 {{cells[i], what}}));
+    }
+  }
+  return grid;
+}
+
+absl::Status StoppedStatus(PlanOutcome outcome, const char* what, int64_t budget,
+                           const char* budget_source) {
+  switch (outcome) {
+    case PlanOutcome::kCancelled:
+      return absl::CancelledError(absl::StrFormat("cancelled while computing the %s", what));
+    case PlanOutcome::kExpansionLimit:
+      return absl::ResourceExhaustedError(
+          absl::StrFormat("expansion limit of %d (%s) reached while computing the %s", budget,
+                          budget_source, what));
+    default:
+      return absl::DeadlineExceededError(
+          absl::StrFormat("deadline passed while computing the %s", what));
+  }
+}
+
+}  // namespace pathd::server
