@@ -2,12 +2,16 @@
 // table (entries against one plan per pair, a second table from the cache,
 // an unreachable pair), nearest (against a scan of the map), trip (the
 // order against every permutation of the table's costs, the legs as one
-// path), isochrone (cell count against the octile distance, GeoJSON) and
-// plan --snap_start.
+// path), isochrone (cell count against the octile distance, GeoJSON),
+// plan --snap_start, and fleet plan (every solver's plan through the
+// independent conflict checker, render --robots, no plan).
 #include <algorithm>
+#include <array>
 #include <numeric>
 
+#include "core/map_io/map_io.h"
 #include "tests/e2e/e2e_fixture.h"
+#include "tests/testing/fleet_checker.h"
 
 namespace pathd::e2e_test {
 namespace {
@@ -193,6 +197,69 @@ TEST_F(E2eTest, PlanSnapStartMovesABlockedStartToTheNearestFreeCell) {
   EXPECT_EQ(plan.start().x(), 4);
   EXPECT_EQ(plan.path(0).x(), plan.start().x());
   EXPECT_NEAR(plan.snap_distance_cells(), 1.0, 1e-9);
+}
+
+TEST_F(E2eTest, FleetPlanEverySolverPassesTheConflictCheckerAndRenders) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("fleet", FleetMap()));
+  const absl::StatusOr<Grid> grid = ParseMovingAiMap(FleetMap(), "fleet");
+  ASSERT_TRUE(grid.ok()) << grid.status();
+  // Six robots trading sides of the wall, two pairs swapping places.
+  const std::vector<std::array<int, 4>> robots = {
+      {0, 0, 11, 7}, {11, 7, 0, 0}, {0, 9, 11, 0}, {11, 0, 0, 9}, {2, 4, 8, 4}, {8, 5, 2, 5}};
+  std::string file = "# SX SY GX GY\n";
+  std::vector<testing::FleetCheckRobot> check;
+  for (const auto& r : robots) {
+    absl::StrAppend(&file, r[0], " ", r[1], " ", r[2], " ", r[3], "\n");
+    check.push_back({Cell{r[0], r[1]}, Cell{r[2], r[3]}, &*grid});
+  }
+  const std::string path = MapFile("robots.txt", file);
+  for (const std::string solver : {"lacam", "pibt", "prioritized", "cbs"}) {
+    SCOPED_TRACE(solver);
+    const ProcessResult r =
+        Ctl({"fleet", "plan", "fleet", "--robots", path, "--solver", solver, "--json"});
+    ASSERT_EQ(r.exit_code, 0) << r;
+    const auto plan = ParseJson<v1::PlanFleetResponse>(r.out);
+    ASSERT_TRUE(plan.found()) << plan.reason();
+    std::vector<std::vector<Cell>> paths;
+    for (const v1::FleetPath& p : plan.paths()) {
+      std::vector<Cell>& cells = paths.emplace_back();
+      for (const v1::Cell& c : p.cells()) cells.push_back(Cell{c.x(), c.y()});
+      ASSERT_EQ(p.world_size(), p.cells_size());
+    }
+    const testing::FleetCheckResult checked = testing::CheckFleetPlan(
+        check, /*eight_connected=*/true, /*unknown_is_free=*/false, paths);
+    ASSERT_TRUE(checked.ok) << checked.error;
+    EXPECT_EQ(plan.sum_of_costs(), checked.sum_of_costs);
+    EXPECT_EQ(plan.makespan(), checked.makespan);
+    EXPECT_LE(plan.lower_bound(), plan.sum_of_costs());
+    for (int i = 0; i < plan.paths_size(); ++i) {
+      EXPECT_EQ(plan.paths(i).cost(), checked.costs[i]) << "robot " << i;
+    }
+    if (solver == "cbs") EXPECT_TRUE(plan.optimal());
+  }
+  // The table form, and the picture: one letter per robot, its capital at
+  // the start and the goal.
+  const ProcessResult text = Ctl({"fleet", "plan", "fleet", "--robots", path});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "robots:       6")) << text;
+  const ProcessResult drawn = Ctl({"render", "fleet", "--robots", path, "--ascii"});
+  ASSERT_EQ(drawn.exit_code, 0) << drawn;
+  for (const char c : std::string("ABCDEF")) {
+    EXPECT_EQ(std::count(drawn.out.begin(), drawn.out.end(), c), 2) << c << "\n" << drawn.out;
+  }
+  EXPECT_TRUE(absl::StrContains(drawn.out, "fleet plan (lacam): 6 robots")) << drawn;
+
+  // A goal in the sealed cell: no plan, exit 3 and the reason.
+  const std::string sealed = MapFile("sealed.txt", "0 0 11 9\n3 0 4 0\n");
+  const ProcessResult none = Ctl({"fleet", "plan", "fleet", "--robots", sealed});
+  EXPECT_EQ(none.exit_code, 3) << none;
+  EXPECT_TRUE(absl::StrContains(none.out, "no plan: no conflict-free plan exists")) << none;
+  // A bad line is a usage error naming the file and the line.
+  const std::string bad = MapFile("bad.txt", "0 0 11 7\n1 2 3\n");
+  const ProcessResult usage = Ctl({"fleet", "plan", "fleet", "--robots", bad});
+  EXPECT_EQ(usage.exit_code, 2) << usage;
+  EXPECT_TRUE(absl::StrContains(usage.err, "bad.txt:2: expected 'SX SY GX GY [RADIUS_M]'"))
+      << usage;
 }
 
 }  // namespace pathd::e2e_test
