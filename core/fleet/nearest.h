@@ -11,27 +11,12 @@
 
 #include "core/kinematics/footprint.h"
 #include "core/map/grid.h"
+#include "core/search/endpoints.h"
 
 namespace pathd {
 
-struct NearestCell {
-  Cell cell;
-  // Euclidean distance between the target's centre and the cell's, cells.
-  double distance = 0.0;
-  // Cells tested.
-  int64_t tested = 0;
-};
-
-// The cell nearest to `target` (Euclidean distance between cell centres, at
-// most `max_distance` inclusive; ties to the smaller y, then the smaller x:
-// the rule of the goal tolerance, core/search/endpoints.h) for which
-// `allowed` is true; nullopt when none is. Visits rings of growing
-// Chebyshev radius around the target and stops once no further ring can be
-// nearer, so the work is O(d^2) for the answer's distance d. `target` may be
-// off the grid; only cells on it are tested.
-std::optional<NearestCell> NearestAllowedCell(const Grid& grid, Cell target,
-                                              double max_distance,
-                                              const std::function<bool(Cell)>& allowed);
+// NearestCell and NearestAllowedCell (the ring search) live in
+// core/search/endpoints.h, where the goal tolerance uses them too.
 
 // The test for a polygon footprint at heading `yaw` (grid frame): the
 // footprint placed at the cell's centre touches no cell that is not

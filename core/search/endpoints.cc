@@ -147,31 +147,37 @@ absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
   return absl::OkStatus();
 }
 
-std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
-                                           double max_distance,
-                                           const CostParams& cost) {
+std::optional<NearestCell> NearestAllowedCell(const Grid& grid, Cell target,
+                                              double max_distance,
+                                              const std::function<bool(Cell)>& allowed) {
   if (!(max_distance >= 0.0)) return std::nullopt;
   const double max_d2 = max_distance * max_distance;
-  // Rings beyond the grid's extent hold no cell, whatever max_distance says.
-  const int64_t extent = std::max<int64_t>(grid.width(), grid.height());
+  // Rings past the grid's far side hold no cell.
+  const int64_t far = std::max<int64_t>(
+      std::max<int64_t>(std::abs(int64_t{target.x}), std::abs(int64_t{target.x} - grid.width())),
+      std::max<int64_t>(std::abs(int64_t{target.y}), std::abs(int64_t{target.y} - grid.height())));
   const int64_t max_ring =
-      std::min<int64_t>(static_cast<int64_t>(std::floor(max_distance)), extent);
-  std::optional<Cell> best;
+      std::min<int64_t>(static_cast<int64_t>(std::floor(max_distance)), far);
+  std::optional<NearestCell> best;
   int64_t best_d2 = 0;
-  auto consider = [&](int64_t x, int64_t y) {
+  int64_t tested = 0;
+  const auto consider = [&](int64_t x, int64_t y) {
     if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height()) return;
     const int64_t dx = x - target.x;
     const int64_t dy = y - target.y;
     const int64_t d2 = dx * dx + dy * dy;
     if (static_cast<double>(d2) > max_d2) return;
     const Cell c{static_cast<int32_t>(x), static_cast<int32_t>(y)};
-    if (!Traversable(grid.cost(c), cost.unknown_is_free)) return;
-    if (!best.has_value() || d2 < best_d2 ||
-        (d2 == best_d2 &&
-         (c.y < best->y || (c.y == best->y && c.x < best->x)))) {
-      best = c;
-      best_d2 = d2;
+    // Only a candidate that would win needs the (possibly costly) test.
+    if (best.has_value() &&
+        (d2 > best_d2 || (d2 == best_d2 && (c.y > best->cell.y ||
+                                            (c.y == best->cell.y && c.x > best->cell.x))))) {
+      return;
     }
+    ++tested;
+    if (!allowed(c)) return;
+    best = NearestCell{c, std::sqrt(static_cast<double>(d2)), 0};
+    best_d2 = d2;
   };
   for (int64_t r = 0; r <= max_ring; ++r) {
     // Every cell of ring r is at least r from the target.
@@ -180,18 +186,28 @@ std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
       consider(target.x, target.y);
       continue;
     }
-    // Top and bottom rows of the ring, then its side columns between them.
     for (int64_t x = int64_t{target.x} - r; x <= int64_t{target.x} + r; ++x) {
       consider(x, int64_t{target.y} - r);
       consider(x, int64_t{target.y} + r);
     }
-    for (int64_t y = int64_t{target.y} - r + 1; y <= int64_t{target.y} + r - 1;
-         ++y) {
+    for (int64_t y = int64_t{target.y} - r + 1; y <= int64_t{target.y} + r - 1; ++y) {
       consider(int64_t{target.x} - r, y);
       consider(int64_t{target.x} + r, y);
     }
   }
+  if (best.has_value()) best->tested = tested;
   return best;
+}
+
+std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
+                                           double max_distance,
+                                           const CostParams& cost) {
+  const std::optional<NearestCell> nearest =
+      NearestAllowedCell(grid, target, max_distance, [&](Cell c) {
+        return Traversable(grid.cost(c), cost.unknown_is_free);
+      });
+  if (!nearest.has_value()) return std::nullopt;
+  return nearest->cell;
 }
 
 absl::StatusOr<Cell> GoalWithinTolerance(const Grid& grid, Cell requested,

@@ -5,6 +5,8 @@
 #ifndef PATHD_CORE_SEARCH_ENDPOINTS_H_
 #define PATHD_CORE_SEARCH_ENDPOINTS_H_
 
+#include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <optional>
 #include <string_view>
@@ -59,13 +61,27 @@ absl::Status ValidateEndpoints(const Grid& grid, const PlanRequest& request);
 absl::Status ValidateRequest(const Grid& grid, const PlanRequest& request,
                              std::string_view planner, const PlannerTraits& traits);
 
-// The nearest cell to `target` the robot centre may occupy under `cost`
-// (on the grid and Traversable), by the Euclidean distance between cell
-// centres, at most `max_distance` cells (inclusive); ties go to the smaller
-// y, then the smaller x. `target` itself when it qualifies; nullopt when no
-// cell does. Visits rings of growing Chebyshev radius and stops once no
-// further ring can be nearer, so the cost is O(d^2) for the answer's distance
-// d, O(max_distance^2) when there is none.
+struct NearestCell {
+  Cell cell;
+  // Euclidean distance between the target's centre and the cell's, cells.
+  double distance = 0.0;
+  // Cells tested.
+  int64_t tested = 0;
+};
+
+// The cell nearest to `target` (Euclidean distance between cell centres, at
+// most `max_distance` inclusive; ties to the smaller y, then the smaller x)
+// for which `allowed` is true; nullopt when none is. Visits rings of growing
+// Chebyshev radius around the target and stops once no further ring can be
+// nearer, so the work is O(d^2) for the answer's distance d,
+// O(max_distance^2) when there is none; `allowed` runs only for candidates
+// that would win. `target` may be off the grid; only cells on it are tested.
+std::optional<NearestCell> NearestAllowedCell(const Grid& grid, Cell target,
+                                              double max_distance,
+                                              const std::function<bool(Cell)>& allowed);
+
+// NearestAllowedCell for the robot centre under `cost`: the nearest cell on
+// the grid that is Traversable.
 std::optional<Cell> NearestTraversableCell(const Grid& grid, Cell target,
                                            double max_distance,
                                            const CostParams& cost);
