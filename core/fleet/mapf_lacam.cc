@@ -1,0 +1,391 @@
+// PIBT (Okumura, Machida, Défago & Tamura, "Priority inheritance with
+// backtracking for iterative multi-agent path finding", 2022) adapted to
+// mapf.h's conflict rule, alone (kPibt) and as the configuration generator
+// of LaCAM (Okumura, "LaCAM: Search-based algorithm for quick multi-agent
+// pathfinding", 2023; kLacam).
+//
+// The adaptation. PIBT lets a robot enter a cell its occupant leaves in the
+// same step (following) and pushes lower-priority robots out of its way by
+// priority inheritance. mapf.h forbids following: every robot sweeps its own
+// cell during the step, so a robot may only move into (and, diagonally,
+// past) cells no robot is on at time t, and the sweeps of one step are
+// pairwise disjoint. Inheritance therefore works across one step: a robot
+// whose best cell holds an undecided robot asks that robot to move away
+// (inheriting its priority, preferring any move to staying) and, when it
+// did, waits one step for the cell; when it could not, the robot tries its
+// next candidate. Staying is always legal (no other robot may sweep an
+// occupied cell), so every robot always gets a move: PIBT never fails here,
+// it only waits. LaCAM's constraints fix some robots' next cells first; a
+// fixed move that breaks the rule makes that successor invalid.
+//
+// This is plain LaCAM (complete: it returns a plan or proves none exists
+// within max_steps configurations deep), not LaCAM*'s anytime refinement.
+#include <algorithm>
+#include <deque>
+#include <random>
+#include <tuple>
+#include <utility>
+
+#include "core/fleet/mapf_internal.h"
+
+namespace pathd::mapf_internal {
+namespace {
+
+constexpr int32_t kNobody = -1;
+
+// One PIBT step; reusable across steps (its per-cell arrays are reset by
+// the cells they touched).
+class PibtStep {
+ public:
+  PibtStep(const Instance& inst, uint64_t seed)
+      : inst_(inst),
+        occ_(inst.cells, kNobody),
+        claim_(inst.cells, kNobody),
+        rng_(seed) {}
+
+  // The next configuration from `from`: robots in `fixed` (robot, cell) get
+  // their cell when legal (else false), then every other robot in `order`
+  // (highest priority first).
+  bool Run(const std::vector<uint32_t>& from,
+           const std::vector<std::pair<size_t, uint32_t>>& fixed,
+           const std::vector<size_t>& order, std::vector<uint32_t>* to) {
+    const size_t n = from.size();
+    from_ = &from;
+    to_ = to;
+    to->assign(n, kNoCell);
+    decided_.assign(n, 0);
+    for (const uint32_t c : touched_) {
+      occ_[c] = kNobody;
+      claim_[c] = kNobody;
+    }
+    touched_.clear();
+    for (size_t i = 0; i < n; ++i) Occupy(from[i], static_cast<int32_t>(i));
+    bool ok = true;
+    for (const auto& [i, v] : fixed) {
+      decided_[i] = 1;
+      if (!Take(i, v)) ok = false;
+    }
+    if (!ok) return false;
+    for (const size_t i : order) {
+      if (decided_[i] == 0) Pibt(i, nullptr);
+    }
+    return true;
+  }
+
+  int64_t calls() const { return calls_; }
+
+ private:
+  void Occupy(uint32_t c, int32_t i) {
+    occ_[c] = i;
+    touched_.push_back(c);
+  }
+  // Whether robot i may take v (its cell or one legal move) now; claims its
+  // sweep when so.
+  bool Take(size_t i, uint32_t v) {
+    const uint32_t u = (*from_)[i];
+    const MoveGraph& g = inst_.graph(i);
+    if (v != u) {
+      bool legal = false;
+      g.ForEachMove(u, [&](uint32_t w) { legal = legal || w == v; });
+      if (!legal) return false;
+    }
+    const Sweep s = g.SweepOf(u, v);
+    for (int k = 0; k < s.n; ++k) {
+      const uint32_t c = s.cells[k];
+      if (claim_[c] != kNobody) return false;
+      if (c != u && occ_[c] != kNobody) return false;
+    }
+    for (int k = 0; k < s.n; ++k) {
+      claim_[s.cells[k]] = static_cast<int32_t>(i);
+      touched_.push_back(s.cells[k]);
+    }
+    (*to_)[i] = v;
+    return true;
+  }
+
+  // Returns whether robot i moved. `vacate`: a higher-priority robot wants
+  // to sweep i's cell next step, so any move beats staying, and i may not
+  // move onto another cell of that sweep (it would be in the way again).
+  bool Pibt(size_t i, const Sweep* vacate) {
+    ++calls_;
+    decided_[i] = 1;
+    const uint32_t u = (*from_)[i];
+    const MoveGraph& g = inst_.graph(i);
+    const std::vector<int32_t>& h = inst_.h[i];
+    // Candidates by distance to the goal, then free before occupied (a
+    // free cell as near as an occupied one is taken without waiting), then
+    // at random.
+    struct Candidate {
+      uint32_t v;
+      int32_t h;
+      int occupied;
+    };
+    std::vector<Candidate> cands;
+    g.ForEachMove(u, [&](uint32_t v) {
+      if (vacate != nullptr && vacate->Touches(v)) return;
+      const Sweep s = g.SweepOf(u, v);
+      int occupied = 0;
+      for (int k = 0; k < s.n; ++k) {
+        if (s.cells[k] != u && occ_[s.cells[k]] != kNobody) occupied = 1;
+      }
+      cands.push_back(Candidate{v, h[v], occupied});
+    });
+    if (vacate == nullptr) cands.push_back(Candidate{u, h[u], 0});
+    std::shuffle(cands.begin(), cands.end(), rng_);
+    std::stable_sort(cands.begin(), cands.end(),
+                     [](const Candidate& a, const Candidate& b) {
+                       return std::tie(a.h, a.occupied) < std::tie(b.h, b.occupied);
+                     });
+    for (const Candidate& cand : cands) {
+      const uint32_t v = cand.v;
+      if (v == u) break;
+      const Sweep s = g.SweepOf(u, v);
+      bool claimed = false;
+      bool held = false;  // by a robot already decided
+      int32_t blockers[4];
+      int nb = 0;
+      for (int k = 0; k < s.n; ++k) {
+        const uint32_t c = s.cells[k];
+        if (c == u) continue;
+        if (claim_[c] != kNobody) claimed = true;
+        const int32_t o = occ_[c];
+        if (o == kNobody) continue;
+        if (decided_[o] != 0) held = true;
+        blockers[nb++] = o;
+      }
+      if (claimed || held) continue;
+      if (nb == 0) {
+        Take(i, v);
+        return true;
+      }
+      // Undecided robots on the cells this move sweeps: ask them to move
+      // away (priority inheritance) and, when all did, wait a step.
+      bool all_moved = true;
+      for (int k = 0; k < nb; ++k) {
+        if (decided_[blockers[k]] != 0 || !Pibt(blockers[k], &s)) {
+          all_moved = false;
+        }
+      }
+      if (all_moved) {
+        Take(i, u);
+        return false;
+      }
+    }
+    Take(i, u);
+    return false;
+  }
+
+  const Instance& inst_;
+  std::vector<int32_t> occ_;    // robot on the cell at t
+  std::vector<int32_t> claim_;  // robot sweeping the cell this step
+  std::vector<uint32_t> touched_;
+  std::vector<uint8_t> decided_;
+  const std::vector<uint32_t>* from_ = nullptr;
+  std::vector<uint32_t>* to_ = nullptr;
+  std::mt19937_64 rng_;
+  int64_t calls_ = 0;
+};
+
+// PIBT's priorities: a robot's grows by one each step it is not at its goal
+// and drops to its tie-breaking fraction when it is.
+void UpdatePriorities(const Instance& inst, const std::vector<uint32_t>& config,
+                      const std::vector<double>& tie, std::vector<double>* prio) {
+  for (size_t i = 0; i < config.size(); ++i) {
+    (*prio)[i] = config[i] == inst.goals[i] ? tie[i] : (*prio)[i] + 1.0;
+  }
+}
+
+std::vector<size_t> OrderOf(const std::vector<double>& prio) {
+  std::vector<size_t> order(prio.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return prio[a] > prio[b]; });
+  return order;
+}
+
+std::vector<double> TieBreaks(const Instance& inst, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<double> tie(inst.robots());
+  for (double& t : tie) t = unit(rng);
+  return tie;
+}
+
+// Paths from a sequence of configurations.
+std::vector<IndexPath> PathsOf(const std::vector<std::vector<uint32_t>>& configs) {
+  std::vector<IndexPath> paths(configs.front().size());
+  for (const auto& q : configs) {
+    for (size_t i = 0; i < q.size(); ++i) paths[i].push_back(q[i]);
+  }
+  return paths;
+}
+
+// Above this many stored configuration cells LaCAM gives up
+// (kExpansionLimit) rather than grow without bound: ~0.5 GiB.
+constexpr int64_t kMaxStoredCells = int64_t{1} << 26;
+
+}  // namespace
+
+FleetPlan SolvePibt(const Instance& inst, const FleetOptions& options,
+                    const StopCondition& stop) {
+  FleetPlan plan;
+  std::mt19937_64 rng(options.seed);
+  const std::vector<double> tie = TieBreaks(inst, rng);
+  std::vector<double> prio = tie;
+  PibtStep step(inst, rng());
+  std::vector<std::vector<uint32_t>> configs{inst.starts};
+  std::vector<uint32_t> next;
+  while (configs.back() != inst.goals) {
+    if (static_cast<int32_t>(configs.size()) > inst.max_steps) {
+      plan.outcome = PlanOutcome::kExpansionLimit;  // not solved in max_steps
+      plan.expansions = step.calls();
+      plan.iterations = static_cast<int64_t>(configs.size()) - 1;
+      return plan;
+    }
+    if (const PlanOutcome o = stop.CheckNow(); o != PlanOutcome::kFound) {
+      plan.outcome = o;
+      plan.expansions = step.calls();
+      return plan;
+    }
+    UpdatePriorities(inst, configs.back(), tie, &prio);
+    step.Run(configs.back(), {}, OrderOf(prio), &next);
+    configs.push_back(next);
+  }
+  plan.iterations = static_cast<int64_t>(configs.size()) - 1;
+  plan.expansions = step.calls();
+  SetPaths(inst, PathsOf(configs), &plan);
+  plan.outcome = PlanOutcome::kFound;
+  return plan;
+}
+
+namespace {
+
+// A LaCAM low-level node: robot `who` goes to `where`, with its ancestors'
+// constraints (the chain up to the root, depth 0).
+struct Constraint {
+  int32_t parent;
+  int32_t depth;
+  uint32_t who;
+  uint32_t where;
+};
+
+struct HighNode {
+  std::vector<uint32_t> config;
+  std::vector<double> prio;
+  std::vector<size_t> order;
+  std::deque<int32_t> tree;  // constraint nodes still to try
+  int32_t parent;
+  int32_t depth;
+};
+
+}  // namespace
+
+FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
+                     const StopCondition& stop) {
+  FleetPlan plan;
+  const size_t n = inst.robots();
+  std::mt19937_64 rng(options.seed);
+  const std::vector<double> tie = TieBreaks(inst, rng);
+  PibtStep step(inst, rng());
+  std::vector<Constraint> constraints{{-1, 0, 0, 0}};  // the shared root
+  std::vector<HighNode> nodes;
+  absl::flat_hash_map<std::vector<uint32_t>, int32_t> explored;
+  std::vector<int32_t> open;
+
+  auto add = [&](std::vector<uint32_t> config, int32_t parent,
+                 const std::vector<double>& parent_prio) {
+    HighNode node;
+    node.prio = parent_prio;
+    UpdatePriorities(inst, config, tie, &node.prio);
+    node.order = OrderOf(node.prio);
+    node.config = std::move(config);
+    node.tree.push_back(0);
+    node.parent = parent;
+    node.depth = parent < 0 ? 0 : nodes[parent].depth + 1;
+    const auto id = static_cast<int32_t>(nodes.size());
+    explored.emplace(node.config, id);
+    nodes.push_back(std::move(node));
+    open.push_back(id);
+  };
+  {
+    // Initial priorities: farther robots first.
+    std::vector<double> prio(n);
+    for (size_t i = 0; i < n; ++i) {
+      prio[i] = static_cast<double>(inst.h[i][inst.starts[i]]) /
+                    static_cast<double>(inst.cells) + tie[i] * 1e-9 - 1.0;
+    }
+    add(inst.starts, -1, prio);
+  }
+  bool horizon_hit = false;
+  std::vector<uint32_t> next;
+  std::vector<std::pair<size_t, uint32_t>> fixed;
+  while (!open.empty()) {
+    if (const PlanOutcome o = stop.Check(plan.iterations);
+        o != PlanOutcome::kFound) {
+      plan.outcome = o;
+      plan.expansions = step.calls();
+      return plan;
+    }
+    const int32_t id = open.back();
+    if (nodes[id].config == inst.goals) {
+      std::vector<std::vector<uint32_t>> configs;
+      for (int32_t at = id; at >= 0; at = nodes[at].parent) {
+        configs.push_back(nodes[at].config);
+      }
+      std::reverse(configs.begin(), configs.end());
+      SetPaths(inst, PathsOf(configs), &plan);
+      plan.outcome = PlanOutcome::kFound;
+      plan.expansions = step.calls();
+      return plan;
+    }
+    if (nodes[id].tree.empty()) {
+      open.pop_back();
+      continue;
+    }
+    const int32_t c = nodes[id].tree.front();
+    nodes[id].tree.pop_front();
+    const Constraint con = constraints[c];
+    if (con.depth < static_cast<int32_t>(n)) {
+      const size_t i = nodes[id].order[con.depth];
+      const uint32_t u = nodes[id].config[i];
+      std::vector<uint32_t> cands{u};
+      inst.graph(i).ForEachMove(u, [&](uint32_t v) { cands.push_back(v); });
+      std::shuffle(cands.begin(), cands.end(), rng);
+      for (const uint32_t v : cands) {
+        constraints.push_back(
+            Constraint{c, con.depth + 1, static_cast<uint32_t>(i), v});
+        nodes[id].tree.push_back(static_cast<int32_t>(constraints.size()) - 1);
+      }
+    }
+    fixed.clear();
+    for (int32_t at = c; constraints[at].depth > 0; at = constraints[at].parent) {
+      fixed.emplace_back(constraints[at].who, constraints[at].where);
+    }
+    ++plan.iterations;
+    if (!step.Run(nodes[id].config, fixed, nodes[id].order, &next)) continue;
+    if (const auto it = explored.find(next); it != explored.end()) {
+      // Back to a known configuration: search on from it (LaCAM*'s
+      // reinsertion; each push follows a consumed constraint, so the search
+      // still ends).
+      open.push_back(it->second);
+      continue;
+    }
+    if (inst.max_steps_given && nodes[id].depth + 1 > inst.max_steps) {
+      horizon_hit = true;
+      continue;
+    }
+    if (static_cast<int64_t>(nodes.size() + 1) * static_cast<int64_t>(n) >
+        kMaxStoredCells) {
+      plan.outcome = PlanOutcome::kExpansionLimit;
+      plan.expansions = step.calls();
+      return plan;
+    }
+    const std::vector<double> prio = nodes[id].prio;
+    add(next, id, prio);
+  }
+  // Every configuration reachable within max_steps was explored.
+  plan.outcome = horizon_hit ? PlanOutcome::kExpansionLimit : PlanOutcome::kNoPath;
+  plan.expansions = step.calls();
+  return plan;
+}
+
+}  // namespace pathd::mapf_internal
