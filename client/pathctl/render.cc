@@ -230,6 +230,7 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
   };
   marker(overlay.start, kStartColour);
   marker(overlay.goal, kGoalColour);
+  // Every path first, then every start and goal, so no path hides one.
   for (size_t i = 0; i < overlay.fleet_paths.size(); ++i) {
     const std::vector<Cell>& path = overlay.fleet_paths[i];
     const Rgb colour = FleetColour(i);
@@ -241,10 +242,13 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
                                          colour);
                        });
     }
+  }
+  for (size_t i = 0; i < overlay.fleet_paths.size(); ++i) {
+    const std::vector<Cell>& path = overlay.fleet_paths[i];
     if (path.empty()) continue;
-    marker(path.front(), colour);
+    marker(path.front(), FleetColour(i));
     // The goal: a ring (the colour around a white centre).
-    marker(path.back(), colour);
+    marker(path.back(), FleetColour(i));
     if (grid.InBounds(path.back())) {
       canvas.FillDisc((path.back().x + 0.5) * scale,
                       (DrawnRow(grid, path.back().y, options.y_up) + 0.5) * scale,
@@ -280,13 +284,15 @@ absl::StatusOr<std::string> RenderText(const Grid& grid,
   }
   if (overlay.start.has_value()) put(*overlay.start, kStartGlyph);
   if (overlay.goal.has_value()) put(*overlay.goal, kGoalGlyph);
+  // Every path first, then every start and goal, so no path hides one.
+  for (size_t i = 0; i < overlay.fleet_paths.size(); ++i) {
+    for (const Cell& c : overlay.fleet_paths[i]) put(c, static_cast<char>('a' + i % 26));
+  }
   for (size_t i = 0; i < overlay.fleet_paths.size(); ++i) {
     const std::vector<Cell>& path = overlay.fleet_paths[i];
-    const char letter = static_cast<char>('a' + i % 26);
-    for (const Cell& c : path) put(c, letter);
     if (path.empty()) continue;
-    put(path.front(), static_cast<char>(letter - 'a' + 'A'));
-    put(path.back(), static_cast<char>(letter - 'a' + 'A'));
+    put(path.front(), static_cast<char>('A' + i % 26));
+    put(path.back(), static_cast<char>('A' + i % 26));
   }
 
   std::string text;

@@ -203,9 +203,10 @@ TEST_F(E2eTest, FleetPlanEverySolverPassesTheConflictCheckerAndRenders) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("fleet", FleetMap()));
   const absl::StatusOr<Grid> grid = ParseMovingAiMap(FleetMap(), "fleet");
   ASSERT_TRUE(grid.ok()) << grid.status();
-  // Six robots trading sides of the wall, two pairs swapping places.
+  // Six robots trading sides of the wall in crossing pairs (twelve distinct
+  // cells, so each capital letter shows twice in the picture).
   const std::vector<std::array<int, 4>> robots = {
-      {0, 0, 11, 7}, {11, 7, 0, 0}, {0, 9, 11, 0}, {11, 0, 0, 9}, {2, 4, 8, 4}, {8, 5, 2, 5}};
+      {0, 0, 11, 7}, {11, 6, 0, 1}, {0, 9, 11, 0}, {11, 1, 0, 8}, {2, 4, 8, 4}, {8, 5, 2, 5}};
   std::string file = "# SX SY GX GY\n";
   std::vector<testing::FleetCheckRobot> check;
   for (const auto& r : robots) {
@@ -235,7 +236,9 @@ TEST_F(E2eTest, FleetPlanEverySolverPassesTheConflictCheckerAndRenders) {
     for (int i = 0; i < plan.paths_size(); ++i) {
       EXPECT_EQ(plan.paths(i).cost(), checked.costs[i]) << "robot " << i;
     }
-    if (solver == "cbs") EXPECT_TRUE(plan.optimal());
+    if (solver == "cbs") {
+      EXPECT_TRUE(plan.optimal());
+    }
   }
   // The table form, and the picture: one letter per robot, its capital at
   // the start and the goal.
