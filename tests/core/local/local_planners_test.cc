@@ -1,0 +1,426 @@
+// The local planners (core/local) against checks written apart from them:
+// ORCA's programs against an exact enumeration of the optimum's candidate
+// points and a brute-force grid of velocities, its half-planes against the
+// motion they promise, whole fleets stepped with ORCA under a separation
+// check; DWA's commands against the dynamic window and its accepted rollouts
+// against the independent dense footprint checker (tests/testing/
+// kinematic_checker); FIRAS on a trap and on an open map.
+//
+// PATHD_LOCAL_CASES=N scales the randomised cases (default 1000; the ASan run
+// uses 100).
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/geometry/free_space.h"
+#include "core/geometry/obstacle_polygons.h"
+#include "core/local/local_types.h"
+#include "core/local/orca.h"
+#include "gtest/gtest.h"
+
+namespace pathd {
+namespace {
+
+int Cases() {
+  if (const char* env = std::getenv("PATHD_LOCAL_CASES")) {
+    const int n = std::atoi(env);
+    if (n > 0) return n;
+  }
+  return 1000;
+}
+
+double Cross(CellPoint a, CellPoint b) { return a.x * b.y - a.y * b.x; }
+// Signed violation of a half-plane, computed here from the definition
+// (left of the directed line is admissible).
+double Violates(const OrcaLine& l, CellPoint v) {
+  return Cross(l.direction, CellPoint{l.point.x - v.x, l.point.y - v.y});
+}
+double Dist(CellPoint a, CellPoint b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+// The exact optimum of min |v - pref| over the disc and the half-planes by
+// enumeration: the optimum of a strictly convex objective over a convex
+// region is pref itself, or the projection of pref onto one active
+// constraint, or a vertex of two. Returns false when no candidate is
+// feasible (then the region is empty, up to tolerance).
+bool ExactClosest(const std::vector<OrcaLine>& lines, double radius, CellPoint pref,
+                  CellPoint* best) {
+  std::vector<CellPoint> cand;
+  cand.push_back(pref);
+  const double pn = std::hypot(pref.x, pref.y);
+  if (pn > 0) cand.push_back(CellPoint{pref.x * radius / pn, pref.y * radius / pn});
+  for (const OrcaLine& l : lines) {
+    const double t = (pref.x - l.point.x) * l.direction.x + (pref.y - l.point.y) * l.direction.y;
+    cand.push_back(CellPoint{l.point.x + t * l.direction.x, l.point.y + t * l.direction.y});
+    // Line and circle.
+    const double b = l.point.x * l.direction.x + l.point.y * l.direction.y;
+    const double c = l.point.x * l.point.x + l.point.y * l.point.y - radius * radius;
+    const double disc = b * b - c;
+    if (disc >= 0) {
+      for (double s : {-b - std::sqrt(disc), -b + std::sqrt(disc)}) {
+        cand.push_back(CellPoint{l.point.x + s * l.direction.x, l.point.y + s * l.direction.y});
+      }
+    }
+  }
+  for (size_t i = 0; i < lines.size(); ++i) {
+    for (size_t j = i + 1; j < lines.size(); ++j) {
+      const double den = Cross(lines[i].direction, lines[j].direction);
+      if (std::fabs(den) < 1e-12) continue;
+      const CellPoint d{lines[j].point.x - lines[i].point.x, lines[j].point.y - lines[i].point.y};
+      const double t = Cross(d, lines[j].direction) / den;
+      cand.push_back(CellPoint{lines[i].point.x + t * lines[i].direction.x,
+                               lines[i].point.y + t * lines[i].direction.y});
+    }
+  }
+  bool found = false;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const CellPoint& c : cand) {
+    if (std::hypot(c.x, c.y) > radius + 1e-9) continue;
+    bool ok = true;
+    for (const OrcaLine& l : lines) ok = ok && Violates(l, c) <= 1e-9;
+    if (ok && Dist(c, pref) < best_d) {
+      best_d = Dist(c, pref);
+      *best = c;
+      found = true;
+    }
+  }
+  return found;
+}
+
+OrcaLine RandomNeighbourLine(std::mt19937& rng, double* share_out) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  MovingObstacle o;
+  o.position = CellPoint{4 * u(rng), 4 * u(rng)};
+  o.velocity = CellPoint{u(rng), u(rng)};
+  o.radius = 0.3 + 0.3 * (u(rng) + 1);
+  o.reciprocal = u(rng) > 0;
+  *share_out = o.reciprocal ? 0.5 : 1.0;
+  return OrcaLineForNeighbour(CellPoint{0, 0}, CellPoint{u(rng), u(rng)}, 0.5, o,
+                              1.0 + (u(rng) + 1), 0.1, *share_out);
+}
+
+TEST(OrcaLinearProgram, FeasibleAnswersAreTheExactOptimum) {
+  std::mt19937 rng(20);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int feasible = 0, infeasible = 0;
+  for (int c = 0; c < Cases(); ++c) {
+    const int n = 1 + static_cast<int>(rng() % 8);
+    std::vector<OrcaLine> lines;
+    double share;
+    for (int i = 0; i < n; ++i) lines.push_back(RandomNeighbourLine(rng, &share));
+    const double max_speed = 1.0 + (u(rng) + 1);
+    const CellPoint pref{2 * u(rng), 2 * u(rng)};
+    const OrcaSolution sol = SolveOrcaLines(lines, 0, max_speed, pref);
+    CellPoint exact;
+    const bool exact_found = ExactClosest(lines, max_speed, pref, &exact);
+    SCOPED_TRACE(testing::Message() << "case " << c << " lines " << n);
+    if (sol.feasible) {
+      ++feasible;
+      EXPECT_LE(std::hypot(sol.velocity.x, sol.velocity.y), max_speed + 1e-9);
+      for (const OrcaLine& l : lines) EXPECT_LE(Violates(l, sol.velocity), 1e-7);
+      ASSERT_TRUE(exact_found);
+      EXPECT_NEAR(Dist(sol.velocity, pref), Dist(exact, pref), 1e-6);
+      EXPECT_LE(Dist(sol.velocity, exact), 1e-4);
+    } else {
+      ++infeasible;
+      // Infeasible: no candidate clears every line by more than rounding.
+      EXPECT_FALSE(exact_found && [&] {
+        for (const OrcaLine& l : lines) {
+          if (Violates(l, exact) > -1e-6) return false;
+        }
+        return true;
+      }());
+    }
+  }
+  EXPECT_GT(feasible, Cases() / 10);
+  EXPECT_GT(infeasible, 0);
+}
+
+// Brute force on a grid of velocities: the feasible grid velocity nearest
+// the preferred one is never nearer than the program's, and when the
+// program is infeasible, no grid velocity has a smaller largest violation
+// (hard lines kept).
+TEST(OrcaLinearProgram, AgreesWithBruteForceGrid) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int cases = std::max(10, Cases() / 10);
+  const double step = 0.01;
+  int infeasible = 0;
+  for (int c = 0; c < cases; ++c) {
+    std::vector<OrcaLine> lines;
+    // Hard lines: walls near the robot (velocity 0 satisfies them).
+    const int hard = static_cast<int>(rng() % 3);
+    for (int i = 0; i < hard; ++i) {
+      const double a = std::numbers::pi * u(rng);
+      const ObstacleSegment s{CellPoint{2 * std::cos(a) - std::sin(a), 2 * std::sin(a) + std::cos(a)},
+                              CellPoint{2 * std::cos(a) + std::sin(a), 2 * std::sin(a) - std::cos(a)}};
+      lines.push_back(OrcaLineForSegment(CellPoint{0, 0}, 0.5, s, 1.0, 0.1));
+    }
+    const int n = 1 + static_cast<int>(rng() % 10);
+    double share;
+    for (int i = 0; i < n; ++i) lines.push_back(RandomNeighbourLine(rng, &share));
+    const double max_speed = 1.5;
+    const CellPoint pref{2 * u(rng), 2 * u(rng)};
+    const OrcaSolution sol = SolveOrcaLines(lines, static_cast<size_t>(hard), max_speed, pref);
+    SCOPED_TRACE(testing::Message() << "case " << c);
+    double grid_best = std::numeric_limits<double>::infinity();  // distance, feasible
+    double grid_minmax = std::numeric_limits<double>::infinity();
+    for (double x = -max_speed; x <= max_speed; x += step) {
+      for (double y = -max_speed; y <= max_speed; y += step) {
+        const CellPoint v{x, y};
+        if (std::hypot(x, y) > max_speed) continue;
+        bool hard_ok = true;
+        for (int i = 0; i < hard; ++i) hard_ok = hard_ok && Violates(lines[i], v) <= 0;
+        if (!hard_ok) continue;
+        double worst = -std::numeric_limits<double>::infinity();
+        for (size_t i = static_cast<size_t>(hard); i < lines.size(); ++i) {
+          worst = std::max(worst, Violates(lines[i], v));
+        }
+        grid_minmax = std::min(grid_minmax, worst);
+        if (worst <= 0) grid_best = std::min(grid_best, Dist(v, pref));
+      }
+    }
+    for (int i = 0; i < hard; ++i) EXPECT_LE(Violates(lines[i], sol.velocity), 1e-7);
+    if (sol.feasible) {
+      EXPECT_LE(Dist(sol.velocity, pref), grid_best + 1e-9);
+    } else {
+      ++infeasible;
+      EXPECT_TRUE(std::isinf(grid_best)) << "the grid found a feasible velocity";
+      double worst = 0;
+      for (size_t i = static_cast<size_t>(hard); i < lines.size(); ++i) {
+        worst = std::max(worst, Violates(lines[i], sol.velocity));
+      }
+      EXPECT_LE(worst, grid_minmax + 1e-6);
+    }
+  }
+  EXPECT_GT(infeasible, 0);
+}
+
+// The half-planes keep their promise: when each of two reacting robots picks
+// any velocity in its own half-plane, they do not overlap within the
+// horizon (the closest approach of the relative motion, computed here).
+TEST(OrcaLines, ReciprocalHalfPlanesAvoidCollisionWithinHorizon) {
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int c = 0; c < Cases(); ++c) {
+    const CellPoint pa{0, 0}, pb{5 * u(rng), 5 * u(rng)};
+    const double ra = 0.5, rb = 0.4, tau = 2.0;
+    if (Dist(pa, pb) <= ra + rb + 0.01) continue;
+    const CellPoint va{u(rng), u(rng)}, vb{u(rng), u(rng)};
+    const OrcaLine la = OrcaLineForNeighbour(pa, va, ra, MovingObstacle{pb, vb, rb, true}, tau, 0.1, 0.5);
+    const OrcaLine lb = OrcaLineForNeighbour(pb, vb, rb, MovingObstacle{pa, va, ra, true}, tau, 0.1, 0.5);
+    for (int k = 0; k < 20; ++k) {
+      CellPoint a{2 * u(rng), 2 * u(rng)}, b{2 * u(rng), 2 * u(rng)};
+      if (Violates(la, a) > 0 || Violates(lb, b) > 0) continue;
+      // Closest approach of pb - pa + t (b - a) over t in [0, tau].
+      const CellPoint d{pb.x - pa.x, pb.y - pa.y}, w{b.x - a.x, b.y - a.y};
+      const double ww = w.x * w.x + w.y * w.y;
+      const double t = ww > 0 ? std::clamp(-(d.x * w.x + d.y * w.y) / ww, 0.0, tau) : 0.0;
+      EXPECT_GE(std::hypot(d.x + t * w.x, d.y + t * w.y), ra + rb - 1e-9)
+          << "case " << c << " sample " << k;
+    }
+  }
+}
+
+struct SimRobot {
+  CellPoint position;
+  CellPoint velocity;
+  std::vector<CellPoint> path;
+  double radius = 0.5;
+  bool arrived = false;
+};
+
+// Steps every robot with ORCA from the same snapshot (holonomic, no
+// acceleration limit), checking separation after every step and, when
+// `grid` is given, that no robot overlaps a blocked cell. Returns the time
+// the last robot arrived (infinity when one did not within max_time).
+double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time) {
+  const double dt = 0.1;
+  OrcaOptions options;
+  options.max_neighbours = robots.size();
+  options.respect_acceleration = false;
+  VelocityLimits limits;
+  limits.holonomic = true;
+  limits.min_v = -1.0;
+  limits.max_v = 1.0;
+  limits.max_vy = 1.0;
+  std::shared_ptr<const ObstaclePolygons> polygons;
+  if (grid != nullptr) polygons = ObstaclePolygons::Build(FreeSpace(*grid, false));
+  double t = 0.0;
+  for (; t < max_time; t += dt) {
+    std::vector<CellPoint> next(robots.size());
+    bool all = true;
+    for (size_t i = 0; i < robots.size(); ++i) {
+      std::vector<MovingObstacle> others;
+      for (size_t j = 0; j < robots.size(); ++j) {
+        if (j != i) {
+          others.push_back(MovingObstacle{robots[j].position, robots[j].velocity, robots[j].radius, true});
+        }
+      }
+      std::vector<ObstacleSegment> segments;
+      if (polygons) {
+        segments = ObstacleSegmentsNear(*polygons, robots[i].position,
+                                        options.obstacle_range + robots[i].radius,
+                                        options.max_obstacle_lines);
+      }
+      // Yaw 0: the body frame is the grid frame.
+      RobotState state{Pose{robots[i].position.x, robots[i].position.y, 0.0}, robots[i].velocity.x,
+                       robots[i].velocity.y, 0.0};
+      absl::StatusOr<LocalPlan> plan = OrcaStep(state, robots[i].radius, limits, others,
+                                                segments, robots[i].path, dt, options);
+      EXPECT_TRUE(plan.ok()) << plan.status();
+      if (!plan.ok()) return std::numeric_limits<double>::infinity();
+      robots[i].arrived = plan->status == LocalStatus::kGoalReached;
+      all = all && robots[i].arrived;
+      next[i] = CellPoint{plan->v, plan->vy};
+    }
+    if (all) return t;
+    for (size_t i = 0; i < robots.size(); ++i) {
+      robots[i].velocity = next[i];
+      robots[i].position.x += dt * next[i].x;
+      robots[i].position.y += dt * next[i].y;
+    }
+    for (size_t i = 0; i < robots.size(); ++i) {
+      for (size_t j = i + 1; j < robots.size(); ++j) {
+        const double d = Dist(robots[i].position, robots[j].position);
+        if (d < robots[i].radius + robots[j].radius - 1e-6) {
+          ADD_FAILURE() << "robots " << i << " and " << j << " at distance " << d << " at t=" << t;
+          return std::numeric_limits<double>::infinity();
+        }
+      }
+      if (grid != nullptr) {
+        // No blocked cell's square (nor the map's outside) within the radius.
+        const CellPoint p = robots[i].position;
+        const double r = robots[i].radius;
+        if (p.x < r - 1e-6 || p.y < r - 1e-6 || p.x > grid->width() - r + 1e-6 ||
+            p.y > grid->height() - r + 1e-6) {
+          ADD_FAILURE() << "robot " << i << " leaves the map at t=" << t;
+          return std::numeric_limits<double>::infinity();
+        }
+        for (int32_t y = 0; y < grid->height(); ++y) {
+          for (int32_t x = 0; x < grid->width(); ++x) {
+            if (grid->cost(x, y) < kInscribedCost) continue;
+            const double dx = std::max({x - p.x, 0.0, p.x - (x + 1)});
+            const double dy = std::max({y - p.y, 0.0, p.y - (y + 1)});
+            if (std::hypot(dx, dy) < r - 1e-6) {
+              ADD_FAILURE() << "robot " << i << " enters blocked cell (" << x << ", " << y
+                            << ") at t=" << t;
+              return std::numeric_limits<double>::infinity();
+            }
+          }
+        }
+      }
+    }
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+class OrcaCircleSwap : public ::testing::TestWithParam<int> {};
+
+TEST_P(OrcaCircleSwap, RobotsSwapWithoutContactAndArrive) {
+  const int n = GetParam();
+  const double ring = 4.0 + 0.4 * n;
+  std::vector<SimRobot> robots(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    robots[i].position = CellPoint{ring * std::cos(a), ring * std::sin(a)};
+    robots[i].path = {robots[i].position, CellPoint{-robots[i].position.x, -robots[i].position.y}};
+  }
+  const double bound = 3 * (2 * ring) / 1.0 + 20.0;
+  const double arrival = RunFleet(robots, nullptr, bound);
+  EXPECT_LT(arrival, bound);
+  for (int i = 0; i < n; ++i) EXPECT_TRUE(robots[i].arrived) << "robot " << i << " at " << robots[i].position.x << "," << robots[i].position.y << " v " << robots[i].velocity.x << "," << robots[i].velocity.y;
+}
+
+INSTANTIATE_TEST_SUITE_P(Fleets, OrcaCircleSwap, ::testing::Values(8, 16, 32));
+
+Grid MakeGrid(const std::vector<std::string>& rows) {
+  // rows[0] is the top row (largest y), as drawn.
+  const int32_t h = static_cast<int32_t>(rows.size());
+  const int32_t w = static_cast<int32_t>(rows[0].size());
+  Grid g = *Grid::Create(w, h);
+  for (int32_t r = 0; r < h; ++r) {
+    for (int32_t x = 0; x < w; ++x) {
+      if (rows[r][x] == '#') g.set_cost(x, h - 1 - r, kLethalCost);
+    }
+  }
+  return g;
+}
+
+TEST(OrcaStaticObstacles, CorridorTrafficStaysOffBlockedCells) {
+  const Grid grid = MakeGrid({
+      "........................",
+      "........................",
+      "........########........",
+      "........########........",
+      "........................",
+      "........................",
+      "........................",
+      "........########........",
+      "........########........",
+  });
+  std::vector<SimRobot> robots(3);
+  robots[0].position = CellPoint{1.5, 3.5};
+  robots[0].path = {robots[0].position, CellPoint{22.5, 3.5}};
+  robots[1].position = CellPoint{22.5, 4.5};
+  robots[1].path = {robots[1].position, CellPoint{1.5, 4.5}};
+  // Its straight path runs into the lower block: ORCA must stop at the wall
+  // (it does not arrive; the global planner is the one to go around).
+  robots[2].position = CellPoint{1.5, 1.0};
+  robots[2].path = {robots[2].position, CellPoint{22.5, 1.0}};
+  for (SimRobot& r : robots) r.radius = 0.4;
+  RunFleet(robots, &grid, 60.0);
+  EXPECT_FALSE(robots[2].arrived);
+  EXPECT_GT(robots[2].position.x, 5.0) << "it should approach the wall";
+}
+
+TEST(OrcaStaticObstacles, CorridorTrafficArrives) {
+  const Grid grid = MakeGrid({
+      "........................",
+      "........########........",
+      "........########........",
+      "........................",
+      "........................",
+      "........................",
+      "........########........",
+      "........########........",
+  });
+  // The corridor is y in [2, 5]: two robots each way, on their right.
+  std::vector<SimRobot> robots(4);
+  robots[0].position = CellPoint{1.5, 2.6};
+  robots[0].path = {robots[0].position, CellPoint{22.5, 2.6}};
+  robots[1].position = CellPoint{22.5, 4.4};
+  robots[1].path = {robots[1].position, CellPoint{1.5, 4.4}};
+  robots[2].position = CellPoint{3.5, 2.6};
+  robots[2].path = {robots[2].position, CellPoint{20.5, 2.6}};
+  robots[3].position = CellPoint{20.5, 4.4};
+  robots[3].path = {robots[3].position, CellPoint{3.5, 4.4}};
+  for (SimRobot& r : robots) r.radius = 0.4;
+  EXPECT_LT(RunFleet(robots, &grid, 120.0), 120.0);
+}
+
+TEST(OrcaStep, BadInputNamesTheField) {
+  RobotState state;
+  VelocityLimits limits;
+  OrcaOptions options;
+  const std::vector<CellPoint> path = {CellPoint{1, 1}};
+  options.time_horizon = 0;
+  EXPECT_NE(OrcaStep(state, 0.5, limits, {}, {}, path, 0.1, options).status().message().find(
+                "time_horizon"),
+            std::string::npos);
+  options = OrcaOptions{};
+  limits.acc_v = -1;
+  EXPECT_NE(OrcaStep(state, 0.5, limits, {}, {}, path, 0.1, options).status().message().find(
+                "acc_v"),
+            std::string::npos);
+  limits = VelocityLimits{};
+  EXPECT_FALSE(OrcaStep(state, 0.5, limits, {}, {}, {}, 0.1, options).ok());
+  EXPECT_FALSE(OrcaStep(state, -1, limits, {}, {}, path, 0.1, options).ok());
+}
+
+}  // namespace
+}  // namespace pathd
