@@ -20,7 +20,10 @@
 #include "core/geometry/free_space.h"
 #include "core/geometry/obstacle_polygons.h"
 #include "core/local/local_types.h"
+#include "core/local/dwa.h"
 #include "core/local/orca.h"
+#include "core/kinematics/footprint.h"
+#include "tests/testing/kinematic_checker.h"
 #include "gtest/gtest.h"
 
 namespace pathd {
@@ -117,7 +120,7 @@ TEST(OrcaLinearProgram, FeasibleAnswersAreTheExactOptimum) {
     const OrcaSolution sol = SolveOrcaLines(lines, 0, max_speed, pref);
     CellPoint exact;
     const bool exact_found = ExactClosest(lines, max_speed, pref, &exact);
-    SCOPED_TRACE(testing::Message() << "case " << c << " lines " << n);
+    SCOPED_TRACE(::testing::Message() << "case " << c << " lines " << n);
     if (sol.feasible) {
       ++feasible;
       EXPECT_LE(std::hypot(sol.velocity.x, sol.velocity.y), max_speed + 1e-9);
@@ -166,7 +169,7 @@ TEST(OrcaLinearProgram, AgreesWithBruteForceGrid) {
     const double max_speed = 1.5;
     const CellPoint pref{2 * u(rng), 2 * u(rng)};
     const OrcaSolution sol = SolveOrcaLines(lines, static_cast<size_t>(hard), max_speed, pref);
-    SCOPED_TRACE(testing::Message() << "case " << c);
+    SCOPED_TRACE(::testing::Message() << "case " << c);
     double grid_best = std::numeric_limits<double>::infinity();  // distance, feasible
     double grid_minmax = std::numeric_limits<double>::infinity();
     for (double x = -max_speed; x <= max_speed; x += step) {
@@ -401,6 +404,225 @@ TEST(OrcaStaticObstacles, CorridorTrafficArrives) {
   robots[3].path = {robots[3].position, CellPoint{3.5, 4.4}};
   for (SimRobot& r : robots) r.radius = 0.4;
   EXPECT_LT(RunFleet(robots, &grid, 120.0), 120.0);
+}
+
+// --- DWA ---
+
+Footprint Rectangle() {
+  return *Footprint::Polygon({CellPoint{0.6, 0.4}, CellPoint{-0.6, 0.4}, CellPoint{-0.6, -0.4},
+                              CellPoint{0.6, -0.4}});
+}
+
+testing::KinematicCheck DenseCheck(const Footprint& f, bool holonomic) {
+  testing::KinematicCheck check;
+  check.footprint = f.vertices();
+  check.step_cells = 0.02;
+  check.allow_reverse = true;
+  check.allow_turn_in_place = true;
+  check.allow_sideways = holonomic;
+  check.check_ends = false;
+  check.max_drift = 1e-6;
+  return check;
+}
+
+// Where constant (v, vy, w) takes `p` after t seconds, in closed form.
+Pose ExactMotion(const Pose& p, double v, double vy, double w, double t) {
+  if (std::fabs(w) < 1e-12) {
+    const double c = std::cos(p.yaw), s = std::sin(p.yaw);
+    return Pose{p.x + (v * c - vy * s) * t, p.y + (v * s + vy * c) * t, p.yaw};
+  }
+  const double a = p.yaw, b = p.yaw + w * t;
+  // Integral of the rotated body velocity over the arc.
+  const double x = (v * (std::sin(b) - std::sin(a)) + vy * (std::cos(b) - std::cos(a))) / w;
+  const double y = (-v * (std::cos(b) - std::cos(a)) + vy * (std::sin(b) - std::sin(a))) / w;
+  return Pose{p.x + x, p.y + y, NormalizeAngle(b)};
+}
+
+TEST(Dwa, CommandsInTheWindowAndAcceptedRolloutsAreCollisionFree) {
+  std::mt19937 rng(30);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Footprint footprint = Rectangle();
+  FootprintCheckerOptions copt;
+  copt.margin_cells = 0.1;
+  const FootprintChecker checker = *FootprintChecker::Create(footprint, copt);
+  const int cases = std::max(5, Cases() / 25);
+  int accepted = 0, rejected = 0;
+  for (int c = 0; c < cases; ++c) {
+    Grid grid = *Grid::Create(20, 20);
+    for (int32_t y = 0; y < 20; ++y) {
+      for (int32_t x = 0; x < 20; ++x) {
+        if (u(rng) < 0.06) grid.set_cost(x, y, kLethalCost);
+      }
+    }
+    const std::vector<float> distance = ObstacleDistanceField(grid, false);
+    Pose start;
+    do {
+      start = Pose{2 + 16 * u(rng), 2 + 16 * u(rng), 2 * std::numbers::pi * u(rng)};
+    } while (checker.Collides(grid, start, false, distance.data()));
+    const bool holonomic = c % 3 == 0;
+    VelocityLimits limits;
+    limits.holonomic = holonomic;
+    limits.min_v = -0.3;
+    limits.max_v = 1.5;
+    limits.max_vy = holonomic ? 0.8 : 0.0;
+    limits.max_w = 1.2;
+    limits.acc_v = 1.0;
+    limits.acc_vy = 1.0;
+    limits.acc_w = 2.0;
+    RobotState state{start, limits.min_v + (limits.max_v - limits.min_v) * u(rng),
+                     holonomic ? (2 * u(rng) - 1) * limits.max_vy : 0.0,
+                     (2 * u(rng) - 1) * limits.max_w};
+    const std::vector<CellPoint> path = {start.point(), CellPoint{1 + 18 * u(rng), 1 + 18 * u(rng)}};
+    DwaOptions options;
+    options.v_samples = 5;
+    options.w_samples = 7;
+    options.vy_samples = 3;
+    const double period = 0.2;
+    std::vector<DwaRollout> rollouts;
+    absl::StatusOr<LocalPlan> plan =
+        DwaStep(DwaMap{&grid, &checker, c % 2 == 0 ? distance.data() : nullptr}, state, limits, {},
+                path, period, options, &rollouts);
+    ASSERT_TRUE(plan.ok()) << plan.status();
+    SCOPED_TRACE(::testing::Message() << "case " << c);
+    // The window, from its definition.
+    const double eps = 1e-9;
+    EXPECT_GE(plan->v, std::max(limits.min_v, state.v - limits.acc_v * period) - eps);
+    EXPECT_LE(plan->v, std::min(limits.max_v, state.v + limits.acc_v * period) + eps);
+    EXPECT_GE(plan->w, std::max(-limits.max_w, state.w - limits.acc_w * period) - eps);
+    EXPECT_LE(plan->w, std::min(limits.max_w, state.w + limits.acc_w * period) + eps);
+    if (holonomic) {
+      EXPECT_GE(plan->vy, std::max(-limits.max_vy, state.vy - limits.acc_vy * period) - eps);
+      EXPECT_LE(plan->vy, std::min(limits.max_vy, state.vy + limits.acc_vy * period) + eps);
+    } else {
+      EXPECT_EQ(plan->vy, 0.0);
+    }
+    bool command_among_accepted = plan->status != LocalStatus::kOk;
+    for (const DwaRollout& r : rollouts) {
+      if (!r.admissible) {
+        ++rejected;
+        continue;
+      }
+      ++accepted;
+      command_among_accepted = command_among_accepted ||
+                               (r.v == plan->v && r.vy == plan->vy && r.w == plan->w);
+      EXPECT_EQ(CheckKinematicPath(grid, r.poses, {}, DenseCheck(footprint, holonomic)), "")
+          << "rollout v=" << r.v << " vy=" << r.vy << " w=" << r.w;
+      // The rollout is the motion of its velocity over the horizon.
+      const Pose exact = ExactMotion(state.pose, r.v, r.vy, r.w, options.horizon);
+      EXPECT_NEAR(r.poses.back().x, exact.x, 1e-2);
+      EXPECT_NEAR(r.poses.back().y, exact.y, 1e-2);
+      EXPECT_NEAR(AngleBetween(r.poses.back().yaw, exact.yaw), 0.0, 1e-6);
+    }
+    EXPECT_TRUE(command_among_accepted);
+  }
+  EXPECT_GT(accepted, 0);
+  EXPECT_GT(rejected, 0);
+}
+
+TEST(Dwa, FollowsAPathAroundAnObstacleToTheGoal) {
+  const Grid grid = MakeGrid({
+      "..............................",
+      "..............................",
+      "..............................",
+      "..........######..............",
+      "..........######..............",
+      "..........######..............",
+      "..........######..............",
+      "..........######..............",
+      "..........######..............",
+      "..............................",
+      "..............................",
+      "..............................",
+  });
+  const Footprint footprint = Rectangle();
+  FootprintCheckerOptions copt;
+  copt.margin_cells = 0.1;
+  const FootprintChecker checker = *FootprintChecker::Create(footprint, copt);
+  const std::vector<float> distance = ObstacleDistanceField(grid, false);
+  // The global path passes under the block.
+  const std::vector<CellPoint> path = {{3.5, 6.0}, {8.0, 1.5}, {18.0, 1.5}, {26.5, 6.0}};
+  VelocityLimits limits;
+  limits.min_v = 0.0;
+  limits.max_v = 2.0;
+  limits.max_w = 1.5;
+  limits.acc_v = 2.0;
+  limits.acc_w = 3.0;
+  RobotState state{Pose{3.5, 6.0, 0.0}, 0.0, 0.0, 0.0};
+  DwaOptions options;
+  const double period = 0.1;
+  bool arrived = false;
+  for (int cycle = 0; cycle < 600 && !arrived; ++cycle) {
+    absl::StatusOr<LocalPlan> plan =
+        DwaStep(DwaMap{&grid, &checker, distance.data()}, state, limits, {}, path, period, options);
+    ASSERT_TRUE(plan.ok()) << plan.status();
+    ASSERT_NE(plan->status, LocalStatus::kBlocked) << plan->reason;
+    if (plan->status == LocalStatus::kGoalReached) {
+      arrived = true;
+      break;
+    }
+    // Execute one period, exactly, and check the motion densely.
+    std::vector<Pose> moved;
+    for (int k = 0; k <= 10; ++k) {
+      moved.push_back(ExactMotion(state.pose, plan->v, plan->vy, plan->w, period * k / 10));
+    }
+    ASSERT_EQ(CheckKinematicPath(grid, moved, {}, DenseCheck(footprint, false)), "")
+        << "cycle " << cycle;
+    state = RobotState{moved.back(), plan->v, 0.0, plan->w};
+  }
+  EXPECT_TRUE(arrived) << "ended at " << state.pose.x << ", " << state.pose.y;
+}
+
+TEST(Dwa, TooFastTowardAWallIsBlocked) {
+  const Grid grid = MakeGrid({
+      "..........",
+      "......#...",
+      "......#...",
+      "......#...",
+      "......#...",
+      "..........",
+  });
+  const FootprintChecker checker = *FootprintChecker::Create(Rectangle());
+  VelocityLimits limits;
+  limits.max_v = 2.0;
+  limits.acc_v = 0.1;  // cannot stop within the horizon
+  limits.max_w = 0.2;
+  limits.acc_w = 0.1;
+  const RobotState state{Pose{4.5, 3.0, 0.0}, 2.0, 0.0, 0.0};
+  const std::vector<CellPoint> path = {{4.5, 3.0}, {9.5, 3.0}};
+  absl::StatusOr<LocalPlan> plan =
+      DwaStep(DwaMap{&grid, &checker, nullptr}, state, limits, {}, path, 0.1, DwaOptions{});
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  EXPECT_EQ(plan->status, LocalStatus::kBlocked);
+  EXPECT_NE(plan->reason.find("with the map"), std::string::npos) << plan->reason;
+  EXPECT_LT(plan->v, 2.0);  // braking
+}
+
+TEST(Dwa, AMovingObstacleHeadOnRejectsTheStraightRollouts) {
+  const Grid grid = *Grid::Create(30, 10);
+  const FootprintChecker checker = *FootprintChecker::Create(Rectangle());
+  VelocityLimits limits;
+  limits.max_v = 1.0;
+  limits.max_w = 1.0;
+  const RobotState state{Pose{5.0, 5.0, 0.0}, 1.0, 0.0, 0.0};
+  const std::vector<CellPoint> path = {{5.0, 5.0}, {25.0, 5.0}};
+  const MovingObstacle person{CellPoint{12.0, 5.0}, CellPoint{-1.0, 0.0}, 0.5, false};
+  std::vector<DwaRollout> rollouts;
+  DwaOptions options;
+  options.horizon = 3.0;
+  absl::StatusOr<LocalPlan> plan = DwaStep(DwaMap{&grid, &checker, nullptr}, state, limits,
+                                           {&person, 1}, path, 0.1, options, &rollouts);
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  EXPECT_EQ(plan->status, LocalStatus::kOk) << plan->reason;
+  int by_obstacle = 0;
+  for (const DwaRollout& r : rollouts) by_obstacle += r.rejected == "moving obstacle";
+  EXPECT_GT(by_obstacle, 0);
+  // The command's predicted trajectory keeps clear of the predicted person.
+  const double h = options.horizon / (plan->trajectory.size() - 1);
+  for (size_t i = 0; i < plan->trajectory.size(); ++i) {
+    const double px = 12.0 - h * i;
+    EXPECT_GE(std::hypot(plan->trajectory[i].x - px, plan->trajectory[i].y - 5.0),
+              0.5 + checker.footprint().circumscribed_radius() - 1e-9);
+  }
 }
 
 TEST(OrcaStep, BadInputNamesTheField) {
