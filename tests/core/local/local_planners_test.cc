@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iostream>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -21,6 +22,7 @@
 #include "core/geometry/obstacle_polygons.h"
 #include "core/local/local_types.h"
 #include "core/local/dwa.h"
+#include "core/local/firas.h"
 #include "core/local/orca.h"
 #include "core/kinematics/footprint.h"
 #include "tests/testing/kinematic_checker.h"
@@ -623,6 +625,102 @@ TEST(Dwa, AMovingObstacleHeadOnRejectsTheStraightRollouts) {
     EXPECT_GE(std::hypot(plan->trajectory[i].x - px, plan->trajectory[i].y - 5.0),
               0.5 + checker.footprint().circumscribed_radius() - 1e-9);
   }
+}
+
+// --- FIRAS ---
+
+// Drives a differential-drive robot with FIRAS (exact motion per period);
+// returns the first status other than kOk, and checks the robot's disc
+// never overlaps a blocked cell.
+LocalStatus DriveFiras(const Grid& grid, Pose start, const std::vector<CellPoint>& path,
+                       int cycles, Pose* end) {
+  VelocityLimits limits;
+  limits.max_v = 1.0;
+  limits.max_w = 1.5;
+  limits.acc_v = 2.0;
+  limits.acc_w = 4.0;
+  const double radius = 0.4, period = 0.1;
+  RobotState state{start, 0, 0, 0};
+  FirasMemory memory;
+  for (int cycle = 0; cycle < cycles; ++cycle) {
+    absl::StatusOr<LocalPlan> plan =
+        FirasStep(grid, state, radius, limits, {}, path, period, FirasOptions{}, &memory);
+    EXPECT_TRUE(plan.ok()) << plan.status();
+    if (!plan.ok()) return LocalStatus::kBlocked;
+    if (plan->status != LocalStatus::kOk) {
+      *end = state.pose;
+      std::cerr << "cycle " << cycle << " at " << end->x << "," << end->y << ": "
+                << plan->reason << "\n";
+      return plan->status;
+    }
+    state = RobotState{ExactMotion(state.pose, plan->v, 0, plan->w, period), plan->v, 0, plan->w};
+    for (int32_t y = 0; y < grid.height(); ++y) {
+      for (int32_t x = 0; x < grid.width(); ++x) {
+        if (grid.cost(x, y) < kInscribedCost) continue;
+        const double dx = std::max({x - state.pose.x, 0.0, state.pose.x - (x + 1)});
+        const double dy = std::max({y - state.pose.y, 0.0, state.pose.y - (y + 1)});
+        EXPECT_GE(std::hypot(dx, dy), radius) << "cycle " << cycle << " cell " << x << "," << y;
+      }
+    }
+  }
+  *end = state.pose;
+  return LocalStatus::kOk;
+}
+
+TEST(Firas, AUShapedTrapIsALocalMinimum) {
+  const Grid grid = MakeGrid({
+      "..............................",
+      "..............................",
+      "..............................",
+      "............#######...........",
+      "..................#...........",
+      "..................#...........",
+      "..................#...........",
+      "..................#...........",
+      "..................#...........",
+      "..................#...........",
+      "............#######...........",
+      "..............................",
+      "..............................",
+      "..............................",
+  });
+  // The naive global path runs straight through the cup's back wall.
+  const std::vector<CellPoint> path = {{4.5, 7.0}, {27.5, 7.0}};
+  Pose end;
+  EXPECT_EQ(DriveFiras(grid, Pose{4.5, 7.0, 0.0}, path, 600, &end), LocalStatus::kLocalMinimum);
+  EXPECT_GT(end.x, 12.0) << "it should be inside the cup";
+  EXPECT_LT(end.x, 18.0);
+}
+
+TEST(Firas, OpenMapReachesTheGoal) {
+  const Grid grid = MakeGrid({
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............#...............",
+      "..............#...............",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+  });
+  // The path passes just under the small block, which pushes the robot aside
+  // (a block straight across the path would be a local minimum too).
+  const std::vector<CellPoint> path = {{2.5, 4.5}, {27.5, 4.5}};
+  Pose end;
+  EXPECT_EQ(DriveFiras(grid, Pose{2.5, 4.5, 0.0}, path, 600, &end), LocalStatus::kGoalReached);
+}
+
+TEST(Firas, BadInputNamesTheField) {
+  const Grid grid = *Grid::Create(5, 5);
+  FirasOptions options;
+  options.influence = -1;
+  const std::vector<CellPoint> path = {{1, 1}};
+  absl::StatusOr<LocalPlan> plan =
+      FirasStep(grid, RobotState{}, 0.4, VelocityLimits{}, {}, path, 0.1, options, nullptr);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_NE(plan.status().message().find("influence"), std::string::npos);
 }
 
 TEST(OrcaStep, BadInputNamesTheField) {
