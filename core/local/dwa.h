@@ -45,10 +45,10 @@ struct DwaOptions {
   // scaled to about [0, 1].
   double path_distance_weight = 1.0;  // rollout end to the global path
   double goal_distance_weight = 1.0;  // rollout end to the lookahead point
-  double heading_weight = 0.3;        // final heading against the lookahead direction
-  double obstacle_weight = 0.5;       // clearance below clearance_limit
-  double speed_weight = 0.3;          // slower than max_v
-  double twirling_weight = 0.05;      // |w| / max_w
+  double heading_weight = 0.3;  // final heading against the lookahead direction
+  double obstacle_weight = 0.5;   // clearance below clearance_limit
+  double speed_weight = 0.3;      // slower than max_v
+  double twirling_weight = 0.05;  // |w| / max_w
   // The lookahead point this far along the global path, cells.
   double lookahead = 3.0;
   // Clearance (cells, footprint's circumscribed disc to the nearest obstacle
@@ -70,8 +70,8 @@ struct DynamicWindow {
   double vy_lo = 0, vy_hi = 0;
   double w_lo = 0, w_hi = 0;
 };
-DynamicWindow ComputeDynamicWindow(const RobotState& state, const VelocityLimits& limits,
-                                   double period);
+DynamicWindow ComputeDynamicWindow(const RobotState& state,
+                                   const VelocityLimits& limits, double period);
 
 // The map as DWA reads it. `distance` (optional) is ObstacleDistanceField of
 // `grid` with the same unknown rule: it speeds up the checker and feeds the
@@ -88,8 +88,8 @@ struct DwaRollout {
   double v = 0, vy = 0, w = 0;
   std::vector<Pose> poses;  // from the current pose, one per sub-step
   bool admissible = false;
-  std::string rejected;     // "map" or "moving obstacle" when not admissible
-  double score = 0;         // the weighted critics (admissible only)
+  std::string rejected;  // "map" or "moving obstacle" when not admissible
+  double score = 0;      // the weighted critics (admissible only)
 };
 
 // One control cycle. Status kBlocked (the command then brakes as hard as the
@@ -101,8 +101,8 @@ struct DwaRollout {
 absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
                                   const VelocityLimits& limits,
                                   absl::Span<const MovingObstacle> obstacles,
-                                  absl::Span<const CellPoint> path, double period,
-                                  const DwaOptions& options,
+                                  absl::Span<const CellPoint> path,
+                                  double period, const DwaOptions& options,
                                   std::vector<DwaRollout>* rollouts = nullptr);
 
 }  // namespace pathd

@@ -31,8 +31,9 @@ absl::Status ValidateFirasOptions(const FirasOptions& o) {
                   {"window_seconds", o.window_seconds}};
   for (const auto& f : positive) {
     if (!(std::isfinite(f.value) && f.value > 0)) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("firas options: %s must be positive and finite (got %g)", f.name, f.value));
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "firas options: %s must be positive and finite (got %g)", f.name,
+          f.value));
     }
   }
   const struct {
@@ -44,34 +45,40 @@ absl::Status ValidateFirasOptions(const FirasOptions& o) {
   for (const auto& f : non_negative) {
     if (!(std::isfinite(f.value) && f.value >= 0)) {
       return absl::InvalidArgumentError(
-          absl::StrFormat("firas options: %s must be >= 0 and finite (got %g)", f.name, f.value));
+          absl::StrFormat("firas options: %s must be >= 0 and finite (got %g)",
+                          f.name, f.value));
     }
   }
   if (o.influence > 100) {
-    return absl::InvalidArgumentError("firas options: influence must be at most 100 cells");
+    return absl::InvalidArgumentError(
+        "firas options: influence must be at most 100 cells");
   }
   return absl::OkStatus();
 }
 
-absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, double radius,
-                                    const VelocityLimits& limits,
+absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state,
+                                    double radius, const VelocityLimits& limits,
                                     absl::Span<const MovingObstacle> obstacles,
-                                    absl::Span<const CellPoint> path, double period,
-                                    const FirasOptions& options, FirasMemory* memory) {
+                                    absl::Span<const CellPoint> path,
+                                    double period, const FirasOptions& options,
+                                    FirasMemory* memory) {
   if (absl::Status s = ValidateFirasOptions(options); !s.ok()) return s;
   if (absl::Status s = ValidateVelocityLimits(limits); !s.ok()) return s;
   if (!(std::isfinite(radius) && radius > 0)) {
-    return absl::InvalidArgumentError(absl::StrFormat("firas: radius must be positive (got %g)", radius));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("firas: radius must be positive (got %g)", radius));
   }
   if (!(std::isfinite(period) && period > 0)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("firas: control period must be positive (got %g)", period));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "firas: control period must be positive (got %g)", period));
   }
-  if (path.empty()) return absl::InvalidArgumentError("firas: the global path is empty");
+  if (path.empty())
+    return absl::InvalidArgumentError("firas: the global path is empty");
 
   LocalPlan plan;
   const double qx = state.pose.x, qy = state.pose.y;
-  const PathTarget target = FindPathTarget(path, state.pose.point(), options.lookahead);
+  const PathTarget target =
+      FindPathTarget(path, state.pose.point(), options.lookahead);
   const auto finish = [&](double fx, double fy) {
     double v, vy = 0.0, w;
     if (limits.holonomic) {
@@ -80,24 +87,29 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, d
       vy = std::clamp(-fx * s + fy * c, -limits.max_vy, limits.max_vy);
       w = 0.0;
     } else {
-      FollowVelocityDiffDrive(CellPoint{fx, fy}, state.pose.yaw, options.turn_gain, limits, &v, &w);
+      FollowVelocityDiffDrive(CellPoint{fx, fy}, state.pose.yaw,
+                              options.turn_gain, limits, &v, &w);
     }
-    plan.v = ClampToWindow(v, state.v, limits.acc_v, period, limits.min_v, limits.max_v);
-    plan.w = ClampToWindow(w, state.w, limits.acc_w, period, -limits.max_w, limits.max_w);
+    plan.v = ClampToWindow(v, state.v, limits.acc_v, period, limits.min_v,
+                           limits.max_v);
+    plan.w = ClampToWindow(w, state.w, limits.acc_w, period, -limits.max_w,
+                           limits.max_w);
     plan.vy = limits.holonomic
-                  ? ClampToWindow(vy, state.vy, limits.acc_vy, period, -limits.max_vy, limits.max_vy)
+                  ? ClampToWindow(vy, state.vy, limits.acc_vy, period,
+                                  -limits.max_vy, limits.max_vy)
                   : 0.0;
     plan.trajectory.push_back(state.pose);
     for (int i = 0; i < 10; ++i) {
-      plan.trajectory.push_back(
-          IntegrateVelocity(plan.trajectory.back(), plan.v, plan.vy, plan.w, period, 1));
+      plan.trajectory.push_back(IntegrateVelocity(
+          plan.trajectory.back(), plan.v, plan.vy, plan.w, period, 1));
     }
   };
 
   if (target.distance_to_goal <= options.goal_tolerance) {
     finish(0.0, 0.0);
     plan.status = LocalStatus::kGoalReached;
-    plan.reason = absl::StrFormat("within %g cells of the path's end", options.goal_tolerance);
+    plan.reason = absl::StrFormat("within %g cells of the path's end",
+                                  options.goal_tolerance);
     if (memory != nullptr) memory->recent.clear();
     return plan;
   }
@@ -105,7 +117,8 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, d
   // Attraction toward the lookahead point.
   double ax = target.point.x - qx, ay = target.point.y - qy;
   const double da = std::hypot(ax, ay);
-  const double scale = da > options.attraction_distance ? options.attraction_distance / da : 1.0;
+  const double scale =
+      da > options.attraction_distance ? options.attraction_distance / da : 1.0;
   ax *= options.attraction * scale;
   ay *= options.attraction * scale;
   const double attraction = std::hypot(ax, ay);
@@ -139,7 +152,8 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, d
     // lecture's (q - q_r) / d^2 with d the clearance, direction kept.
     if (clearance > options.influence || norm <= 0) return;
     const double d = std::max(clearance, 1e-3);
-    const double magnitude = options.repulsion * (1.0 / d - 1.0 / options.influence) / d;
+    const double magnitude =
+        options.repulsion * (1.0 / d - 1.0 / options.influence) / d;
     fx += magnitude * dx / norm;
     fy += magnitude * dy / norm;
   };
@@ -178,11 +192,12 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, d
   if (attraction > 0 && force < options.min_force_ratio * attraction) {
     plan.status = LocalStatus::kLocalMinimum;
     plan.reason = absl::StrFormat(
-        "the repulsion cancels the attraction (resulting force %.3g of %.3g)", force, attraction);
+        "the repulsion cancels the attraction (resulting force %.3g of %.3g)",
+        force, attraction);
   }
   if (memory != nullptr) {
-    const size_t window =
-        static_cast<size_t>(std::max(2.0, std::ceil(options.window_seconds / period)));
+    const size_t window = static_cast<size_t>(
+        std::clamp(std::ceil(options.window_seconds / period), 2.0, 10000.0));
     memory->recent.push_back(state.pose.point());
     while (memory->recent.size() > window) memory->recent.pop_front();
     if (memory->recent.size() == window && plan.status == LocalStatus::kOk) {
@@ -194,7 +209,8 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, d
       if (farthest < options.min_progress) {
         plan.status = LocalStatus::kLocalMinimum;
         plan.reason = absl::StrFormat(
-            "the robot stayed within %.3g cells over the last %g s (oscillating or stuck)",
+            "the robot stayed within %.3g cells over the last %g s "
+            "(oscillating or stuck)",
             farthest, options.window_seconds);
       }
     }

@@ -34,10 +34,11 @@ struct FirasOptions {
   double influence = 2.0;            // d0, cells of clearance
   double lookahead = 3.0;            // cells along the global path
   double goal_tolerance = 0.25;
-  double turn_gain = 2.0;            // differential drive, 1/s per radian
+  double turn_gain = 2.0;  // differential drive, 1/s per radian
   // Local minimum: the resulting force below this fraction of the
   // attraction alone, or (with a FirasMemory) the robot within
-  // min_progress cells of where it was window_seconds ago.
+  // min_progress cells of where it was window_seconds ago (at most 10000
+  // cycles are remembered).
   double min_force_ratio = 0.05;
   double window_seconds = 3.0;
   double min_progress = 0.5;
@@ -59,11 +60,12 @@ struct FirasMemory {
 // zero), kGoalReached within goal_tolerance of the path's end. `memory`
 // may be null (no progress window). Errors: INVALID_ARGUMENT naming a bad
 // option, limit, radius or period, or an empty path.
-absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state, double radius,
-                                    const VelocityLimits& limits,
+absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state,
+                                    double radius, const VelocityLimits& limits,
                                     absl::Span<const MovingObstacle> obstacles,
-                                    absl::Span<const CellPoint> path, double period,
-                                    const FirasOptions& options, FirasMemory* memory);
+                                    absl::Span<const CellPoint> path,
+                                    double period, const FirasOptions& options,
+                                    FirasMemory* memory);
 
 }  // namespace pathd
 

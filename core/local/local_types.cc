@@ -14,7 +14,7 @@ absl::Status ValidateVelocityLimits(const VelocityLimits& l) {
     const char* name;
     double value;
     bool signed_ok;
-  } fields[] = {{"min_v", l.min_v, true},   {"max_v", l.max_v, true},
+  } fields[] = {{"min_v", l.min_v, true},    {"max_v", l.max_v, true},
                 {"max_vy", l.max_vy, false}, {"max_w", l.max_w, false},
                 {"acc_v", l.acc_v, false},   {"acc_vy", l.acc_vy, false},
                 {"acc_w", l.acc_w, false}};
@@ -24,13 +24,14 @@ absl::Status ValidateVelocityLimits(const VelocityLimits& l) {
           absl::StrFormat("velocity limits: %s is not finite", f.name));
     }
     if (!f.signed_ok && f.value < 0) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("velocity limits: %s is negative (%g)", f.name, f.value));
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "velocity limits: %s is negative (%g)", f.name, f.value));
     }
   }
   if (l.min_v > l.max_v) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "velocity limits: min_v (%g) is greater than max_v (%g)", l.min_v, l.max_v));
+        "velocity limits: min_v (%g) is greater than max_v (%g)", l.min_v,
+        l.max_v));
   }
   return absl::OkStatus();
 }
@@ -68,7 +69,8 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
                           double lookahead) {
   PathTarget target;
   const CellPoint& last = path.back();
-  target.distance_to_goal = std::hypot(last.x - position.x, last.y - position.y);
+  target.distance_to_goal =
+      std::hypot(last.x - position.x, last.y - position.y);
   if (path.size() == 1) {
     target.point = last;
     target.distance_to_path = target.distance_to_goal;
@@ -84,9 +86,11 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
     const double len2 = dx * dx + dy * dy;
     double t = 0.0;
     if (len2 > 0) {
-      t = std::clamp(((position.x - a.x) * dx + (position.y - a.y) * dy) / len2, 0.0, 1.0);
+      t = std::clamp(((position.x - a.x) * dx + (position.y - a.y) * dy) / len2,
+                     0.0, 1.0);
     }
-    const double d = std::hypot(a.x + t * dx - position.x, a.y + t * dy - position.y);
+    const double d =
+        std::hypot(a.x + t * dx - position.x, a.y + t * dy - position.y);
     // "<=" prefers the later segment at a tie: at a corner the robot is
     // past the earlier one.
     if (d <= best) {
@@ -110,7 +114,8 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
     remaining += seg;
     if (!placed && seg >= left) {
       const double f = seg > 0 ? left / seg : 0.0;
-      target.point = CellPoint{from.x + f * (to.x - from.x), from.y + f * (to.y - from.y)};
+      target.point =
+          CellPoint{from.x + f * (to.x - from.x), from.y + f * (to.y - from.y)};
       placed = true;
     } else if (!placed) {
       left -= seg;
@@ -122,7 +127,8 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
 }
 
 void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
-                             const VelocityLimits& limits, double* v, double* w) {
+                             const VelocityLimits& limits, double* v,
+                             double* w) {
   const double speed = std::hypot(desired.x, desired.y);
   if (speed < 1e-9) {
     *v = 0.0;
@@ -131,8 +137,10 @@ void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
   }
   const double error = NormalizeAngle(std::atan2(desired.y, desired.x) - yaw);
   *w = std::clamp(turn_gain * error, -limits.max_w, limits.max_w);
-  const double forward = std::fabs(error) < std::numbers::pi / 2 ? speed * std::cos(error) : 0.0;
-  *v = std::clamp(forward, std::max(limits.min_v, 0.0), std::max(limits.max_v, 0.0));
+  const double forward =
+      std::fabs(error) < std::numbers::pi / 2 ? speed * std::cos(error) : 0.0;
+  *v = std::clamp(forward, std::max(limits.min_v, 0.0),
+                  std::max(limits.max_v, 0.0));
 }
 
 double ClampToWindow(double target, double current, double acceleration,

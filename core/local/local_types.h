@@ -95,10 +95,10 @@ Pose IntegrateVelocity(const Pose& pose, double v, double vy, double w,
 // cells along the path beyond the path point nearest `position`, clamped to
 // the path's end. O(path points). Precondition: path not empty.
 struct PathTarget {
-  CellPoint point;          // the lookahead point
+  CellPoint point;             // the lookahead point
   size_t nearest_segment = 0;  // index of the nearest segment's first point
   double distance_to_path = 0.0;
-  double remaining = 0.0;    // along the path from the nearest point to the end
+  double remaining = 0.0;  // along the path from the nearest point to the end
   double distance_to_goal = 0.0;  // straight line to the path's last point
 };
 PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
@@ -112,7 +112,8 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
 // exactly along `desired`: ORCA's guarantee holds only for the holonomic
 // velocity, which docs/decisions.md explains.
 void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
-                             const VelocityLimits& limits, double* v, double* w);
+                             const VelocityLimits& limits, double* v,
+                             double* w);
 
 // Limits `target` to what is reachable from `current` within `period` at
 // `acceleration` and to [lo, hi].

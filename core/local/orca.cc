@@ -41,8 +41,8 @@ Line L(const OrcaLine& l) { return Line{V(l.point), V(l.direction)}; }
 // half-planes of lines[0..k-1] that is closest to `target` (or, with
 // `extreme`, farthest along the unit direction `target`). False when that
 // part of the line is empty.
-bool SolveOnLine(const std::vector<Line>& lines, size_t k, double radius, Vec target,
-                 bool extreme, Vec* result) {
+bool SolveOnLine(const std::vector<Line>& lines, size_t k, double radius,
+                 Vec target, bool extreme, Vec* result) {
   const Line& line = lines[k];
   // The line's chord of the disc: point + t dir for t in [t_lo, t_hi].
   const double along = Dot(line.point, line.dir);
@@ -83,8 +83,8 @@ bool SolveOnLine(const std::vector<Line>& lines, size_t k, double radius, Vec ta
 // line i (the 1-D program). Returns lines.size() on success, else the index
 // of the line that made it infeasible (`result` then holds the answer for
 // the lines before it).
-size_t SolvePlane(const std::vector<Line>& lines, double radius, Vec target, bool extreme,
-                  Vec* result) {
+size_t SolvePlane(const std::vector<Line>& lines, double radius, Vec target,
+                  bool extreme, Vec* result) {
   if (extreme) {
     *result = radius * target;
   } else if (Norm2(target) > radius * radius) {
@@ -111,13 +111,14 @@ size_t SolvePlane(const std::vector<Line>& lines, double radius, Vec target, boo
 // lines, which in the velocity plane is a 2-D program over the bisectors of
 // line i with each earlier soft line (plus the hard lines), solved for the
 // velocity farthest into line i's half-plane.
-void SolveSpace(const std::vector<Line>& lines, size_t hard, size_t first_failed,
-                double radius, Vec* result) {
+void SolveSpace(const std::vector<Line>& lines, size_t hard,
+                size_t first_failed, double radius, Vec* result) {
   double worst = 0.0;
   std::vector<Line> projected;
   for (size_t i = first_failed; i < lines.size(); ++i) {
     if (Det(lines[i].dir, lines[i].point - *result) <= worst) continue;
-    projected.assign(lines.begin(), lines.begin() + static_cast<std::ptrdiff_t>(hard));
+    projected.assign(lines.begin(),
+                     lines.begin() + static_cast<std::ptrdiff_t>(hard));
     for (size_t j = hard; j < i; ++j) {
       Line bisector;
       const double determinant = Det(lines[i].dir, lines[j].dir);
@@ -127,15 +128,16 @@ void SolveSpace(const std::vector<Line>& lines, size_t hard, size_t first_failed
       } else {
         bisector.point =
             lines[i].point +
-            (Det(lines[j].dir, lines[i].point - lines[j].point) / determinant) * lines[i].dir;
+            (Det(lines[j].dir, lines[i].point - lines[j].point) / determinant) *
+                lines[i].dir;
       }
       bisector.dir = Unit(lines[j].dir - lines[i].dir);
       projected.push_back(bisector);
     }
     const Vec before = *result;
     // Farthest into line i: along its inward normal (-dir.y, dir.x).
-    if (SolvePlane(projected, radius, Vec{-lines[i].dir.y, lines[i].dir.x}, true, result) <
-        projected.size()) {
+    if (SolvePlane(projected, radius, Vec{-lines[i].dir.y, lines[i].dir.x},
+                   true, result) < projected.size()) {
       // Only floating point can get here (the previous answer is feasible
       // for the projected program); keep it.
       *result = before;
@@ -155,9 +157,9 @@ double OrcaViolation(const OrcaLine& line, CellPoint v) {
   return Det(V(line.direction), V(line.point) - V(v));
 }
 
-OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity, double radius,
-                              const MovingObstacle& other, double horizon, double period,
-                              double share) {
+OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity,
+                              double radius, const MovingObstacle& other,
+                              double horizon, double period, double share) {
   const Vec rel_pos = V(other.position) - V(position);
   const Vec rel_vel = V(velocity) - V(other.velocity);
   const double dist2 = Norm2(rel_pos);
@@ -183,10 +185,11 @@ OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity, double rad
       // On one of the cone's legs: the one on w's side of rel_pos.
       const double leg = std::sqrt(dist2 - r2);
       if (Det(rel_pos, w) > 0) {
-        dir = (1.0 / dist2) * Vec{rel_pos.x * leg - rel_pos.y * r, rel_pos.x * r + rel_pos.y * leg};
+        dir = (1.0 / dist2) * Vec{rel_pos.x * leg - rel_pos.y * r,
+                                  rel_pos.x * r + rel_pos.y * leg};
       } else {
-        dir = (-1.0 / dist2) *
-              Vec{rel_pos.x * leg + rel_pos.y * r, -rel_pos.x * r + rel_pos.y * leg};
+        dir = (-1.0 / dist2) * Vec{rel_pos.x * leg + rel_pos.y * r,
+                                   -rel_pos.x * r + rel_pos.y * leg};
       }
       u = Dot(rel_vel, dir) * dir - rel_vel;
     }
@@ -195,15 +198,17 @@ OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity, double rad
     const double inv_p = 1.0 / period;
     const Vec w = rel_vel - inv_p * rel_pos;
     const double w_len = Norm(w);
-    const Vec unit_w = w_len > 0 ? (1.0 / w_len) * w : Unit(Vec{-rel_pos.x, -rel_pos.y});
+    const Vec unit_w =
+        w_len > 0 ? (1.0 / w_len) * w : Unit(Vec{-rel_pos.x, -rel_pos.y});
     dir = Vec{unit_w.y, -unit_w.x};
     u = (r * inv_p - w_len) * unit_w;
   }
   return OrcaLine{P(V(velocity) + share * u), P(dir)};
 }
 
-OrcaLine OrcaLineForSegment(CellPoint position, double radius, const ObstacleSegment& segment,
-                            double horizon, double period) {
+OrcaLine OrcaLineForSegment(CellPoint position, double radius,
+                            const ObstacleSegment& segment, double horizon,
+                            double period) {
   const Vec p = V(position), a = V(segment.a), b = V(segment.b);
   const Vec ab = b - a;
   const double len2 = Norm2(ab);
@@ -216,29 +221,34 @@ OrcaLine OrcaLineForSegment(CellPoint position, double radius, const ObstacleSeg
   // n . v >= bound, as the half-plane left of the direction (n.y, -n.x)...
   // with the direction chosen so its left is n: dir = (n.y, -n.x) rotated
   // back; left of dir is (-dir.y, dir.x) = n.
-  const double bound = d >= radius ? -(d - radius) / horizon : (radius - d) / period;
+  const double bound =
+      d >= radius ? -(d - radius) / horizon : (radius - d) / period;
   const Vec dir{n.y, -n.x};
   return OrcaLine{P(bound * n), P(dir)};
 }
 
-std::vector<ObstacleSegment> ObstacleSegmentsNear(const ObstaclePolygons& polygons,
-                                                  CellPoint center, double range,
-                                                  size_t max_segments) {
+std::vector<ObstacleSegment> ObstacleSegmentsNear(
+    const ObstaclePolygons& polygons, CellPoint center, double range,
+    size_t max_segments) {
   std::vector<std::pair<double, ObstacleSegment>> found;
   for (const BoundaryRing& ring : polygons.rings()) {
     // Box distance: the nearest point of the ring's bounding box.
-    const double bx = std::max({ring.min.x - center.x, 0.0, center.x - ring.max.x});
-    const double by = std::max({ring.min.y - center.y, 0.0, center.y - ring.max.y});
+    const double bx =
+        std::max({ring.min.x - center.x, 0.0, center.x - ring.max.x});
+    const double by =
+        std::max({ring.min.y - center.y, 0.0, center.y - ring.max.y});
     if (bx * bx + by * by > range * range) continue;
     const size_t n = ring.vertices.size();
     for (size_t i = 0; i < n; ++i) {
       const GridCorner& ga = ring.vertices[i];
       const GridCorner& gb = ring.vertices[(i + 1) % n];
-      const ObstacleSegment s{CellPoint{static_cast<double>(ga.x), static_cast<double>(ga.y)},
-                              CellPoint{static_cast<double>(gb.x), static_cast<double>(gb.y)}};
+      const ObstacleSegment s{
+          CellPoint{static_cast<double>(ga.x), static_cast<double>(ga.y)},
+          CellPoint{static_cast<double>(gb.x), static_cast<double>(gb.y)}};
       const Vec p = V(center), a = V(s.a), ab = V(s.b) - V(s.a);
       const double len2 = Norm2(ab);
-      const double t = len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+      const double t =
+          len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
       const double d = Norm(p - (a + t * ab));
       if (d <= range) found.emplace_back(d, s);
     }
@@ -246,7 +256,8 @@ std::vector<ObstacleSegment> ObstacleSegmentsNear(const ObstaclePolygons& polygo
   std::sort(found.begin(), found.end(),
             [](const auto& x, const auto& y) { return x.first < y.first; });
   std::vector<ObstacleSegment> out;
-  for (size_t i = 0; i < found.size() && i < max_segments; ++i) out.push_back(found[i].second);
+  for (size_t i = 0; i < found.size() && i < max_segments; ++i)
+    out.push_back(found[i].second);
   return out;
 }
 
@@ -259,7 +270,8 @@ OrcaSolution SolveOrcaLines(absl::Span<const OrcaLine> lines, size_t hard_lines,
   // The soft lines in a random order (fixed seed: the same input gives the
   // same answer): the incremental program's expected linear time.
   std::mt19937 rng(static_cast<uint32_t>(ls.size()));
-  std::shuffle(ls.begin() + static_cast<std::ptrdiff_t>(hard_lines), ls.end(), rng);
+  std::shuffle(ls.begin() + static_cast<std::ptrdiff_t>(hard_lines), ls.end(),
+               rng);
   Vec result;
   OrcaSolution solution;
   const size_t failed = SolvePlane(ls, max_speed, V(preferred), false, &result);
@@ -268,7 +280,8 @@ OrcaSolution SolveOrcaLines(absl::Span<const OrcaLine> lines, size_t hard_lines,
   }
   solution.velocity = P(result);
   double worst = 0.0;
-  for (const Line& l : ls) worst = std::max(worst, Det(l.dir, l.point - result));
+  for (const Line& l : ls)
+    worst = std::max(worst, Det(l.dir, l.point - result));
   solution.max_violation = worst;
   solution.feasible = failed >= ls.size() || worst <= 1e-9;
   return solution;
@@ -286,23 +299,28 @@ absl::Status ValidateOrcaOptions(const OrcaOptions& o) {
                   {"goal_tolerance", o.goal_tolerance},
                   {"turn_gain", o.turn_gain}};
   if (!(std::isfinite(o.keep_right) && std::fabs(o.keep_right) < 1.0)) {
-    return absl::InvalidArgumentError("orca options: keep_right must be in (-1, 1) radians");
+    return absl::InvalidArgumentError(
+        "orca options: keep_right must be in (-1, 1) radians");
   }
   for (const auto& f : positive) {
     if (!(std::isfinite(f.value) && f.value > 0)) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("orca options: %s must be positive and finite (got %g)", f.name, f.value));
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "orca options: %s must be positive and finite (got %g)", f.name,
+          f.value));
     }
   }
   if (!(std::isfinite(o.safety_margin) && o.safety_margin >= 0)) {
-    return absl::InvalidArgumentError("orca options: safety_margin must be >= 0 and finite");
+    return absl::InvalidArgumentError(
+        "orca options: safety_margin must be >= 0 and finite");
   }
   if (o.trajectory_steps < 1 || o.trajectory_steps > 1000) {
-    return absl::InvalidArgumentError("orca options: trajectory_steps must be in 1..1000");
+    return absl::InvalidArgumentError(
+        "orca options: trajectory_steps must be in 1..1000");
   }
   if (o.max_neighbours > 10000 || o.max_obstacle_lines > 10000) {
     return absl::InvalidArgumentError(
-        "orca options: max_neighbours and max_obstacle_lines must be at most 10000");
+        "orca options: max_neighbours and max_obstacle_lines must be at most "
+        "10000");
   }
   return absl::OkStatus();
 }
@@ -311,18 +329,20 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
                                    const VelocityLimits& limits,
                                    absl::Span<const MovingObstacle> neighbours,
                                    absl::Span<const ObstacleSegment> segments,
-                                   absl::Span<const CellPoint> path, double period,
-                                   const OrcaOptions& options) {
+                                   absl::Span<const CellPoint> path,
+                                   double period, const OrcaOptions& options) {
   if (absl::Status s = ValidateOrcaOptions(options); !s.ok()) return s;
   if (absl::Status s = ValidateVelocityLimits(limits); !s.ok()) return s;
   if (!(std::isfinite(radius) && radius > 0)) {
-    return absl::InvalidArgumentError(absl::StrFormat("orca: radius must be positive (got %g)", radius));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("orca: radius must be positive (got %g)", radius));
   }
   if (!(std::isfinite(period) && period > 0)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("orca: control period must be positive (got %g)", period));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "orca: control period must be positive (got %g)", period));
   }
-  if (path.empty()) return absl::InvalidArgumentError("orca: the global path is empty");
+  if (path.empty())
+    return absl::InvalidArgumentError("orca: the global path is empty");
 
   LocalPlan plan;
   const CellPoint position = state.pose.point();
@@ -337,13 +357,15 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
   if (!at_goal) {
     const Vec to = V(target.point) - V(position);
     const double dist = Norm(to);
-    if (dist > 1e-12) preferred = (std::min(max_speed, dist / period) / dist) * to;
+    if (dist > 1e-12)
+      preferred = (std::min(max_speed, dist / period) / dist) * to;
   }
 
   std::vector<OrcaLine> lines;
   for (const ObstacleSegment& s : segments) {
     if (lines.size() >= options.max_obstacle_lines) break;
-    lines.push_back(OrcaLineForSegment(position, r, s, options.obstacle_time_horizon, period));
+    lines.push_back(OrcaLineForSegment(position, r, s,
+                                       options.obstacle_time_horizon, period));
   }
   const size_t hard = lines.size();
   // The nearest neighbours within range.
@@ -353,18 +375,24 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
     if (d <= options.neighbour_range) near.emplace_back(d, i);
   }
   const size_t keep = std::min(near.size(), options.max_neighbours);
-  std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(keep), near.end());
+  std::partial_sort(near.begin(),
+                    near.begin() + static_cast<std::ptrdiff_t>(keep),
+                    near.end());
   for (size_t k = 0; k < keep; ++k) {
     const MovingObstacle& o = neighbours[near[k].second];
-    lines.push_back(OrcaLineForNeighbour(position, P(velocity), r, o, options.time_horizon,
-                                         period, o.reciprocal ? 0.5 : 1.0));
+    lines.push_back(OrcaLineForNeighbour(position, P(velocity), r, o,
+                                         options.time_horizon, period,
+                                         o.reciprocal ? 0.5 : 1.0));
   }
   plan.constraints = static_cast<int64_t>(lines.size());
   if (keep > 0 && options.keep_right != 0) {
-    const double c = std::cos(-options.keep_right), s = std::sin(-options.keep_right);
-    preferred = Vec{c * preferred.x - s * preferred.y, s * preferred.x + c * preferred.y};
+    const double c = std::cos(-options.keep_right),
+                 s = std::sin(-options.keep_right);
+    preferred = Vec{c * preferred.x - s * preferred.y,
+                    s * preferred.x + c * preferred.y};
   }
-  const OrcaSolution solution = SolveOrcaLines(lines, hard, max_speed, P(preferred));
+  const OrcaSolution solution =
+      SolveOrcaLines(lines, hard, max_speed, P(preferred));
   const Vec chosen = V(solution.velocity);
 
   // The command in the body frame.
@@ -376,20 +404,25 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
     // Heading: toward the path's lookahead point (the body turns; the
     // velocity does not depend on it).
     const Vec to = V(target.point) - V(position);
-    const double err = Norm(to) > 1e-6 && !at_goal
-                           ? NormalizeAngle(std::atan2(to.y, to.x) - state.pose.yaw)
-                           : 0.0;
+    const double err =
+        Norm(to) > 1e-6 && !at_goal
+            ? NormalizeAngle(std::atan2(to.y, to.x) - state.pose.yaw)
+            : 0.0;
     w = std::clamp(options.turn_gain * err, -limits.max_w, limits.max_w);
     v = std::clamp(v, limits.min_v, limits.max_v);
     vy = std::clamp(vy, -limits.max_vy, limits.max_vy);
   } else {
-    FollowVelocityDiffDrive(P(chosen), state.pose.yaw, options.turn_gain, limits, &v, &w);
+    FollowVelocityDiffDrive(P(chosen), state.pose.yaw, options.turn_gain,
+                            limits, &v, &w);
   }
   if (options.respect_acceleration) {
-    v = ClampToWindow(v, state.v, limits.acc_v, period, limits.min_v, limits.max_v);
-    w = ClampToWindow(w, state.w, limits.acc_w, period, -limits.max_w, limits.max_w);
+    v = ClampToWindow(v, state.v, limits.acc_v, period, limits.min_v,
+                      limits.max_v);
+    w = ClampToWindow(w, state.w, limits.acc_w, period, -limits.max_w,
+                      limits.max_w);
     if (limits.holonomic) {
-      vy = ClampToWindow(vy, state.vy, limits.acc_vy, period, -limits.max_vy, limits.max_vy);
+      vy = ClampToWindow(vy, state.vy, limits.acc_vy, period, -limits.max_vy,
+                         limits.max_vy);
     }
   }
   plan.v = v;
@@ -401,15 +434,18 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
   plan.trajectory.reserve(static_cast<size_t>(steps) + 1);
   plan.trajectory.push_back(state.pose);
   for (int32_t i = 0; i < steps; ++i) {
-    plan.trajectory.push_back(IntegrateVelocity(plan.trajectory.back(), v, vy, w, h, 1));
+    plan.trajectory.push_back(
+        IntegrateVelocity(plan.trajectory.back(), v, vy, w, h, 1));
   }
   if (at_goal) {
     plan.status = LocalStatus::kGoalReached;
-    plan.reason = absl::StrFormat("within %g cells of the path's end", options.goal_tolerance);
+    plan.reason = absl::StrFormat("within %g cells of the path's end",
+                                  options.goal_tolerance);
   } else if (!solution.feasible) {
     plan.status = LocalStatus::kBlocked;
     plan.reason = absl::StrFormat(
-        "no velocity satisfies all %d constraints; the least-violating one (by %.3g cells/s) "
+        "no velocity satisfies all %d constraints; the least-violating one (by "
+        "%.3g cells/s) "
         "is commanded",
         static_cast<int>(lines.size()), solution.max_violation);
   }

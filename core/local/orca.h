@@ -47,9 +47,9 @@ double OrcaViolation(const OrcaLine& line, CellPoint v);
 // the part of the avoidance this robot takes: 0.5 against a robot that
 // reacts too, 1 against one that does not. When the two already overlap,
 // the half-plane pushes them apart within `period` (the control period, s).
-OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity, double radius,
-                              const MovingObstacle& other, double horizon,
-                              double period, double share);
+OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity,
+                              double radius, const MovingObstacle& other,
+                              double horizon, double period, double share);
 
 // A static obstacle: a segment of an obstacle's boundary, cell coordinates.
 struct ObstacleSegment {
@@ -60,9 +60,9 @@ struct ObstacleSegment {
 // The segments of `polygons`' rings within `range` cells of `center`, nearest
 // first, at most `max_segments` of them. O(ring vertices); rings whose
 // bounding box is farther than `range` are skipped whole.
-std::vector<ObstacleSegment> ObstacleSegmentsNear(const ObstaclePolygons& polygons,
-                                                  CellPoint center, double range,
-                                                  size_t max_segments);
+std::vector<ObstacleSegment> ObstacleSegmentsNear(
+    const ObstaclePolygons& polygons, CellPoint center, double range,
+    size_t max_segments);
 
 // The half-plane that keeps a disc of `radius` at `position` out of the
 // segment for `horizon` s: with q the segment's point nearest `position`
@@ -72,8 +72,9 @@ std::vector<ObstacleSegment> ObstacleSegmentsNear(const ObstaclePolygons& polygo
 // and more cautious than the paper's truncated cone around the segment (a
 // robot may still slide along a wall at full speed). When the disc already
 // touches the segment, n . v >= (radius - d) / period pushes it out.
-OrcaLine OrcaLineForSegment(CellPoint position, double radius, const ObstacleSegment& segment,
-                            double horizon, double period);
+OrcaLine OrcaLineForSegment(CellPoint position, double radius,
+                            const ObstacleSegment& segment, double horizon,
+                            double period);
 
 // The answer of the linear programs.
 struct OrcaSolution {
@@ -147,8 +148,8 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
                                    const VelocityLimits& limits,
                                    absl::Span<const MovingObstacle> neighbours,
                                    absl::Span<const ObstacleSegment> segments,
-                                   absl::Span<const CellPoint> path, double period,
-                                   const OrcaOptions& options);
+                                   absl::Span<const CellPoint> path,
+                                   double period, const OrcaOptions& options);
 
 }  // namespace pathd
 

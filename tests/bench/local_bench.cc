@@ -42,7 +42,8 @@ Grid MakeMap(std::mt19937& rng) {
   g.set_resolution(0.05);
   const int blocks = 400 * 400 * 8 / 100 / 100;
   for (int b = 0; b < blocks; ++b) {
-    const int32_t x0 = static_cast<int32_t>(rng() % 390), y0 = static_cast<int32_t>(rng() % 390);
+    const int32_t x0 = static_cast<int32_t>(rng() % 390),
+                  y0 = static_cast<int32_t>(rng() % 390);
     for (int32_t y = y0; y < y0 + 10; ++y) {
       for (int32_t x = x0; x < x0 + 10; ++x) g.set_cost(x, y, kLethalCost);
     }
@@ -63,8 +64,12 @@ void BenchDwa(const Grid& grid, std::mt19937& rng, int cycles) {
   limits.max_w = 2.0;
   limits.acc_v = 50.0;
   limits.acc_w = 6.0;
-  std::printf("\n### DWA: one control cycle (400 x 400 map, 60 x 40 cm footprint, 5 cm margin)\n\n");
-  std::printf("| v x w samples | horizon (s) | max sub-step (s) | rollouts | us per cycle | us per rollout |\n");
+  std::printf(
+      "\n### DWA: one control cycle (400 x 400 map, 60 x 40 cm footprint, 5 cm "
+      "margin)\n\n");
+  std::printf(
+      "| v x w samples | horizon (s) | max sub-step (s) | rollouts | us per "
+      "cycle | us per rollout |\n");
   std::printf("|---|---|---|---|---|---|\n");
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Pose> starts;
@@ -72,7 +77,8 @@ void BenchDwa(const Grid& grid, std::mt19937& rng, int cycles) {
     const Pose p{20 + 360 * u(rng), 20 + 360 * u(rng), 6.283 * u(rng)};
     if (!checker.Collides(grid, p, false, distance.data())) starts.push_back(p);
   }
-  for (auto [nv, nw] : {std::pair{5, 11}, std::pair{11, 21}, std::pair{21, 41}}) {
+  for (auto [nv, nw] :
+       {std::pair{5, 11}, std::pair{11, 21}, std::pair{21, 41}}) {
     for (double horizon : {1.0, 2.0, 3.0}) {
       DwaOptions options;
       options.v_samples = nv;
@@ -84,24 +90,30 @@ void BenchDwa(const Grid& grid, std::mt19937& rng, int cycles) {
       int64_t rollouts = 0;
       const double t0 = CpuSeconds();
       for (const Pose& p : starts) {
-        const std::vector<CellPoint> path = {p.point(), CellPoint{p.x + 100 * std::cos(p.yaw),
-                                                                  p.y + 100 * std::sin(p.yaw)}};
+        const std::vector<CellPoint> path = {
+            p.point(), CellPoint{p.x + 100 * std::cos(p.yaw),
+                                 p.y + 100 * std::sin(p.yaw)}};
         const RobotState state{p, 10.0, 0.0, 0.0};
-        rollouts += DwaStep(DwaMap{&grid, &checker, distance.data()}, state, limits, {}, path,
-                            0.1, options)
+        rollouts += DwaStep(DwaMap{&grid, &checker, distance.data()}, state,
+                            limits, {}, path, 0.1, options)
                         ->samples;
       }
       const double dt = CpuSeconds() - t0;
-      std::printf("| %d x %d | %.1f | %.2f | %lld | %.1f | %.2f |\n", nv, nw, horizon,
-                  options.sub_step, static_cast<long long>(rollouts / cycles), 1e6 * dt / cycles,
+      std::printf("| %d x %d | %.1f | %.2f | %lld | %.1f | %.2f |\n", nv, nw,
+                  horizon, options.sub_step,
+                  static_cast<long long>(rollouts / cycles), 1e6 * dt / cycles,
                   1e6 * dt / static_cast<double>(rollouts));
     }
   }
 }
 
 void BenchOrcaNeighbours(std::mt19937& rng, int cycles) {
-  std::printf("\n### ORCA: one control cycle against n neighbours within range (no map)\n\n");
-  std::printf("| neighbours | half-planes | infeasible cycles | us per cycle |\n|---|---|---|---|\n");
+  std::printf(
+      "\n### ORCA: one control cycle against n neighbours within range (no "
+      "map)\n\n");
+  std::printf(
+      "| neighbours | half-planes | infeasible cycles | us per cycle "
+      "|\n|---|---|---|---|\n");
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   VelocityLimits limits;
   limits.holonomic = true;
@@ -123,10 +135,12 @@ void BenchOrcaNeighbours(std::mt19937& rng, int cycles) {
       while (static_cast<int>(others.size()) < n) {
         const CellPoint p{spread * u(rng), spread * u(rng)};
         if (std::hypot(p.x, p.y) < 1.0) continue;
-        others.push_back(MovingObstacle{p, CellPoint{0.5 * u(rng), 0.5 * u(rng)}, 0.3, true});
+        others.push_back(MovingObstacle{
+            p, CellPoint{0.5 * u(rng), 0.5 * u(rng)}, 0.3, true});
       }
       const RobotState state{Pose{0, 0, 0}, 0.5, 0.0, 0.0};
-      const std::vector<CellPoint> path = {CellPoint{0, 0}, CellPoint{spread * 2, 0}};
+      const std::vector<CellPoint> path = {CellPoint{0, 0},
+                                           CellPoint{spread * 2, 0}};
       const double t0 = CpuSeconds();
       absl::StatusOr<LocalPlan> plan =
           OrcaStep(state, 0.3, limits, others, {}, path, 0.1, options);
@@ -134,16 +148,20 @@ void BenchOrcaNeighbours(std::mt19937& rng, int cycles) {
       lines += plan->constraints;
       infeasible += plan->status == LocalStatus::kBlocked;
     }
-    std::printf("| %d | %lld | %d of %d | %.1f |\n", n, static_cast<long long>(lines / cycles),
-                infeasible, cycles, 1e6 * total / cycles);
+    std::printf("| %d | %lld | %d of %d | %.1f |\n", n,
+                static_cast<long long>(lines / cycles), infeasible, cycles,
+                1e6 * total / cycles);
   }
 }
 
 void BenchOrcaFleet(const Grid& grid, std::mt19937& rng, int cycles) {
   std::printf(
-      "\n### ORCA: one whole-fleet step (every robot one cycle; 16 nearest neighbours within 2 m, "
+      "\n### ORCA: one whole-fleet step (every robot one cycle; 16 nearest "
+      "neighbours within 2 m, "
       "static obstacle lines within 50 cm of the 400 x 400 map)\n\n");
-  std::printf("| robots | us per fleet step | us per robot | of which obstacle segments |\n|---|---|---|---|\n");
+  std::printf(
+      "| robots | us per fleet step | us per robot | of which obstacle "
+      "segments |\n|---|---|---|---|\n");
   const std::shared_ptr<const ObstaclePolygons> polygons =
       ObstaclePolygons::Build(FreeSpace(grid, false));
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -159,9 +177,11 @@ void BenchOrcaFleet(const Grid& grid, std::mt19937& rng, int cycles) {
   for (int n : {10, 50, 200, 1000}) {
     std::vector<MovingObstacle> robots;
     while (static_cast<int>(robots.size()) < n) {
-      const Cell c{static_cast<int32_t>(rng() % 400), static_cast<int32_t>(rng() % 400)};
+      const Cell c{static_cast<int32_t>(rng() % 400),
+                   static_cast<int32_t>(rng() % 400)};
       if (grid.cost(c) != kFreeCost) continue;
-      robots.push_back(MovingObstacle{CellPoint{c.x + 0.5, c.y + 0.5}, CellPoint{0, 0}, 6.0, true});
+      robots.push_back(MovingObstacle{CellPoint{c.x + 0.5, c.y + 0.5},
+                                      CellPoint{0, 0}, 6.0, true});
     }
     const int steps = std::max(1, cycles / 20);
     double total = 0, segments_time = 0;
@@ -170,23 +190,28 @@ void BenchOrcaFleet(const Grid& grid, std::mt19937& rng, int cycles) {
       for (int i = 0; i < n; ++i) {
         const double t1 = CpuSeconds();
         const std::vector<ObstacleSegment> segments = ObstacleSegmentsNear(
-            *polygons, robots[i].position, options.obstacle_range + 6.0, options.max_obstacle_lines);
+            *polygons, robots[i].position, options.obstacle_range + 6.0,
+            options.max_obstacle_lines);
         segments_time += CpuSeconds() - t1;
         std::vector<MovingObstacle> others = robots;
         others.erase(others.begin() + i);
-        const RobotState state{Pose{robots[i].position.x, robots[i].position.y, 0}, 0, 0, 0};
-        const std::vector<CellPoint> path = {robots[i].position, CellPoint{200, 200}};
-        (void)OrcaStep(state, 6.0, limits, others, segments, path, 0.1, options);
+        const RobotState state{
+            Pose{robots[i].position.x, robots[i].position.y, 0}, 0, 0, 0};
+        const std::vector<CellPoint> path = {robots[i].position,
+                                             CellPoint{200, 200}};
+        (void)OrcaStep(state, 6.0, limits, others, segments, path, 0.1,
+                       options);
       }
       total += CpuSeconds() - t0;
     }
-    std::printf("| %d | %.0f | %.1f | %.1f |\n", n, 1e6 * total / steps, 1e6 * total / steps / n,
-                1e6 * segments_time / steps / n);
+    std::printf("| %d | %.0f | %.1f | %.1f |\n", n, 1e6 * total / steps,
+                1e6 * total / steps / n, 1e6 * segments_time / steps / n);
   }
 }
 
 void BenchFiras(const Grid& grid, std::mt19937& rng, int cycles) {
-  std::printf("\n### FIRAS: one control cycle (400 x 400 map, 30 cm radius)\n\n");
+  std::printf(
+      "\n### FIRAS: one control cycle (400 x 400 map, 30 cm radius)\n\n");
   std::printf("| influence (cells) | us per cycle |\n|---|---|\n");
   std::uniform_real_distribution<double> u(0.0, 1.0);
   VelocityLimits limits;
@@ -199,9 +224,11 @@ void BenchFiras(const Grid& grid, std::mt19937& rng, int cycles) {
     double total = 0;
     for (int c = 0; c < cycles; ++c) {
       const Pose p{20 + 360 * u(rng), 20 + 360 * u(rng), 0};
-      const std::vector<CellPoint> path = {p.point(), CellPoint{p.x + 100, p.y}};
+      const std::vector<CellPoint> path = {p.point(),
+                                           CellPoint{p.x + 100, p.y}};
       const double t0 = CpuSeconds();
-      (void)FirasStep(grid, RobotState{p, 0, 0, 0}, 6.0, limits, {}, path, 0.1, options, nullptr);
+      (void)FirasStep(grid, RobotState{p, 0, 0, 0}, 6.0, limits, {}, path, 0.1,
+                      options, nullptr);
       total += CpuSeconds() - t0;
     }
     std::printf("| %.0f | %.1f |\n", influence, 1e6 * total / cycles);
@@ -212,7 +239,8 @@ void BenchFiras(const Grid& grid, std::mt19937& rng, int cycles) {
 }  // namespace pathd
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage("Times one control cycle of the local planners (core/local).");
+  absl::SetProgramUsageMessage(
+      "Times one control cycle of the local planners (core/local).");
   absl::ParseCommandLine(argc, argv);
   std::mt19937 rng(static_cast<uint32_t>(absl::GetFlag(FLAGS_seed)));
   const int cycles = absl::GetFlag(FLAGS_cycles);

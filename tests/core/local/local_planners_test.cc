@@ -20,13 +20,13 @@
 
 #include "core/geometry/free_space.h"
 #include "core/geometry/obstacle_polygons.h"
-#include "core/local/local_types.h"
+#include "core/kinematics/footprint.h"
 #include "core/local/dwa.h"
 #include "core/local/firas.h"
+#include "core/local/local_types.h"
 #include "core/local/orca.h"
-#include "core/kinematics/footprint.h"
-#include "tests/testing/kinematic_checker.h"
 #include "gtest/gtest.h"
+#include "tests/testing/kinematic_checker.h"
 
 namespace pathd {
 namespace {
@@ -45,29 +45,36 @@ double Cross(CellPoint a, CellPoint b) { return a.x * b.y - a.y * b.x; }
 double Violates(const OrcaLine& l, CellPoint v) {
   return Cross(l.direction, CellPoint{l.point.x - v.x, l.point.y - v.y});
 }
-double Dist(CellPoint a, CellPoint b) { return std::hypot(a.x - b.x, a.y - b.y); }
+double Dist(CellPoint a, CellPoint b) {
+  return std::hypot(a.x - b.x, a.y - b.y);
+}
 
 // The exact optimum of min |v - pref| over the disc and the half-planes by
 // enumeration: the optimum of a strictly convex objective over a convex
 // region is pref itself, or the projection of pref onto one active
 // constraint, or a vertex of two. Returns false when no candidate is
 // feasible (then the region is empty, up to tolerance).
-bool ExactClosest(const std::vector<OrcaLine>& lines, double radius, CellPoint pref,
-                  CellPoint* best) {
+bool ExactClosest(const std::vector<OrcaLine>& lines, double radius,
+                  CellPoint pref, CellPoint* best) {
   std::vector<CellPoint> cand;
   cand.push_back(pref);
   const double pn = std::hypot(pref.x, pref.y);
-  if (pn > 0) cand.push_back(CellPoint{pref.x * radius / pn, pref.y * radius / pn});
+  if (pn > 0)
+    cand.push_back(CellPoint{pref.x * radius / pn, pref.y * radius / pn});
   for (const OrcaLine& l : lines) {
-    const double t = (pref.x - l.point.x) * l.direction.x + (pref.y - l.point.y) * l.direction.y;
-    cand.push_back(CellPoint{l.point.x + t * l.direction.x, l.point.y + t * l.direction.y});
+    const double t = (pref.x - l.point.x) * l.direction.x +
+                     (pref.y - l.point.y) * l.direction.y;
+    cand.push_back(CellPoint{l.point.x + t * l.direction.x,
+                             l.point.y + t * l.direction.y});
     // Line and circle.
     const double b = l.point.x * l.direction.x + l.point.y * l.direction.y;
-    const double c = l.point.x * l.point.x + l.point.y * l.point.y - radius * radius;
+    const double c =
+        l.point.x * l.point.x + l.point.y * l.point.y - radius * radius;
     const double disc = b * b - c;
     if (disc >= 0) {
       for (double s : {-b - std::sqrt(disc), -b + std::sqrt(disc)}) {
-        cand.push_back(CellPoint{l.point.x + s * l.direction.x, l.point.y + s * l.direction.y});
+        cand.push_back(CellPoint{l.point.x + s * l.direction.x,
+                                 l.point.y + s * l.direction.y});
       }
     }
   }
@@ -75,7 +82,8 @@ bool ExactClosest(const std::vector<OrcaLine>& lines, double radius, CellPoint p
     for (size_t j = i + 1; j < lines.size(); ++j) {
       const double den = Cross(lines[i].direction, lines[j].direction);
       if (std::fabs(den) < 1e-12) continue;
-      const CellPoint d{lines[j].point.x - lines[i].point.x, lines[j].point.y - lines[i].point.y};
+      const CellPoint d{lines[j].point.x - lines[i].point.x,
+                        lines[j].point.y - lines[i].point.y};
       const double t = Cross(d, lines[j].direction) / den;
       cand.push_back(CellPoint{lines[i].point.x + t * lines[i].direction.x,
                                lines[i].point.y + t * lines[i].direction.y});
@@ -104,8 +112,8 @@ OrcaLine RandomNeighbourLine(std::mt19937& rng, double* share_out) {
   o.radius = 0.3 + 0.3 * (u(rng) + 1);
   o.reciprocal = u(rng) > 0;
   *share_out = o.reciprocal ? 0.5 : 1.0;
-  return OrcaLineForNeighbour(CellPoint{0, 0}, CellPoint{u(rng), u(rng)}, 0.5, o,
-                              1.0 + (u(rng) + 1), 0.1, *share_out);
+  return OrcaLineForNeighbour(CellPoint{0, 0}, CellPoint{u(rng), u(rng)}, 0.5,
+                              o, 1.0 + (u(rng) + 1), 0.1, *share_out);
 }
 
 TEST(OrcaLinearProgram, FeasibleAnswersAreTheExactOptimum) {
@@ -116,7 +124,8 @@ TEST(OrcaLinearProgram, FeasibleAnswersAreTheExactOptimum) {
     const int n = 1 + static_cast<int>(rng() % 8);
     std::vector<OrcaLine> lines;
     double share;
-    for (int i = 0; i < n; ++i) lines.push_back(RandomNeighbourLine(rng, &share));
+    for (int i = 0; i < n; ++i)
+      lines.push_back(RandomNeighbourLine(rng, &share));
     const double max_speed = 1.0 + (u(rng) + 1);
     const CellPoint pref{2 * u(rng), 2 * u(rng)};
     const OrcaSolution sol = SolveOrcaLines(lines, 0, max_speed, pref);
@@ -126,7 +135,8 @@ TEST(OrcaLinearProgram, FeasibleAnswersAreTheExactOptimum) {
     if (sol.feasible) {
       ++feasible;
       EXPECT_LE(std::hypot(sol.velocity.x, sol.velocity.y), max_speed + 1e-9);
-      for (const OrcaLine& l : lines) EXPECT_LE(Violates(l, sol.velocity), 1e-7);
+      for (const OrcaLine& l : lines)
+        EXPECT_LE(Violates(l, sol.velocity), 1e-7);
       ASSERT_TRUE(exact_found);
       EXPECT_NEAR(Dist(sol.velocity, pref), Dist(exact, pref), 1e-6);
       EXPECT_LE(Dist(sol.velocity, exact), 1e-4);
@@ -161,25 +171,31 @@ TEST(OrcaLinearProgram, AgreesWithBruteForceGrid) {
     const int hard = static_cast<int>(rng() % 3);
     for (int i = 0; i < hard; ++i) {
       const double a = std::numbers::pi * u(rng);
-      const ObstacleSegment s{CellPoint{2 * std::cos(a) - std::sin(a), 2 * std::sin(a) + std::cos(a)},
-                              CellPoint{2 * std::cos(a) + std::sin(a), 2 * std::sin(a) - std::cos(a)}};
+      const ObstacleSegment s{CellPoint{2 * std::cos(a) - std::sin(a),
+                                        2 * std::sin(a) + std::cos(a)},
+                              CellPoint{2 * std::cos(a) + std::sin(a),
+                                        2 * std::sin(a) - std::cos(a)}};
       lines.push_back(OrcaLineForSegment(CellPoint{0, 0}, 0.5, s, 1.0, 0.1));
     }
     const int n = 1 + static_cast<int>(rng() % 10);
     double share;
-    for (int i = 0; i < n; ++i) lines.push_back(RandomNeighbourLine(rng, &share));
+    for (int i = 0; i < n; ++i)
+      lines.push_back(RandomNeighbourLine(rng, &share));
     const double max_speed = 1.5;
     const CellPoint pref{2 * u(rng), 2 * u(rng)};
-    const OrcaSolution sol = SolveOrcaLines(lines, static_cast<size_t>(hard), max_speed, pref);
+    const OrcaSolution sol =
+        SolveOrcaLines(lines, static_cast<size_t>(hard), max_speed, pref);
     SCOPED_TRACE(::testing::Message() << "case " << c);
-    double grid_best = std::numeric_limits<double>::infinity();  // distance, feasible
+    double grid_best =
+        std::numeric_limits<double>::infinity();  // distance, feasible
     double grid_minmax = std::numeric_limits<double>::infinity();
     for (double x = -max_speed; x <= max_speed; x += step) {
       for (double y = -max_speed; y <= max_speed; y += step) {
         const CellPoint v{x, y};
         if (std::hypot(x, y) > max_speed) continue;
         bool hard_ok = true;
-        for (int i = 0; i < hard; ++i) hard_ok = hard_ok && Violates(lines[i], v) <= 0;
+        for (int i = 0; i < hard; ++i)
+          hard_ok = hard_ok && Violates(lines[i], v) <= 0;
         if (!hard_ok) continue;
         double worst = -std::numeric_limits<double>::infinity();
         for (size_t i = static_cast<size_t>(hard); i < lines.size(); ++i) {
@@ -189,12 +205,14 @@ TEST(OrcaLinearProgram, AgreesWithBruteForceGrid) {
         if (worst <= 0) grid_best = std::min(grid_best, Dist(v, pref));
       }
     }
-    for (int i = 0; i < hard; ++i) EXPECT_LE(Violates(lines[i], sol.velocity), 1e-7);
+    for (int i = 0; i < hard; ++i)
+      EXPECT_LE(Violates(lines[i], sol.velocity), 1e-7);
     if (sol.feasible) {
       EXPECT_LE(Dist(sol.velocity, pref), grid_best + 1e-9);
     } else {
       ++infeasible;
-      EXPECT_TRUE(std::isinf(grid_best)) << "the grid found a feasible velocity";
+      EXPECT_TRUE(std::isinf(grid_best))
+          << "the grid found a feasible velocity";
       double worst = 0;
       for (size_t i = static_cast<size_t>(hard); i < lines.size(); ++i) {
         worst = std::max(worst, Violates(lines[i], sol.velocity));
@@ -216,15 +234,18 @@ TEST(OrcaLines, ReciprocalHalfPlanesAvoidCollisionWithinHorizon) {
     const double ra = 0.5, rb = 0.4, tau = 2.0;
     if (Dist(pa, pb) <= ra + rb + 0.01) continue;
     const CellPoint va{u(rng), u(rng)}, vb{u(rng), u(rng)};
-    const OrcaLine la = OrcaLineForNeighbour(pa, va, ra, MovingObstacle{pb, vb, rb, true}, tau, 0.1, 0.5);
-    const OrcaLine lb = OrcaLineForNeighbour(pb, vb, rb, MovingObstacle{pa, va, ra, true}, tau, 0.1, 0.5);
+    const OrcaLine la = OrcaLineForNeighbour(
+        pa, va, ra, MovingObstacle{pb, vb, rb, true}, tau, 0.1, 0.5);
+    const OrcaLine lb = OrcaLineForNeighbour(
+        pb, vb, rb, MovingObstacle{pa, va, ra, true}, tau, 0.1, 0.5);
     for (int k = 0; k < 20; ++k) {
       CellPoint a{2 * u(rng), 2 * u(rng)}, b{2 * u(rng), 2 * u(rng)};
       if (Violates(la, a) > 0 || Violates(lb, b) > 0) continue;
       // Closest approach of pb - pa + t (b - a) over t in [0, tau].
       const CellPoint d{pb.x - pa.x, pb.y - pa.y}, w{b.x - a.x, b.y - a.y};
       const double ww = w.x * w.x + w.y * w.y;
-      const double t = ww > 0 ? std::clamp(-(d.x * w.x + d.y * w.y) / ww, 0.0, tau) : 0.0;
+      const double t =
+          ww > 0 ? std::clamp(-(d.x * w.x + d.y * w.y) / ww, 0.0, tau) : 0.0;
       EXPECT_GE(std::hypot(d.x + t * w.x, d.y + t * w.y), ra + rb - 1e-9)
           << "case " << c << " sample " << k;
     }
@@ -243,7 +264,8 @@ struct SimRobot {
 // acceleration limit), checking separation after every step and, when
 // `grid` is given, that no robot overlaps a blocked cell. Returns the time
 // the last robot arrived (infinity when one did not within max_time).
-double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time) {
+double RunFleet(std::vector<SimRobot>& robots, const Grid* grid,
+                double max_time) {
   const double dt = 0.1;
   OrcaOptions options;
   options.max_neighbours = robots.size();
@@ -254,7 +276,8 @@ double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time
   limits.max_v = 1.0;
   limits.max_vy = 1.0;
   std::shared_ptr<const ObstaclePolygons> polygons;
-  if (grid != nullptr) polygons = ObstaclePolygons::Build(FreeSpace(*grid, false));
+  if (grid != nullptr)
+    polygons = ObstaclePolygons::Build(FreeSpace(*grid, false));
   double t = 0.0;
   for (; t < max_time; t += dt) {
     std::vector<CellPoint> next(robots.size());
@@ -263,20 +286,23 @@ double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time
       std::vector<MovingObstacle> others;
       for (size_t j = 0; j < robots.size(); ++j) {
         if (j != i) {
-          others.push_back(MovingObstacle{robots[j].position, robots[j].velocity, robots[j].radius, true});
+          others.push_back(MovingObstacle{
+              robots[j].position, robots[j].velocity, robots[j].radius, true});
         }
       }
       std::vector<ObstacleSegment> segments;
       if (polygons) {
-        segments = ObstacleSegmentsNear(*polygons, robots[i].position,
-                                        options.obstacle_range + robots[i].radius,
-                                        options.max_obstacle_lines);
+        segments =
+            ObstacleSegmentsNear(*polygons, robots[i].position,
+                                 options.obstacle_range + robots[i].radius,
+                                 options.max_obstacle_lines);
       }
       // Yaw 0: the body frame is the grid frame.
-      RobotState state{Pose{robots[i].position.x, robots[i].position.y, 0.0}, robots[i].velocity.x,
-                       robots[i].velocity.y, 0.0};
-      absl::StatusOr<LocalPlan> plan = OrcaStep(state, robots[i].radius, limits, others,
-                                                segments, robots[i].path, dt, options);
+      RobotState state{Pose{robots[i].position.x, robots[i].position.y, 0.0},
+                       robots[i].velocity.x, robots[i].velocity.y, 0.0};
+      absl::StatusOr<LocalPlan> plan =
+          OrcaStep(state, robots[i].radius, limits, others, segments,
+                   robots[i].path, dt, options);
       EXPECT_TRUE(plan.ok()) << plan.status();
       if (!plan.ok()) return std::numeric_limits<double>::infinity();
       robots[i].arrived = plan->status == LocalStatus::kGoalReached;
@@ -293,7 +319,8 @@ double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time
       for (size_t j = i + 1; j < robots.size(); ++j) {
         const double d = Dist(robots[i].position, robots[j].position);
         if (d < robots[i].radius + robots[j].radius - 1e-6) {
-          ADD_FAILURE() << "robots " << i << " and " << j << " at distance " << d << " at t=" << t;
+          ADD_FAILURE() << "robots " << i << " and " << j << " at distance "
+                        << d << " at t=" << t;
           return std::numeric_limits<double>::infinity();
         }
       }
@@ -301,8 +328,8 @@ double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time
         // No blocked cell's square (nor the map's outside) within the radius.
         const CellPoint p = robots[i].position;
         const double r = robots[i].radius;
-        if (p.x < r - 1e-6 || p.y < r - 1e-6 || p.x > grid->width() - r + 1e-6 ||
-            p.y > grid->height() - r + 1e-6) {
+        if (p.x < r - 1e-6 || p.y < r - 1e-6 ||
+            p.x > grid->width() - r + 1e-6 || p.y > grid->height() - r + 1e-6) {
           ADD_FAILURE() << "robot " << i << " leaves the map at t=" << t;
           return std::numeric_limits<double>::infinity();
         }
@@ -312,8 +339,8 @@ double RunFleet(std::vector<SimRobot>& robots, const Grid* grid, double max_time
             const double dx = std::max({x - p.x, 0.0, p.x - (x + 1)});
             const double dy = std::max({y - p.y, 0.0, p.y - (y + 1)});
             if (std::hypot(dx, dy) < r - 1e-6) {
-              ADD_FAILURE() << "robot " << i << " enters blocked cell (" << x << ", " << y
-                            << ") at t=" << t;
+              ADD_FAILURE() << "robot " << i << " enters blocked cell (" << x
+                            << ", " << y << ") at t=" << t;
               return std::numeric_limits<double>::infinity();
             }
           }
@@ -333,12 +360,17 @@ TEST_P(OrcaCircleSwap, RobotsSwapWithoutContactAndArrive) {
   for (int i = 0; i < n; ++i) {
     const double a = 2 * std::numbers::pi * i / n;
     robots[i].position = CellPoint{ring * std::cos(a), ring * std::sin(a)};
-    robots[i].path = {robots[i].position, CellPoint{-robots[i].position.x, -robots[i].position.y}};
+    robots[i].path = {robots[i].position,
+                      CellPoint{-robots[i].position.x, -robots[i].position.y}};
   }
   const double bound = 3 * (2 * ring) / 1.0 + 20.0;
   const double arrival = RunFleet(robots, nullptr, bound);
   EXPECT_LT(arrival, bound);
-  for (int i = 0; i < n; ++i) EXPECT_TRUE(robots[i].arrived) << "robot " << i << " at " << robots[i].position.x << "," << robots[i].position.y << " v " << robots[i].velocity.x << "," << robots[i].velocity.y;
+  for (int i = 0; i < n; ++i)
+    EXPECT_TRUE(robots[i].arrived)
+        << "robot " << i << " at " << robots[i].position.x << ","
+        << robots[i].position.y << " v " << robots[i].velocity.x << ","
+        << robots[i].velocity.y;
 }
 
 INSTANTIATE_TEST_SUITE_P(Fleets, OrcaCircleSwap, ::testing::Values(8, 16, 32));
@@ -411,8 +443,8 @@ TEST(OrcaStaticObstacles, CorridorTrafficArrives) {
 // --- DWA ---
 
 Footprint Rectangle() {
-  return *Footprint::Polygon({CellPoint{0.6, 0.4}, CellPoint{-0.6, 0.4}, CellPoint{-0.6, -0.4},
-                              CellPoint{0.6, -0.4}});
+  return *Footprint::Polygon({CellPoint{0.6, 0.4}, CellPoint{-0.6, 0.4},
+                              CellPoint{-0.6, -0.4}, CellPoint{0.6, -0.4}});
 }
 
 testing::KinematicCheck DenseCheck(const Footprint& f, bool holonomic) {
@@ -435,8 +467,10 @@ Pose ExactMotion(const Pose& p, double v, double vy, double w, double t) {
   }
   const double a = p.yaw, b = p.yaw + w * t;
   // Integral of the rotated body velocity over the arc.
-  const double x = (v * (std::sin(b) - std::sin(a)) + vy * (std::cos(b) - std::cos(a))) / w;
-  const double y = (-v * (std::cos(b) - std::cos(a)) + vy * (std::sin(b) - std::sin(a))) / w;
+  const double x =
+      (v * (std::sin(b) - std::sin(a)) + vy * (std::cos(b) - std::cos(a))) / w;
+  const double y =
+      (-v * (std::cos(b) - std::cos(a)) + vy * (std::sin(b) - std::sin(a))) / w;
   return Pose{p.x + x, p.y + y, NormalizeAngle(b)};
 }
 
@@ -459,7 +493,8 @@ TEST(Dwa, CommandsInTheWindowAndAcceptedRolloutsAreCollisionFree) {
     const std::vector<float> distance = ObstacleDistanceField(grid, false);
     Pose start;
     do {
-      start = Pose{2 + 16 * u(rng), 2 + 16 * u(rng), 2 * std::numbers::pi * u(rng)};
+      start =
+          Pose{2 + 16 * u(rng), 2 + 16 * u(rng), 2 * std::numbers::pi * u(rng)};
     } while (checker.Collides(grid, start, false, distance.data()));
     const bool holonomic = c % 3 == 0;
     VelocityLimits limits;
@@ -471,10 +506,12 @@ TEST(Dwa, CommandsInTheWindowAndAcceptedRolloutsAreCollisionFree) {
     limits.acc_v = 1.0;
     limits.acc_vy = 1.0;
     limits.acc_w = 2.0;
-    RobotState state{start, limits.min_v + (limits.max_v - limits.min_v) * u(rng),
+    RobotState state{start,
+                     limits.min_v + (limits.max_v - limits.min_v) * u(rng),
                      holonomic ? (2 * u(rng) - 1) * limits.max_vy : 0.0,
                      (2 * u(rng) - 1) * limits.max_w};
-    const std::vector<CellPoint> path = {start.point(), CellPoint{1 + 18 * u(rng), 1 + 18 * u(rng)}};
+    const std::vector<CellPoint> path = {
+        start.point(), CellPoint{1 + 18 * u(rng), 1 + 18 * u(rng)}};
     DwaOptions options;
     options.v_samples = 5;
     options.w_samples = 7;
@@ -482,19 +519,27 @@ TEST(Dwa, CommandsInTheWindowAndAcceptedRolloutsAreCollisionFree) {
     const double period = 0.2;
     std::vector<DwaRollout> rollouts;
     absl::StatusOr<LocalPlan> plan =
-        DwaStep(DwaMap{&grid, &checker, c % 2 == 0 ? distance.data() : nullptr}, state, limits, {},
-                path, period, options, &rollouts);
+        DwaStep(DwaMap{&grid, &checker, c % 2 == 0 ? distance.data() : nullptr},
+                state, limits, {}, path, period, options, &rollouts);
     ASSERT_TRUE(plan.ok()) << plan.status();
     SCOPED_TRACE(::testing::Message() << "case " << c);
     // The window, from its definition.
     const double eps = 1e-9;
-    EXPECT_GE(plan->v, std::max(limits.min_v, state.v - limits.acc_v * period) - eps);
-    EXPECT_LE(plan->v, std::min(limits.max_v, state.v + limits.acc_v * period) + eps);
-    EXPECT_GE(plan->w, std::max(-limits.max_w, state.w - limits.acc_w * period) - eps);
-    EXPECT_LE(plan->w, std::min(limits.max_w, state.w + limits.acc_w * period) + eps);
+    EXPECT_GE(plan->v,
+              std::max(limits.min_v, state.v - limits.acc_v * period) - eps);
+    EXPECT_LE(plan->v,
+              std::min(limits.max_v, state.v + limits.acc_v * period) + eps);
+    EXPECT_GE(plan->w,
+              std::max(-limits.max_w, state.w - limits.acc_w * period) - eps);
+    EXPECT_LE(plan->w,
+              std::min(limits.max_w, state.w + limits.acc_w * period) + eps);
     if (holonomic) {
-      EXPECT_GE(plan->vy, std::max(-limits.max_vy, state.vy - limits.acc_vy * period) - eps);
-      EXPECT_LE(plan->vy, std::min(limits.max_vy, state.vy + limits.acc_vy * period) + eps);
+      EXPECT_GE(
+          plan->vy,
+          std::max(-limits.max_vy, state.vy - limits.acc_vy * period) - eps);
+      EXPECT_LE(
+          plan->vy,
+          std::min(limits.max_vy, state.vy + limits.acc_vy * period) + eps);
     } else {
       EXPECT_EQ(plan->vy, 0.0);
     }
@@ -505,12 +550,16 @@ TEST(Dwa, CommandsInTheWindowAndAcceptedRolloutsAreCollisionFree) {
         continue;
       }
       ++accepted;
-      command_among_accepted = command_among_accepted ||
-                               (r.v == plan->v && r.vy == plan->vy && r.w == plan->w);
-      EXPECT_EQ(CheckKinematicPath(grid, r.poses, {}, DenseCheck(footprint, holonomic)), "")
+      command_among_accepted =
+          command_among_accepted ||
+          (r.v == plan->v && r.vy == plan->vy && r.w == plan->w);
+      EXPECT_EQ(CheckKinematicPath(grid, r.poses, {},
+                                   DenseCheck(footprint, holonomic)),
+                "")
           << "rollout v=" << r.v << " vy=" << r.vy << " w=" << r.w;
       // The rollout is the motion of its velocity over the horizon.
-      const Pose exact = ExactMotion(state.pose, r.v, r.vy, r.w, options.horizon);
+      const Pose exact =
+          ExactMotion(state.pose, r.v, r.vy, r.w, options.horizon);
       EXPECT_NEAR(r.poses.back().x, exact.x, 1e-2);
       EXPECT_NEAR(r.poses.back().y, exact.y, 1e-2);
       EXPECT_NEAR(AngleBetween(r.poses.back().yaw, exact.yaw), 0.0, 1e-6);
@@ -542,7 +591,8 @@ TEST(Dwa, FollowsAPathAroundAnObstacleToTheGoal) {
   const FootprintChecker checker = *FootprintChecker::Create(footprint, copt);
   const std::vector<float> distance = ObstacleDistanceField(grid, false);
   // The global path passes under the block.
-  const std::vector<CellPoint> path = {{3.5, 6.0}, {8.0, 1.5}, {18.0, 1.5}, {26.5, 6.0}};
+  const std::vector<CellPoint> path = {
+      {3.5, 6.0}, {8.0, 1.5}, {18.0, 1.5}, {26.5, 6.0}};
   VelocityLimits limits;
   limits.min_v = 0.0;
   limits.max_v = 2.0;
@@ -555,7 +605,8 @@ TEST(Dwa, FollowsAPathAroundAnObstacleToTheGoal) {
   bool arrived = false;
   for (int cycle = 0; cycle < 600 && !arrived; ++cycle) {
     absl::StatusOr<LocalPlan> plan =
-        DwaStep(DwaMap{&grid, &checker, distance.data()}, state, limits, {}, path, period, options);
+        DwaStep(DwaMap{&grid, &checker, distance.data()}, state, limits, {},
+                path, period, options);
     ASSERT_TRUE(plan.ok()) << plan.status();
     ASSERT_NE(plan->status, LocalStatus::kBlocked) << plan->reason;
     if (plan->status == LocalStatus::kGoalReached) {
@@ -565,9 +616,11 @@ TEST(Dwa, FollowsAPathAroundAnObstacleToTheGoal) {
     // Execute one period, exactly, and check the motion densely.
     std::vector<Pose> moved;
     for (int k = 0; k <= 10; ++k) {
-      moved.push_back(ExactMotion(state.pose, plan->v, plan->vy, plan->w, period * k / 10));
+      moved.push_back(
+          ExactMotion(state.pose, plan->v, plan->vy, plan->w, period * k / 10));
     }
-    ASSERT_EQ(CheckKinematicPath(grid, moved, {}, DenseCheck(footprint, false)), "")
+    ASSERT_EQ(CheckKinematicPath(grid, moved, {}, DenseCheck(footprint, false)),
+              "")
         << "cycle " << cycle;
     state = RobotState{moved.back(), plan->v, 0.0, plan->w};
   }
@@ -592,10 +645,12 @@ TEST(Dwa, TooFastTowardAWallIsBlocked) {
   const RobotState state{Pose{4.5, 3.0, 0.0}, 2.0, 0.0, 0.0};
   const std::vector<CellPoint> path = {{4.5, 3.0}, {9.5, 3.0}};
   absl::StatusOr<LocalPlan> plan =
-      DwaStep(DwaMap{&grid, &checker, nullptr}, state, limits, {}, path, 0.1, DwaOptions{});
+      DwaStep(DwaMap{&grid, &checker, nullptr}, state, limits, {}, path, 0.1,
+              DwaOptions{});
   ASSERT_TRUE(plan.ok()) << plan.status();
   EXPECT_EQ(plan->status, LocalStatus::kBlocked);
-  EXPECT_NE(plan->reason.find("with the map"), std::string::npos) << plan->reason;
+  EXPECT_NE(plan->reason.find("with the map"), std::string::npos)
+      << plan->reason;
   EXPECT_LT(plan->v, 2.0);  // braking
 }
 
@@ -607,23 +662,27 @@ TEST(Dwa, AMovingObstacleHeadOnRejectsTheStraightRollouts) {
   limits.max_w = 1.0;
   const RobotState state{Pose{5.0, 5.0, 0.0}, 1.0, 0.0, 0.0};
   const std::vector<CellPoint> path = {{5.0, 5.0}, {25.0, 5.0}};
-  const MovingObstacle person{CellPoint{12.0, 5.0}, CellPoint{-1.0, 0.0}, 0.5, false};
+  const MovingObstacle person{CellPoint{12.0, 5.0}, CellPoint{-1.0, 0.0}, 0.5,
+                              false};
   std::vector<DwaRollout> rollouts;
   DwaOptions options;
   options.horizon = 3.0;
-  absl::StatusOr<LocalPlan> plan = DwaStep(DwaMap{&grid, &checker, nullptr}, state, limits,
-                                           {&person, 1}, path, 0.1, options, &rollouts);
+  absl::StatusOr<LocalPlan> plan =
+      DwaStep(DwaMap{&grid, &checker, nullptr}, state, limits, {&person, 1},
+              path, 0.1, options, &rollouts);
   ASSERT_TRUE(plan.ok()) << plan.status();
   EXPECT_EQ(plan->status, LocalStatus::kOk) << plan->reason;
   int by_obstacle = 0;
-  for (const DwaRollout& r : rollouts) by_obstacle += r.rejected == "moving obstacle";
+  for (const DwaRollout& r : rollouts)
+    by_obstacle += r.rejected == "moving obstacle";
   EXPECT_GT(by_obstacle, 0);
   // The command's predicted trajectory keeps clear of the predicted person.
   const double h = options.horizon / (plan->trajectory.size() - 1);
   for (size_t i = 0; i < plan->trajectory.size(); ++i) {
     const double px = 12.0 - h * i;
-    EXPECT_GE(std::hypot(plan->trajectory[i].x - px, plan->trajectory[i].y - 5.0),
-              0.5 + checker.footprint().circumscribed_radius() - 1e-9);
+    EXPECT_GE(
+        std::hypot(plan->trajectory[i].x - px, plan->trajectory[i].y - 5.0),
+        0.5 + checker.footprint().circumscribed_radius() - 1e-9);
   }
 }
 
@@ -632,8 +691,9 @@ TEST(Dwa, AMovingObstacleHeadOnRejectsTheStraightRollouts) {
 // Drives a differential-drive robot with FIRAS (exact motion per period);
 // returns the first status other than kOk, and checks the robot's disc
 // never overlaps a blocked cell.
-LocalStatus DriveFiras(const Grid& grid, Pose start, const std::vector<CellPoint>& path,
-                       int cycles, Pose* end) {
+LocalStatus DriveFiras(const Grid& grid, Pose start,
+                       const std::vector<CellPoint>& path, int cycles,
+                       Pose* end) {
   VelocityLimits limits;
   limits.max_v = 1.0;
   limits.max_w = 1.5;
@@ -643,23 +703,27 @@ LocalStatus DriveFiras(const Grid& grid, Pose start, const std::vector<CellPoint
   RobotState state{start, 0, 0, 0};
   FirasMemory memory;
   for (int cycle = 0; cycle < cycles; ++cycle) {
-    absl::StatusOr<LocalPlan> plan =
-        FirasStep(grid, state, radius, limits, {}, path, period, FirasOptions{}, &memory);
+    absl::StatusOr<LocalPlan> plan = FirasStep(
+        grid, state, radius, limits, {}, path, period, FirasOptions{}, &memory);
     EXPECT_TRUE(plan.ok()) << plan.status();
     if (!plan.ok()) return LocalStatus::kBlocked;
     if (plan->status != LocalStatus::kOk) {
       *end = state.pose;
-      std::cerr << "cycle " << cycle << " at " << end->x << "," << end->y << ": "
-                << plan->reason << "\n";
+      std::cerr << "cycle " << cycle << " at " << end->x << "," << end->y
+                << ": " << plan->reason << "\n";
       return plan->status;
     }
-    state = RobotState{ExactMotion(state.pose, plan->v, 0, plan->w, period), plan->v, 0, plan->w};
+    state = RobotState{ExactMotion(state.pose, plan->v, 0, plan->w, period),
+                       plan->v, 0, plan->w};
     for (int32_t y = 0; y < grid.height(); ++y) {
       for (int32_t x = 0; x < grid.width(); ++x) {
         if (grid.cost(x, y) < kInscribedCost) continue;
-        const double dx = std::max({x - state.pose.x, 0.0, state.pose.x - (x + 1)});
-        const double dy = std::max({y - state.pose.y, 0.0, state.pose.y - (y + 1)});
-        EXPECT_GE(std::hypot(dx, dy), radius) << "cycle " << cycle << " cell " << x << "," << y;
+        const double dx =
+            std::max({x - state.pose.x, 0.0, state.pose.x - (x + 1)});
+        const double dy =
+            std::max({y - state.pose.y, 0.0, state.pose.y - (y + 1)});
+        EXPECT_GE(std::hypot(dx, dy), radius)
+            << "cycle " << cycle << " cell " << x << "," << y;
       }
     }
   }
@@ -687,7 +751,8 @@ TEST(Firas, AUShapedTrapIsALocalMinimum) {
   // The naive global path runs straight through the cup's back wall.
   const std::vector<CellPoint> path = {{4.5, 7.0}, {27.5, 7.0}};
   Pose end;
-  EXPECT_EQ(DriveFiras(grid, Pose{4.5, 7.0, 0.0}, path, 600, &end), LocalStatus::kLocalMinimum);
+  EXPECT_EQ(DriveFiras(grid, Pose{4.5, 7.0, 0.0}, path, 600, &end),
+            LocalStatus::kLocalMinimum);
   EXPECT_GT(end.x, 12.0) << "it should be inside the cup";
   EXPECT_LT(end.x, 18.0);
 }
@@ -709,7 +774,8 @@ TEST(Firas, OpenMapReachesTheGoal) {
   // (a block straight across the path would be a local minimum too).
   const std::vector<CellPoint> path = {{2.5, 4.5}, {27.5, 4.5}};
   Pose end;
-  EXPECT_EQ(DriveFiras(grid, Pose{2.5, 4.5, 0.0}, path, 600, &end), LocalStatus::kGoalReached);
+  EXPECT_EQ(DriveFiras(grid, Pose{2.5, 4.5, 0.0}, path, 600, &end),
+            LocalStatus::kGoalReached);
 }
 
 TEST(Firas, BadInputNamesTheField) {
@@ -718,7 +784,8 @@ TEST(Firas, BadInputNamesTheField) {
   options.influence = -1;
   const std::vector<CellPoint> path = {{1, 1}};
   absl::StatusOr<LocalPlan> plan =
-      FirasStep(grid, RobotState{}, 0.4, VelocityLimits{}, {}, path, 0.1, options, nullptr);
+      FirasStep(grid, RobotState{}, 0.4, VelocityLimits{}, {}, path, 0.1,
+                options, nullptr);
   ASSERT_FALSE(plan.ok());
   EXPECT_NE(plan.status().message().find("influence"), std::string::npos);
 }
@@ -729,13 +796,17 @@ TEST(OrcaStep, BadInputNamesTheField) {
   OrcaOptions options;
   const std::vector<CellPoint> path = {CellPoint{1, 1}};
   options.time_horizon = 0;
-  EXPECT_NE(OrcaStep(state, 0.5, limits, {}, {}, path, 0.1, options).status().message().find(
-                "time_horizon"),
+  EXPECT_NE(OrcaStep(state, 0.5, limits, {}, {}, path, 0.1, options)
+                .status()
+                .message()
+                .find("time_horizon"),
             std::string::npos);
   options = OrcaOptions{};
   limits.acc_v = -1;
-  EXPECT_NE(OrcaStep(state, 0.5, limits, {}, {}, path, 0.1, options).status().message().find(
-                "acc_v"),
+  EXPECT_NE(OrcaStep(state, 0.5, limits, {}, {}, path, 0.1, options)
+                .status()
+                .message()
+                .find("acc_v"),
             std::string::npos);
   limits = VelocityLimits{};
   EXPECT_FALSE(OrcaStep(state, 0.5, limits, {}, {}, {}, 0.1, options).ok());
