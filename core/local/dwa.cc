@@ -161,6 +161,10 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
                        : std::vector<double>{0.0};
 
   LocalPlan plan;
+  // A start that already touches an obstacle (with the checker's margin)
+  // rejects every rollout; say so rather than count them.
+  const bool start_collides =
+      checker.Collides(grid, state.pose, options.unknown_is_free, map.distance);
   double best_score = std::numeric_limits<double>::infinity();
   std::vector<Pose> best_poses;
   int64_t map_rejects = 0, obstacle_rejects = 0;
@@ -284,6 +288,12 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
     plan.status = LocalStatus::kGoalReached;
     plan.reason = absl::StrFormat("within %g cells of the path's end",
                                   options.goal_tolerance);
+  } else if (start_collides) {
+    brake();
+    plan.status = LocalStatus::kBlocked;
+    plan.reason =
+        "the footprint at the current pose already touches an obstacle (the "
+        "checker's margin included); braking";
   } else if (std::isinf(best_score)) {
     brake();
     plan.status = LocalStatus::kBlocked;

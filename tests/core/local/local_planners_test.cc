@@ -652,6 +652,15 @@ TEST(Dwa, TooFastTowardAWallIsBlocked) {
   EXPECT_NE(plan->reason.find("with the map"), std::string::npos)
       << plan->reason;
   EXPECT_LT(plan->v, 2.0);  // braking
+
+  // Standing on the wall: blocked, and the reason says why.
+  const RobotState on_wall{Pose{6.2, 3.0, 0.0}, 0.0, 0.0, 0.0};
+  plan = DwaStep(DwaMap{&grid, &checker, nullptr}, on_wall, limits, {}, path,
+                 0.1, DwaOptions{});
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  EXPECT_EQ(plan->status, LocalStatus::kBlocked);
+  EXPECT_NE(plan->reason.find("current pose"), std::string::npos)
+      << plan->reason;
 }
 
 TEST(Dwa, AMovingObstacleHeadOnRejectsTheStraightRollouts) {
