@@ -109,8 +109,8 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
 // and drive at |desired| scaled by the cosine of the heading error (0 when
 // the error exceeds 90 degrees, so the robot turns in place first), clamped
 // to [max(min_v, 0), max_v]. The robot then moves along its heading, not
-// exactly along `desired`: ORCA's guarantee holds only for the holonomic
-// velocity, which docs/decisions.md explains.
+// exactly along `desired` (OrcaStep then cuts the forward speed to stay in
+// its half-planes; docs/decisions.md).
 void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
                              const VelocityLimits& limits, double* v,
                              double* w);

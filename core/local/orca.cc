@@ -146,6 +146,54 @@ void SolveSpace(const std::vector<Line>& lines, size_t hard,
   }
 }
 
+// Differential drive: the forward speed t in [0, v] along the unit heading
+// h whose velocity t h satisfies every line, nearest v; when none does, the
+// t in [0, v] with the smallest largest violation (the violation is convex
+// and piecewise linear in t, so its minimum is at 0, v or a breakpoint).
+double SafeForwardSpeed(const std::vector<OrcaLine>& lines, Vec h, double v) {
+  if (v <= 0) return v;
+  double lo = 0.0, hi = v;
+  bool empty = false;
+  for (const OrcaLine& l : lines) {
+    // det(dir, t h - point) >= 0  <=>  t det(dir, h) >= det(dir, point).
+    const double a = Det(V(l.direction), h);
+    const double b = Det(V(l.direction), V(l.point));
+    if (a > kParallel) {
+      lo = std::max(lo, b / a);
+    } else if (a < -kParallel) {
+      hi = std::min(hi, b / a);
+    } else if (b > 0) {
+      empty = true;
+    }
+  }
+  if (!empty && lo <= hi) return hi;
+  const auto worst = [&](double t) {
+    double w = -std::numeric_limits<double>::infinity();
+    for (const OrcaLine& l : lines) {
+      w = std::max(
+          w, Det(V(l.direction), V(l.point)) - Det(V(l.direction), h) * t);
+    }
+    return w;
+  };
+  double best_t = 0.0, best = worst(0.0);
+  const auto consider = [&](double t) {
+    if (t < 0 || t > v) return;
+    const double w = worst(t);
+    if (w < best) {
+      best = w;
+      best_t = t;
+    }
+  };
+  consider(v);
+  for (const OrcaLine& l : lines) {
+    const double a = Det(V(l.direction), h);
+    if (std::fabs(a) > kParallel) {
+      consider(Det(V(l.direction), V(l.point)) / a);
+    }
+  }
+  return best_t;
+}
+
 Vec GridVelocity(const RobotState& s) {
   const double c = std::cos(s.pose.yaw), sn = std::sin(s.pose.yaw);
   return Vec{s.v * c - s.vy * sn, s.v * sn + s.vy * c};
@@ -414,6 +462,9 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
   } else {
     FollowVelocityDiffDrive(P(chosen), state.pose.yaw, options.turn_gain,
                             limits, &v, &w);
+    // The robot moves along its heading, not along `chosen`: keep the
+    // forward speed inside the half-planes along the current heading.
+    v = SafeForwardSpeed(lines, Vec{c, s}, v);
   }
   if (options.respect_acceleration) {
     v = ClampToWindow(v, state.v, limits.acc_v, period, limits.min_v,

@@ -119,7 +119,9 @@ struct OrcaOptions {
   // neighbour is within neighbour_range: the "keep right" convention that
   // breaks the symmetric equilibria in which reciprocal robots otherwise
   // stop face to face for ever (robots swapping across a circle, or two
-  // head-on in a corridor). 0 turns it off.
+  // head-on in a corridor). 0 turns it off. Crowds of differential-drive
+  // robots, which cannot sidestep, need more (0.5); in corridors that much
+  // steers robots into the wall on their right (docs/decisions.md).
   double keep_right = 0.15;
   // Differential drive: turn rate per radian of heading error, 1/s.
   double turn_gain = 2.0;
@@ -138,7 +140,9 @@ absl::Status ValidateOrcaOptions(const OrcaOptions& options);
 // velocity toward the lookahead point on `path` (cell coordinates; not
 // empty), the half-planes of the neighbours and of `segments` (static
 // obstacle segments, e.g. ObstacleSegmentsNear), the program, and for a
-// differential-drive robot the (v, w) that follows the answer. Status
+// differential-drive robot the (v, w) that follows the answer
+// (FollowVelocityDiffDrive), its forward speed cut so that the velocity
+// along the current heading stays inside every half-plane. Status
 // kBlocked when the program was infeasible (the least-violating velocity is
 // still commanded), kGoalReached within goal_tolerance of the path's end.
 // The robot's current grid-frame velocity is taken from `state` (v, vy in
