@@ -185,6 +185,7 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
         poses.push_back(state.pose);
         const char* rejected = nullptr;
         double clearance = std::numeric_limits<double>::infinity();
+        double moving_clearance = std::numeric_limits<double>::infinity();
         int32_t worst_cost = 0;
         for (int32_t i = 0; i <= steps; ++i) {
           if (i > 0)
@@ -199,10 +200,13 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
           for (const MovingObstacle& o : obstacles) {
             const double ox = o.position.x + o.velocity.x * t;
             const double oy = o.position.y + o.velocity.y * t;
-            if (std::hypot(ox - p.x, oy - p.y) < o.radius + r_circ) {
+            const double gap =
+                std::hypot(ox - p.x, oy - p.y) - o.radius - r_circ;
+            if (gap < 0) {
               rejected = "moving obstacle";
               break;
             }
+            moving_clearance = std::min(moving_clearance, gap);
           }
           if (rejected != nullptr) break;
           const Cell c = p.cell();
@@ -249,7 +253,12 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
                 ? Clamp01((options.clearance_limit - clearance) /
                           options.clearance_limit)
                 : worst_cost / static_cast<double>(kMaxTraversableCost);
-        score += options.obstacle_weight * Clamp01(obstacle);
+        // Moving obstacles count with their predicted positions, so robots
+        // start giving way before the rollouts toward each other collide.
+        const double moving =
+            Clamp01((options.clearance_limit - moving_clearance) /
+                    options.clearance_limit);
+        score += options.obstacle_weight * std::max(Clamp01(obstacle), moving);
         const double top = std::max(limits.max_v, 1e-9);
         score +=
             options.speed_weight * Clamp01((top - std::hypot(v, vy)) / top);

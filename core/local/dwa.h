@@ -46,13 +46,15 @@ struct DwaOptions {
   double path_distance_weight = 1.0;  // rollout end to the global path
   double goal_distance_weight = 1.0;  // rollout end to the lookahead point
   double heading_weight = 0.3;  // final heading against the lookahead direction
-  double obstacle_weight = 0.5;   // clearance below clearance_limit
+  double obstacle_weight = 0.5;   // clearance below clearance_limit (map
+                                  // or predicted moving obstacles)
   double speed_weight = 0.3;      // slower than max_v
   double twirling_weight = 0.05;  // |w| / max_w
   // The lookahead point this far along the global path, cells.
   double lookahead = 3.0;
   // Clearance (cells, footprint's circumscribed disc to the nearest obstacle
-  // cell centre) beyond which the obstacle critic is 0.
+  // cell centre or predicted moving obstacle disc) beyond which the
+  // obstacle critic is 0.
   double clearance_limit = 3.0;
   double goal_tolerance = 0.25;
   bool unknown_is_free = false;

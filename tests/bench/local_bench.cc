@@ -4,6 +4,9 @@
 // FIRAS, on a generated map at 5 cm cells (markdown tables). Times are the
 // thread's CPU time, mean over --cycles cycles at random free poses.
 //
+// Then N robots swapping across a circle with each planner: arrivals, path
+// length and separation side by side.
+//
 //   build/tests/bench/local_bench --cycles=200
 #include <cmath>
 #include <cstdio>
@@ -235,6 +238,129 @@ void BenchFiras(const Grid& grid, std::mt19937& rng, int cycles) {
   }
 }
 
+// Robots swapping places across a circle on an open 60 x 60 map, stepped
+// from one snapshot per period (0.1 s), each robot a 0.5-cell disc at up to
+// 1 cell/s with finite accelerations; the others are its moving obstacles
+// (reciprocal for ORCA). Figures, not pass/fail: arrivals, the time of the
+// last arrival, path length over the straight distance, the smallest
+// separation seen (contact below 1.0) and the periods with a contact.
+enum class Planner { kOrcaHolonomic, kOrcaDiffDrive, kDwa, kFiras };
+
+void BenchSwap(Planner planner, int n) {
+  const double period = 0.1, radius = 0.5;
+  const Grid grid = *Grid::Create(60, 60);
+  const Footprint disc = *Footprint::Circle(radius);
+  FootprintCheckerOptions copt;
+  copt.margin_cells = 0.05;
+  const FootprintChecker checker = *FootprintChecker::Create(disc, copt);
+  const std::vector<float> distance = ObstacleDistanceField(grid, false);
+  VelocityLimits limits;
+  limits.holonomic = planner == Planner::kOrcaHolonomic;
+  limits.min_v = limits.holonomic ? -1.0 : 0.0;
+  limits.max_v = 1.0;
+  limits.max_vy = limits.holonomic ? 1.0 : 0.0;
+  limits.max_w = 2.0;
+  limits.acc_v = limits.acc_vy = 2.0;
+  limits.acc_w = 4.0;
+  OrcaOptions orca;
+  orca.keep_right = planner == Planner::kOrcaDiffDrive ? 0.5 : 0.15;
+  DwaOptions dwa;
+  FirasOptions firas;
+  const double ring = 4.0 + 0.4 * n;
+  struct Robot {
+    RobotState state;
+    std::vector<CellPoint> path;
+    double travelled = 0;
+    bool arrived = false;
+    FirasMemory memory;
+  };
+  std::vector<Robot> robots(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * 3.141592653589793 * i / n;
+    const CellPoint p{30 + ring * std::cos(a), 30 + ring * std::sin(a)};
+    robots[i].state.pose =
+        Pose{p.x, p.y, NormalizeAngle(a + 3.141592653589793)};
+    robots[i].path = {p, CellPoint{60 - p.x, 60 - p.y}};
+  }
+  const auto grid_velocity = [](const RobotState& s) {
+    const double c = std::cos(s.pose.yaw), sn = std::sin(s.pose.yaw);
+    return CellPoint{s.v * c - s.vy * sn, s.v * sn + s.vy * c};
+  };
+  double min_sep = 1e9, last_arrival = 0;
+  int contacts = 0;
+  const double limit = 3 * 2 * ring + 20;
+  for (double t = 0; t < limit; t += period) {
+    std::vector<LocalPlan> plans(robots.size());
+    for (size_t i = 0; i < robots.size(); ++i) {
+      std::vector<MovingObstacle> others;
+      for (size_t j = 0; j < robots.size(); ++j) {
+        if (j == i) continue;
+        others.push_back(
+            MovingObstacle{robots[j].state.pose.point(),
+                           grid_velocity(robots[j].state), radius,
+                           planner == Planner::kOrcaHolonomic ||
+                               planner == Planner::kOrcaDiffDrive});
+      }
+      absl::StatusOr<LocalPlan> plan;
+      switch (planner) {
+        case Planner::kOrcaHolonomic:
+        case Planner::kOrcaDiffDrive:
+          plan = OrcaStep(robots[i].state, radius, limits, others, {},
+                          robots[i].path, period, orca);
+          break;
+        case Planner::kDwa:
+          plan =
+              DwaStep(DwaMap{&grid, &checker, distance.data()}, robots[i].state,
+                      limits, others, robots[i].path, period, dwa);
+          break;
+        case Planner::kFiras:
+          plan = FirasStep(grid, robots[i].state, radius, limits, others,
+                           robots[i].path, period, firas, &robots[i].memory);
+          break;
+      }
+      plans[i] = *plan;
+      if (plan->status == LocalStatus::kGoalReached && !robots[i].arrived) {
+        robots[i].arrived = true;
+        last_arrival = t;
+      }
+    }
+    bool all = true;
+    for (size_t i = 0; i < robots.size(); ++i) {
+      all = all && robots[i].arrived;
+      const Pose before = robots[i].state.pose;
+      const Pose after = IntegrateVelocity(before, plans[i].v, plans[i].vy,
+                                           plans[i].w, period, 10);
+      robots[i].travelled += std::hypot(after.x - before.x, after.y - before.y);
+      robots[i].state = RobotState{after, plans[i].v, plans[i].vy, plans[i].w};
+    }
+    if (all) break;
+    bool contact = false;
+    for (size_t i = 0; i < robots.size(); ++i) {
+      for (size_t j = i + 1; j < robots.size(); ++j) {
+        const double d =
+            std::hypot(robots[i].state.pose.x - robots[j].state.pose.x,
+                       robots[i].state.pose.y - robots[j].state.pose.y);
+        min_sep = std::min(min_sep, d);
+        contact = contact || d < 2 * radius;
+      }
+    }
+    contacts += contact;
+  }
+  int arrived = 0;
+  double ratio = 0;
+  for (const Robot& r : robots) {
+    arrived += r.arrived;
+    ratio += r.travelled / (2 * ring);
+  }
+  static const char* kNames[] = {
+      "orca (holonomic)", "orca (diff drive, keep_right 0.5)", "dwa", "firas"};
+  char last[32] = "-";
+  if (arrived == n) std::snprintf(last, sizeof(last), "%.1f", last_arrival);
+  std::printf("| %s | %d | %d | %s | %.2f | %.3f | %d |\n",
+              kNames[static_cast<int>(planner)], n, arrived, last, ratio / n,
+              min_sep, contacts);
+}
+
 }  // namespace
 }  // namespace pathd
 
@@ -249,5 +375,18 @@ int main(int argc, char** argv) {
   pathd::BenchOrcaNeighbours(rng, cycles);
   pathd::BenchOrcaFleet(grid, rng, cycles);
   pathd::BenchFiras(grid, rng, cycles);
+  std::printf(
+      "\n### Circle swap: N robots (0.5-cell discs, 1 cell/s) to the opposite "
+      "side, 0.1 s periods\n\n");
+  std::printf(
+      "| planner | robots | arrived | last arrival (s) | travelled / straight "
+      "| "
+      "min separation (contact < 1) | periods with contact |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  for (pathd::Planner p :
+       {pathd::Planner::kOrcaHolonomic, pathd::Planner::kOrcaDiffDrive,
+        pathd::Planner::kDwa, pathd::Planner::kFiras}) {
+    for (int n : {2, 8, 16}) pathd::BenchSwap(p, n);
+  }
   return 0;
 }
