@@ -60,7 +60,8 @@ absl::Status ValidateDwaOptions(const DwaOptions& o) {
                   {"sub_step", o.sub_step},
                   {"lookahead", o.lookahead},
                   {"clearance_limit", o.clearance_limit},
-                  {"goal_tolerance", o.goal_tolerance}};
+                  {"goal_tolerance", o.goal_tolerance},
+                  {"window_seconds", o.window_seconds}};
   for (const auto& f : positive) {
     if (!(std::isfinite(f.value) && f.value > 0)) {
       return absl::InvalidArgumentError(absl::StrFormat(
@@ -71,7 +72,8 @@ absl::Status ValidateDwaOptions(const DwaOptions& o) {
   const struct {
     const char* name;
     double value;
-  } weights[] = {{"path_distance_weight", o.path_distance_weight},
+  } weights[] = {{"min_progress", o.min_progress},
+                 {"path_distance_weight", o.path_distance_weight},
                  {"goal_distance_weight", o.goal_distance_weight},
                  {"heading_weight", o.heading_weight},
                  {"obstacle_weight", o.obstacle_weight},
@@ -111,7 +113,8 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
                                   absl::Span<const MovingObstacle> obstacles,
                                   absl::Span<const CellPoint> path,
                                   double period, const DwaOptions& options,
-                                  std::vector<DwaRollout>* rollouts) {
+                                  std::vector<DwaRollout>* rollouts,
+                                  ProgressWindow* progress) {
   if (absl::Status s = ValidateDwaOptions(options); !s.ok()) return s;
   if (absl::Status s = ValidateVelocityLimits(limits); !s.ok()) return s;
   if (map.grid == nullptr || map.checker == nullptr) {
@@ -314,6 +317,11 @@ absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
         static_cast<int>(map_rejects), static_cast<int>(obstacle_rejects));
   } else {
     plan.trajectory = std::move(best_poses);
+  }
+  if (at_goal && progress != nullptr) progress->remaining.clear();
+  if (!at_goal) {
+    ReportStall(progress, target, period, options.window_seconds,
+                options.min_progress, &plan);
   }
   return plan;
 }

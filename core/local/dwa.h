@@ -57,6 +57,11 @@ struct DwaOptions {
   // obstacle critic is 0.
   double clearance_limit = 3.0;
   double goal_tolerance = 0.25;
+  // Stall detection, with a ProgressWindow: less than min_progress cells of
+  // progress along the path over window_seconds is reported as
+  // kLocalMinimum.
+  double window_seconds = 3.0;
+  double min_progress = 0.5;
   bool unknown_is_free = false;
 };
 
@@ -96,16 +101,18 @@ struct DwaRollout {
 
 // One control cycle. Status kBlocked (the command then brakes as hard as the
 // window allows) when every rollout is rejected, kGoalReached within
-// goal_tolerance of the path's end (also braking). `rollouts`, when not
-// null, receives every sample. Errors: INVALID_ARGUMENT naming a bad option,
-// limit or period, a missing grid or checker, or an empty path.
+// goal_tolerance of the path's end (also braking), kLocalMinimum when
+// `progress` (optional, the caller's per robot) sees a stall. `rollouts`,
+// when not null, receives every sample. Errors: INVALID_ARGUMENT naming a bad
+// option, limit or period, a missing grid or checker, or an empty path.
 // Precondition: map.distance, when set, has one entry per cell of the grid.
 absl::StatusOr<LocalPlan> DwaStep(const DwaMap& map, const RobotState& state,
                                   const VelocityLimits& limits,
                                   absl::Span<const MovingObstacle> obstacles,
                                   absl::Span<const CellPoint> path,
                                   double period, const DwaOptions& options,
-                                  std::vector<DwaRollout>* rollouts = nullptr);
+                                  std::vector<DwaRollout>* rollouts = nullptr,
+                                  ProgressWindow* progress = nullptr);
 
 }  // namespace pathd
 

@@ -61,7 +61,7 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state,
                                     absl::Span<const MovingObstacle> obstacles,
                                     absl::Span<const CellPoint> path,
                                     double period, const FirasOptions& options,
-                                    FirasMemory* memory) {
+                                    ProgressWindow* progress) {
   if (absl::Status s = ValidateFirasOptions(options); !s.ok()) return s;
   if (absl::Status s = ValidateVelocityLimits(limits); !s.ok()) return s;
   if (!(std::isfinite(radius) && radius > 0)) {
@@ -110,7 +110,7 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state,
     plan.status = LocalStatus::kGoalReached;
     plan.reason = absl::StrFormat("within %g cells of the path's end",
                                   options.goal_tolerance);
-    if (memory != nullptr) memory->recent.clear();
+    if (progress != nullptr) progress->remaining.clear();
     return plan;
   }
 
@@ -195,26 +195,8 @@ absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state,
         "the repulsion cancels the attraction (resulting force %.3g of %.3g)",
         force, attraction);
   }
-  if (memory != nullptr) {
-    const size_t window = static_cast<size_t>(
-        std::clamp(std::ceil(options.window_seconds / period), 2.0, 10000.0));
-    memory->recent.push_back(state.pose.point());
-    while (memory->recent.size() > window) memory->recent.pop_front();
-    if (memory->recent.size() == window && plan.status == LocalStatus::kOk) {
-      const CellPoint first = memory->recent.front();
-      double farthest = 0;
-      for (const CellPoint& p : memory->recent) {
-        farthest = std::max(farthest, std::hypot(p.x - first.x, p.y - first.y));
-      }
-      if (farthest < options.min_progress) {
-        plan.status = LocalStatus::kLocalMinimum;
-        plan.reason = absl::StrFormat(
-            "the robot stayed within %.3g cells over the last %g s "
-            "(oscillating or stuck)",
-            farthest, options.window_seconds);
-      }
-    }
-  }
+  ReportStall(progress, target, period, options.window_seconds,
+              options.min_progress, &plan);
   return plan;
 }
 

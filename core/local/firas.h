@@ -9,16 +9,15 @@
 // potential). The resulting force is the desired velocity. A baseline:
 // potential fields stop in local minima, which this reports (status
 // kLocalMinimum) when the forces nearly cancel or the robot has not moved
-// away from where it was over a window of cycles.
+// along the path over a window of cycles.
 //
-// Pure function of its inputs and of FirasMemory, the caller's per-robot
-// window of recent positions. Work per call: the cells within
+// Pure function of its inputs and of the caller's per-robot ProgressWindow
+// (core/local/local_types.h). Work per call: the cells within
 // radius + influence of the robot, plus one term per moving obstacle.
 #ifndef PATHD_CORE_LOCAL_FIRAS_H_
 #define PATHD_CORE_LOCAL_FIRAS_H_
 
 #include <cstdint>
-#include <deque>
 
 #include "absl/status/statusor.h"
 #include "absl/types/span.h"
@@ -36,9 +35,8 @@ struct FirasOptions {
   double goal_tolerance = 0.25;
   double turn_gain = 2.0;  // differential drive, 1/s per radian
   // Local minimum: the resulting force below this fraction of the
-  // attraction alone, or (with a FirasMemory) the robot within
-  // min_progress cells of where it was window_seconds ago (at most 10000
-  // cycles are remembered).
+  // attraction alone, or (with a ProgressWindow) less than min_progress
+  // cells of progress along the path over window_seconds.
   double min_force_ratio = 0.05;
   double window_seconds = 3.0;
   double min_progress = 0.5;
@@ -48,24 +46,18 @@ struct FirasOptions {
 // INVALID_ARGUMENT naming the option.
 absl::Status ValidateFirasOptions(const FirasOptions& options);
 
-// The caller's record of one robot's recent positions (one per cycle). Not
-// thread-safe; one per robot.
-struct FirasMemory {
-  std::deque<CellPoint> recent;
-};
-
 // One control cycle for a robot of `radius` cells. Status kLocalMinimum as
 // above (the command is still the force's), kBlocked when the robot's disc
 // already overlaps an obstacle cell or a moving obstacle (the command is
-// zero), kGoalReached within goal_tolerance of the path's end. `memory`
-// may be null (no progress window). Errors: INVALID_ARGUMENT naming a bad
+// zero), kGoalReached within goal_tolerance of the path's end. `progress`
+// may be null (no stall detection). Errors: INVALID_ARGUMENT naming a bad
 // option, limit, radius or period, or an empty path.
 absl::StatusOr<LocalPlan> FirasStep(const Grid& grid, const RobotState& state,
                                     double radius, const VelocityLimits& limits,
                                     absl::Span<const MovingObstacle> obstacles,
                                     absl::Span<const CellPoint> path,
                                     double period, const FirasOptions& options,
-                                    FirasMemory* memory);
+                                    ProgressWindow* progress);
 
 }  // namespace pathd
 

@@ -143,6 +143,35 @@ void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
                   std::max(limits.max_v, 0.0));
 }
 
+double RecordProgress(ProgressWindow& window, double remaining, double period,
+                      double window_seconds) {
+  if (!window.remaining.empty() && remaining > window.remaining.back() + 1.0) {
+    window.remaining.clear();
+  }
+  const size_t cycles = static_cast<size_t>(
+      std::clamp(std::ceil(window_seconds / period), 1.0, 10000.0));
+  window.remaining.push_back(remaining);
+  while (window.remaining.size() > cycles + 1) window.remaining.pop_front();
+  if (window.remaining.size() < cycles + 1) return -1.0;
+  return window.remaining.front() - window.remaining.back();
+}
+
+void ReportStall(ProgressWindow* window, const PathTarget& target,
+                 double period, double window_seconds, double min_progress,
+                 LocalPlan* plan) {
+  if (window == nullptr) return;
+  const double progress =
+      RecordProgress(*window, target.remaining, period, window_seconds);
+  if (progress >= 0 && progress < min_progress &&
+      plan->status == LocalStatus::kOk) {
+    plan->status = LocalStatus::kLocalMinimum;
+    plan->reason = absl::StrFormat(
+        "%.3g cells of progress along the path in the last %g s (stalled, "
+        "oscillating or circling)",
+        progress, window_seconds);
+  }
+}
+
 double ClampToWindow(double target, double current, double acceleration,
                      double period, double lo, double hi) {
   const double reach = acceleration * period;

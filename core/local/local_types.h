@@ -7,6 +7,7 @@
 #define PATHD_CORE_LOCAL_LOCAL_TYPES_H_
 
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -114,6 +115,30 @@ PathTarget FindPathTarget(absl::Span<const CellPoint> path, CellPoint position,
 void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
                              const VelocityLimits& limits, double* v,
                              double* w);
+
+// A robot's progress along its global path over its recent cycles, kept by
+// the caller per robot and passed to each cycle: the planners report a
+// robot whose remaining path length has shrunk by less than min_progress
+// cells over window_seconds (standing still nose to nose, oscillating,
+// circling) as kLocalMinimum, so that a stall is never silent. Not
+// thread-safe; one per robot. Holds at most 10000 cycles.
+struct ProgressWindow {
+  std::deque<double> remaining;  // one per cycle, oldest first
+};
+
+// Records this cycle's remaining path length and returns the progress over
+// the window (cells) once it holds window_seconds of cycles; -1 before.
+// A new path (remaining grew by more than a cell) starts the window again.
+double RecordProgress(ProgressWindow& window, double remaining, double period,
+                      double window_seconds);
+
+// When `window` is not null: records target.remaining, and when the plan's
+// status is kOk and the progress over a full window is below
+// `min_progress`, makes it kLocalMinimum with a reason naming the
+// progress. The planners call it last; callers need not.
+void ReportStall(ProgressWindow* window, const PathTarget& target,
+                 double period, double window_seconds, double min_progress,
+                 LocalPlan* plan);
 
 // Limits `target` to what is reachable from `current` within `period` at
 // `acceleration` and to [lo, hi].

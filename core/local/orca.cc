@@ -345,7 +345,8 @@ absl::Status ValidateOrcaOptions(const OrcaOptions& o) {
                   {"obstacle_range", o.obstacle_range},
                   {"lookahead", o.lookahead},
                   {"goal_tolerance", o.goal_tolerance},
-                  {"turn_gain", o.turn_gain}};
+                  {"turn_gain", o.turn_gain},
+                  {"window_seconds", o.window_seconds}};
   if (!(std::isfinite(o.keep_right) && std::fabs(o.keep_right) < 1.0)) {
     return absl::InvalidArgumentError(
         "orca options: keep_right must be in (-1, 1) radians");
@@ -356,6 +357,10 @@ absl::Status ValidateOrcaOptions(const OrcaOptions& o) {
           "orca options: %s must be positive and finite (got %g)", f.name,
           f.value));
     }
+  }
+  if (!(std::isfinite(o.min_progress) && o.min_progress >= 0)) {
+    return absl::InvalidArgumentError(
+        "orca options: min_progress must be >= 0 and finite");
   }
   if (!(std::isfinite(o.safety_margin) && o.safety_margin >= 0)) {
     return absl::InvalidArgumentError(
@@ -378,7 +383,8 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
                                    absl::Span<const MovingObstacle> neighbours,
                                    absl::Span<const ObstacleSegment> segments,
                                    absl::Span<const CellPoint> path,
-                                   double period, const OrcaOptions& options) {
+                                   double period, const OrcaOptions& options,
+                                   ProgressWindow* progress) {
   if (absl::Status s = ValidateOrcaOptions(options); !s.ok()) return s;
   if (absl::Status s = ValidateVelocityLimits(limits); !s.ok()) return s;
   if (!(std::isfinite(radius) && radius > 0)) {
@@ -499,6 +505,11 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
         "%.3g cells/s) "
         "is commanded",
         static_cast<int>(lines.size()), solution.max_violation);
+  }
+  if (at_goal && progress != nullptr) progress->remaining.clear();
+  if (!at_goal) {
+    ReportStall(progress, target, period, options.window_seconds,
+                options.min_progress, &plan);
   }
   return plan;
 }

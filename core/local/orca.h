@@ -129,6 +129,11 @@ struct OrcaOptions {
   // Changes the answer away from the program's when the limits bind (then
   // ORCA's collision-free guarantee no longer holds; docs/decisions.md).
   bool respect_acceleration = true;
+  // Stall detection, with a ProgressWindow: less than min_progress cells of
+  // progress along the path over window_seconds is reported as
+  // kLocalMinimum.
+  double window_seconds = 3.0;
+  double min_progress = 0.5;
   // Sub-steps of the predicted trajectory over one time_horizon.
   int32_t trajectory_steps = 10;
 };
@@ -144,7 +149,9 @@ absl::Status ValidateOrcaOptions(const OrcaOptions& options);
 // (FollowVelocityDiffDrive), its forward speed cut so that the velocity
 // along the current heading stays inside every half-plane. Status
 // kBlocked when the program was infeasible (the least-violating velocity is
-// still commanded), kGoalReached within goal_tolerance of the path's end.
+// still commanded), kGoalReached within goal_tolerance of the path's end,
+// kLocalMinimum when `progress` (optional, the caller's per robot) sees a
+// stall.
 // The robot's current grid-frame velocity is taken from `state` (v, vy in
 // the body frame). Errors: INVALID_ARGUMENT naming a bad option, limit,
 // radius, or an empty path.
@@ -153,7 +160,8 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
                                    absl::Span<const MovingObstacle> neighbours,
                                    absl::Span<const ObstacleSegment> segments,
                                    absl::Span<const CellPoint> path,
-                                   double period, const OrcaOptions& options);
+                                   double period, const OrcaOptions& options,
+                                   ProgressWindow* progress = nullptr);
 
 }  // namespace pathd
 

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <map>
 #include <memory>
 #include <random>
 #include <string>
@@ -272,7 +273,8 @@ void BenchSwap(Planner planner, int n) {
     std::vector<CellPoint> path;
     double travelled = 0;
     bool arrived = false;
-    FirasMemory memory;
+    LocalStatus last = LocalStatus::kOk;
+    ProgressWindow progress;
   };
   std::vector<Robot> robots(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) {
@@ -306,19 +308,20 @@ void BenchSwap(Planner planner, int n) {
         case Planner::kOrcaHolonomic:
         case Planner::kOrcaDiffDrive:
           plan = OrcaStep(robots[i].state, radius, limits, others, {},
-                          robots[i].path, period, orca);
+                          robots[i].path, period, orca, &robots[i].progress);
           break;
         case Planner::kDwa:
-          plan =
-              DwaStep(DwaMap{&grid, &checker, distance.data()}, robots[i].state,
-                      limits, others, robots[i].path, period, dwa);
+          plan = DwaStep(DwaMap{&grid, &checker, distance.data()},
+                         robots[i].state, limits, others, robots[i].path,
+                         period, dwa, nullptr, &robots[i].progress);
           break;
         case Planner::kFiras:
           plan = FirasStep(grid, robots[i].state, radius, limits, others,
-                           robots[i].path, period, firas, &robots[i].memory);
+                           robots[i].path, period, firas, &robots[i].progress);
           break;
       }
       plans[i] = *plan;
+      robots[i].last = plan->status;
       if (plan->status == LocalStatus::kGoalReached && !robots[i].arrived) {
         robots[i].arrived = true;
         last_arrival = t;
@@ -354,11 +357,21 @@ void BenchSwap(Planner planner, int n) {
   }
   static const char* kNames[] = {
       "orca (holonomic)", "orca (diff drive, keep_right 0.5)", "dwa", "firas"};
+  // How the robots that did not arrive ended: the last status of each.
+  std::map<std::string, int> endings;
+  for (const Robot& r : robots) {
+    if (!r.arrived) ++endings[LocalStatusName(r.last)];
+  }
+  std::string ended;
+  for (const auto& [name, count] : endings) {
+    ended += (ended.empty() ? "" : ", ") + std::to_string(count) + " " + name;
+  }
+  if (ended.empty()) ended = "-";
   char last[32] = "-";
   if (arrived == n) std::snprintf(last, sizeof(last), "%.1f", last_arrival);
-  std::printf("| %s | %d | %d | %s | %.2f | %.3f | %d |\n",
+  std::printf("| %s | %d | %d | %s | %.2f | %.3f | %d | %s |\n",
               kNames[static_cast<int>(planner)], n, arrived, last, ratio / n,
-              min_sep, contacts);
+              min_sep, contacts, ended.c_str());
 }
 
 }  // namespace
@@ -381,8 +394,9 @@ int main(int argc, char** argv) {
   std::printf(
       "| planner | robots | arrived | last arrival (s) | travelled / straight "
       "| "
-      "min separation (contact < 1) | periods with contact |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+      "min separation (contact < 1) | periods with contact | non-arrivals' "
+      "last status |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   for (pathd::Planner p :
        {pathd::Planner::kOrcaHolonomic, pathd::Planner::kOrcaDiffDrive,
         pathd::Planner::kDwa, pathd::Planner::kFiras}) {

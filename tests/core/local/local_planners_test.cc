@@ -720,6 +720,61 @@ TEST(Dwa, TooFastTowardAWallIsBlocked) {
       << plan->reason;
 }
 
+// Two DWA robots head-on treat each other as obstacles moving at constant
+// velocity and stall nose to nose (docs/performance.md); the stall must be
+// reported, never silent: every robot that does not arrive ends with
+// kLocalMinimum (or kBlocked), and they never touch.
+TEST(Dwa, AHeadOnStallIsReported) {
+  const Grid grid = *Grid::Create(30, 10);
+  const FootprintChecker checker =
+      *FootprintChecker::Create(*Footprint::Circle(0.5));
+  const std::vector<float> distance = ObstacleDistanceField(grid, false);
+  VelocityLimits limits;
+  limits.max_v = 1.0;
+  limits.max_w = 2.0;
+  limits.acc_v = 2.0;
+  limits.acc_w = 4.0;
+  RobotState robots[2] = {{Pose{5.0, 5.0, 0.0}, 0, 0, 0},
+                          {Pose{25.0, 5.0, std::numbers::pi}, 0, 0, 0}};
+  const std::vector<CellPoint> paths[2] = {{{5.0, 5.0}, {25.0, 5.0}},
+                                           {{25.0, 5.0}, {5.0, 5.0}}};
+  ProgressWindow progress[2];
+  LocalStatus last[2] = {LocalStatus::kOk, LocalStatus::kOk};
+  const double period = 0.1;
+  for (int cycle = 0; cycle < 400; ++cycle) {
+    LocalPlan plans[2];
+    for (int i = 0; i < 2; ++i) {
+      const RobotState& other = robots[1 - i];
+      const MovingObstacle o{other.pose.point(),
+                             CellPoint{other.v * std::cos(other.pose.yaw),
+                                       other.v * std::sin(other.pose.yaw)},
+                             0.5, false};
+      absl::StatusOr<LocalPlan> plan = DwaStep(
+          DwaMap{&grid, &checker, distance.data()}, robots[i], limits, {&o, 1},
+          paths[i], period, DwaOptions{}, nullptr, &progress[i]);
+      ASSERT_TRUE(plan.ok()) << plan.status();
+      plans[i] = *plan;
+      last[i] = plan->status;
+    }
+    if (last[0] == LocalStatus::kGoalReached &&
+        last[1] == LocalStatus::kGoalReached) {
+      break;
+    }
+    for (int i = 0; i < 2; ++i) {
+      robots[i] = RobotState{
+          ExactMotion(robots[i].pose, plans[i].v, 0, plans[i].w, period),
+          plans[i].v, 0, plans[i].w};
+    }
+    ASSERT_GE(std::hypot(robots[0].pose.x - robots[1].pose.x,
+                         robots[0].pose.y - robots[1].pose.y),
+              1.0)
+        << "cycle " << cycle;
+  }
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NE(last[i], LocalStatus::kOk) << "robot " << i;
+  }
+}
+
 TEST(Dwa, AMovingObstacleHeadOnRejectsTheStraightRollouts) {
   const Grid grid = *Grid::Create(30, 10);
   const FootprintChecker checker = *FootprintChecker::Create(Rectangle());
@@ -767,7 +822,7 @@ LocalStatus DriveFiras(const Grid& grid, Pose start,
   limits.acc_w = 4.0;
   const double radius = 0.4, period = 0.1;
   RobotState state{start, 0, 0, 0};
-  FirasMemory memory;
+  ProgressWindow memory;
   for (int cycle = 0; cycle < cycles; ++cycle) {
     absl::StatusOr<LocalPlan> plan = FirasStep(
         grid, state, radius, limits, {}, path, period, FirasOptions{}, &memory);
