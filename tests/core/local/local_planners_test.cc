@@ -252,6 +252,117 @@ TEST(OrcaLines, ReciprocalHalfPlanesAvoidCollisionWithinHorizon) {
   }
 }
 
+// The static obstacle half-plane is sound: any velocity in it keeps the
+// robot's disc off the segment for the whole horizon (distance from the
+// moving centre to the segment, sampled every 1/200 of the horizon).
+TEST(OrcaLines, SegmentHalfPlaneKeepsTheDiscOffTheSegment) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto segment_distance = [](CellPoint p, const ObstacleSegment& s) {
+    const double dx = s.b.x - s.a.x, dy = s.b.y - s.a.y;
+    const double len2 = dx * dx + dy * dy;
+    const double t =
+        len2 > 0 ? std::clamp(((p.x - s.a.x) * dx + (p.y - s.a.y) * dy) / len2,
+                              0.0, 1.0)
+                 : 0.0;
+    return std::hypot(s.a.x + t * dx - p.x, s.a.y + t * dy - p.y);
+  };
+  int checked = 0;
+  for (int c = 0; c < Cases(); ++c) {
+    const ObstacleSegment seg{CellPoint{3 * u(rng), 3 * u(rng)},
+                              CellPoint{3 * u(rng), 3 * u(rng)}};
+    const CellPoint p{4 * u(rng), 4 * u(rng)};
+    const double r = 0.5, tau = 1.0 + (u(rng) + 1);
+    if (segment_distance(p, seg) <= r) continue;
+    const OrcaLine line = OrcaLineForSegment(p, r, seg, tau, 0.1);
+    for (int k = 0; k < 10; ++k) {
+      const CellPoint v{3 * u(rng), 3 * u(rng)};
+      if (Violates(line, v) > 0) continue;
+      ++checked;
+      for (int i = 0; i <= 200; ++i) {
+        const double t = tau * i / 200;
+        ASSERT_GE(
+            segment_distance(CellPoint{p.x + v.x * t, p.y + v.y * t}, seg),
+            r - 1e-9)
+            << "case " << c << " t=" << t;
+      }
+    }
+  }
+  EXPECT_GT(checked, Cases());
+}
+
+// ObstacleSegmentsNear against every ring edge: each edge within range is
+// returned (up to the cap), nearest first, and nothing farther.
+TEST(OrcaStaticObstacles, SegmentsNearAreTheEdgesWithinRange) {
+  std::mt19937 rng(24);
+  Grid grid = *Grid::Create(40, 30);
+  for (int i = 0; i < 120; ++i) {
+    grid.set_cost(static_cast<int32_t>(rng() % 40),
+                  static_cast<int32_t>(rng() % 30), kLethalCost);
+  }
+  const auto polygons = ObstaclePolygons::Build(FreeSpace(grid, false));
+  const auto distance = [](CellPoint p, CellPoint a, CellPoint b) {
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    const double len2 = dx * dx + dy * dy;
+    const double t =
+        std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / len2, 0.0, 1.0);
+    return std::hypot(a.x + t * dx - p.x, a.y + t * dy - p.y);
+  };
+  for (int c = 0; c < 50; ++c) {
+    const CellPoint centre{40.0 * (rng() % 1000) / 1000,
+                           30.0 * (rng() % 1000) / 1000};
+    const double range = 1.0 + (rng() % 50) / 10.0;
+    int expected = 0;
+    for (const BoundaryRing& ring : polygons->rings()) {
+      for (size_t i = 0; i < ring.vertices.size(); ++i) {
+        const GridCorner a = ring.vertices[i];
+        const GridCorner b = ring.vertices[(i + 1) % ring.vertices.size()];
+        expected += distance(centre, CellPoint{1.0 * a.x, 1.0 * a.y},
+                             CellPoint{1.0 * b.x, 1.0 * b.y}) <= range;
+      }
+    }
+    const std::vector<ObstacleSegment> all =
+        ObstacleSegmentsNear(*polygons, centre, range, 100000);
+    EXPECT_EQ(static_cast<int>(all.size()), expected) << "case " << c;
+    double previous = 0;
+    for (const ObstacleSegment& s : all) {
+      const double d = distance(centre, s.a, s.b);
+      EXPECT_LE(d, range);
+      EXPECT_GE(d, previous);
+      previous = d;
+    }
+    const std::vector<ObstacleSegment> capped =
+        ObstacleSegmentsNear(*polygons, centre, range, 3);
+    EXPECT_EQ(capped.size(), std::min<size_t>(3, all.size()));
+  }
+}
+
+// The lookahead point, by an independent walk along the path: the point at
+// arc length (nearest point's arc length + lookahead), clamped to the end.
+TEST(LocalTypes, PathTargetIsTheLookaheadPoint) {
+  const std::vector<CellPoint> path = {{0, 0}, {4, 0}, {4, 3}, {10, 3}};
+  struct Case {
+    CellPoint position;
+    double lookahead;
+    CellPoint expected;
+    double remaining;
+  } cases[] = {
+      {{1, 1}, 2.0, {3, 0}, 12.0},   // nearest (1, 0)
+      {{3, -1}, 2.0, {4, 1}, 10.0},  // nearest (3, 0): 1 to the corner
+      {{5, 2}, 1.0, {6, 3}, 5.0},    // nearest (4, 2), (5, 3) tie: the later
+      {{9, 4}, 5.0, {10, 3}, 1.0},   // clamped to the end
+  };
+  for (const Case& c : cases) {
+    const PathTarget t = FindPathTarget(path, c.position, c.lookahead);
+    EXPECT_NEAR(t.point.x, c.expected.x, 1e-9)
+        << c.position.x << "," << c.position.y;
+    EXPECT_NEAR(t.point.y, c.expected.y, 1e-9)
+        << c.position.x << "," << c.position.y;
+    EXPECT_NEAR(t.remaining, c.remaining, 1e-9)
+        << c.position.x << "," << c.position.y;
+  }
+}
+
 // Where constant (v, vy, w) takes `p` after t seconds, in closed form.
 Pose ExactMotion(const Pose& p, double v, double vy, double w, double t) {
   if (std::fabs(w) < 1e-12) {
