@@ -266,9 +266,8 @@ OrcaLine OrcaLineForSegment(CellPoint position, double radius,
   // n: away from the segment. A robot centred on the segment has no such
   // direction; the segment's normal then stands in.
   const Vec n = d > 1e-12 ? (1.0 / d) * (p - q) : Unit(Vec{-ab.y, ab.x});
-  // n . v >= bound, as the half-plane left of the direction (n.y, -n.x)...
-  // with the direction chosen so its left is n: dir = (n.y, -n.x) rotated
-  // back; left of dir is (-dir.y, dir.x) = n.
+  // n . v >= bound is the half-plane left of the line through bound * n
+  // along dir = (n.y, -n.x), whose left normal (-dir.y, dir.x) is n.
   const double bound =
       d >= radius ? -(d - radius) / horizon : (radius - d) / period;
   const Vec dir{n.y, -n.x};
