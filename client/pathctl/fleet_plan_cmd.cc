@@ -200,7 +200,7 @@ constexpr absl::string_view kFleetPlanFlags[] = {
 const Command kFleetPlanCommand = {
     .name = "fleet plan",
     .synopsis = "NAME --robots FILE [--solver lacam|pibt|prioritized|cbs]\n"
-                " [--time_limit S] [--suboptimality W] [--restarts N] [--seed N]\n"
+                " [--time_limit S] [--suboptimality W] [--restarts N] [--seed N] [--max_steps N]\n"
                 " [--world] [--robot_radius M] [--connectivity 4|8]",
     .help = "Plans conflict-free timed paths for the robots of FILE on map NAME: one\n"
             "'SX SY GX GY [RADIUS_M]' line per robot (cells; metres with --world). At\n"
