@@ -166,8 +166,13 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
   FleetPlan plan;
   int32_t longest = 0;
   for (size_t i = 0; i < inst.robots(); ++i) {
-    inst.h.push_back(inst.graph(i).DistancesTo(inst.goals[i]));
-    const int32_t d = inst.h.back()[inst.starts[i]];
+    // A table is a BFS over the whole map (milliseconds on 512 x 512).
+    if (const PlanOutcome o = stop.CheckNow(); o != PlanOutcome::kFound) {
+      plan.outcome = o;
+      return plan;
+    }
+    int32_t d = kUnreachable;
+    inst.h.push_back(inst.graph(i).DistancesTo(inst.goals[i], inst.starts[i], &d));
     if (d == kUnreachable) {
       plan.outcome = PlanOutcome::kNoPath;  // cheap proof: no plan exists
       return plan;
@@ -182,12 +187,10 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
           ? options.max_steps
           : std::max(2 * longest, 2 * (g0.width() + g0.height())) +
                 2 * static_cast<int32_t>(inst.robots());
-  for (size_t i = 0; i < inst.robots(); ++i) {
-    if (inst.h[i][inst.starts[i]] > inst.max_steps) {
-      plan.outcome = PlanOutcome::kExpansionLimit;  // beyond max_steps
-      plan.lower_bound = inst.individual_sum;
-      return plan;
-    }
+  if (longest > inst.max_steps) {
+    plan.outcome = PlanOutcome::kExpansionLimit;  // beyond max_steps
+    plan.lower_bound = inst.individual_sum;
+    return plan;
   }
   switch (options.solver) {
     case FleetSolver::kPrioritized:

@@ -105,7 +105,9 @@ struct FleetPlan {
   int64_t sum_of_costs = 0;
   // A proved lower bound on the optimal sum of costs: at least the sum of
   // the robots' individual shortest paths in steps; kCbs raises it to its
-  // best open node's cost.
+  // best open node's cost. 0 when the stop condition fired while the
+  // per-robot distance tables were being built (the first step of every
+  // solver).
   int64_t lower_bound = 0;
   // Low-level search expansions (space-time A*, PIBT calls, LaCAM nodes).
   int64_t expansions = 0;

@@ -97,7 +97,7 @@ std::vector<Conflict> FindConflicts(const Instance& inst,
 Mdd BuildMdd(const Instance& inst, size_t robot, const ConstraintSet& cons,
              int32_t cost) {
   const MoveGraph& g = inst.graph(robot);
-  const std::vector<int32_t>& h = inst.h[robot];
+  const DistanceTable& h = inst.h[robot];
   Mdd mdd;
   mdd.levels.resize(cost + 1);
   mdd.levels[0] = {inst.starts[robot]};

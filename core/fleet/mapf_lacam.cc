@@ -111,7 +111,7 @@ class PibtStep {
     decided_[i] = 1;
     const uint32_t u = (*from_)[i];
     const MoveGraph& g = inst_.graph(i);
-    const std::vector<int32_t>& h = inst_.h[i];
+    const DistanceTable& h = inst_.h[i];
     // Candidates by distance to the goal, then free before occupied (a
     // free cell as near as an occupied one is taken without waiting), then
     // at random.
@@ -241,7 +241,12 @@ FleetPlan SolvePibt(const Instance& inst, const FleetOptions& options,
       plan.iterations = static_cast<int64_t>(configs.size()) - 1;
       return plan;
     }
-    if (const PlanOutcome o = stop.CheckNow(); o != PlanOutcome::kFound) {
+    // PIBT calls grow by the robot count a step, so Check's every-1024th
+    // clock poll could be skipped: poll each step, the budget by hand.
+    const PlanOutcome o = stop.max_expansions() > 0 && step.calls() >= stop.max_expansions()
+                              ? PlanOutcome::kExpansionLimit
+                              : stop.Poll(step.calls());
+    if (o != PlanOutcome::kFound) {
       plan.outcome = o;
       plan.expansions = step.calls();
       return plan;

@@ -16,27 +16,65 @@ MoveGraph::MoveGraph(const Grid& grid, Connectivity connectivity,
     : width_(grid.width()),
       height_(grid.height()),
       moves_(MoveCount(connectivity)),
-      open_(grid.size()) {
+      open_(grid.size()),
+      padded_open_(static_cast<size_t>(width_ + 2) * (height_ + 2), 0) {
   for (size_t i = 0; i < grid.size(); ++i) {
     open_[i] = Traversable(grid.cells()[i], unknown_is_free) ? 1 : 0;
   }
+  for (int32_t y = 0; y < height_; ++y) {
+    for (int32_t x = 0; x < width_; ++x) {
+      padded_open_[static_cast<size_t>(y + 1) * (width_ + 2) + x + 1] =
+          open_[static_cast<size_t>(y) * width_ + x];
+    }
+  }
 }
 
-std::vector<int32_t> MoveGraph::DistancesTo(uint32_t goal) const {
-  std::vector<int32_t> dist(cells(), kUnreachable);
-  std::deque<uint32_t> queue;
-  dist[goal] = 0;
-  queue.push_back(goal);
-  while (!queue.empty()) {
-    const uint32_t u = queue.front();
-    queue.pop_front();
-    ForEachMove(u, [&](uint32_t v) {
-      if (dist[v] == kUnreachable) {
-        dist[v] = dist[u] + 1;
-        queue.push_back(v);
-      }
-    });
+DistanceTable MoveGraph::DistancesTo(uint32_t goal, uint32_t from,
+                                   int32_t* from_distance) const {
+  // On the copy padded with one blocked cell all round, so the moves need
+  // no bounds tests: one robot's table is a BFS over the whole map.
+  const int64_t stride = width_ + 2;
+  const size_t padded = padded_open_.size();
+  const std::vector<uint8_t>& open = padded_open_;
+  int64_t offset[8];
+  int64_t side_a[8];
+  int64_t side_b[8];
+  for (int k = 0; k < moves_; ++k) {
+    offset[k] = kMoves[k].dx + kMoves[k].dy * stride;
+    const bool diagonal = kMoves[k].dx != 0 && kMoves[k].dy != 0;
+    side_a[k] = diagonal ? kMoves[k].dx : offset[k];
+    side_b[k] = diagonal ? kMoves[k].dy * stride : offset[k];
   }
+  std::vector<int32_t> dist_padded(padded, kUnreachable);
+  std::vector<int64_t> queue;
+  queue.reserve(open_.size());
+  const Cell g = CellOf(goal);
+  const int64_t start = (g.y + 1) * stride + g.x + 1;
+  dist_padded[start] = 0;
+  queue.push_back(start);
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int64_t u = queue[head];
+    const int32_t du = dist_padded[u] + 1;
+    for (int k = 0; k < moves_; ++k) {
+      const int64_t v = u + offset[k];
+      if (open[v] == 0 || dist_padded[v] != kUnreachable) continue;
+      if (open[u + side_a[k]] == 0 || open[u + side_b[k]] == 0) continue;
+      dist_padded[v] = du;
+      queue.push_back(v);
+    }
+  }
+  DistanceTable dist(cells(), kFar);
+  for (int32_t y = 0; y < height_; ++y) {
+    for (int32_t x = 0; x < width_; ++x) {
+      const int32_t d = dist_padded[(y + 1) * stride + x + 1];
+      if (d != kUnreachable) {
+        dist[static_cast<size_t>(y) * width_ + x] =
+            static_cast<uint16_t>(std::min<int32_t>(d, kFar - 1));
+      }
+    }
+  }
+  const Cell f = CellOf(from);
+  *from_distance = dist_padded[(f.y + 1) * stride + f.x + 1];
   return dist;
 }
 
@@ -91,9 +129,9 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
                                int64_t* expansions) {
   LowLevelResult result;
   const MoveGraph& graph = *q.graph;
-  const std::vector<int32_t>& h = *q.h;
+  const DistanceTable& h = *q.h;
   const size_t cells = graph.cells();
-  if (h[q.start] == kUnreachable) return result;
+  if (h[q.start] == kFar) return result;
   // Past `still` nothing in the constraints or tables changes with time, so
   // a state is its cell alone and an earlier arrival dominates a later one.
   int32_t still = 0;

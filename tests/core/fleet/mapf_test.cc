@@ -126,10 +126,11 @@ struct Instance {
   int individual = 0;  // sum of individual shortest paths
 };
 
-// `robots` distinct starts and goals in the largest component (fewer when
-// it is small).
-void PlaceRobots(std::mt19937& rng, int robots, Instance* inst) {
+// `robots` distinct starts and goals in the largest component, at most one
+// robot per `spread` of its cells.
+void PlaceRobots(std::mt19937& rng, int robots, Instance* inst, int spread = 1) {
   std::vector<Cell> cells = LargestComponent(inst->grid);
+  robots = std::min<int>(robots, static_cast<int>(cells.size()) / spread);
   std::shuffle(cells.begin(), cells.end(), rng);
   std::vector<Cell> goals = cells;
   std::shuffle(goals.begin(), goals.end(), rng);
@@ -179,9 +180,10 @@ StopCondition Within(absl::Duration d) {
 }
 
 FleetPlan Solve(const Instance& inst, FleetSolver solver, double w = 1.0,
-                absl::Duration limit = absl::Seconds(10)) {
+                absl::Duration limit = absl::Seconds(10), int restarts = 10) {
   FleetOptions options;
   options.solver = solver;
+  options.restarts = restarts;
   options.suboptimality = w;
   absl::StatusOr<FleetPlan> plan = PlanFleet(inst.problem, options, Within(limit));
   EXPECT_TRUE(plan.ok()) << plan.status();
@@ -296,14 +298,16 @@ int64_t BruteForce(const Instance& inst, int horizon) {
 
 TEST(MapfTest, CbsMatchesBruteForceOnTinyInstances) {
   std::mt19937 rng(7);
-  const int cases = std::max(4, EnvInt("PATHD_MAPF_CASES", 1000) / 25);
+  const int cases = std::max(4, EnvInt("PATHD_MAPF_CASES", 1000) / 40);
   int solved = 0;
   for (int k = 0; k < cases; ++k) {
     Instance inst;
-    const int side = 4 + static_cast<int>(rng() % 3);  // 4..6
+    // Three robots on 4x4 and 5x5 only: the joint space grows as cells^3.
+    const int robots = k % 3 == 2 ? 3 : 2;
+    const int side = 4 + static_cast<int>(rng() % (robots == 3 ? 2 : 3));
     inst.grid = RandomGrid(rng, side, side, 0.2);
     inst.problem.connectivity = k % 2 == 0 ? Connectivity::kFour : Connectivity::kEight;
-    PlaceRobots(rng, k % 3 == 2 ? 3 : 2, &inst);
+    PlaceRobots(rng, robots, &inst);
     if (inst.problem.robots.size() < 2) continue;
     const std::string what = "tiny case " + std::to_string(k);
     const int64_t best = BruteForce(inst, 3 * side * side);
@@ -337,6 +341,7 @@ TEST(MapfTest, RandomInstancesCheckedForEverySolver) {
   std::mt19937 rng(21);
   const int cases = EnvInt("PATHD_MAPF_CASES", 1000);
   std::map<std::string, std::pair<int, int>> found;  // solver -> (found, run)
+  std::map<std::string, double> seconds;               // printed, not asserted
   for (int k = 0; k < cases; ++k) {
     Instance inst;
     const int side = 16 + static_cast<int>(rng() % 49);  // 16..64
@@ -353,12 +358,19 @@ TEST(MapfTest, RandomInstancesCheckedForEverySolver) {
       robots = 4 + static_cast<int>(rng() % 5);
       w = k % 8 == 1 ? 1.0 : 1.3;
     }
-    PlaceRobots(rng, robots, &inst);
+    // At most one robot per 4 free cells: denser random sets under the
+    // no-following rule are often unsolvable, and proving that takes long.
+    PlaceRobots(rng, robots, &inst, 4);
     const std::string what = "case " + std::to_string(k) + " " +
                              std::string(FleetSolverName(solver)) + " robots " +
                              std::to_string(inst.problem.robots.size());
-    const FleetPlan plan = Solve(inst, solver, w, absl::Milliseconds(500));
-    auto& f = found[std::string(FleetSolverName(solver)) + (w > 1 ? " w=1.3" : "")];
+    const absl::Time t0 = absl::Now();
+    // A short deadline and few restarts: the instances that need more are
+    // few, and this test checks plans rather than success rates.
+    const FleetPlan plan = Solve(inst, solver, w, absl::Milliseconds(250), 3);
+    const std::string key = std::string(FleetSolverName(solver)) + (w > 1 ? " w=1.3" : "");
+    seconds[key] += absl::ToDoubleSeconds(absl::Now() - t0);
+    auto& f = found[key];
     ++f.second;
     if (ExpectValid(inst, plan, what) >= 0) {
       ++f.first;
@@ -375,7 +387,8 @@ TEST(MapfTest, RandomInstancesCheckedForEverySolver) {
     if (HasFailure()) return;
   }
   for (const auto& [name, f] : found) {
-    std::printf("%s: %d of %d solved\n", name.c_str(), f.first, f.second);
+    std::printf("%s: %d of %d solved, %.2f s\n", name.c_str(), f.first, f.second,
+                seconds[name]);
     EXPECT_GT(f.first, 0) << name;
   }
 }
@@ -417,14 +430,18 @@ TEST(MapfTest, MovingAiMapsWithManyRobots) {
   }
   const bool small = EnvInt("PATHD_MAPF_CASES", 1000) < 1000;
   std::mt19937 rng(3);
-  for (const char* name : {"random/random512-10-0.map", "room/32room_000.map"}) {
+  // Each run builds one distance table per robot (a BFS over 512 x 512), so
+  // two solvers a map keep this test short.
+  const std::pair<const char*, std::vector<FleetSolver>> runs[] = {
+      {"random/random512-10-0.map", {FleetSolver::kLacam, FleetSolver::kPrioritized}},
+      {"room/32room_000.map", {FleetSolver::kLacam, FleetSolver::kPibt}}};
+  for (const auto& [name, solvers] : runs) {
     absl::StatusOr<Grid> grid = ReadMovingAiMapFile((dir / name).string());
     ASSERT_TRUE(grid.ok()) << grid.status();
     Instance inst;
     inst.grid = *std::move(grid);
-    PlaceRobots(rng, small ? 30 : 60, &inst);
-    for (const FleetSolver s : {FleetSolver::kLacam, FleetSolver::kPibt,
-                                FleetSolver::kPrioritized}) {
+    PlaceRobots(rng, small ? 20 : 50, &inst);
+    for (const FleetSolver s : solvers) {
       const std::string what = std::string(name) + " " + std::string(FleetSolverName(s));
       const FleetPlan plan = Solve(inst, s, 1.0, absl::Seconds(20));
       EXPECT_GE(ExpectValid(inst, plan, what), 0) << what << ": "
@@ -479,13 +496,26 @@ TEST(MapfTest, PastDeadlineStopsPromptly) {
     EXPECT_EQ(plan->outcome, PlanOutcome::kTimeout) << FleetSolverName(options.solver);
     EXPECT_FALSE(plan->complete);
     EXPECT_TRUE(plan->paths.empty());
-    EXPECT_GE(plan->lower_bound, inst.individual);
+    // Stopped before the distance tables were built, no bound is known.
+    EXPECT_EQ(plan->lower_bound, 0);
     // Not a timing assertion: the figure is printed for the reader.
     std::printf("%s stopped after %.1f ms\n",
                 std::string(FleetSolverName(options.solver)).c_str(),
                 absl::ToDoubleMilliseconds(absl::Now() - t0));
   }
-  // A cancelled CBS search on a hard instance reports the open list's bound.
+  // An expansion budget stops every solver inside its search, after the
+  // distance tables: the bound is then known.
+  for (int s = 0; s < 4; ++s) {
+    FleetOptions options;
+    options.solver = static_cast<FleetSolver>(s);
+    absl::StatusOr<FleetPlan> plan =
+        PlanFleet(inst.problem, options, StopCondition(absl::InfiniteFuture(), nullptr, 64));
+    ASSERT_TRUE(plan.ok()) << plan.status();
+    EXPECT_EQ(plan->outcome, PlanOutcome::kExpansionLimit) << FleetSolverName(options.solver);
+    EXPECT_FALSE(plan->complete);
+    EXPECT_GE(plan->lower_bound, inst.individual) << FleetSolverName(options.solver);
+  }
+  // A cancelled CBS search stops too.
   std::atomic<bool> cancelled{true};
   FleetOptions options;
   options.solver = FleetSolver::kCbs;
