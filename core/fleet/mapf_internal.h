@@ -170,8 +170,9 @@ class SweepTable {
     }
     return n;
   }
-  // The last step with a timed sweep of `cell` (-1: none); never lowered by
-  // removals (a conservative bound).
+  // The last step with a timed sweep of `cell` (-1: none); lowered by
+  // removals only when step 0's were the last (otherwise a conservative
+  // bound).
   int32_t LastStep(uint32_t cell) const { return last_step_[cell]; }
   // One past the last step with any timed sweep: from then on the table does
   // not change with time.

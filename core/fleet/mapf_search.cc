@@ -89,7 +89,12 @@ void TrimPath(IndexPath* path) { path->resize(PathCost(*path) + 1); }
 void SweepTable::AddTimed(uint32_t cell, int32_t t, int32_t delta) {
   auto [it, inserted] = timed_.try_emplace(Key(cell, t), 0);
   it->second += delta;
-  if (it->second == 0) timed_.erase(it);
+  if (it->second == 0) {
+    timed_.erase(it);
+    // A cell's only sweeps were at step 0 (prioritized planning's start
+    // reservations): none is left.
+    if (t == 0 && last_step_[cell] == 0) last_step_[cell] = -1;
+  }
   if (delta > 0) {
     last_step_[cell] = std::max(last_step_[cell], t);
     horizon_ = std::max(horizon_, t + 1);

@@ -414,6 +414,41 @@ TEST(MapfTest, CbsNoWorseThanPrioritizedAndSeedsRepeat) {
   }
 }
 
+// Robots of two sizes: the larger ones' grid has a wall with one door the
+// smaller ones may also pass beside. Every solver's plan is checked against
+// each robot's own grid.
+TEST(MapfTest, RobotsOnDifferentGrids) {
+  Grid small = Grid::Create(12, 12).value();
+  for (int y = 0; y < 12; ++y) {
+    if (y != 5 && y != 6) small.set_cost(6, y, kLethalCost);
+  }
+  Grid large = small;
+  large.set_cost(6, 6, kLethalCost);
+  std::mt19937 rng(9);
+  for (int k = 0; k < 10; ++k) {
+    Instance inst;
+    inst.grid = small;
+    PlaceRobots(rng, 8, &inst);
+    inst.problem.grids = {&small, &large};
+    inst.individual = 0;
+    for (size_t i = 0; i < inst.problem.robots.size(); ++i) {
+      FleetRobot& r = inst.problem.robots[i];
+      // A larger robot only where its grid is open at both ends.
+      if (i % 2 == 1 && Free(large, r.start.x, r.start.y) && Free(large, r.goal.x, r.goal.y)) {
+        r.grid = 1;
+      }
+      inst.individual += BfsSteps(*inst.problem.grids[r.grid], r.start, r.goal, true);
+    }
+    for (int s = 0; s < 4; ++s) {
+      const FleetPlan plan = Solve(inst, static_cast<FleetSolver>(s));
+      EXPECT_EQ(plan.outcome, PlanOutcome::kFound)
+          << "case " << k << " " << FleetSolverName(static_cast<FleetSolver>(s));
+      ExpectValid(inst, plan, "case " + std::to_string(k) + " " +
+                                  std::string(FleetSolverName(static_cast<FleetSolver>(s))));
+    }
+  }
+}
+
 std::filesystem::path MovingAiDir() {
   if (const char* env = std::getenv("PATHD_MOVINGAI_DIR")) return env;
   for (const char* p : {"../shared/benchmarks/movingai", "/work/shared/benchmarks/movingai"}) {
