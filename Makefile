@@ -101,7 +101,7 @@ ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE) \
   PATHD_GEOMETRIC_SCENARIOS=10 PATHD_GEOMETRIC_PLANNERS=navmesh,minimal_construct \
-  PATHD_FLEET_CASES=8 \
+  PATHD_FLEET_CASES=8 PATHD_MAPF_CASES=100 \
   PATHD_CRASH_KILLS=6 PATHD_CRASH_CHECKPOINT_KILLS=20
 
 test-asan: setup-test

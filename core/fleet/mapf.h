@@ -45,8 +45,10 @@ enum class FleetSolver {
   // Conflict-based search: optimal sum of costs; with suboptimality > 1,
   // ECBS (focal search) bounded by that factor.
   kCbs,
-  // LaCAM* over configurations with PIBT as the successor generator:
-  // complete; refines towards optimal until the stop condition fires.
+  // LaCAM over configurations with PIBT as the successor generator:
+  // complete (with LaCAM*'s reinsertion of seen configurations). Returns
+  // its first plan: LaCAM*'s refinement towards optimal is not built
+  // (docs/decisions.md).
   kLacam,
   // PIBT alone, one configuration per step up to max_steps: fastest,
   // incomplete.
@@ -89,14 +91,16 @@ struct FleetProblem {
 struct FleetPlan {
   // kFound: `paths` is a conflict-free plan for every robot (`complete`).
   // kNoPath: proved unsolvable (a robot's goal unreachable on its grid, or a
-  // solver that exhausted its space). kTimeout / kCancelled /
+  // solver that exhausted its space). kExpansionLimit also when an
+  // incomplete solver gave up: kPrioritized after every order, kPibt at
+  // max_steps. kTimeout / kCancelled /
   // kExpansionLimit: the stop condition fired; `paths` then holds the best
   // plan found so far when one was (complete = true; not proved optimal), or
   // is empty.
   PlanOutcome outcome = PlanOutcome::kNoPath;
   bool complete = false;
   // True when the sum of costs is proved optimal (kCbs with suboptimality 1
-  // that finished, or LaCAM* that exhausted its search).
+  // that finished, or any plan whose cost equals the lower bound).
   bool optimal = false;
   // paths[i][t] is robot i's cell at time t; paths[i].front() == its start,
   // paths[i].back() == its goal.
