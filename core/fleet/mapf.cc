@@ -165,6 +165,7 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
   }
   FleetPlan plan;
   int32_t longest = 0;
+  BfsScratch scratch;
   for (size_t i = 0; i < inst.robots(); ++i) {
     // A table is a BFS over the whole map (milliseconds on 512 x 512).
     if (const PlanOutcome o = stop.CheckNow(); o != PlanOutcome::kFound) {
@@ -172,7 +173,7 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
       return plan;
     }
     int32_t d = kUnreachable;
-    inst.h.push_back(inst.graph(i).DistancesTo(inst.goals[i], inst.starts[i], &d));
+    inst.h.push_back(inst.graph(i).DistancesTo(inst.goals[i], inst.starts[i], &d, &scratch));
     if (d == kUnreachable) {
       plan.outcome = PlanOutcome::kNoPath;  // cheap proof: no plan exists
       return plan;

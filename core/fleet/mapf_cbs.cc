@@ -270,6 +270,14 @@ FleetPlan Cbs::Run() {
         focal_.emplace(nodes_[id]->conflicts, nodes_[id]->cost, id);
       }
     }
+    // Open nodes hold a path pointer, cost and bound per robot (their paths
+    // mostly shared): past ~2^25 such entries (about 1 GiB with the paths)
+    // give up rather than grow without bound.
+    if (static_cast<int64_t>(open_.size()) * static_cast<int64_t>(inst_.robots()) >
+        (int64_t{1} << 25)) {
+      stopped_ = PlanOutcome::kExpansionLimit;
+      break;
+    }
     const size_t id = std::get<2>(*focal_.begin());
     focal_.erase(focal_.begin());
     std::unique_ptr<CbsNode> node = std::move(nodes_[id]);

@@ -49,6 +49,12 @@ struct Sweep {
   }
 };
 
+// Buffers of DistancesTo, reused from one robot's table to the next.
+struct BfsScratch {
+  std::vector<int32_t> dist;
+  std::vector<uint32_t> queue;
+};
+
 // The legal moves of one robot grid (cells by row-major index).
 class MoveGraph {
  public:
@@ -116,7 +122,7 @@ class MoveGraph {
   // the reverse moves (the rule is symmetric). `*from_distance` gets the
   // exact steps from `from` (kUnreachable when none).
   DistanceTable DistancesTo(uint32_t goal, uint32_t from,
-                            int32_t* from_distance) const;
+                            int32_t* from_distance, BfsScratch* scratch) const;
 
  private:
   int32_t width_;

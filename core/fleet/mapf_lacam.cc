@@ -219,8 +219,9 @@ std::vector<IndexPath> PathsOf(const std::vector<std::vector<uint32_t>>& configs
   return paths;
 }
 
-// Above this many stored configuration cells LaCAM gives up
-// (kExpansionLimit) rather than grow without bound: ~0.5 GiB.
+// Above this many stored configuration cells (a constraint counting as 4)
+// LaCAM gives up (kExpansionLimit) rather than grow without bound: about
+// 0.5 GiB with the priorities and orders each node keeps.
 constexpr int64_t kMaxStoredCells = int64_t{1} << 26;
 
 }  // namespace
@@ -378,7 +379,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       horizon_hit = true;
       continue;
     }
-    if (static_cast<int64_t>(nodes.size() + 1) * static_cast<int64_t>(n) >
+    if (static_cast<int64_t>(nodes.size() + 1) * static_cast<int64_t>(n) +
+            4 * static_cast<int64_t>(constraints.size()) >
         kMaxStoredCells) {
       plan.outcome = PlanOutcome::kExpansionLimit;
       plan.expansions = step.calls();

@@ -30,7 +30,8 @@ MoveGraph::MoveGraph(const Grid& grid, Connectivity connectivity,
 }
 
 DistanceTable MoveGraph::DistancesTo(uint32_t goal, uint32_t from,
-                                   int32_t* from_distance) const {
+                                   int32_t* from_distance,
+                                   BfsScratch* scratch) const {
   // On the copy padded with one blocked cell all round, so the moves need
   // no bounds tests: one robot's table is a BFS over the whole map.
   const int64_t stride = width_ + 2;
@@ -45,13 +46,14 @@ DistanceTable MoveGraph::DistancesTo(uint32_t goal, uint32_t from,
     side_a[k] = diagonal ? kMoves[k].dx : offset[k];
     side_b[k] = diagonal ? kMoves[k].dy * stride : offset[k];
   }
-  std::vector<int32_t> dist_padded(padded, kUnreachable);
-  std::vector<int64_t> queue;
-  queue.reserve(open_.size());
+  std::vector<int32_t>& dist_padded = scratch->dist;
+  dist_padded.assign(padded, kUnreachable);
+  std::vector<uint32_t>& queue = scratch->queue;
+  queue.clear();
   const Cell g = CellOf(goal);
   const int64_t start = (g.y + 1) * stride + g.x + 1;
   dist_padded[start] = 0;
-  queue.push_back(start);
+  queue.push_back(static_cast<uint32_t>(start));
   for (size_t head = 0; head < queue.size(); ++head) {
     const int64_t u = queue[head];
     const int32_t du = dist_padded[u] + 1;
@@ -60,7 +62,7 @@ DistanceTable MoveGraph::DistancesTo(uint32_t goal, uint32_t from,
       if (open[v] == 0 || dist_padded[v] != kUnreachable) continue;
       if (open[u + side_a[k]] == 0 || open[u + side_b[k]] == 0) continue;
       dist_padded[v] = du;
-      queue.push_back(v);
+      queue.push_back(static_cast<uint32_t>(v));
     }
   }
   DistanceTable dist(cells(), kFar);
