@@ -331,7 +331,9 @@ TEST(MapfTest, CbsMatchesBruteForceOnTinyInstances) {
     for (const FleetSolver s : {FleetSolver::kPrioritized, FleetSolver::kPibt}) {
       const FleetPlan p = Solve(inst, s);
       const int64_t c = ExpectValid(inst, p, what + " " + std::string(FleetSolverName(s)));
-      if (c >= 0) EXPECT_GE(c, best) << what;
+      if (c >= 0) {
+        EXPECT_GE(c, best) << what;
+      }
     }
   }
   EXPECT_GT(solved, cases / 2);
@@ -405,7 +407,9 @@ TEST(MapfTest, CbsNoWorseThanPrioritizedAndSeedsRepeat) {
     const FleetPlan cbs = Solve(inst, FleetSolver::kCbs);
     const int64_t p = ExpectValid(inst, pri, what + " prioritized");
     const int64_t c = ExpectValid(inst, cbs, what + " cbs");
-    if (p >= 0 && c >= 0) EXPECT_LE(c, p) << what;
+    if (p >= 0 && c >= 0) {
+      EXPECT_LE(c, p) << what;
+    }
     for (const FleetSolver s : {FleetSolver::kLacam, FleetSolver::kPrioritized}) {
       const FleetPlan a = Solve(inst, s);
       const FleetPlan b = Solve(inst, s);
