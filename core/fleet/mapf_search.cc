@@ -152,6 +152,9 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
     earliest_stop = std::max(earliest_stop, StopAfter(q.reserved->LastStep(q.goal)));
   }
   if (q.avoid != nullptr) still = std::max(still, q.avoid->Horizon());
+  // Keyed by the cell alone only once the robot may stop at its goal (else
+  // waiting there from `still` would look like a revisit and be dropped).
+  still = std::max(still, earliest_stop);
   auto key_of = [&](uint32_t cell, int32_t t) {
     return static_cast<uint64_t>(std::min(t, still)) * cells + cell;
   };

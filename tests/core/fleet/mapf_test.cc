@@ -298,7 +298,7 @@ int64_t BruteForce(const Instance& inst, int horizon) {
 
 TEST(MapfTest, CbsMatchesBruteForceOnTinyInstances) {
   std::mt19937 rng(7);
-  const int cases = std::max(4, EnvInt("PATHD_MAPF_CASES", 1000) / 40);
+  const int cases = std::max(4, EnvInt("PATHD_MAPF_CASES", 1000) / 20);
   int solved = 0;
   for (int k = 0; k < cases; ++k) {
     Instance inst;
