@@ -153,7 +153,9 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
   }
   if (q.avoid != nullptr) still = std::max(still, q.avoid->Horizon());
   // Keyed by the cell alone only once the robot may stop at its goal (else
-  // waiting there from `still` would look like a revisit and be dropped).
+  // waiting there from `still` would look like a revisit and be dropped; the
+  // sweep of the goal at step earliest_stop - 2 already keeps the robot off
+  // it at still = earliest_stop - 1, so this is a guard, not a fix).
   still = std::max(still, earliest_stop);
   auto key_of = [&](uint32_t cell, int32_t t) {
     return static_cast<uint64_t>(std::min(t, still)) * cells + cell;

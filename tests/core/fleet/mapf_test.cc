@@ -13,6 +13,7 @@
 #include <map>
 #include <queue>
 #include <random>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "core/fleet/mapf.h"
+#include "core/fleet/mapf_internal.h"
 #include "core/map/grid.h"
 #include "core/map_io/map_io.h"
 #include "gtest/gtest.h"
@@ -337,6 +339,116 @@ TEST(MapfTest, CbsMatchesBruteForceOnTinyInstances) {
     }
   }
   EXPECT_GT(solved, cases / 2);
+}
+
+// The low level alone: space-time A* (and focal search) under random CBS
+// constraints against this test's own breadth-first search over (cell,
+// time) layers, many constraints on the goal so the earliest stop matters.
+TEST(MapfTest, SpaceTimeSearchMatchesLayeredSearch) {
+  using namespace mapf_internal;  // NOLINT: the test of these internals
+  std::mt19937 rng(13);
+  const int cases = std::max(20, EnvInt("PATHD_MAPF_CASES", 1000) / 2);
+  for (int k = 0; k < cases; ++k) {
+    const int side = 4 + static_cast<int>(rng() % 5);
+    Grid grid = RandomGrid(rng, side, side, 0.2);
+    const bool eight = k % 2 == 1;
+    std::vector<Cell> comp = LargestComponent(grid);
+    if (comp.size() < 2) continue;
+    std::shuffle(comp.begin(), comp.end(), rng);
+    const Cell start = comp[0];
+    const Cell goal = k % 7 == 0 ? comp[0] : comp[1];
+    const MoveGraph graph(grid, eight ? Connectivity::kEight : Connectivity::kFour, false);
+    const size_t cells = grid.size();
+    ConstraintSet cons;
+    std::set<std::pair<uint32_t, int32_t>> banned;  // (cell, step)
+    const int n = static_cast<int>(rng() % 25);
+    for (int c = 0; c < n; ++c) {
+      const Cell at = c % 3 == 0 ? goal : comp[rng() % comp.size()];
+      const auto t = static_cast<int32_t>(rng() % 16);
+      cons.Add(static_cast<uint32_t>(grid.Index(at)), t, cells);
+      banned.insert({static_cast<uint32_t>(grid.Index(at)), t});
+    }
+    // Layers of the cells reachable at t without sweeping a banned cell.
+    auto swept = [&](Cell a, Cell b) {
+      std::vector<uint32_t> out;
+      for (const Cell c : Swept(a, b)) out.push_back(static_cast<uint32_t>(grid.Index(c)));
+      return out;
+    };
+    int32_t last_goal = -1;
+    for (const auto& [c, t] : banned) {
+      if (c == grid.Index(goal)) last_goal = std::max(last_goal, t);
+    }
+    int expected = -1;
+    std::set<uint32_t> layer{static_cast<uint32_t>(grid.Index(start))};
+    const int horizon = 20 + static_cast<int>(cells);
+    for (int t = 0; t <= horizon && !layer.empty(); ++t) {
+      // At the goal at t and never sweeping a banned cell by staying.
+      if (layer.count(static_cast<uint32_t>(grid.Index(goal))) != 0 && t > last_goal) {
+        expected = t;
+        break;
+      }
+      std::set<uint32_t> next;
+      for (const uint32_t u : layer) {
+        const Cell a = grid.CellAt(u);
+        for (int dx = -1; dx <= 1; ++dx) {
+          for (int dy = -1; dy <= 1; ++dy) {
+            const Cell b{a.x + dx, a.y + dy};
+            if (!Free(grid, b.x, b.y)) continue;
+            if (dx != 0 && dy != 0 &&
+                (!eight || !Free(grid, b.x, a.y) || !Free(grid, a.x, b.y))) {
+              continue;
+            }
+            bool ok = true;
+            for (const uint32_t c : swept(a, b)) ok = ok && banned.count({c, t}) == 0;
+            if (ok) next.insert(static_cast<uint32_t>(grid.Index(b)));
+          }
+        }
+      }
+      layer = std::move(next);
+    }
+    int32_t exact = kUnreachable;
+    BfsScratch scratch;
+    const DistanceTable h = graph.DistancesTo(static_cast<uint32_t>(grid.Index(goal)),
+                                              static_cast<uint32_t>(grid.Index(start)),
+                                              &exact, &scratch);
+    for (const double w : {1.0, 1.5}) {
+      LowLevelQuery q;
+      q.graph = &graph;
+      q.h = &h;
+      q.start = static_cast<uint32_t>(grid.Index(start));
+      q.goal = static_cast<uint32_t>(grid.Index(goal));
+      q.constraints = &cons;
+      q.max_steps = horizon;
+      q.w = w;
+      int64_t expansions = 0;
+      const LowLevelResult r = SpaceTimeSearch(q, StopCondition::None(), &expansions);
+      const std::string what = "case " + std::to_string(k) + " w " + std::to_string(w);
+      if (expected < 0) {
+        EXPECT_NE(r.outcome, PlanOutcome::kFound) << what;
+        continue;
+      }
+      ASSERT_EQ(r.outcome, PlanOutcome::kFound) << what;
+      if (w == 1.0) {
+        EXPECT_EQ(r.cost, expected) << what;
+      } else {
+        EXPECT_GE(r.cost, expected) << what;
+        EXPECT_LE(r.cost, w * expected + 1e-9) << what;
+      }
+      EXPECT_LE(r.lower_bound, expected) << what;
+      // The path itself: legal and never sweeping a banned cell, parked
+      // after its end.
+      ASSERT_FALSE(r.path.empty());
+      EXPECT_EQ(r.path.front(), q.start) << what;
+      EXPECT_EQ(r.path.back(), q.goal) << what;
+      for (int32_t t = 0; t < horizon; ++t) {
+        const size_t i = std::min<size_t>(t, r.path.size() - 1);
+        const size_t j = std::min<size_t>(t + 1, r.path.size() - 1);
+        for (const uint32_t c : swept(grid.CellAt(r.path[i]), grid.CellAt(r.path[j]))) {
+          EXPECT_EQ(banned.count({c, t}), 0u) << what << " step " << t;
+        }
+      }
+    }
+  }
 }
 
 TEST(MapfTest, RandomInstancesCheckedForEverySolver) {
