@@ -46,9 +46,8 @@ enum class FleetSolver {
   // ECBS (focal search) bounded by that factor.
   kCbs,
   // LaCAM over configurations with PIBT as the successor generator:
-  // complete (with LaCAM*'s reinsertion of seen configurations). Returns
-  // its first plan: LaCAM*'s refinement towards optimal is not built
-  // (docs/decisions.md).
+  // complete. Returns its first plan, or with FleetOptions::refine goes on
+  // as LaCAM*, refining towards optimal until the stop condition fires.
   kLacam,
   // PIBT alone, one configuration per step up to max_steps: fastest,
   // incomplete.
@@ -71,6 +70,12 @@ struct FleetOptions {
   int32_t restarts = 10;
   // kCbs: 1 = optimal; w > 1 = ECBS, sum of costs within w of optimal.
   double suboptimality = 1.0;
+  // kLacam: after the first plan, keep improving it (LaCAM*) until the stop
+  // condition fires (outcome kTimeout etc. with the best plan, complete) or
+  // the search is exhausted (kFound; least sum of loss, the cost that
+  // counts waits at the goal as free even before a robot leaves again).
+  // Without a deadline or budget a refining call can run very long.
+  bool refine = false;
   // Seed of every random choice (priority orders, tie breaks): equal inputs
   // give equal plans.
   uint64_t seed = 1;

@@ -18,10 +18,17 @@
 // it only waits. LaCAM's constraints fix some robots' next cells first; a
 // fixed move that breaks the rule makes that successor invalid.
 //
-// This is plain LaCAM (complete: it returns a plan or proves none exists
-// within max_steps configurations deep), not LaCAM*'s anytime refinement.
+// LaCAM is complete (it returns a plan or proves none exists). With
+// FleetOptions::refine it goes on as LaCAM* (Okumura, "Improving LaCAM for
+// scalable eventually optimal multi-agent pathfinding", 2023): every node
+// keeps its cost from the start (sum of loss: robots not resting at their
+// goals), a configuration reached again by a cheaper way rewires its
+// descendants, nodes that cannot beat the plan in hand are dropped, and the
+// best plan is returned when the stop condition fires or the search is
+// exhausted (then it has the least sum of loss).
 #include <algorithm>
 #include <deque>
+#include <queue>
 #include <random>
 #include <tuple>
 #include <utility>
@@ -281,7 +288,31 @@ struct HighNode {
   std::deque<int32_t> tree;  // constraint nodes still to try
   int32_t parent;
   int32_t depth;
+  // LaCAM*: cost from the start along parent links (sum of loss), the
+  // admissible estimate to the goal configuration, the configurations
+  // reached from this one.
+  int64_t g = 0;
+  int64_t h = 0;
+  std::vector<int32_t> neighbors;
 };
+
+// LaCAM*'s transition cost: the robots not resting at their goals (sum of
+// loss: a robot waiting at its goal costs nothing, as after its last
+// arrival).
+int64_t Loss(const Instance& inst, const std::vector<uint32_t>& from,
+             const std::vector<uint32_t>& to) {
+  int64_t loss = 0;
+  for (size_t i = 0; i < from.size(); ++i) {
+    if (from[i] != inst.goals[i] || to[i] != inst.goals[i]) ++loss;
+  }
+  return loss;
+}
+
+int64_t Estimate(const Instance& inst, const std::vector<uint32_t>& config) {
+  int64_t h = 0;
+  for (size_t i = 0; i < config.size(); ++i) h += inst.h[i][config[i]];
+  return h;
+}
 
 }  // namespace
 
@@ -300,6 +331,10 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   auto add = [&](std::vector<uint32_t> config, int32_t parent,
                  const std::vector<double>& parent_prio) {
     HighNode node;
+    if (parent >= 0) {
+      node.g = nodes[parent].g + Loss(inst, nodes[parent].config, config);
+    }
+    node.h = Estimate(inst, config);
     node.prio = parent_prio;
     UpdatePriorities(inst, config, tie, &node.prio);
     node.order = OrderOf(node.prio);
@@ -310,7 +345,46 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
     const auto id = static_cast<int32_t>(nodes.size());
     explored.emplace(node.config, id);
     nodes.push_back(std::move(node));
+    if (parent >= 0) nodes[parent].neighbors.push_back(id);
     open.push_back(id);
+  };
+  // LaCAM*: the goal configuration's node once reached (its g only falls).
+  int32_t goal_node = -1;
+  auto finish = [&](PlanOutcome outcome) {
+    plan.outcome = outcome;
+    plan.expansions = step.calls();
+    if (goal_node < 0) return plan;
+    std::vector<std::vector<uint32_t>> configs;
+    for (int32_t at = goal_node; at >= 0; at = nodes[at].parent) {
+      configs.push_back(nodes[at].config);
+    }
+    std::reverse(configs.begin(), configs.end());
+    SetPaths(inst, PathsOf(configs), &plan);
+    return plan;
+  };
+  // LaCAM*: a shorter way into `from` was found; carry it on to every node
+  // reached from there (Dijkstra over the explored graph). Every edge but a
+  // configuration's loop to itself costs at least one, so parents stay
+  // acyclic.
+  auto rewire = [&](int32_t from) {
+    using Entry = std::pair<int64_t, int32_t>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+    queue.push({nodes[from].g, from});
+    while (!queue.empty()) {
+      const auto [g, u] = queue.top();
+      queue.pop();
+      if (g != nodes[u].g) continue;
+      for (const int32_t v : nodes[u].neighbors) {
+        const int64_t ng = g + Loss(inst, nodes[u].config, nodes[v].config);
+        if (ng >= nodes[v].g) continue;
+        nodes[v].g = ng;
+        nodes[v].parent = u;
+        queue.push({ng, v});
+        if (goal_node >= 0 && ng + nodes[v].h < nodes[goal_node].g) {
+          open.push_back(v);
+        }
+      }
+    }
   };
   {
     // Initial priorities: farther robots first.
@@ -327,21 +401,17 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   while (!open.empty()) {
     if (const PlanOutcome o = stop.Check(plan.iterations);
         o != PlanOutcome::kFound) {
-      plan.outcome = o;
-      plan.expansions = step.calls();
-      return plan;
+      return finish(o);  // with the best plan so far when refining
     }
     const int32_t id = open.back();
-    if (nodes[id].config == inst.goals) {
-      std::vector<std::vector<uint32_t>> configs;
-      for (int32_t at = id; at >= 0; at = nodes[at].parent) {
-        configs.push_back(nodes[at].config);
-      }
-      std::reverse(configs.begin(), configs.end());
-      SetPaths(inst, PathsOf(configs), &plan);
-      plan.outcome = PlanOutcome::kFound;
-      plan.expansions = step.calls();
-      return plan;
+    if (goal_node < 0 && nodes[id].config == inst.goals) {
+      goal_node = id;
+      if (!options.refine) return finish(PlanOutcome::kFound);
+    }
+    // LaCAM*: nothing through this node can beat the plan in hand.
+    if (goal_node >= 0 && nodes[goal_node].g <= nodes[id].g + nodes[id].h) {
+      open.pop_back();
+      continue;
     }
     if (nodes[id].tree.empty()) {
       open.pop_back();
@@ -372,7 +442,16 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       // Back to a known configuration: search on from it (LaCAM*'s
       // reinsertion; each push follows a consumed constraint, so the search
       // still ends).
+      nodes[id].neighbors.push_back(it->second);
       open.push_back(it->second);
+      if (options.refine) {
+        const int64_t ng = nodes[id].g + Loss(inst, nodes[id].config, next);
+        if (ng < nodes[it->second].g) {
+          nodes[it->second].g = ng;
+          nodes[it->second].parent = id;
+          rewire(it->second);
+        }
+      }
       continue;
     }
     if (inst.max_steps_given && nodes[id].depth + 1 > inst.max_steps) {
@@ -382,17 +461,15 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
     if (static_cast<int64_t>(nodes.size() + 1) * static_cast<int64_t>(n) +
             4 * static_cast<int64_t>(constraints.size()) >
         kMaxStoredCells) {
-      plan.outcome = PlanOutcome::kExpansionLimit;
-      plan.expansions = step.calls();
-      return plan;
+      return finish(PlanOutcome::kExpansionLimit);
     }
     const std::vector<double> prio = nodes[id].prio;
     add(next, id, prio);
   }
-  // Every configuration reachable within max_steps was explored.
-  plan.outcome = horizon_hit ? PlanOutcome::kExpansionLimit : PlanOutcome::kNoPath;
-  plan.expansions = step.calls();
-  return plan;
+  // Every configuration reachable within max_steps was explored: the plan
+  // in hand (refining) has the least sum of loss, or there is none.
+  if (goal_node >= 0) return finish(PlanOutcome::kFound);
+  return finish(horizon_hit ? PlanOutcome::kExpansionLimit : PlanOutcome::kNoPath);
 }
 
 }  // namespace pathd::mapf_internal
