@@ -69,8 +69,9 @@ ConstraintSet ConstraintsOf(const CbsNode& node, size_t robot, size_t cells) {
 
 // Every pair of robots whose sweeps meet, once per pair and step (the first
 // shared cell), in step order.
-std::vector<Conflict> FindConflicts(const Instance& inst,
-                                    const std::vector<std::shared_ptr<const IndexPath>>& paths) {
+std::vector<Conflict> FindConflicts(
+    const Instance& inst,
+    const std::vector<std::shared_ptr<const IndexPath>>& paths) {
   std::vector<Conflict> out;
   int32_t makespan = 0;
   for (const auto& p : paths) {
@@ -153,7 +154,8 @@ bool Forced(const Instance& inst, size_t robot, const Mdd& mdd, uint32_t cell,
 
 class Cbs {
  public:
-  Cbs(const Instance& inst, const FleetOptions& options, const StopCondition& stop)
+  Cbs(const Instance& inst, const FleetOptions& options,
+      const StopCondition& stop)
       : inst_(inst), w_(options.suboptimality), stop_(stop) {}
 
   FleetPlan Run();
@@ -171,9 +173,11 @@ class Cbs {
   int64_t expansions_ = 0;
   PlanOutcome stopped_ = PlanOutcome::kFound;
   std::vector<std::unique_ptr<CbsNode>> nodes_;
-  std::set<std::pair<int64_t, size_t>> open_;          // (lb, id)
-  std::set<std::pair<int64_t, size_t>> pending_;       // open, not in focal: (cost, id)
-  std::set<std::tuple<int32_t, int64_t, size_t>> focal_;  // (conflicts, cost, id)
+  std::set<std::pair<int64_t, size_t>> open_;  // (lb, id)
+  std::set<std::pair<int64_t, size_t>>
+      pending_;  // open, not in focal: (cost, id)
+  std::set<std::tuple<int32_t, int64_t, size_t>>
+      focal_;  // (conflicts, cost, id)
   double bound_ = -1.0;
 };
 
@@ -225,7 +229,8 @@ void Cbs::Push(std::unique_ptr<CbsNode> node) {
   }
   // A parent's bound holds for its whole subtree.
   node->lb = std::max(node->lb, lb);
-  node->conflicts = static_cast<int32_t>(FindConflicts(inst_, node->paths).size());
+  node->conflicts =
+      static_cast<int32_t>(FindConflicts(inst_, node->paths).size());
   const size_t id = nodes_.size();
   open_.emplace(node->lb, id);
   if (static_cast<double>(node->cost) <= bound_) {
@@ -246,8 +251,8 @@ FleetPlan Cbs::Run() {
   root->mdds.resize(n);
   for (size_t i = 0; i < n; ++i) {
     if (!Replan(root.get(), i)) {
-      plan.outcome = stopped_ != PlanOutcome::kFound ? stopped_
-                                                     : PlanOutcome::kNoPath;
+      plan.outcome =
+          stopped_ != PlanOutcome::kFound ? stopped_ : PlanOutcome::kNoPath;
       plan.expansions = expansions_;
       return plan;
     }
@@ -273,7 +278,8 @@ FleetPlan Cbs::Run() {
     // Open nodes hold a path pointer, cost and bound per robot (their paths
     // mostly shared): past ~2^25 such entries (about 1 GiB with the paths)
     // give up rather than grow without bound.
-    if (static_cast<int64_t>(open_.size()) * static_cast<int64_t>(inst_.robots()) >
+    if (static_cast<int64_t>(open_.size()) *
+            static_cast<int64_t>(inst_.robots()) >
         (int64_t{1} << 25)) {
       stopped_ = PlanOutcome::kExpansionLimit;
       break;
@@ -300,8 +306,9 @@ FleetPlan Cbs::Run() {
     if (w_ == 1.0) {
       int best = -1;
       for (const Conflict& c : conflicts) {
-        const int rank = (Forced(inst_, c.i, MddOf(node.get(), c.i), c.cell, c.t) ? 1 : 0) +
-                         (Forced(inst_, c.j, MddOf(node.get(), c.j), c.cell, c.t) ? 1 : 0);
+        const int rank =
+            (Forced(inst_, c.i, MddOf(node.get(), c.i), c.cell, c.t) ? 1 : 0) +
+            (Forced(inst_, c.j, MddOf(node.get(), c.j), c.cell, c.t) ? 1 : 0);
         if (rank > best) {
           best = rank;
           chosen = c;
@@ -322,7 +329,8 @@ FleetPlan Cbs::Run() {
       if (w_ == 1.0 && child->costs[robot] == node->costs[robot]) {
         // Bypass: the same cost with fewer conflicts replaces the parent's
         // path (the child's path also meets the parent's constraints).
-        const auto fewer = static_cast<int32_t>(FindConflicts(inst_, child->paths).size());
+        const auto fewer =
+            static_cast<int32_t>(FindConflicts(inst_, child->paths).size());
         if (fewer < node->conflicts) {
           node->paths[robot] = child->paths[robot];
           node->mdds[robot] = nullptr;
@@ -339,7 +347,8 @@ FleetPlan Cbs::Run() {
     }
     for (auto& child : children) Push(std::move(child));
   }
-  plan.outcome = stopped_ != PlanOutcome::kFound ? stopped_ : PlanOutcome::kNoPath;
+  plan.outcome =
+      stopped_ != PlanOutcome::kFound ? stopped_ : PlanOutcome::kNoPath;
   if (!open_.empty()) plan.lower_bound = open_.begin()->first;
   plan.expansions = expansions_;
   return plan;

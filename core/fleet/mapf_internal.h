@@ -262,10 +262,10 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& query,
 
 // The shared context of one PlanFleet call.
 struct Instance {
-  std::vector<MoveGraph> graphs;       // one per FleetProblem::grids entry
-  std::vector<int32_t> graph_of;       // robot -> graphs index
+  std::vector<MoveGraph> graphs;        // one per FleetProblem::grids entry
+  std::vector<int32_t> graph_of;        // robot -> graphs index
   std::vector<uint32_t> starts, goals;  // by cell index
-  std::vector<DistanceTable> h;        // robot -> DistancesTo(goal)
+  std::vector<DistanceTable> h;         // robot -> DistancesTo(goal)
   size_t cells = 0;
   int32_t max_steps = 0;
   // FleetOptions::max_steps was set (LaCAM's search is otherwise unbounded

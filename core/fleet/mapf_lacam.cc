@@ -139,10 +139,10 @@ class PibtStep {
     });
     if (vacate == nullptr) cands.push_back(Candidate{u, h[u], 0});
     std::shuffle(cands.begin(), cands.end(), rng_);
-    std::stable_sort(cands.begin(), cands.end(),
-                     [](const Candidate& a, const Candidate& b) {
-                       return std::tie(a.h, a.occupied) < std::tie(b.h, b.occupied);
-                     });
+    std::stable_sort(
+        cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
+          return std::tie(a.h, a.occupied) < std::tie(b.h, b.occupied);
+        });
     for (const Candidate& cand : cands) {
       const uint32_t v = cand.v;
       if (v == u) break;
@@ -196,7 +196,8 @@ class PibtStep {
 // PIBT's priorities: a robot's grows by one each step it is not at its goal
 // and drops to its tie-breaking fraction when it is.
 void UpdatePriorities(const Instance& inst, const std::vector<uint32_t>& config,
-                      const std::vector<double>& tie, std::vector<double>* prio) {
+                      const std::vector<double>& tie,
+                      std::vector<double>* prio) {
   for (size_t i = 0; i < config.size(); ++i) {
     (*prio)[i] = config[i] == inst.goals[i] ? tie[i] : (*prio)[i] + 1.0;
   }
@@ -218,7 +219,8 @@ std::vector<double> TieBreaks(const Instance& inst, std::mt19937_64& rng) {
 }
 
 // Paths from a sequence of configurations.
-std::vector<IndexPath> PathsOf(const std::vector<std::vector<uint32_t>>& configs) {
+std::vector<IndexPath> PathsOf(
+    const std::vector<std::vector<uint32_t>>& configs) {
   std::vector<IndexPath> paths(configs.front().size());
   for (const auto& q : configs) {
     for (size_t i = 0; i < q.size(); ++i) paths[i].push_back(q[i]);
@@ -251,9 +253,10 @@ FleetPlan SolvePibt(const Instance& inst, const FleetOptions& options,
     }
     // PIBT calls grow by the robot count a step, so Check's every-1024th
     // clock poll could be skipped: poll each step, the budget by hand.
-    const PlanOutcome o = stop.max_expansions() > 0 && step.calls() >= stop.max_expansions()
-                              ? PlanOutcome::kExpansionLimit
-                              : stop.Poll(step.calls());
+    const PlanOutcome o =
+        stop.max_expansions() > 0 && step.calls() >= stop.max_expansions()
+            ? PlanOutcome::kExpansionLimit
+            : stop.Poll(step.calls());
     if (o != PlanOutcome::kFound) {
       plan.outcome = o;
       plan.expansions = step.calls();
@@ -391,7 +394,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
     std::vector<double> prio(n);
     for (size_t i = 0; i < n; ++i) {
       prio[i] = static_cast<double>(inst.h[i][inst.starts[i]]) /
-                    static_cast<double>(inst.cells) + tie[i] * 1e-9 - 1.0;
+                    static_cast<double>(inst.cells) +
+                tie[i] * 1e-9 - 1.0;
     }
     add(inst.starts, -1, prio);
   }
@@ -440,7 +444,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       }
     }
     fixed.clear();
-    for (int32_t at = c; constraints[at].depth > 0; at = constraints[at].parent) {
+    for (int32_t at = c; constraints[at].depth > 0;
+         at = constraints[at].parent) {
       fixed.emplace_back(constraints[at].who, constraints[at].where);
     }
     ++plan.iterations;
@@ -476,7 +481,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   // Every configuration reachable within max_steps was explored: the plan
   // in hand (refining) has the least sum of loss, or there is none.
   if (goal_node >= 0) return finish(PlanOutcome::kFound);
-  return finish(horizon_hit ? PlanOutcome::kExpansionLimit : PlanOutcome::kNoPath);
+  return finish(horizon_hit ? PlanOutcome::kExpansionLimit
+                            : PlanOutcome::kNoPath);
 }
 
 }  // namespace pathd::mapf_internal

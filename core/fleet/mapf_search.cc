@@ -30,8 +30,8 @@ MoveGraph::MoveGraph(const Grid& grid, Connectivity connectivity,
 }
 
 DistanceTable MoveGraph::DistancesTo(uint32_t goal, uint32_t from,
-                                   int32_t* from_distance,
-                                   BfsScratch* scratch) const {
+                                     int32_t* from_distance,
+                                     BfsScratch* scratch) const {
   // On the copy padded with one blocked cell all round, so the moves need
   // no bounds tests: one robot's table is a BFS over the whole map.
   const int64_t stride = width_ + 2;
@@ -132,8 +132,8 @@ int32_t StopAfter(int32_t last) { return last < 0 ? 0 : last + 2; }
 
 }  // namespace
 
-LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop,
-                               int64_t* expansions) {
+LowLevelResult SpaceTimeSearch(const LowLevelQuery& q,
+                               const StopCondition& stop, int64_t* expansions) {
   LowLevelResult result;
   const MoveGraph& graph = *q.graph;
   const DistanceTable& h = *q.h;
@@ -145,11 +145,13 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
   int32_t earliest_stop = 0;
   if (q.constraints != nullptr) {
     still = std::max(still, q.constraints->Horizon());
-    earliest_stop = std::max(earliest_stop, StopAfter(q.constraints->LastStep(q.goal)));
+    earliest_stop =
+        std::max(earliest_stop, StopAfter(q.constraints->LastStep(q.goal)));
   }
   if (q.reserved != nullptr) {
     still = std::max(still, q.reserved->Horizon());
-    earliest_stop = std::max(earliest_stop, StopAfter(q.reserved->LastStep(q.goal)));
+    earliest_stop =
+        std::max(earliest_stop, StopAfter(q.reserved->LastStep(q.goal)));
   }
   if (q.avoid != nullptr) still = std::max(still, q.avoid->Horizon());
   // Keyed by the cell alone only once the robot may stop at its goal (else
@@ -203,7 +205,8 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
     open.erase({f_of(nodes[id]), id});
     focal.erase(focal_key(id));
   };
-  auto reach = [&](uint32_t cell, int32_t t, int32_t conflicts, int32_t parent) {
+  auto reach = [&](uint32_t cell, int32_t t, int32_t conflicts,
+                   int32_t parent) {
     const auto [it, inserted] =
         index.try_emplace(key_of(cell, t), static_cast<int32_t>(nodes.size()));
     if (inserted) {
@@ -280,7 +283,8 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
     if (n.t >= q.max_steps) continue;
     auto step = [&](uint32_t to) {
       const Sweep s = graph.SweepOf(n.cell, to);
-      if (q.constraints != nullptr && q.constraints->Blocks(s, n.t, cells)) return;
+      if (q.constraints != nullptr && q.constraints->Blocks(s, n.t, cells))
+        return;
       if (q.reserved != nullptr && q.reserved->Count(s, n.t) > 0) return;
       const int32_t c = q.avoid != nullptr ? q.avoid->Count(s, n.t) : 0;
       reach(to, n.t + 1, n.conflicts + c, id);
