@@ -327,7 +327,9 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   const std::vector<double> tie = TieBreaks(inst, rng);
   PibtStep step(inst, rng());
   std::vector<Constraint> constraints{{-1, 0, 0, 0}};  // the shared root
-  std::vector<HighNode> nodes;
+  // A deque: growing never moves (or, std::deque having no noexcept move,
+  // copies) the nodes already stored.
+  std::deque<HighNode> nodes;
   absl::flat_hash_map<std::vector<uint32_t>, int32_t> explored;
   std::vector<int32_t> open;
 
