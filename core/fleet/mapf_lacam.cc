@@ -406,8 +406,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   std::vector<std::pair<size_t, uint32_t>> fixed;
   while (!open.empty()) {
     // An iteration runs PIBT over every robot (and, refining, may rewire
-    // much of the explored graph): read the clock every 64, not every 1024
-    // as Check would (LaCAM* overran a 5 s deadline by 1.8 s that way).
+    // much of the explored graph): read the clock every 64 iterations, not
+    // every 1024 as Check would.
     const PlanOutcome o =
         stop.max_expansions() > 0 && plan.iterations >= stop.max_expansions()
             ? PlanOutcome::kExpansionLimit
