@@ -228,10 +228,16 @@ std::vector<IndexPath> PathsOf(
   return paths;
 }
 
-// Above this many stored configuration cells (a constraint counting as 4)
-// LaCAM gives up (kExpansionLimit) rather than grow without bound: about
-// 0.5 GiB with the priorities and orders each node keeps.
-constexpr int64_t kMaxStoredCells = int64_t{1} << 26;
+// Past about this many bytes of search state LaCAM gives up
+// (kExpansionLimit) rather than grow without bound. A node holds its
+// configuration twice (node and explored set, 4 + 4 bytes a robot), its
+// priorities and order (8 + 8), and a constraint deque and the rest
+// (about 700 bytes); a constraint is 16.
+constexpr int64_t kMaxSearchBytes = int64_t{1} << 29;  // 512 MiB
+int64_t SearchBytes(size_t nodes, size_t robots, size_t constraints) {
+  return static_cast<int64_t>(nodes) * (24 * static_cast<int64_t>(robots) + 700) +
+         16 * static_cast<int64_t>(constraints);
+}
 
 }  // namespace
 
@@ -472,9 +478,7 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       horizon_hit = true;
       continue;
     }
-    if (static_cast<int64_t>(nodes.size() + 1) * static_cast<int64_t>(n) +
-            4 * static_cast<int64_t>(constraints.size()) >
-        kMaxStoredCells) {
+    if (SearchBytes(nodes.size() + 1, n, constraints.size()) > kMaxSearchBytes) {
       return finish(PlanOutcome::kExpansionLimit);
     }
     const std::vector<double> prio = nodes[id].prio;
