@@ -275,12 +275,13 @@ FleetPlan Cbs::Run() {
         focal_.emplace(nodes_[id]->conflicts, nodes_[id]->cost, id);
       }
     }
-    // Open nodes hold a path pointer, cost and bound per robot (their paths
-    // mostly shared): past ~2^25 such entries (about 1 GiB with the paths)
-    // give up rather than grow without bound.
+    // Open nodes hold a path and an MDD pointer, a cost and a bound per
+    // robot (about 40 bytes; the paths mostly shared): past 2^23 such
+    // entries (about 0.3 GiB plus the paths) give up rather than grow
+    // without bound.
     if (static_cast<int64_t>(open_.size()) *
             static_cast<int64_t>(inst_.robots()) >
-        (int64_t{1} << 25)) {
+        (int64_t{1} << 23)) {
       stopped_ = PlanOutcome::kExpansionLimit;
       break;
     }
