@@ -661,6 +661,24 @@ TEST(MapfTest, RobotsOnDifferentGrids) {
   }
 }
 
+// Regression: a robot whose diagonal to its goal was blocked only by
+// robots resting on its side cells never asked them to move (PIBT's
+// inheritance looked at the target cell alone), so all three stayed until
+// max_steps.
+TEST(MapfTest, PibtAsksSideCellOccupantsToMove) {
+  Instance inst;
+  inst.grid = Grid::Create(3, 3).value();
+  inst.problem.grids = {&inst.grid};
+  inst.problem.robots = {
+      {{0, 0}, {1, 1}, 0}, {{1, 0}, {1, 0}, 0}, {{0, 1}, {0, 1}, 0}};
+  inst.individual = 1;
+  for (const FleetSolver s : {FleetSolver::kPibt, FleetSolver::kLacam}) {
+    const FleetPlan plan = Solve(inst, s);
+    EXPECT_EQ(plan.outcome, PlanOutcome::kFound) << FleetSolverName(s);
+    ExpectValid(inst, plan, std::string(FleetSolverName(s)));
+  }
+}
+
 std::filesystem::path MovingAiDir() {
   if (const char* env = std::getenv("PATHD_MOVINGAI_DIR")) return env;
   for (const char* p :
