@@ -235,7 +235,8 @@ std::vector<IndexPath> PathsOf(
 // (about 700 bytes); a constraint is 16.
 constexpr int64_t kMaxSearchBytes = int64_t{1} << 29;  // 512 MiB
 int64_t SearchBytes(size_t nodes, size_t robots, size_t constraints) {
-  return static_cast<int64_t>(nodes) * (24 * static_cast<int64_t>(robots) + 700) +
+  return static_cast<int64_t>(nodes) *
+             (24 * static_cast<int64_t>(robots) + 700) +
          16 * static_cast<int64_t>(constraints);
 }
 
@@ -478,7 +479,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       horizon_hit = true;
       continue;
     }
-    if (SearchBytes(nodes.size() + 1, n, constraints.size()) > kMaxSearchBytes) {
+    if (SearchBytes(nodes.size() + 1, n, constraints.size()) >
+        kMaxSearchBytes) {
       return finish(PlanOutcome::kExpansionLimit);
     }
     const std::vector<double> prio = nodes[id].prio;
