@@ -45,7 +45,8 @@ FleetPlan SolvePrioritized(const Instance& inst, const FleetOptions& options,
   const int64_t budget =
       std::max<int64_t>(100000, 8 * static_cast<int64_t>(inst.cells));
   PlanOutcome last_failure = PlanOutcome::kExpansionLimit;
-  for (int32_t attempt = 0; attempt <= std::max(0, options.restarts); ++attempt) {
+  for (int32_t attempt = 0; attempt <= std::max(0, options.restarts);
+       ++attempt) {
     if (attempt > 0) std::shuffle(order.begin(), order.end(), rng);
     ++plan.iterations;
     SweepTable reserved(inst.cells);
@@ -139,7 +140,8 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
     }
     const Grid& grid = *problem.grids[r.grid];
     const MoveGraph& graph = inst.graphs[r.grid];
-    for (const auto& [name, c] : {std::pair{"start", r.start}, {"goal", r.goal}}) {
+    for (const auto& [name, c] :
+         {std::pair{"start", r.start}, {"goal", r.goal}}) {
       if (!grid.InBounds(c)) {
         return absl::InvalidArgumentError(absl::StrFormat(
             "robots[%d].%s: %s is off the grid", i, name, CellToString(c)));
@@ -165,9 +167,16 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
   }
   FleetPlan plan;
   int32_t longest = 0;
+  BfsScratch scratch;
   for (size_t i = 0; i < inst.robots(); ++i) {
-    inst.h.push_back(inst.graph(i).DistancesTo(inst.goals[i]));
-    const int32_t d = inst.h.back()[inst.starts[i]];
+    // A table is a BFS over the whole map (milliseconds on 512 x 512).
+    if (const PlanOutcome o = stop.CheckNow(); o != PlanOutcome::kFound) {
+      plan.outcome = o;
+      return plan;
+    }
+    int32_t d = kUnreachable;
+    inst.h.push_back(
+        inst.graph(i).DistancesTo(inst.goals[i], inst.starts[i], &d, &scratch));
     if (d == kUnreachable) {
       plan.outcome = PlanOutcome::kNoPath;  // cheap proof: no plan exists
       return plan;
@@ -177,17 +186,14 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
   }
   const Grid& g0 = *problem.grids[0];
   inst.max_steps_given = options.max_steps > 0;
-  inst.max_steps =
-      options.max_steps > 0
-          ? options.max_steps
-          : std::max(2 * longest, 2 * (g0.width() + g0.height())) +
-                2 * static_cast<int32_t>(inst.robots());
-  for (size_t i = 0; i < inst.robots(); ++i) {
-    if (inst.h[i][inst.starts[i]] > inst.max_steps) {
-      plan.outcome = PlanOutcome::kExpansionLimit;  // beyond max_steps
-      plan.lower_bound = inst.individual_sum;
-      return plan;
-    }
+  inst.max_steps = options.max_steps > 0
+                       ? options.max_steps
+                       : std::max(2 * longest, 2 * (g0.width() + g0.height())) +
+                             2 * static_cast<int32_t>(inst.robots());
+  if (longest > inst.max_steps) {
+    plan.outcome = PlanOutcome::kExpansionLimit;  // beyond max_steps
+    plan.lower_bound = inst.individual_sum;
+    return plan;
   }
   switch (options.solver) {
     case FleetSolver::kPrioritized:
@@ -204,7 +210,8 @@ absl::StatusOr<FleetPlan> PlanFleet(const FleetProblem& problem,
       break;
   }
   plan.lower_bound = std::max(plan.lower_bound, inst.individual_sum);
-  if (plan.complete && plan.sum_of_costs == plan.lower_bound) plan.optimal = true;
+  if (plan.complete && plan.sum_of_costs == plan.lower_bound)
+    plan.optimal = true;
   return plan;
 }
 

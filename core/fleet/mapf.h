@@ -45,8 +45,9 @@ enum class FleetSolver {
   // Conflict-based search: optimal sum of costs; with suboptimality > 1,
   // ECBS (focal search) bounded by that factor.
   kCbs,
-  // LaCAM* over configurations with PIBT as the successor generator:
-  // complete; refines towards optimal until the stop condition fires.
+  // LaCAM over configurations with PIBT as the successor generator:
+  // complete. Returns its first plan, or with FleetOptions::refine goes on
+  // as LaCAM*, refining towards optimal until the stop condition fires.
   kLacam,
   // PIBT alone, one configuration per step up to max_steps: fastest,
   // incomplete.
@@ -69,6 +70,12 @@ struct FleetOptions {
   int32_t restarts = 10;
   // kCbs: 1 = optimal; w > 1 = ECBS, sum of costs within w of optimal.
   double suboptimality = 1.0;
+  // kLacam: after the first plan, keep improving it (LaCAM*) until the stop
+  // condition fires (outcome kTimeout etc. with the best plan, complete) or
+  // the search is exhausted (kFound; least sum of loss, the cost that
+  // counts waits at the goal as free even before a robot leaves again).
+  // Without a deadline or budget a refining call can run very long.
+  bool refine = false;
   // Seed of every random choice (priority orders, tie breaks): equal inputs
   // give equal plans.
   uint64_t seed = 1;
@@ -89,14 +96,16 @@ struct FleetProblem {
 struct FleetPlan {
   // kFound: `paths` is a conflict-free plan for every robot (`complete`).
   // kNoPath: proved unsolvable (a robot's goal unreachable on its grid, or a
-  // solver that exhausted its space). kTimeout / kCancelled /
+  // solver that exhausted its space). kExpansionLimit also when an
+  // incomplete solver gave up: kPrioritized after every order, kPibt at
+  // max_steps. kTimeout / kCancelled /
   // kExpansionLimit: the stop condition fired; `paths` then holds the best
   // plan found so far when one was (complete = true; not proved optimal), or
   // is empty.
   PlanOutcome outcome = PlanOutcome::kNoPath;
   bool complete = false;
   // True when the sum of costs is proved optimal (kCbs with suboptimality 1
-  // that finished, or LaCAM* that exhausted its search).
+  // that finished, or any plan whose cost equals the lower bound).
   bool optimal = false;
   // paths[i][t] is robot i's cell at time t; paths[i].front() == its start,
   // paths[i].back() == its goal.
@@ -105,7 +114,9 @@ struct FleetPlan {
   int64_t sum_of_costs = 0;
   // A proved lower bound on the optimal sum of costs: at least the sum of
   // the robots' individual shortest paths in steps; kCbs raises it to its
-  // best open node's cost.
+  // best open node's cost. 0 when the stop condition fired while the
+  // per-robot distance tables were being built (the first step of every
+  // solver).
   int64_t lower_bound = 0;
   // Low-level search expansions (space-time A*, PIBT calls, LaCAM nodes).
   int64_t expansions = 0;

@@ -69,8 +69,9 @@ ConstraintSet ConstraintsOf(const CbsNode& node, size_t robot, size_t cells) {
 
 // Every pair of robots whose sweeps meet, once per pair and step (the first
 // shared cell), in step order.
-std::vector<Conflict> FindConflicts(const Instance& inst,
-                                    const std::vector<std::shared_ptr<const IndexPath>>& paths) {
+std::vector<Conflict> FindConflicts(
+    const Instance& inst,
+    const std::vector<std::shared_ptr<const IndexPath>>& paths) {
   std::vector<Conflict> out;
   int32_t makespan = 0;
   for (const auto& p : paths) {
@@ -97,7 +98,7 @@ std::vector<Conflict> FindConflicts(const Instance& inst,
 Mdd BuildMdd(const Instance& inst, size_t robot, const ConstraintSet& cons,
              int32_t cost) {
   const MoveGraph& g = inst.graph(robot);
-  const std::vector<int32_t>& h = inst.h[robot];
+  const DistanceTable& h = inst.h[robot];
   Mdd mdd;
   mdd.levels.resize(cost + 1);
   mdd.levels[0] = {inst.starts[robot]};
@@ -153,7 +154,8 @@ bool Forced(const Instance& inst, size_t robot, const Mdd& mdd, uint32_t cell,
 
 class Cbs {
  public:
-  Cbs(const Instance& inst, const FleetOptions& options, const StopCondition& stop)
+  Cbs(const Instance& inst, const FleetOptions& options,
+      const StopCondition& stop)
       : inst_(inst), w_(options.suboptimality), stop_(stop) {}
 
   FleetPlan Run();
@@ -171,9 +173,11 @@ class Cbs {
   int64_t expansions_ = 0;
   PlanOutcome stopped_ = PlanOutcome::kFound;
   std::vector<std::unique_ptr<CbsNode>> nodes_;
-  std::set<std::pair<int64_t, size_t>> open_;          // (lb, id)
-  std::set<std::pair<int64_t, size_t>> pending_;       // open, not in focal: (cost, id)
-  std::set<std::tuple<int32_t, int64_t, size_t>> focal_;  // (conflicts, cost, id)
+  std::set<std::pair<int64_t, size_t>> open_;  // (lb, id)
+  std::set<std::pair<int64_t, size_t>>
+      pending_;  // open, not in focal: (cost, id)
+  std::set<std::tuple<int32_t, int64_t, size_t>>
+      focal_;  // (conflicts, cost, id)
   double bound_ = -1.0;
 };
 
@@ -225,7 +229,8 @@ void Cbs::Push(std::unique_ptr<CbsNode> node) {
   }
   // A parent's bound holds for its whole subtree.
   node->lb = std::max(node->lb, lb);
-  node->conflicts = static_cast<int32_t>(FindConflicts(inst_, node->paths).size());
+  node->conflicts =
+      static_cast<int32_t>(FindConflicts(inst_, node->paths).size());
   const size_t id = nodes_.size();
   open_.emplace(node->lb, id);
   if (static_cast<double>(node->cost) <= bound_) {
@@ -246,8 +251,8 @@ FleetPlan Cbs::Run() {
   root->mdds.resize(n);
   for (size_t i = 0; i < n; ++i) {
     if (!Replan(root.get(), i)) {
-      plan.outcome = stopped_ != PlanOutcome::kFound ? stopped_
-                                                     : PlanOutcome::kNoPath;
+      plan.outcome =
+          stopped_ != PlanOutcome::kFound ? stopped_ : PlanOutcome::kNoPath;
       plan.expansions = expansions_;
       return plan;
     }
@@ -269,6 +274,16 @@ FleetPlan Cbs::Run() {
         pending_.erase(pending_.begin());
         focal_.emplace(nodes_[id]->conflicts, nodes_[id]->cost, id);
       }
+    }
+    // Open nodes hold a path and an MDD pointer, a cost and a bound per
+    // robot (about 40 bytes; the paths mostly shared): past 2^23 such
+    // entries (about 0.3 GiB plus the paths) give up rather than grow
+    // without bound.
+    if (static_cast<int64_t>(open_.size()) *
+            static_cast<int64_t>(inst_.robots()) >
+        (int64_t{1} << 23)) {
+      stopped_ = PlanOutcome::kExpansionLimit;
+      break;
     }
     const size_t id = std::get<2>(*focal_.begin());
     focal_.erase(focal_.begin());
@@ -292,8 +307,9 @@ FleetPlan Cbs::Run() {
     if (w_ == 1.0) {
       int best = -1;
       for (const Conflict& c : conflicts) {
-        const int rank = (Forced(inst_, c.i, MddOf(node.get(), c.i), c.cell, c.t) ? 1 : 0) +
-                         (Forced(inst_, c.j, MddOf(node.get(), c.j), c.cell, c.t) ? 1 : 0);
+        const int rank =
+            (Forced(inst_, c.i, MddOf(node.get(), c.i), c.cell, c.t) ? 1 : 0) +
+            (Forced(inst_, c.j, MddOf(node.get(), c.j), c.cell, c.t) ? 1 : 0);
         if (rank > best) {
           best = rank;
           chosen = c;
@@ -314,7 +330,8 @@ FleetPlan Cbs::Run() {
       if (w_ == 1.0 && child->costs[robot] == node->costs[robot]) {
         // Bypass: the same cost with fewer conflicts replaces the parent's
         // path (the child's path also meets the parent's constraints).
-        const auto fewer = static_cast<int32_t>(FindConflicts(inst_, child->paths).size());
+        const auto fewer =
+            static_cast<int32_t>(FindConflicts(inst_, child->paths).size());
         if (fewer < node->conflicts) {
           node->paths[robot] = child->paths[robot];
           node->mdds[robot] = nullptr;
@@ -331,7 +348,8 @@ FleetPlan Cbs::Run() {
     }
     for (auto& child : children) Push(std::move(child));
   }
-  plan.outcome = stopped_ != PlanOutcome::kFound ? stopped_ : PlanOutcome::kNoPath;
+  plan.outcome =
+      stopped_ != PlanOutcome::kFound ? stopped_ : PlanOutcome::kNoPath;
   if (!open_.empty()) plan.lower_bound = open_.begin()->first;
   plan.expansions = expansions_;
   return plan;

@@ -22,6 +22,12 @@ namespace pathd::mapf_internal {
 
 inline constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
 inline constexpr int32_t kUnreachable = -1;
+
+// A robot's steps to its goal from every cell, two bytes a cell (a 512 x 512
+// map costs 0.5 MiB a robot): kFar where unreachable, capped at kFar - 1
+// (min(d, cap) is still admissible and consistent).
+using DistanceTable = std::vector<uint16_t>;
+inline constexpr uint16_t kFar = 0xffff;
 inline constexpr int32_t kNever = std::numeric_limits<int32_t>::max();
 
 // The cells one step sweeps: its cell at t, at t+1 and, for a diagonal move,
@@ -41,6 +47,12 @@ struct Sweep {
     }
     return false;
   }
+};
+
+// Buffers of DistancesTo, reused from one robot's table to the next.
+struct BfsScratch {
+  std::vector<int32_t> dist;
+  std::vector<uint32_t> queue;
 };
 
 // The legal moves of one robot grid (cells by row-major index).
@@ -106,15 +118,18 @@ class MoveGraph {
     return s;
   }
 
-  // Steps from every cell to `goal` (kUnreachable where none): a BFS from
-  // the goal, whose moves are the reverse moves (the rule is symmetric).
-  std::vector<int32_t> DistancesTo(uint32_t goal) const;
+  // Steps from every cell to `goal`: a BFS from the goal, whose moves are
+  // the reverse moves (the rule is symmetric). `*from_distance` gets the
+  // exact steps from `from` (kUnreachable when none).
+  DistanceTable DistancesTo(uint32_t goal, uint32_t from,
+                            int32_t* from_distance, BfsScratch* scratch) const;
 
  private:
   int32_t width_;
   int32_t height_;
   int moves_;
   std::vector<uint8_t> open_;
+  std::vector<uint8_t> padded_open_;  // with a blocked border, for BFS
 };
 
 // A timed path by cell index; after its last entry the robot stays.
@@ -161,8 +176,9 @@ class SweepTable {
     }
     return n;
   }
-  // The last step with a timed sweep of `cell` (-1: none); never lowered by
-  // removals (a conservative bound).
+  // The last step with a timed sweep of `cell` (-1: none); lowered by
+  // removals only when step 0's were the last (otherwise a conservative
+  // bound).
   int32_t LastStep(uint32_t cell) const { return last_step_[cell]; }
   // One past the last step with any timed sweep: from then on the table does
   // not change with time.
@@ -216,7 +232,7 @@ class ConstraintSet {
 // is keyed by its cell alone (nothing changes after it).
 struct LowLevelQuery {
   const MoveGraph* graph = nullptr;
-  const std::vector<int32_t>* h = nullptr;  // DistancesTo(goal)
+  const DistanceTable* h = nullptr;  // DistancesTo(goal)
   uint32_t start = 0;
   uint32_t goal = 0;
   const ConstraintSet* constraints = nullptr;  // hard, may be null
@@ -246,10 +262,10 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& query,
 
 // The shared context of one PlanFleet call.
 struct Instance {
-  std::vector<MoveGraph> graphs;       // one per FleetProblem::grids entry
-  std::vector<int32_t> graph_of;       // robot -> graphs index
+  std::vector<MoveGraph> graphs;        // one per FleetProblem::grids entry
+  std::vector<int32_t> graph_of;        // robot -> graphs index
   std::vector<uint32_t> starts, goals;  // by cell index
-  std::vector<std::vector<int32_t>> h;  // robot -> DistancesTo(goal)
+  std::vector<DistanceTable> h;         // robot -> DistancesTo(goal)
   size_t cells = 0;
   int32_t max_steps = 0;
   // FleetOptions::max_steps was set (LaCAM's search is otherwise unbounded

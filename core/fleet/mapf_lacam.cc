@@ -18,10 +18,17 @@
 // it only waits. LaCAM's constraints fix some robots' next cells first; a
 // fixed move that breaks the rule makes that successor invalid.
 //
-// This is plain LaCAM (complete: it returns a plan or proves none exists
-// within max_steps configurations deep), not LaCAM*'s anytime refinement.
+// LaCAM is complete (it returns a plan or proves none exists). With
+// FleetOptions::refine it goes on as LaCAM* (Okumura, "Improving LaCAM for
+// scalable eventually optimal multi-agent pathfinding", 2023): every node
+// keeps its cost from the start (sum of loss: robots not resting at their
+// goals), a configuration reached again by a cheaper way rewires its
+// descendants, nodes that cannot beat the plan in hand are dropped, and the
+// best plan is returned when the stop condition fires or the search is
+// exhausted (then it has the least sum of loss).
 #include <algorithm>
 #include <deque>
+#include <queue>
 #include <random>
 #include <tuple>
 #include <utility>
@@ -111,7 +118,7 @@ class PibtStep {
     decided_[i] = 1;
     const uint32_t u = (*from_)[i];
     const MoveGraph& g = inst_.graph(i);
-    const std::vector<int32_t>& h = inst_.h[i];
+    const DistanceTable& h = inst_.h[i];
     // Candidates by distance to the goal, then free before occupied (a
     // free cell as near as an occupied one is taken without waiting), then
     // at random.
@@ -132,10 +139,10 @@ class PibtStep {
     });
     if (vacate == nullptr) cands.push_back(Candidate{u, h[u], 0});
     std::shuffle(cands.begin(), cands.end(), rng_);
-    std::stable_sort(cands.begin(), cands.end(),
-                     [](const Candidate& a, const Candidate& b) {
-                       return std::tie(a.h, a.occupied) < std::tie(b.h, b.occupied);
-                     });
+    std::stable_sort(
+        cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
+          return std::tie(a.h, a.occupied) < std::tie(b.h, b.occupied);
+        });
     for (const Candidate& cand : cands) {
       const uint32_t v = cand.v;
       if (v == u) break;
@@ -189,7 +196,8 @@ class PibtStep {
 // PIBT's priorities: a robot's grows by one each step it is not at its goal
 // and drops to its tie-breaking fraction when it is.
 void UpdatePriorities(const Instance& inst, const std::vector<uint32_t>& config,
-                      const std::vector<double>& tie, std::vector<double>* prio) {
+                      const std::vector<double>& tie,
+                      std::vector<double>* prio) {
   for (size_t i = 0; i < config.size(); ++i) {
     (*prio)[i] = config[i] == inst.goals[i] ? tie[i] : (*prio)[i] + 1.0;
   }
@@ -211,7 +219,8 @@ std::vector<double> TieBreaks(const Instance& inst, std::mt19937_64& rng) {
 }
 
 // Paths from a sequence of configurations.
-std::vector<IndexPath> PathsOf(const std::vector<std::vector<uint32_t>>& configs) {
+std::vector<IndexPath> PathsOf(
+    const std::vector<std::vector<uint32_t>>& configs) {
   std::vector<IndexPath> paths(configs.front().size());
   for (const auto& q : configs) {
     for (size_t i = 0; i < q.size(); ++i) paths[i].push_back(q[i]);
@@ -219,9 +228,17 @@ std::vector<IndexPath> PathsOf(const std::vector<std::vector<uint32_t>>& configs
   return paths;
 }
 
-// Above this many stored configuration cells LaCAM gives up
-// (kExpansionLimit) rather than grow without bound: ~0.5 GiB.
-constexpr int64_t kMaxStoredCells = int64_t{1} << 26;
+// Past about this many bytes of search state LaCAM gives up
+// (kExpansionLimit) rather than grow without bound. A node holds its
+// configuration twice (node and explored set, 4 + 4 bytes a robot), its
+// priorities and order (8 + 8), and a constraint deque and the rest
+// (about 700 bytes); a constraint is 16.
+constexpr int64_t kMaxSearchBytes = int64_t{1} << 29;  // 512 MiB
+int64_t SearchBytes(size_t nodes, size_t robots, size_t constraints) {
+  return static_cast<int64_t>(nodes) *
+             (24 * static_cast<int64_t>(robots) + 700) +
+         16 * static_cast<int64_t>(constraints);
+}
 
 }  // namespace
 
@@ -241,7 +258,13 @@ FleetPlan SolvePibt(const Instance& inst, const FleetOptions& options,
       plan.iterations = static_cast<int64_t>(configs.size()) - 1;
       return plan;
     }
-    if (const PlanOutcome o = stop.CheckNow(); o != PlanOutcome::kFound) {
+    // PIBT calls grow by the robot count a step, so Check's every-1024th
+    // clock poll could be skipped: poll each step, the budget by hand.
+    const PlanOutcome o =
+        stop.max_expansions() > 0 && step.calls() >= stop.max_expansions()
+            ? PlanOutcome::kExpansionLimit
+            : stop.Poll(step.calls());
+    if (o != PlanOutcome::kFound) {
       plan.outcome = o;
       plan.expansions = step.calls();
       return plan;
@@ -275,7 +298,31 @@ struct HighNode {
   std::deque<int32_t> tree;  // constraint nodes still to try
   int32_t parent;
   int32_t depth;
+  // LaCAM*: cost from the start along parent links (sum of loss), the
+  // admissible estimate to the goal configuration, the configurations
+  // reached from this one.
+  int64_t g = 0;
+  int64_t h = 0;
+  std::vector<int32_t> neighbors;
 };
+
+// LaCAM*'s transition cost: the robots not resting at their goals (sum of
+// loss: a robot waiting at its goal costs nothing, as after its last
+// arrival).
+int64_t Loss(const Instance& inst, const std::vector<uint32_t>& from,
+             const std::vector<uint32_t>& to) {
+  int64_t loss = 0;
+  for (size_t i = 0; i < from.size(); ++i) {
+    if (from[i] != inst.goals[i] || to[i] != inst.goals[i]) ++loss;
+  }
+  return loss;
+}
+
+int64_t Estimate(const Instance& inst, const std::vector<uint32_t>& config) {
+  int64_t h = 0;
+  for (size_t i = 0; i < config.size(); ++i) h += inst.h[i][config[i]];
+  return h;
+}
 
 }  // namespace
 
@@ -287,13 +334,19 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   const std::vector<double> tie = TieBreaks(inst, rng);
   PibtStep step(inst, rng());
   std::vector<Constraint> constraints{{-1, 0, 0, 0}};  // the shared root
-  std::vector<HighNode> nodes;
+  // A deque: growing never moves (or, std::deque having no noexcept move,
+  // copies) the nodes already stored.
+  std::deque<HighNode> nodes;
   absl::flat_hash_map<std::vector<uint32_t>, int32_t> explored;
   std::vector<int32_t> open;
 
   auto add = [&](std::vector<uint32_t> config, int32_t parent,
                  const std::vector<double>& parent_prio) {
     HighNode node;
+    if (parent >= 0) {
+      node.g = nodes[parent].g + Loss(inst, nodes[parent].config, config);
+    }
+    node.h = Estimate(inst, config);
     node.prio = parent_prio;
     UpdatePriorities(inst, config, tie, &node.prio);
     node.order = OrderOf(node.prio);
@@ -304,14 +357,54 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
     const auto id = static_cast<int32_t>(nodes.size());
     explored.emplace(node.config, id);
     nodes.push_back(std::move(node));
+    if (parent >= 0) nodes[parent].neighbors.push_back(id);
     open.push_back(id);
+  };
+  // LaCAM*: the goal configuration's node once reached (its g only falls).
+  int32_t goal_node = -1;
+  auto finish = [&](PlanOutcome outcome) {
+    plan.outcome = outcome;
+    plan.expansions = step.calls();
+    if (goal_node < 0) return plan;
+    std::vector<std::vector<uint32_t>> configs;
+    for (int32_t at = goal_node; at >= 0; at = nodes[at].parent) {
+      configs.push_back(nodes[at].config);
+    }
+    std::reverse(configs.begin(), configs.end());
+    SetPaths(inst, PathsOf(configs), &plan);
+    return plan;
+  };
+  // LaCAM*: a shorter way into `from` was found; carry it on to every node
+  // reached from there (Dijkstra over the explored graph). Every edge but a
+  // configuration's loop to itself costs at least one, so parents stay
+  // acyclic.
+  auto rewire = [&](int32_t from) {
+    using Entry = std::pair<int64_t, int32_t>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+    queue.push({nodes[from].g, from});
+    while (!queue.empty()) {
+      const auto [g, u] = queue.top();
+      queue.pop();
+      if (g != nodes[u].g) continue;
+      for (const int32_t v : nodes[u].neighbors) {
+        const int64_t ng = g + Loss(inst, nodes[u].config, nodes[v].config);
+        if (ng >= nodes[v].g) continue;
+        nodes[v].g = ng;
+        nodes[v].parent = u;
+        queue.push({ng, v});
+        if (goal_node >= 0 && ng + nodes[v].h < nodes[goal_node].g) {
+          open.push_back(v);
+        }
+      }
+    }
   };
   {
     // Initial priorities: farther robots first.
     std::vector<double> prio(n);
     for (size_t i = 0; i < n; ++i) {
       prio[i] = static_cast<double>(inst.h[i][inst.starts[i]]) /
-                    static_cast<double>(inst.cells) + tie[i] * 1e-9 - 1.0;
+                    static_cast<double>(inst.cells) +
+                tie[i] * 1e-9 - 1.0;
     }
     add(inst.starts, -1, prio);
   }
@@ -319,23 +412,26 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
   std::vector<uint32_t> next;
   std::vector<std::pair<size_t, uint32_t>> fixed;
   while (!open.empty()) {
-    if (const PlanOutcome o = stop.Check(plan.iterations);
-        o != PlanOutcome::kFound) {
-      plan.outcome = o;
-      plan.expansions = step.calls();
-      return plan;
+    // An iteration runs PIBT over every robot (and, refining, may rewire
+    // much of the explored graph): read the clock every 64 iterations, not
+    // every 1024 as Check would.
+    const PlanOutcome o =
+        stop.max_expansions() > 0 && plan.iterations >= stop.max_expansions()
+            ? PlanOutcome::kExpansionLimit
+        : (plan.iterations & 63) == 0 ? stop.Poll(plan.iterations)
+                                      : PlanOutcome::kFound;
+    if (o != PlanOutcome::kFound) {
+      return finish(o);  // with the best plan so far when refining
     }
     const int32_t id = open.back();
-    if (nodes[id].config == inst.goals) {
-      std::vector<std::vector<uint32_t>> configs;
-      for (int32_t at = id; at >= 0; at = nodes[at].parent) {
-        configs.push_back(nodes[at].config);
-      }
-      std::reverse(configs.begin(), configs.end());
-      SetPaths(inst, PathsOf(configs), &plan);
-      plan.outcome = PlanOutcome::kFound;
-      plan.expansions = step.calls();
-      return plan;
+    if (goal_node < 0 && nodes[id].config == inst.goals) {
+      goal_node = id;
+      if (!options.refine) return finish(PlanOutcome::kFound);
+    }
+    // LaCAM*: nothing through this node can beat the plan in hand.
+    if (goal_node >= 0 && nodes[goal_node].g <= nodes[id].g + nodes[id].h) {
+      open.pop_back();
+      continue;
     }
     if (nodes[id].tree.empty()) {
       open.pop_back();
@@ -357,7 +453,8 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       }
     }
     fixed.clear();
-    for (int32_t at = c; constraints[at].depth > 0; at = constraints[at].parent) {
+    for (int32_t at = c; constraints[at].depth > 0;
+         at = constraints[at].parent) {
       fixed.emplace_back(constraints[at].who, constraints[at].where);
     }
     ++plan.iterations;
@@ -366,26 +463,34 @@ FleetPlan SolveLacam(const Instance& inst, const FleetOptions& options,
       // Back to a known configuration: search on from it (LaCAM*'s
       // reinsertion; each push follows a consumed constraint, so the search
       // still ends).
+      nodes[id].neighbors.push_back(it->second);
       open.push_back(it->second);
+      if (options.refine) {
+        const int64_t ng = nodes[id].g + Loss(inst, nodes[id].config, next);
+        if (ng < nodes[it->second].g) {
+          nodes[it->second].g = ng;
+          nodes[it->second].parent = id;
+          rewire(it->second);
+        }
+      }
       continue;
     }
     if (inst.max_steps_given && nodes[id].depth + 1 > inst.max_steps) {
       horizon_hit = true;
       continue;
     }
-    if (static_cast<int64_t>(nodes.size() + 1) * static_cast<int64_t>(n) >
-        kMaxStoredCells) {
-      plan.outcome = PlanOutcome::kExpansionLimit;
-      plan.expansions = step.calls();
-      return plan;
+    if (SearchBytes(nodes.size() + 1, n, constraints.size()) >
+        kMaxSearchBytes) {
+      return finish(PlanOutcome::kExpansionLimit);
     }
     const std::vector<double> prio = nodes[id].prio;
     add(next, id, prio);
   }
-  // Every configuration reachable within max_steps was explored.
-  plan.outcome = horizon_hit ? PlanOutcome::kExpansionLimit : PlanOutcome::kNoPath;
-  plan.expansions = step.calls();
-  return plan;
+  // Every configuration reachable within max_steps was explored: the plan
+  // in hand (refining) has the least sum of loss, or there is none.
+  if (goal_node >= 0) return finish(PlanOutcome::kFound);
+  return finish(horizon_hit ? PlanOutcome::kExpansionLimit
+                            : PlanOutcome::kNoPath);
 }
 
 }  // namespace pathd::mapf_internal

@@ -16,27 +16,67 @@ MoveGraph::MoveGraph(const Grid& grid, Connectivity connectivity,
     : width_(grid.width()),
       height_(grid.height()),
       moves_(MoveCount(connectivity)),
-      open_(grid.size()) {
+      open_(grid.size()),
+      padded_open_(static_cast<size_t>(width_ + 2) * (height_ + 2), 0) {
   for (size_t i = 0; i < grid.size(); ++i) {
     open_[i] = Traversable(grid.cells()[i], unknown_is_free) ? 1 : 0;
   }
+  for (int32_t y = 0; y < height_; ++y) {
+    for (int32_t x = 0; x < width_; ++x) {
+      padded_open_[static_cast<size_t>(y + 1) * (width_ + 2) + x + 1] =
+          open_[static_cast<size_t>(y) * width_ + x];
+    }
+  }
 }
 
-std::vector<int32_t> MoveGraph::DistancesTo(uint32_t goal) const {
-  std::vector<int32_t> dist(cells(), kUnreachable);
-  std::deque<uint32_t> queue;
-  dist[goal] = 0;
-  queue.push_back(goal);
-  while (!queue.empty()) {
-    const uint32_t u = queue.front();
-    queue.pop_front();
-    ForEachMove(u, [&](uint32_t v) {
-      if (dist[v] == kUnreachable) {
-        dist[v] = dist[u] + 1;
-        queue.push_back(v);
-      }
-    });
+DistanceTable MoveGraph::DistancesTo(uint32_t goal, uint32_t from,
+                                     int32_t* from_distance,
+                                     BfsScratch* scratch) const {
+  // On the copy padded with one blocked cell all round, so the moves need
+  // no bounds tests: one robot's table is a BFS over the whole map.
+  const int64_t stride = width_ + 2;
+  const size_t padded = padded_open_.size();
+  const std::vector<uint8_t>& open = padded_open_;
+  int64_t offset[8];
+  int64_t side_a[8];
+  int64_t side_b[8];
+  for (int k = 0; k < moves_; ++k) {
+    offset[k] = kMoves[k].dx + kMoves[k].dy * stride;
+    const bool diagonal = kMoves[k].dx != 0 && kMoves[k].dy != 0;
+    side_a[k] = diagonal ? kMoves[k].dx : offset[k];
+    side_b[k] = diagonal ? kMoves[k].dy * stride : offset[k];
   }
+  std::vector<int32_t>& dist_padded = scratch->dist;
+  dist_padded.assign(padded, kUnreachable);
+  std::vector<uint32_t>& queue = scratch->queue;
+  queue.clear();
+  const Cell g = CellOf(goal);
+  const int64_t start = (g.y + 1) * stride + g.x + 1;
+  dist_padded[start] = 0;
+  queue.push_back(static_cast<uint32_t>(start));
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int64_t u = queue[head];
+    const int32_t du = dist_padded[u] + 1;
+    for (int k = 0; k < moves_; ++k) {
+      const int64_t v = u + offset[k];
+      if (open[v] == 0 || dist_padded[v] != kUnreachable) continue;
+      if (open[u + side_a[k]] == 0 || open[u + side_b[k]] == 0) continue;
+      dist_padded[v] = du;
+      queue.push_back(static_cast<uint32_t>(v));
+    }
+  }
+  DistanceTable dist(cells(), kFar);
+  for (int32_t y = 0; y < height_; ++y) {
+    for (int32_t x = 0; x < width_; ++x) {
+      const int32_t d = dist_padded[(y + 1) * stride + x + 1];
+      if (d != kUnreachable) {
+        dist[static_cast<size_t>(y) * width_ + x] =
+            static_cast<uint16_t>(std::min<int32_t>(d, kFar - 1));
+      }
+    }
+  }
+  const Cell f = CellOf(from);
+  *from_distance = dist_padded[(f.y + 1) * stride + f.x + 1];
   return dist;
 }
 
@@ -51,7 +91,12 @@ void TrimPath(IndexPath* path) { path->resize(PathCost(*path) + 1); }
 void SweepTable::AddTimed(uint32_t cell, int32_t t, int32_t delta) {
   auto [it, inserted] = timed_.try_emplace(Key(cell, t), 0);
   it->second += delta;
-  if (it->second == 0) timed_.erase(it);
+  if (it->second == 0) {
+    timed_.erase(it);
+    // A cell's only sweeps were at step 0 (prioritized planning's start
+    // reservations): none is left.
+    if (t == 0 && last_step_[cell] == 0) last_step_[cell] = -1;
+  }
   if (delta > 0) {
     last_step_[cell] = std::max(last_step_[cell], t);
     horizon_ = std::max(horizon_, t + 1);
@@ -87,26 +132,33 @@ int32_t StopAfter(int32_t last) { return last < 0 ? 0 : last + 2; }
 
 }  // namespace
 
-LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop,
-                               int64_t* expansions) {
+LowLevelResult SpaceTimeSearch(const LowLevelQuery& q,
+                               const StopCondition& stop, int64_t* expansions) {
   LowLevelResult result;
   const MoveGraph& graph = *q.graph;
-  const std::vector<int32_t>& h = *q.h;
+  const DistanceTable& h = *q.h;
   const size_t cells = graph.cells();
-  if (h[q.start] == kUnreachable) return result;
+  if (h[q.start] == kFar) return result;
   // Past `still` nothing in the constraints or tables changes with time, so
   // a state is its cell alone and an earlier arrival dominates a later one.
   int32_t still = 0;
   int32_t earliest_stop = 0;
   if (q.constraints != nullptr) {
     still = std::max(still, q.constraints->Horizon());
-    earliest_stop = std::max(earliest_stop, StopAfter(q.constraints->LastStep(q.goal)));
+    earliest_stop =
+        std::max(earliest_stop, StopAfter(q.constraints->LastStep(q.goal)));
   }
   if (q.reserved != nullptr) {
     still = std::max(still, q.reserved->Horizon());
-    earliest_stop = std::max(earliest_stop, StopAfter(q.reserved->LastStep(q.goal)));
+    earliest_stop =
+        std::max(earliest_stop, StopAfter(q.reserved->LastStep(q.goal)));
   }
   if (q.avoid != nullptr) still = std::max(still, q.avoid->Horizon());
+  // Keyed by the cell alone only once the robot may stop at its goal (else
+  // waiting there from `still` would look like a revisit and be dropped; the
+  // sweep of the goal at step earliest_stop - 2 already keeps the robot off
+  // it at still = earliest_stop - 1, so this is a guard, not a fix).
+  still = std::max(still, earliest_stop);
   auto key_of = [&](uint32_t cell, int32_t t) {
     return static_cast<uint64_t>(std::min(t, still)) * cells + cell;
   };
@@ -153,7 +205,8 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
     open.erase({f_of(nodes[id]), id});
     focal.erase(focal_key(id));
   };
-  auto reach = [&](uint32_t cell, int32_t t, int32_t conflicts, int32_t parent) {
+  auto reach = [&](uint32_t cell, int32_t t, int32_t conflicts,
+                   int32_t parent) {
     const auto [it, inserted] =
         index.try_emplace(key_of(cell, t), static_cast<int32_t>(nodes.size()));
     if (inserted) {
@@ -230,7 +283,8 @@ LowLevelResult SpaceTimeSearch(const LowLevelQuery& q, const StopCondition& stop
     if (n.t >= q.max_steps) continue;
     auto step = [&](uint32_t to) {
       const Sweep s = graph.SweepOf(n.cell, to);
-      if (q.constraints != nullptr && q.constraints->Blocks(s, n.t, cells)) return;
+      if (q.constraints != nullptr && q.constraints->Blocks(s, n.t, cells))
+        return;
       if (q.reserved != nullptr && q.reserved->Count(s, n.t) > 0) return;
       const int32_t c = q.avoid != nullptr ? q.avoid->Count(s, n.t) : 0;
       reach(to, n.t + 1, n.conflicts + c, id);

@@ -30,12 +30,15 @@
 
 ABSL_FLAG(std::string, movingai_dir, "../shared/benchmarks/movingai",
           "folder of the Moving AI maps");
-ABSL_FLAG(std::string, maps,
-          "random/random512-10-0.map,room/32room_000.map,maze/maze512-4-0.map,warehouse",
-          "comma-separated maps under --movingai_dir; 'warehouse' is generated");
+ABSL_FLAG(
+    std::string, maps,
+    "random/random512-10-0.map,room/32room_000.map,maze/"
+    "maze512-4-0.map,warehouse",
+    "comma-separated maps under --movingai_dir; 'warehouse' is generated");
 ABSL_FLAG(std::string, robots, "10,50,100,200,500", "robot counts");
 ABSL_FLAG(std::string, solvers, "prioritized,cbs,ecbs,lacam,pibt",
-          "solvers; ecbs = cbs with --suboptimality");
+          "solvers; ecbs = cbs with --suboptimality, lacam* = lacam refining "
+          "until the deadline");
 ABSL_FLAG(double, suboptimality, 1.5, "ECBS's bound");
 ABSL_FLAG(int, instances, 3, "start/goal sets per map and robot count");
 ABSL_FLAG(double, deadline_s, 30.0, "deadline per solver run, seconds");
@@ -68,13 +71,16 @@ std::vector<Cell> LargestComponent(const Grid& g) {
   std::vector<Cell> best;
   for (int y = 0; y < g.height(); ++y) {
     for (int x = 0; x < g.width(); ++x) {
-      if (!Traversable(g.cost(x, y), false) || seen[g.Index(x, y)] != 0) continue;
+      if (!Traversable(g.cost(x, y), false) || seen[g.Index(x, y)] != 0)
+        continue;
       std::vector<Cell> comp{{x, y}};
       seen[g.Index(x, y)] = 1;
       for (size_t k = 0; k < comp.size(); ++k) {
-        for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        for (const auto& [dx, dy] :
+             {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
           const Cell v{comp[k].x + dx, comp[k].y + dy};
-          if (g.InBounds(v) && Traversable(g.cost(v), false) && seen[g.Index(v)] == 0) {
+          if (g.InBounds(v) && Traversable(g.cost(v), false) &&
+              seen[g.Index(v)] == 0) {
             seen[g.Index(v)] = 1;
             comp.push_back(v);
           }
@@ -99,9 +105,12 @@ void RunMap(const std::string& name, const Grid& grid, std::mt19937& rng) {
   const std::vector<Cell> component = LargestComponent(grid);
   std::vector<std::string> solvers =
       absl::StrSplit(absl::GetFlag(FLAGS_solvers), ',', absl::SkipEmpty());
-  for (const absl::string_view rs : absl::StrSplit(absl::GetFlag(FLAGS_robots), ',')) {
+  for (const absl::string_view rs :
+       absl::StrSplit(absl::GetFlag(FLAGS_robots), ',')) {
     int n = 0;
-    if (!absl::SimpleAtoi(rs, &n) || n <= 0 || n > static_cast<int>(component.size())) continue;
+    if (!absl::SimpleAtoi(rs, &n) || n <= 0 ||
+        n > static_cast<int>(component.size()))
+      continue;
     std::vector<FleetProblem> problems;
     for (int k = 0; k < absl::GetFlag(FLAGS_instances); ++k) {
       std::vector<Cell> starts = component;
@@ -110,7 +119,8 @@ void RunMap(const std::string& name, const Grid& grid, std::mt19937& rng) {
       std::shuffle(goals.begin(), goals.end(), rng);
       FleetProblem p;
       p.grids = {&grid};
-      for (int i = 0; i < n; ++i) p.robots.push_back(FleetRobot{starts[i], goals[i], 0});
+      for (int i = 0; i < n; ++i)
+        p.robots.push_back(FleetRobot{starts[i], goals[i], 0});
       problems.push_back(std::move(p));
     }
     for (const std::string& s : solvers) {
@@ -120,9 +130,15 @@ void RunMap(const std::string& name, const Grid& grid, std::mt19937& rng) {
       } else if (s == "cbs" || s == "ecbs") {
         if (n > absl::GetFlag(FLAGS_max_cbs_robots)) continue;
         options.solver = FleetSolver::kCbs;
-        if (s == "ecbs") options.suboptimality = absl::GetFlag(FLAGS_suboptimality);
+        if (s == "ecbs")
+          options.suboptimality = absl::GetFlag(FLAGS_suboptimality);
       } else if (s == "lacam") {
         options.solver = FleetSolver::kLacam;
+      } else if (s == "lacam*") {
+        // Refines until the deadline: its time is the deadline unless the
+        // search is exhausted sooner.
+        options.solver = FleetSolver::kLacam;
+        options.refine = true;
       } else if (s == "pibt") {
         options.solver = FleetSolver::kPibt;
       } else {
@@ -132,19 +148,21 @@ void RunMap(const std::string& name, const Grid& grid, std::mt19937& rng) {
       Cellwise c;
       for (const FleetProblem& p : problems) {
         const absl::Time t0 = absl::Now();
-        const StopCondition stop(t0 + absl::Seconds(absl::GetFlag(FLAGS_deadline_s)),
-                                 nullptr, 0);
+        const StopCondition stop(
+            t0 + absl::Seconds(absl::GetFlag(FLAGS_deadline_s)), nullptr, 0);
         absl::StatusOr<FleetPlan> plan = PlanFleet(p, options, stop);
         const double secs = absl::ToDoubleSeconds(absl::Now() - t0);
         ++c.runs;
-        if (!plan.ok() || plan->outcome != PlanOutcome::kFound) continue;
+        // A refining LaCAM* stops at the deadline with its best plan.
+        if (!plan.ok() || !plan->complete) continue;
         std::vector<testing::FleetCheckRobot> robots;
-        for (const FleetRobot& r : p.robots) robots.push_back({r.start, r.goal, &grid});
+        for (const FleetRobot& r : p.robots)
+          robots.push_back({r.start, r.goal, &grid});
         const testing::FleetCheckResult check =
             testing::CheckFleetPlan(robots, true, false, plan->paths);
         if (!check.ok || check.sum_of_costs != plan->sum_of_costs) {
-          std::fprintf(stderr, "%s %s %d robots: CHECK FAILED: %s\n", name.c_str(),
-                       s.c_str(), n, check.error.c_str());
+          std::fprintf(stderr, "%s %s %d robots: CHECK FAILED: %s\n",
+                       name.c_str(), s.c_str(), n, check.error.c_str());
           continue;
         }
         ++c.solved;
@@ -155,11 +173,13 @@ void RunMap(const std::string& name, const Grid& grid, std::mt19937& rng) {
                    static_cast<double>(std::max<int64_t>(1, plan->lower_bound));
       }
       if (c.solved > 0) {
-        std::printf("| %s | %d | %s | %d/%d | %.3f | %.3f | %.0f | %.0f |\n", name.c_str(), n,
-                    s.c_str(), c.solved, c.runs, c.seconds / c.solved, c.ratio / c.solved,
+        std::printf("| %s | %d | %s | %d/%d | %.3f | %.3f | %.0f | %.0f |\n",
+                    name.c_str(), n, s.c_str(), c.solved, c.runs,
+                    c.seconds / c.solved, c.ratio / c.solved,
                     c.expansions / c.solved, c.iterations / c.solved);
       } else {
-        std::printf("| %s | %d | %s | 0/%d | - | - | - | - |\n", name.c_str(), n, s.c_str(), c.runs);
+        std::printf("| %s | %d | %s | 0/%d | - | - | - | - |\n", name.c_str(),
+                    n, s.c_str(), c.runs);
       }
       std::fflush(stdout);
     }
@@ -173,22 +193,28 @@ int main(int argc, char** argv) {
   absl::SetProgramUsageMessage("Times the multi-robot path finding solvers.");
   absl::ParseCommandLine(argc, argv);
   std::mt19937 rng(absl::GetFlag(FLAGS_seed));
-  std::printf("deadline %.0f s per run; time = mean over solved runs; "
-              "soc/lb = sum of costs / lower bound\n\n",
-              absl::GetFlag(FLAGS_deadline_s));
-  std::printf("| map | robots | solver | solved | time s | soc/lb | expansions | iterations |\n");
+  std::printf(
+      "deadline %.0f s per run; time = mean over solved runs; "
+      "soc/lb = sum of costs / lower bound\n\n",
+      absl::GetFlag(FLAGS_deadline_s));
+  std::printf(
+      "| map | robots | solver | solved | time s | soc/lb | expansions | "
+      "iterations |\n");
   std::printf("|---|---:|---|---:|---:|---:|---:|---:|\n");
   const std::filesystem::path dir = absl::GetFlag(FLAGS_movingai_dir);
-  for (const absl::string_view m : absl::StrSplit(absl::GetFlag(FLAGS_maps), ',', absl::SkipEmpty())) {
+  for (const absl::string_view m :
+       absl::StrSplit(absl::GetFlag(FLAGS_maps), ',', absl::SkipEmpty())) {
     const std::string name(m);
     if (name == "warehouse") {
       const pathd::Grid g = pathd::Warehouse();
       pathd::RunMap("warehouse (generated 170x84)", g, rng);
       continue;
     }
-    absl::StatusOr<pathd::Grid> g = pathd::ReadMovingAiMapFile((dir / name).string());
+    absl::StatusOr<pathd::Grid> g =
+        pathd::ReadMovingAiMapFile((dir / name).string());
     if (!g.ok()) {
-      std::fprintf(stderr, "skipping %s: %s\n", name.c_str(), g.status().ToString().c_str());
+      std::fprintf(stderr, "skipping %s: %s\n", name.c_str(),
+                   g.status().ToString().c_str());
       continue;
     }
     pathd::RunMap(name, *g, rng);

@@ -28,8 +28,8 @@ FleetCheckResult CheckFleetPlan(const std::vector<FleetCheckRobot>& robots,
                                 const std::vector<std::vector<Cell>>& paths) {
   FleetCheckResult r;
   if (paths.size() != robots.size()) {
-    r.error = "paths for " + std::to_string(paths.size()) + " robots, expected " +
-              std::to_string(robots.size());
+    r.error = "paths for " + std::to_string(paths.size()) +
+              " robots, expected " + std::to_string(robots.size());
     return r;
   }
   size_t longest = 0;
