@@ -113,6 +113,7 @@ absl::StatusOr<v1::PlanFleetRequest> FleetPlanRequest(const Options& options,
   if (o.suboptimality) request.set_suboptimality(*o.suboptimality);
   if (o.restarts) request.set_restarts(*o.restarts);
   if (o.max_steps) request.set_max_steps(*o.max_steps);
+  request.set_refine(o.refine);
   request.set_seed(o.seed);
   if (absl::Status s = SetCostOptions(options.cost, request.mutable_options()); !s.ok()) {
     return s;
@@ -192,21 +193,23 @@ int RunFleetPlan(CommandEnv& env, Args args) {
 }
 
 constexpr absl::string_view kFleetPlanFlags[] = {
-    "robots", "solver", "time_limit", "suboptimality", "restarts", "max_steps", "seed",
-    "world", "connectivity", "unknown_is_free", "robot_radius", "robot_radius_cells"};
+    "robots", "solver", "time_limit", "refine", "suboptimality", "restarts", "max_steps",
+    "seed", "world", "connectivity", "unknown_is_free", "robot_radius", "robot_radius_cells"};
 
 }  // namespace
 
 const Command kFleetPlanCommand = {
     .name = "fleet plan",
     .synopsis = "NAME --robots FILE [--solver lacam|pibt|prioritized|cbs]\n"
-                " [--time_limit S] [--suboptimality W] [--restarts N] [--seed N] [--max_steps N]\n"
+                " [--time_limit S] [--refine] [--suboptimality W] [--restarts N] [--seed N]\n"
+                " [--max_steps N]\n"
                 " [--world] [--robot_radius M] [--connectivity 4|8]",
     .help = "Plans conflict-free timed paths for the robots of FILE on map NAME: one\n"
             "'SX SY GX GY [RADIUS_M]' line per robot (cells; metres with --world). At\n"
             "each time step every robot waits or moves one cell, and no two robots\n"
             "sweep one cell in one step (no vertex, swap or following conflicts).\n"
-            "lacam (default) scales to hundreds of robots; cbs is optimal for small\n"
+            "lacam (default) scales to hundreds of robots (--refine: LaCAM*, improving\n"
+            "its first plan until --time_limit); cbs is optimal for small\n"
             "teams (--suboptimality W > 1: ECBS); prioritized is fast but may fail.\n"
             "--output json prints paths[i].cells[t], robot i's cell at step t (it\n"
             "stays at its goal after its last entry). Exit code 3 when no plan.",

@@ -164,6 +164,8 @@ ABSL_FLAG(std::optional<int32_t>, restarts, std::nullopt,
           "fleet plan --solver prioritized: priority orders tried after the first");
 ABSL_FLAG(std::optional<int32_t>, max_steps, std::nullopt,
           "fleet plan: longest timed path, steps");
+ABSL_FLAG(bool, refine, false,
+          "fleet plan --solver lacam: improve the first plan (LaCAM*) until --time_limit");
 ABSL_FLAG(bool, snap_start, false,
           "plan: a start in an obstacle or within the robot radius of one moves "
           "to the nearest free cell");
@@ -366,6 +368,7 @@ int main(int argc, char** argv) {
   fleet.suboptimality = absl::GetFlag(FLAGS_suboptimality);
   fleet.restarts = absl::GetFlag(FLAGS_restarts);
   fleet.max_steps = absl::GetFlag(FLAGS_max_steps);
+  fleet.refine = absl::GetFlag(FLAGS_refine);
   fleet.seed = absl::GetFlag(FLAGS_seed);
 
   pathctl::BenchOptions& bench = options.bench;

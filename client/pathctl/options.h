@@ -176,6 +176,7 @@ struct FleetOptions {
   std::optional<double> suboptimality;
   std::optional<int32_t> restarts;
   std::optional<int32_t> max_steps;
+  bool refine = false;
   uint64_t seed = 1;
 };
 

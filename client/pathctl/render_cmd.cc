@@ -358,7 +358,8 @@ int Render(CommandEnv& env, Args args) {
 
 constexpr absl::string_view kRenderFlags[] = {
     "plan", "out", "o", "ascii", "scale", "y_up", "overlay", "planner", "world", "via",
-    "robots", "solver", "time_limit", "suboptimality", "restarts", "max_steps", "seed",
+    "robots", "solver", "time_limit", "refine", "suboptimality", "restarts", "max_steps",
+    "seed",
     "allow_partial", "simplify", "max_expansions", "heuristic_weight", "lookahead",
     "expansions", "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",

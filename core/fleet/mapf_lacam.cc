@@ -121,11 +121,24 @@ class PibtStep {
     const DistanceTable& h = inst_.h[i];
     // Candidates by distance to the goal, then free before occupied (a
     // free cell as near as an occupied one is taken without waiting), then
-    // at random.
+    // by straight-line distance to the goal, then at random. With unit-time
+    // moves many neighbours are equally many steps away; picking among them
+    // at random made robots zig-zag across open floor; with this key, 30
+    // robots on arena2 (examples/fleet) drive 3915 m instead of 4306 m and
+    // change direction 512 times instead of 1725, for a sum of costs of
+    // 3326 instead of 3317 steps (lacam; pibt 3339 instead of 3442).
+    const Cell goal = g.CellOf(inst_.goals[i]);
+    const auto line = [&](uint32_t v) {
+      const Cell c = g.CellOf(v);
+      const int64_t dx = c.x - goal.x;
+      const int64_t dy = c.y - goal.y;
+      return dx * dx + dy * dy;
+    };
     struct Candidate {
       uint32_t v;
       int32_t h;
       int occupied;
+      int64_t line;
     };
     std::vector<Candidate> cands;
     g.ForEachMove(u, [&](uint32_t v) {
@@ -135,13 +148,13 @@ class PibtStep {
       for (int k = 0; k < s.n; ++k) {
         if (s.cells[k] != u && occ_[s.cells[k]] != kNobody) occupied = 1;
       }
-      cands.push_back(Candidate{v, h[v], occupied});
+      cands.push_back(Candidate{v, h[v], occupied, line(v)});
     });
-    if (vacate == nullptr) cands.push_back(Candidate{u, h[u], 0});
+    if (vacate == nullptr) cands.push_back(Candidate{u, h[u], 0, line(u)});
     std::shuffle(cands.begin(), cands.end(), rng_);
     std::stable_sort(
         cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
-          return std::tie(a.h, a.occupied) < std::tie(b.h, b.occupied);
+          return std::tie(a.h, a.occupied, a.line) < std::tie(b.h, b.occupied, b.line);
         });
     for (const Candidate& cand : cands) {
       const uint32_t v = cand.v;

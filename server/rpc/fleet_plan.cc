@@ -145,6 +145,7 @@ absl::Status PrepareFleet(const PlanDeps& deps, FleetCall& call) {
         absl::StrFormat("max_steps %d must be >= 0", r.max_steps()));
   }
   o.max_steps = r.max_steps();
+  o.refine = r.refine();
   if (r.time_limit_ms() < 0) {
     return absl::InvalidArgumentError(
         absl::StrFormat("time_limit_ms %d must be >= 0", r.time_limit_ms()));

@@ -226,13 +226,15 @@ class PathdClient:
                    solver: str = "lacam", time_limit_s: float | None = None,
                    suboptimality: float | None = None, restarts: int | None = None,
                    seed: int | None = None, max_steps: int | None = None,
+                   refine: bool = False,
                    options: planner_service_pb2.PlanOptions | None = None,
                    timeout: float | None = None) -> FleetPlanResult:
         """Conflict-free timed paths for many robots: `robots` holds (start,
         goal) or (start, goal, radius_m) per robot. `solver` "lacam"
         (complete, scales to hundreds), "pibt" (fastest, incomplete),
         "prioritized" (cooperative A* with restarts) or "cbs" (optimal sum of
-        costs; `suboptimality` > 1 for ECBS). The solver answers with its
+        costs; `suboptimality` > 1 for ECBS); `refine` makes lacam improve its
+        first plan (LaCAM*) until the time limit. The solver answers with its
         best plan when `time_limit_s` (default 10 s) runs out; `timeout` is
         the call's deadline."""
         request = planner_service_pb2.PlanFleetRequest(
@@ -252,6 +254,7 @@ class PathdClient:
             request.seed = seed
         if max_steps is not None:
             request.max_steps = max_steps
+        request.refine = refine
         return FleetPlanResult.from_proto(
             self._call(self._planner.PlanFleet, request, map_name, timeout))
 
