@@ -232,16 +232,34 @@ absl::Status AnswerFleet(FleetCall& call, InflationCache& inflation,
   out.set_iterations(plan.iterations);
   out.set_lower_bound(plan.lower_bound);
   out.set_frame_id(kFrameId);
-  const bool stopped = plan.outcome != PlanOutcome::kFound && plan.outcome != PlanOutcome::kNoPath;
+  // The stop condition has no expansion budget, so kExpansionLimit is a
+  // solver's own limit: an incomplete one giving up (prioritized after every
+  // order, pibt at max_steps) or lacam / cbs at their memory cap.
+  const bool gave_up = plan.outcome == PlanOutcome::kExpansionLimit;
+  const bool stopped = plan.outcome == PlanOutcome::kTimeout;
   out.set_stopped_early(stopped);
   out.set_found(plan.complete && !plan.paths.empty());
   if (!out.found()) {
-    out.set_reason(
-        stopped ? absl::StrFormat("no conflict-free plan within the time limit of %d ms (%s)",
-                                  absl::ToInt64Milliseconds(deadline - started),
-                                  PlanOutcomeName(plan.outcome))
-                : "no conflict-free plan exists: a robot's goal is unreachable on its map, "
-                  "or the robots cannot all reach their goals");
+    if (stopped) {
+      out.set_reason(absl::StrFormat("no conflict-free plan within the time limit of %d ms",
+                                     absl::ToInt64Milliseconds(deadline - started)));
+    } else if (gave_up) {
+      const bool incomplete = call.options.solver == FleetSolver::kPrioritized ||
+                              call.options.solver == FleetSolver::kPibt;
+      const std::string_view solver = FleetSolverName(call.options.solver);
+      out.set_reason(
+          incomplete
+              ? absl::StrFormat("%s gave up after %d iterations: it is incomplete; lacam "
+                                "finds a plan when one exists",
+                                solver, plan.iterations)
+              : absl::StrFormat("%s stopped at its memory cap after %d iterations without a "
+                                "plan",
+                                solver, plan.iterations));
+    } else {
+      out.set_reason(
+          "no conflict-free plan exists: a robot's goal is unreachable on its map, or the "
+          "robots cannot all reach their goals");
+    }
     return absl::OkStatus();
   }
   out.set_optimal(plan.optimal);
