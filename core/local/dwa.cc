@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "absl/strings/str_format.h"
+#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -53,38 +54,25 @@ absl::Status ValidateDwaOptions(const DwaOptions& o) {
     return absl::InvalidArgumentError(
         "dwa options: max_sub_steps must be in 1..10000");
   }
-  const struct {
-    const char* name;
-    double value;
-  } positive[] = {{"horizon", o.horizon},
-                  {"sub_step", o.sub_step},
-                  {"lookahead", o.lookahead},
-                  {"clearance_limit", o.clearance_limit},
-                  {"goal_tolerance", o.goal_tolerance},
-                  {"window_seconds", o.window_seconds}};
-  for (const auto& f : positive) {
-    if (!(std::isfinite(f.value) && f.value > 0)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "dwa options: %s must be positive and finite (got %g)", f.name,
-          f.value));
-    }
-  }
-  const struct {
-    const char* name;
-    double value;
-  } weights[] = {{"min_progress", o.min_progress},
-                 {"path_distance_weight", o.path_distance_weight},
-                 {"goal_distance_weight", o.goal_distance_weight},
-                 {"heading_weight", o.heading_weight},
-                 {"obstacle_weight", o.obstacle_weight},
-                 {"speed_weight", o.speed_weight},
-                 {"twirling_weight", o.twirling_weight}};
-  for (const auto& f : weights) {
-    if (!(std::isfinite(f.value) && f.value >= 0)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "dwa options: %s must be >= 0 and finite (got %g)", f.name, f.value));
-    }
-  }
+  PATHD_RETURN_IF_ERROR(
+      CheckOptionValues("dwa",
+                        {{"horizon", o.horizon},
+                         {"sub_step", o.sub_step},
+                         {"lookahead", o.lookahead},
+                         {"clearance_limit", o.clearance_limit},
+                         {"goal_tolerance", o.goal_tolerance},
+                         {"window_seconds", o.window_seconds}},
+                        /*zero_ok=*/false));
+  PATHD_RETURN_IF_ERROR(
+      CheckOptionValues("dwa",
+                        {{"min_progress", o.min_progress},
+                         {"path_distance_weight", o.path_distance_weight},
+                         {"goal_distance_weight", o.goal_distance_weight},
+                         {"heading_weight", o.heading_weight},
+                         {"obstacle_weight", o.obstacle_weight},
+                         {"speed_weight", o.speed_weight},
+                         {"twirling_weight", o.twirling_weight}},
+                        /*zero_ok=*/true));
   return absl::OkStatus();
 }
 

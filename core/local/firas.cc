@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "absl/strings/str_format.h"
+#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -19,36 +20,22 @@ bool IsObstacle(const Grid& grid, int32_t x, int32_t y, bool unknown_is_free) {
 }  // namespace
 
 absl::Status ValidateFirasOptions(const FirasOptions& o) {
-  const struct {
-    const char* name;
-    double value;
-  } positive[] = {{"attraction", o.attraction},
-                  {"attraction_distance", o.attraction_distance},
-                  {"influence", o.influence},
-                  {"lookahead", o.lookahead},
-                  {"goal_tolerance", o.goal_tolerance},
-                  {"turn_gain", o.turn_gain},
-                  {"window_seconds", o.window_seconds}};
-  for (const auto& f : positive) {
-    if (!(std::isfinite(f.value) && f.value > 0)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "firas options: %s must be positive and finite (got %g)", f.name,
-          f.value));
-    }
-  }
-  const struct {
-    const char* name;
-    double value;
-  } non_negative[] = {{"repulsion", o.repulsion},
-                      {"min_force_ratio", o.min_force_ratio},
-                      {"min_progress", o.min_progress}};
-  for (const auto& f : non_negative) {
-    if (!(std::isfinite(f.value) && f.value >= 0)) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("firas options: %s must be >= 0 and finite (got %g)",
-                          f.name, f.value));
-    }
-  }
+  PATHD_RETURN_IF_ERROR(
+      CheckOptionValues("firas",
+                        {{"attraction", o.attraction},
+                         {"attraction_distance", o.attraction_distance},
+                         {"influence", o.influence},
+                         {"lookahead", o.lookahead},
+                         {"goal_tolerance", o.goal_tolerance},
+                         {"turn_gain", o.turn_gain},
+                         {"window_seconds", o.window_seconds}},
+                        /*zero_ok=*/false));
+  PATHD_RETURN_IF_ERROR(
+      CheckOptionValues("firas",
+                        {{"repulsion", o.repulsion},
+                         {"min_force_ratio", o.min_force_ratio},
+                         {"min_progress", o.min_progress}},
+                        /*zero_ok=*/true));
   if (o.influence > 100) {
     return absl::InvalidArgumentError(
         "firas options: influence must be at most 100 cells");

@@ -36,6 +36,19 @@ absl::Status ValidateVelocityLimits(const VelocityLimits& l) {
   return absl::OkStatus();
 }
 
+absl::Status CheckOptionValues(const char* owner,
+                               std::initializer_list<OptionValue> values,
+                               bool zero_ok) {
+  for (const OptionValue& f : values) {
+    if (!(std::isfinite(f.value) && (zero_ok ? f.value >= 0 : f.value > 0))) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s options: %s must be %s and finite (got %g)", owner, f.name,
+          zero_ok ? ">= 0" : "positive", f.value));
+    }
+  }
+  return absl::OkStatus();
+}
+
 const char* LocalStatusName(LocalStatus status) {
   switch (status) {
     case LocalStatus::kOk:

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,18 @@ struct VelocityLimits {
 // INVALID_ARGUMENT naming the field when a limit is not finite, a maximum or
 // acceleration is negative, or min_v > max_v.
 absl::Status ValidateVelocityLimits(const VelocityLimits& limits);
+
+// One named option of a local planner, for CheckOptionValues.
+struct OptionValue {
+  const char* name;
+  double value;
+};
+// OK when every value is finite and positive (zero_ok: finite and >= 0);
+// else INVALID_ARGUMENT "<owner> options: <name> must be positive and
+// finite (got <value>)" (">= 0 and finite") for the first that is not.
+absl::Status CheckOptionValues(const char* owner,
+                               std::initializer_list<OptionValue> values,
+                               bool zero_ok);
 
 // Something that moves near the robot: another robot or a non-robot
 // obstacle (a person, a forklift), as a disc moving at constant velocity.

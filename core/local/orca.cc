@@ -6,6 +6,7 @@
 #include <random>
 
 #include "absl/strings/str_format.h"
+#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -335,28 +336,21 @@ OrcaSolution SolveOrcaLines(absl::Span<const OrcaLine> lines, size_t hard_lines,
 }
 
 absl::Status ValidateOrcaOptions(const OrcaOptions& o) {
-  const struct {
-    const char* name;
-    double value;
-  } positive[] = {{"time_horizon", o.time_horizon},
-                  {"obstacle_time_horizon", o.obstacle_time_horizon},
-                  {"neighbour_range", o.neighbour_range},
-                  {"obstacle_range", o.obstacle_range},
-                  {"lookahead", o.lookahead},
-                  {"goal_tolerance", o.goal_tolerance},
-                  {"turn_gain", o.turn_gain},
-                  {"window_seconds", o.window_seconds}};
   if (!(std::isfinite(o.keep_right) && std::fabs(o.keep_right) < 1.0)) {
     return absl::InvalidArgumentError(
         "orca options: keep_right must be in (-1, 1) radians");
   }
-  for (const auto& f : positive) {
-    if (!(std::isfinite(f.value) && f.value > 0)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "orca options: %s must be positive and finite (got %g)", f.name,
-          f.value));
-    }
-  }
+  PATHD_RETURN_IF_ERROR(
+      CheckOptionValues("orca",
+                        {{"time_horizon", o.time_horizon},
+                         {"obstacle_time_horizon", o.obstacle_time_horizon},
+                         {"neighbour_range", o.neighbour_range},
+                         {"obstacle_range", o.obstacle_range},
+                         {"lookahead", o.lookahead},
+                         {"goal_tolerance", o.goal_tolerance},
+                         {"turn_gain", o.turn_gain},
+                         {"window_seconds", o.window_seconds}},
+                        /*zero_ok=*/false));
   if (!(std::isfinite(o.min_progress) && o.min_progress >= 0)) {
     return absl::InvalidArgumentError(
         "orca options: min_progress must be >= 0 and finite");
