@@ -15,6 +15,9 @@ SERVE_PACKAGES=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libyaml-cpp-dev
   prometheus-cpp-dev libcurl4-openssl-dev
+  # libcivetweb-dev: the HTTP/JSON API and viewer (server/http/); the same
+  # civetweb prometheus-cpp serves /metrics with.
+  libcivetweb-dev
   libpng-dev
   libisal-dev
   libcsv-dev
