@@ -401,11 +401,12 @@ class HttpGateway::Impl {
     return x.SendJson(*json);
   }
 
-  // A request the gateway refuses before any call: an oversized body closes
-  // the connection rather than reading the rest of it.
+  // A request the gateway refuses before any call. An oversized body gets 413
+  // at once; civetweb then reads the rest of it into a fixed buffer and drops
+  // it, so the client, still sending, gets to read the answer (closing the
+  // connection instead would reset it mid-send).
   int RefuseRequest(HttpExchange& x, const absl::Status& status) {
     if (status.code() == absl::StatusCode::kResourceExhausted) {
-      mg_disable_keep_alive(x.connection());
       return x.Send(413, "application/json",
                     StatusJson(grpc::StatusCode::RESOURCE_EXHAUSTED, std::string(status.message())));
     }

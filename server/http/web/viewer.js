@@ -30,8 +30,10 @@
     map: null,        // name
     info: null,       // MapInfo
     version: 0,
-    image: null,      // offscreen canvas of the costs, one pixel per cell
-    pixels: null,     // its ImageData
+    // The costs as images: levels[0] one pixel per cell, each next level half
+    // the size, a pixel showing the most blocking cost of its 2 x 2 block, so
+    // a zoomed-out large map keeps its thin walls. {w, h, cells, pixels, canvas}
+    levels: [],
     overlay: null,    // offscreen canvas of expanded cells
     source: null,     // EventSource of WatchMap
     view: { scale: 1, ox: 0, oy: 0 },
@@ -93,35 +95,79 @@
     return bytes;
   }
 
+  function makeLevel(w, h) {
+    const pixels = new ImageData(w, h);
+    return { w, h, cells: new Uint8Array(w * h), pixels, out: new Uint32Array(pixels.data.buffer),
+             canvas: new OffscreenCanvas(w, h) };
+  }
+
+  // Which of two costs a zoomed-out pixel shows: lethal over inscribed over
+  // the higher cost, unknown only over free.
+  const rank = (c) => (c === 255 ? 1 : c === 0 ? 0 : c + 1);
+
+  // Recomputes the cells x0..x1, y0..y1 of level 0 in every coarser level.
+  function updateLevels(x0, y0, x1, y1) {
+    for (let k = 1; k < state.levels.length; k++) {
+      const fine = state.levels[k - 1], coarse = state.levels[k];
+      x0 >>= 1; y0 >>= 1; x1 >>= 1; y1 >>= 1;
+      for (let y = y0; y <= y1; y++) {
+        for (let x = x0; x <= x1; x++) {
+          let best = 0, bestRank = -1;
+          for (let dy = 0; dy < 2; dy++) {
+            const fy = 2 * y + dy;
+            if (fy >= fine.h) break;
+            for (let dx = 0; dx < 2; dx++) {
+              const fx = 2 * x + dx;
+              if (fx >= fine.w) break;
+              const c = fine.cells[fy * fine.w + fx];
+              if (rank(c) > bestRank) { best = c; bestRank = rank(c); }
+            }
+          }
+          coarse.cells[y * coarse.w + x] = best;
+          coarse.out[y * coarse.w + x] = palette[best];
+        }
+      }
+      coarse.canvas.getContext('2d').putImageData(coarse.pixels, 0, 0, x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    }
+  }
+
   function loadWholeMap(info, cells) {
     state.info = info;
     const w = info.width, h = info.height;
-    state.image = new OffscreenCanvas(w, h);
-    state.pixels = new ImageData(w, h);
-    const out = new Uint32Array(state.pixels.data.buffer);
-    for (let i = 0; i < cells.length && i < out.length; i++) out[i] = palette[cells[i]];
-    state.image.getContext('2d').putImageData(state.pixels, 0, 0);
+    const base = makeLevel(w, h);
+    base.cells.set(cells.subarray(0, w * h));
+    for (let i = 0; i < w * h; i++) base.out[i] = palette[base.cells[i]];
+    base.canvas.getContext('2d').putImageData(base.pixels, 0, 0);
+    state.levels = [base];
+    for (let l = base; l.w > 256 || l.h > 256;) {
+      l = makeLevel(Math.ceil(l.w / 2), Math.ceil(l.h / 2));
+      state.levels.push(l);
+    }
+    updateLevels(0, 0, w - 1, h - 1);
     state.overlay = null;
   }
 
   function applyChanges(changes) {
-    const w = state.info.width;
-    const out = new Uint32Array(state.pixels.data.buffer);
-    const g = state.image.getContext('2d');
+    const base = state.levels[0];
+    const g = base.canvas.getContext('2d');
     for (const change of changes) {
       const r = change.rect;
       const x0 = r.xMin || 0, y0 = r.yMin || 0, x1 = r.xMax || 0, y1 = r.yMax || 0;
       const costs = decodeBytes(change.costs);
       let k = 0;
       for (let y = y0; y <= y1; y++) {
-        for (let x = x0; x <= x1; x++) out[y * w + x] = palette[costs[k++]];
+        for (let x = x0; x <= x1; x++) {
+          base.cells[y * base.w + x] = costs[k];
+          base.out[y * base.w + x] = palette[costs[k++]];
+        }
       }
-      g.putImageData(state.pixels, 0, 0, x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+      g.putImageData(base.pixels, 0, 0, x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+      updateLevels(x0, y0, x1, y1);
     }
   }
 
   function fitView() {
-    const w = canvas.width, h = canvas.height;
+    const w = canvas.clientWidth, h = canvas.clientHeight;
     const s = Math.min(w / state.info.width, h / state.info.height) * 0.96;
     state.view = { scale: s, ox: (w - s * state.info.width) / 2, oy: (h - s * state.info.height) / 2 };
   }
@@ -242,7 +288,10 @@
 
   // --- sessions -----------------------------------------------------------
 
+  let polls = 0;
   async function pollSessions() {
+    // New and deleted maps show up in the list every few seconds.
+    if (++polls % 6 === 0) refreshMaps().catch(() => {});
     if (state.map && $('robots').checked) {
       try {
         const body = await api(`/v1/maps/${encodeURIComponent(state.map)}/sessions`);
@@ -296,11 +345,15 @@
     ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.fillStyle = '#ddd';
     ctx.fillRect(0, 0, canvas.width, canvas.height);
-    if (!state.image) return;
+    if (!state.levels.length) return;
     const v = state.view;
     ctx.setTransform(v.scale, 0, 0, v.scale, v.ox, v.oy);
     ctx.imageSmoothingEnabled = false;
-    ctx.drawImage(state.image, 0, 0);
+    // The finest level whose pixels are at least one screen pixel (nearest-
+    // neighbour downscaling would drop thin walls).
+    const k = Math.max(0, Math.min(state.levels.length - 1, Math.ceil(Math.log2(1 / v.scale) - 1e-9)));
+    const level = state.levels[k];
+    ctx.drawImage(level.canvas, 0, 0, level.w, level.h, 0, 0, level.w * (1 << k), level.h * (1 << k));
     if (state.overlay) ctx.drawImage(state.overlay, 0, 0);
     const px = 1 / v.scale;  // one screen pixel in cells
     state.sessions.forEach((s, i) => {
@@ -403,6 +456,7 @@
       return { x: r.left + v.ox + (x + 0.5) * v.scale, y: r.top + v.oy + (y + 0.5) * v.scale };
     },
     selectMap,
+    redraw,
     PATH_COLOUR,
   };
 
