@@ -180,8 +180,14 @@ TEST_F(E2eTest, IsochroneCountsTheCellsWithinTheBudgetAndPrintsGeoJson) {
   ASSERT_EQ(geo.exit_code, 0) << geo;
   EXPECT_TRUE(absl::StartsWith(geo.out, "{\"type\": \"FeatureCollection\"")) << geo;
   EXPECT_TRUE(absl::StrContains(geo.out, "\"MultiPolygon\"")) << geo;
-  // geojson is isochrone's alone.
-  EXPECT_EQ(Ctl({"plan", "open", "0", "0", "1", "1", "--output", "geojson"}).exit_code, 2);
+  // plan prints GeoJSON too (a LineString in world metres); table does not.
+  const ProcessResult line = Ctl({"plan", "open", "0", "0", "2", "1", "--output", "geojson"});
+  ASSERT_EQ(line.exit_code, 0) << line;
+  EXPECT_TRUE(absl::StrContains(line.out, "\"LineString\", \"coordinates\": [[0.5")) << line;
+  EXPECT_EQ(Ctl({"table", "open", "--sources", "0,0", "--destinations", "1,1", "--output",
+                 "geojson"})
+                .exit_code,
+            2);
 }
 
 TEST_F(E2eTest, PlanSnapStartMovesABlockedStartToTheNearestFreeCell) {

@@ -495,6 +495,19 @@ void KinematicNavigateTest::Drive(v1::Planner planner_kind) {
   // Its obstacle distance field and heuristic (4 + 4 bytes per cell) and
   // the private grid copy (1 per cell).
   EXPECT_GE(stats.session_bytes(), 9 * 30 * 12);
+  // pathctl sessions lists it with the answer it just sent (ListSessions),
+  // and a filter on another map lists nothing.
+  const ProcessResult listed = Ctl({"sessions", "--json"});
+  ASSERT_EQ(listed.exit_code, 0) << listed;
+  const auto sessions = ParseJson<v1::ListSessionsResponse>(listed.out);
+  ASSERT_EQ(sessions.sessions_size(), 1) << listed;
+  EXPECT_EQ(sessions.sessions(0).session_id(), answer.session_id());
+  EXPECT_EQ(sessions.sessions(0).last().seq(), answer.seq());
+  EXPECT_EQ(sessions.sessions(0).last().plan().poses_size(), answer.plan().poses_size());
+  EXPECT_EQ(sessions.sessions(0).last().robot_pose().x(), answer.robot_pose().x());
+  const ProcessResult elsewhere = Ctl({"sessions", "elsewhere", "--json"});
+  ASSERT_EQ(elsewhere.exit_code, 0) << elsewhere;
+  EXPECT_EQ(ParseJson<v1::ListSessionsResponse>(elsewhere.out).sessions_size(), 0) << elsewhere;
 
   stream->WritesDone();
   while (stream->Read(&answer)) {

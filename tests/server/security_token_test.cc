@@ -9,9 +9,9 @@ TEST_F(SecurityTest, EveryPathdRpcChecksTheTokenAndTheRole) {
   const std::shared_ptr<grpc::Channel> channel = client::MakeChannel(
       server_->listen_address(), client::ClientCredentials{});
   const std::vector<std::string> methods = ServedMethods(/*pathd_only=*/true);
-  // MapService's 6, PlannerService's 12 (with Table, Nearest, Trip,
-  // Isochrone and PlanFleet).
-  ASSERT_EQ(methods.size(), 18u);
+  // MapService's 6, PlannerService's 13 (with Table, Nearest, Trip,
+  // Isochrone, PlanFleet and ListSessions).
+  ASSERT_EQ(methods.size(), 19u);
   int writes = 0;
   for (const std::string& method : methods) {
     SCOPED_TRACE(method);

@@ -72,7 +72,7 @@ TEST(RunTest, UnknownAndMissingCommandsListTheCommands) {
   EXPECT_TRUE(absl::StrContains(
       r.err,
       "unknown command 'frobnicate'; expected maps, plan, batch, navigate, cost-to-go, "
-      "check, cache-stats, health, metrics, bench, table, nearest, trip, isochrone, fleet, "
+      "check, cache-stats, sessions, health, metrics, bench, table, nearest, trip, isochrone, fleet, "
       "render, completion, help"))
       << r.err;
   r = RunArgs({"maps", "shred"});
