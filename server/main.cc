@@ -79,7 +79,9 @@ ABSL_FLAG(int64_t, max_returned_expansions, 1'000'000,
           "truncated); about 10 bytes each on the wire");
 ABSL_FLAG(std::string, map_dir, "",
           "directory whose .map/.yaml files are loaded at start-up (named after "
-          "the file stem) and readable via CreateMap map_dir_file; empty = none");
+          "the file stem) and readable via CreateMap map_dir_file; empty = none; "
+          "not given (nor in --config): an installed pathd's bundled maps, "
+          "PREFIX/share/pathd/maps, when that folder exists");
 ABSL_FLAG(std::string, log_level, "info", "trace|debug|info|warn|error");
 ABSL_FLAG(int, inflation_cache_entries, 16,
           "Inflated map versions (per robot radius) kept in memory");
