@@ -1,9 +1,12 @@
 #!/usr/bin/python3
 """The Debian package of `make deb` (cmake/packaging.cmake): its files,
-control data and systemd unit, and the daemon run from the unpacked tree
-(`dpkg-deb -x`, no root needed): with no --map_dir it serves the bundled
-maps, with the installed config too, and an explicit --map_dir="" serves
-none; pathctl from the package lists them.
+control data and systemd unit; installed by dpkg into a temporary root with
+its own package database (`dpkg --root`, no root user needed; the
+dependencies are the host's, so dpkg is told not to check them there), the
+conffile kept through a reinstall and a remove; and the installed daemon
+run: with no --map_dir it serves the bundled maps, with the installed config
+too, and an explicit --map_dir="" serves none; pathctl from the package
+lists them.
 
 The package is built here by CPack from the build directory, the daemon
 component only and without dpkg-shlibdeps (12 s of the 13 s cpack takes);
@@ -53,7 +56,15 @@ class DebPackageTest(unittest.TestCase):
                 "-D", "CPACK_COMPONENTS_ALL=daemon", "-D", "CPACK_DEBIAN_PACKAGE_SHLIBDEPS=OFF")
             cls.deb = next((tmp / "out").glob("pathd_*.deb"))
         cls.root = tmp / "root"
-        run("dpkg-deb", "-x", cls.deb, cls.root)
+        for folder in ("var/lib/dpkg/info", "var/lib/dpkg/updates"):
+            (cls.root / folder).mkdir(parents=True)
+        (cls.root / "var/lib/dpkg/status").touch()
+        cls.dpkg("-i", cls.deb)
+
+    @classmethod
+    def dpkg(cls, *args):
+        return run("dpkg", f"--root={cls.root}", "--force-not-root", "--force-depends",
+                   "--log=/dev/null", *args)
 
     @classmethod
     def tearDownClass(cls):
@@ -83,6 +94,35 @@ class DebPackageTest(unittest.TestCase):
             depends = run("dpkg-deb", "--field", self.deb, "Depends")
             for library in ("libgrpc++1", "libprotobuf", "libabsl", "libyaml-cpp", "libc6"):
                 self.assertIn(library, depends)
+            # Every dependency names a package this (Debian) host has
+            # installed, or one an installed package provides
+            # (libspdlog1.10 provides libspdlog1.10-fmt9).
+            present = set()
+            for line in run("dpkg-query", "-W",
+                            "-f=${db:Status-Abbrev}|${Package}|${Provides}\n").splitlines():
+                status, package, provides = line.split("|")
+                if status.startswith("ii"):
+                    present.add(package)
+                    present.update(p.split()[0] for p in provides.split(",") if p.strip())
+            for entry in depends.split(","):
+                self.assertIn(entry.split()[0], present, entry)
+
+    def test_dpkg_installed_it_and_keeps_the_conffile(self):
+        self.assertIn("Status: install ok installed", self.dpkg("-s", "pathd"))
+        self.assertIn("/usr/bin/pathd", self.dpkg("-L", "pathd").split())
+        config = self.root / "etc/pathd/pathd.yaml"
+        original = config.read_text()
+        try:
+            config.write_text(original + "# edited by the operator\n")
+            self.dpkg("-i", self.deb)  # a reinstall keeps the edit
+            self.assertTrue(config.read_text().endswith("# edited by the operator\n"))
+            self.dpkg("-r", "pathd")  # remove (not purge) keeps it too
+            self.assertFalse((self.root / "usr/bin/pathd").exists())
+            self.assertTrue(config.exists())
+        finally:
+            config.write_text(original)
+            self.dpkg("-i", self.deb)
+        self.assertTrue((self.root / "usr/bin/pathd").exists())
 
     def test_systemd_unit(self):
         unit = (self.root / "usr/lib/systemd/system/pathd.service").read_text()
