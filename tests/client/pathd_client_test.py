@@ -358,6 +358,10 @@ class RealServerTest(unittest.TestCase, PathChecks):
             self.assertEqual(fleet.sum_of_costs, sum(fleet.costs))
             self.assertGreaterEqual(fleet.sum_of_costs, fleet.lower_bound)
             self.assertEqual(len(fleet.world_paths[0]), len(fleet.paths[0]))
+        named = self.client.plan_fleet("fleet", [robots[0] + (None, "amr-1"),
+                                                 robots[1] + (0.4, "amr-2")], solver="pibt")
+        self.assertEqual(named.names, ["amr-1", "amr-2"])
+        self.assertEqual(named.radii_m[1], 0.4)
         with self.assertRaisesRegex(pathd_client.InvalidArgumentError,
                                     r"robots\[1\]\.start \(1, 0\) is the start of robots\[0\]"):
             self.client.plan_fleet("fleet", [robots[0], (Cell(1, 0), Cell(5, 0))])

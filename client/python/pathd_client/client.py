@@ -357,7 +357,9 @@ class PathdClient:
 
     def plan_fleet(self, map_name: str,
                    robots: Sequence[tuple[PositionLike, PositionLike]
-                                    | tuple[PositionLike, PositionLike, float]], *,
+                                    | tuple[PositionLike, PositionLike, float | None]
+                                    | tuple[PositionLike, PositionLike, float | None, str]],
+                   *,
                    solver: str = "lacam", time_limit_s: float | None = None,
                    suboptimality: float | None = None, restarts: int | None = None,
                    seed: int | None = None, max_steps: int | None = None,
@@ -365,7 +367,8 @@ class PathdClient:
                    options: planner_service_pb2.PlanOptions | None = None,
                    timeout: float | None = None, **option_keywords) -> FleetPlanResult:
         """Conflict-free timed paths for many robots: `robots` holds (start,
-        goal) or (start, goal, radius_m) per robot. `solver` "lacam"
+        goal), (start, goal, radius_m) or (start, goal, radius_m, name) per
+        robot (the name comes back in FleetPlanResult.names). `solver` "lacam"
         (complete, scales to hundreds), "pibt" (fastest, incomplete),
         "prioritized" (cooperative A* with restarts) or "cbs" (optimal sum of
         costs; `suboptimality` > 1 for ECBS); `refine` makes lacam improve its
@@ -377,8 +380,10 @@ class PathdClient:
             solver=planner_service_pb2.FleetSolver.Value("FLEET_SOLVER_" + solver.upper()))
         for robot in robots:
             r = request.robots.add(start=_position(robot[0]), goal=_position(robot[1]))
-            if len(robot) > 2:
+            if len(robot) > 2 and robot[2] is not None:
                 r.radius_m = robot[2]
+            if len(robot) > 3:
+                r.name = robot[3]
         if time_limit_s is not None:
             request.time_limit_ms = max(1, round(time_limit_s * 1000))
         if suboptimality is not None:

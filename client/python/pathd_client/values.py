@@ -496,6 +496,9 @@ class FleetPlanResult:
     map_version: int
     raw: planner_service_pb2.PlanFleetResponse = dataclasses.field(
         default=None, repr=False, compare=False)
+    # Per robot: the name it was given ("" when none) and its radius.
+    names: list[str] = dataclasses.field(default_factory=list)
+    radii_m: list[float] = dataclasses.field(default_factory=list)
 
     @classmethod
     def from_proto(cls, r: planner_service_pb2.PlanFleetResponse) -> FleetPlanResult:
@@ -508,7 +511,8 @@ class FleetPlanResult:
                    solver=_enum_name(planner_service_pb2.FleetSolver, r.solver,
                                      "FLEET_SOLVER_").lower(),
                    solver_time_ms=r.solver_time_us / 1000.0,
-                   map_version=r.map_version, raw=r)
+                   map_version=r.map_version, raw=r,
+                   names=[p.name for p in r.paths], radii_m=[p.radius_m for p in r.paths])
 
 
 @dataclasses.dataclass(frozen=True)
