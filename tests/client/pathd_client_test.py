@@ -528,7 +528,8 @@ class RealServerTest(unittest.TestCase, PathChecks):
                                "IsPathValid": "is_path_valid", "PlanStream": "plan_stream",
                                "PlanBatch": "plan_batch", "Table": "table",
                                "Nearest": "nearest", "Trip": "trip",
-                               "Isochrone": "isochrone", "PlanFleet": "plan_fleet"},
+                               "Isochrone": "isochrone", "PlanFleet": "plan_fleet",
+                               "ListSessions": "list_sessions"},
         }
         for module in (map_service_pb2, planner_service_pb2):
             for service in module.DESCRIPTOR.services_by_name.values():
@@ -711,7 +712,7 @@ class RealServerTest(unittest.TestCase, PathChecks):
         wide = self.client.is_path_valid("valid", through_wall, robot_radius_cells=1.0)
         self.assertEqual(wide.invalid_indices, [1, 2, 3])
 
-    def test_cache_stats_and_health(self):
+    def test_cache_stats_sessions_and_health(self):
         self.make_map("stats")
         self.assertEqual(self.client.health(), "SERVING")
         before = self.client.get_cache_stats()
@@ -722,8 +723,18 @@ class RealServerTest(unittest.TestCase, PathChecks):
         self.assertEqual(after.misses, before.caches["spm"].misses + 1)
         self.assertEqual(after.hits, before.caches["spm"].hits + 1)
         self.assertGreater(after.bytes, 0)
-        with self.client.navigate("stats", (1, 3), (12, 4)):
+        with self.client.navigate("stats", (1, 3), (12, 4)) as nav:
             self.assertGreaterEqual(self.client.get_cache_stats().sessions, 1)
+            nav.move(nav.path[1])
+            mine = [s for s in self.client.list_sessions("stats")
+                    if s.session_id == nav.session_id]
+            self.assertEqual(len(mine), 1)
+            self.assertEqual(mine[0].map, "stats")
+            self.assertEqual(mine[0].last.plan.path, nav.path)
+            self.assertGreaterEqual(mine[0].age_s, mine[0].idle_s)
+            self.assertIn(nav.session_id,
+                          [s.session_id for s in self.client.list_sessions()])
+        self.assertEqual(self.client.list_sessions("no_such_map"), [])
 
     def test_world_and_cell_coordinates(self):
         origin = (-3.0, 2.0, 0.0)

@@ -60,6 +60,7 @@ from pathd_client.values import (
     NearestResult,
     PlanResult,
     SetCell,
+    SessionInfo,
     SetRect,
     TableResult,
     TripResult,
@@ -80,5 +81,5 @@ __all__ = [
     "FleetPlanResult", "BatchAnswer", "CacheStats", "CacheStatsResult", "CellPose",
     "CostToGoResult", "Origin", "PathCheck", "PermissionDeniedError", "PlanBatch",
     "PlanProgress", "PlanStream", "UnauthenticatedError", "WorldPoint",
-    "make_channel", "plan_request",
+    "make_channel", "plan_request", "SessionInfo",
 ]

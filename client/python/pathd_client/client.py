@@ -28,7 +28,7 @@ from pathd_client.streams import MapWatch, NavigationSession, PlanBatch, PlanStr
 from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CacheStatsResult, Change,
                                  CostToGoResult, FleetPlanResult, IsochroneResult,
                                  MapCells, MapInfo, NearestResult, PathCheck,
-                                 PlanResult, PositionLike, TableResult, TripResult,
+                                 PlanResult, PositionLike, SessionInfo, TableResult, TripResult,
                                  UpdateResult, _change_proto, _options, _planner,
                                  _position, plan_request)
 
@@ -278,6 +278,15 @@ class PathdClient:
             options=_options(options, option_keywords))
         return PathCheck.from_proto(
             self._call(self._planner.IsPathValid, request, map_name, timeout))
+
+    def list_sessions(self, map_name: str | None = None, *,
+                      timeout: float | None = None) -> list[SessionInfo]:
+        """The open Navigate sessions (on `map_name`, or on every map), in
+        session id order, each with the last update it sent."""
+        response = self._call(self._planner.ListSessions,
+                              planner_service_pb2.ListSessionsRequest(map=map_name or ""),
+                              map_name, timeout)
+        return [SessionInfo.from_proto(info) for info in response.sessions]
 
     def get_cache_stats(self, *, timeout: float | None = None) -> CacheStatsResult:
         """Counters of the server's incremental-state caches (spm,

@@ -560,6 +560,25 @@ class NavigateUpdate:
 
 
 @dataclasses.dataclass(frozen=True)
+class SessionInfo:
+    """One open Navigate session (ListSessions): its id, map, the last
+    update it sent (None before its first answer; its plan starts at the
+    robot) and its age and idle time in seconds."""
+
+    session_id: int
+    map: str
+    last: NavigateUpdate | None
+    age_s: float
+    idle_s: float
+
+    @classmethod
+    def from_proto(cls, info: planner_service_pb2.SessionInfo) -> SessionInfo:
+        return cls(info.session_id, info.map,
+                   NavigateUpdate.from_proto(info.last) if info.HasField("last") else None,
+                   info.age_seconds, info.idle_seconds)
+
+
+@dataclasses.dataclass(frozen=True)
 class ChangedRect:
     """A rectangle of changed cells and their new costs, row-major."""
 
