@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import grpc
 
+from pathd.v1 import planner_service_pb2
+
 from pathd_client.values import PLAN_OUTCOME_KEY
 
 class PathdError(Exception):
@@ -110,7 +112,6 @@ def _from_plan_error(error) -> PathdError:
     """The PathdError of a PlanStream / PlanBatch PlanError message: its
     status code and message, its outcome where Plan's trailing metadata
     would have carried it."""
-    from pathd.v1 import planner_service_pb2  # pylint: disable=import-outside-toplevel
     code = _CODES_BY_NUMBER.get(error.code, grpc.StatusCode.UNKNOWN)
     metadata = {}
     if error.outcome != planner_service_pb2.PLAN_OUTCOME_UNSPECIFIED:
