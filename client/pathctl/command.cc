@@ -23,7 +23,7 @@ const Command* const kCommands[] = {
     &kMapsWatchCommand,  &kMapsImportCommand, &kMapsExportCommand,
     &kMapsStatsCommand,
     &kPlanCommand,       &kBatchCommand,      &kNavigateCommand,
-    &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand,
+    &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand, &kSessionsCommand,
     &kHealthCommand,     &kMetricsCommand,    &kBenchCommand,
     &kTableCommand,      &kNearestCommand,    &kTripCommand,
     &kIsochroneCommand,  &kFleetPlanCommand,

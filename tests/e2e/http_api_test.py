@@ -14,15 +14,15 @@ import base64
 import http.client
 import json
 import os
-import signal
-import subprocess
 import sys
 import tempfile
-import threading
 import time
 import unittest
 import urllib.error
 import urllib.request
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "testing"))
+from pathd_process import PathdProcess  # pylint: disable=wrong-import-position
 
 PATHD = sys.argv[1] if len(sys.argv) > 1 else "build/server/pathd"
 READ_TOKEN = "read-token-0123456789abcdef"
@@ -46,6 +46,8 @@ MOVINGAI = "type octile\nheight %d\nwidth %d\nmap\n%s\n" % (len(ROWS), len(ROWS[
 
 
 class Daemon:
+    """pathd with tokens, a small body limit and the HTTP API on a free port."""
+
     def __init__(self, *flags):
         self.dir = tempfile.TemporaryDirectory()
         tokens = os.path.join(self.dir.name, "tokens.yaml")
@@ -54,23 +56,14 @@ class Daemon:
                     f"  - {{name: reader, role: read, token: {READ_TOKEN}}}\n"
                     f"  - {{name: writer, role: write, token: {WRITE_TOKEN}}}\n")
         os.chmod(tokens, 0o600)
-        self.log = open(os.path.join(self.dir.name, "pathd.log"), "wb")
-        self.proc = subprocess.Popen(
-            [PATHD, "--address=127.0.0.1:0", "--http_address=127.0.0.1:0",
-             "--auth_tokens=" + tokens, f"--max_message_bytes={MAX_BODY}",
-             "--threads=2", "--log_level=warn", *flags],
-            stdout=subprocess.PIPE, stderr=self.log)
-        first = self.proc.stdout.readline().decode()
-        second = self.proc.stdout.readline().decode()
-        if not first.startswith("pathd listening on ") or not second.startswith("pathd http on "):
-            self.proc.kill()
-            raise RuntimeError(f"pathd did not start: {first!r} {second!r}")
-        self.http = second.split()[-1]
+        self.proc = PathdProcess(
+            PATHD, ["--http_address=127.0.0.1:0", "--auth_tokens=" + tokens,
+                    f"--max_message_bytes={MAX_BODY}", "--threads=2", "--log_level=warn", *flags],
+            log_path=os.path.join(self.dir.name, "pathd.log"))
+        self.http = self.proc.http_address
 
     def stop(self):
-        self.proc.send_signal(signal.SIGTERM)
-        code = self.proc.wait(timeout=60)
-        self.log.close()
+        code = self.proc.stop()
         self.dir.cleanup()
         return code
 

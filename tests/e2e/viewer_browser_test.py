@@ -21,13 +21,15 @@ import json
 import os
 import re
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
 import threading
 import time
 import urllib.request
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "testing"))
+from pathd_process import PathdProcess  # pylint: disable=wrong-import-position
 
 SKIP = 77
 PATHD, PATHCTL, ARTEFACTS = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -72,16 +74,11 @@ def close(rgb, want, tolerance=40):
 
 class Pathd:
     def __init__(self, workdir):
-        self.log = open(os.path.join(workdir, "pathd.log"), "wb")
-        self.proc = subprocess.Popen(
-            [PATHD, "--address=127.0.0.1:0", "--http_address=127.0.0.1:0", "--threads=2",
-             "--log_level=warn"], stdout=subprocess.PIPE, stderr=self.log)
-        grpc_line = self.proc.stdout.readline().decode()
-        http_line = self.proc.stdout.readline().decode()
-        if not http_line.startswith("pathd http on "):
-            raise RuntimeError(f"pathd did not start: {grpc_line!r} {http_line!r}")
-        self.grpc = grpc_line.split()[-1]
-        self.http = http_line.split()[-1]
+        self.proc = PathdProcess(PATHD, ["--http_address=127.0.0.1:0", "--threads=2",
+                                         "--log_level=warn"],
+                                 log_path=os.path.join(workdir, "pathd.log"))
+        self.grpc = self.proc.address
+        self.http = self.proc.http_address
 
     def call(self, method, path, body=None):
         req = urllib.request.Request(f"http://{self.http}{path}", method=method,
@@ -90,9 +87,7 @@ class Pathd:
             return json.loads(r.read())
 
     def stop(self):
-        self.proc.send_signal(signal.SIGTERM)
-        self.proc.wait(timeout=60)
-        self.log.close()
+        self.proc.stop()
 
 
 class Browser:
