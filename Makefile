@@ -14,6 +14,12 @@
 #                 FUZZ_SECONDS
 #   make check-thread-safety - core/, server/ and client/ through clang's
 #                 -Wthread-safety -Werror, syntax only; any warning fails
+#   make install - build pathd, pathctl and the C++ client and install them
+#                 under PREFIX (/usr/local; DESTDIR honoured; docs/install.md)
+#   make deb    - the Debian packages pathd and pathd-dev by CPack in
+#                 $(BUILD_DIR)/packages (scripts/setup.sh package)
+#   make deb-check - make deb, then tests/e2e/deb_package_test.py on the
+#                 package it built (its Depends line included)
 # ccache is picked by CMakeLists.txt (PATHD_CCACHE), not here, so every
 # configure of a build directory agrees and a second build rebuilds nothing.
 BUILD_DIR ?= build
@@ -24,7 +30,8 @@ HTTP_ADDRESS ?= 127.0.0.1:8080
 CMAKE_CONFIGURE = cmake -S . -G Ninja
 
 .PHONY: setup-serve setup-test configure configure-test build-serve serve \
-        build test bench clean format test-tsan test-asan fuzz check-thread-safety
+        build test bench clean format test-tsan test-asan fuzz check-thread-safety \
+        setup-package install deb deb-check
 
 setup-serve:
 	@bash scripts/setup.sh serve
@@ -121,3 +128,24 @@ fuzz: setup-test
 	@$(CMAKE_CONFIGURE) -B $(FUZZ_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DPATHD_FUZZ=ON >/dev/null
 	@cmake --build $(FUZZ_BUILD_DIR) -j $(JOBS) --target pathd_fuzzers
 	tests/fuzz/run_fuzzers.sh $(FUZZ_BUILD_DIR) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+
+# Install and package (cmake/install.cmake, cmake/packaging.cmake): only the
+# installed targets are built (CMAKE_SKIP_INSTALL_ALL_DEPENDENCY), tests or not.
+PREFIX ?= /usr/local
+INSTALL_TARGETS := pathd pathctl pathd_client pathd_proto
+
+setup-package:
+	@bash scripts/setup.sh package
+
+install: configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target $(INSTALL_TARGETS)
+	cmake --install $(BUILD_DIR) --prefix $(PREFIX)
+
+deb: setup-package configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target $(INSTALL_TARGETS)
+	cd $(BUILD_DIR) && cpack -G DEB
+	@ls -1 $(BUILD_DIR)/packages/*.deb
+
+deb-check: deb
+	PATHD_DEB=$$(ls -t $(BUILD_DIR)/packages/pathd_*_*.deb | head -1) \
+	  /usr/bin/python3 tests/e2e/deb_package_test.py

@@ -2,10 +2,12 @@
 # Installs the Debian packages pathd needs, as root or through sudo.
 #   scripts/setup.sh [serve]  build and run pathd and pathctl (make serve,
 #                             docker/Dockerfile)
-#   scripts/setup.sh test     that, plus what the tests, benchmarks, sanitizer
-#                             and fuzz builds and the thread-safety check need
-#                             (make test, test-tsan, test-asan, fuzz,
-#                             check-thread-safety)
+#   scripts/setup.sh package  serve, plus what `make deb` needs (CPack's DEB
+#                             generator, dpkg-shlibdeps for the dependencies)
+#   scripts/setup.sh test     serve and package, plus what the tests,
+#                             benchmarks, sanitizer and fuzz builds and the
+#                             thread-safety check need (make test, test-tsan,
+#                             test-asan, fuzz, check-thread-safety)
 # Idempotent: when every package of the set is already installed it does
 # nothing (no apt-get update).
 set -euo pipefail
@@ -32,11 +34,20 @@ SERVE_PACKAGES=(
   libompl-dev libeigen3-dev
 )
 
+# make deb (cmake/packaging.cmake): dpkg-shlibdeps (dpkg-dev) and file find
+# the shared libraries pathd links and so the package's dependencies.
+PACKAGE_PACKAGES=(
+  dpkg-dev file
+)
+
 TEST_PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # The Python client and its tests (client/python, tests/client), the crash
-  # test (tests/e2e/crash_test.py).
-  python3 python3-grpcio python3-protobuf
+  # test (tests/e2e/crash_test.py); PyYAML reads ROS map YAML for the
+  # client's map import; pip, setuptools and wheel build the client's
+  # package offline (tests/client/pip_install_test.py).
+  python3 python3-grpcio python3-protobuf python3-yaml
+  python3-pip python3-setuptools python3-wheel
   # The loopback scale-out test (tests/e2e/scaleout_test.cc) runs nginx as
   # the test's user with its own config; the package's system service is not
   # used (on a machine without a policy-rc.d, apt starts it on port 80).
@@ -51,9 +62,10 @@ TEST_PACKAGES=(
 
 case "${1:-serve}" in
   serve) PACKAGES=("${SERVE_PACKAGES[@]}") ;;
-  test) PACKAGES=("${SERVE_PACKAGES[@]}" "${TEST_PACKAGES[@]}") ;;
+  package) PACKAGES=("${SERVE_PACKAGES[@]}" "${PACKAGE_PACKAGES[@]}") ;;
+  test) PACKAGES=("${SERVE_PACKAGES[@]}" "${PACKAGE_PACKAGES[@]}" "${TEST_PACKAGES[@]}") ;;
   *)
-    echo "usage: $0 [serve|test]" >&2
+    echo "usage: $0 [serve|package|test]" >&2
     exit 2
     ;;
 esac

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -15,6 +16,7 @@
 
 #include "absl/flags/commandlineflag.h"
 #include "absl/flags/flag.h"
+#include "absl/flags/internal/parse.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/reflection.h"
 #include "absl/flags/usage.h"
@@ -77,7 +79,9 @@ ABSL_FLAG(int64_t, max_returned_expansions, 1'000'000,
           "truncated); about 10 bytes each on the wire");
 ABSL_FLAG(std::string, map_dir, "",
           "directory whose .map/.yaml files are loaded at start-up (named after "
-          "the file stem) and readable via CreateMap map_dir_file; empty = none");
+          "the file stem) and readable via CreateMap map_dir_file; empty = none; "
+          "not given (nor in --config): an installed pathd's bundled maps, "
+          "PREFIX/share/pathd/maps, when that folder exists");
 ABSL_FLAG(std::string, log_level, "info", "trace|debug|info|warn|error");
 ABSL_FLAG(int, inflation_cache_entries, 16,
           "Inflated map versions (per robot radius) kept in memory");
@@ -283,6 +287,36 @@ spdlog::level::level_enum ParseLogLevel(const std::string& text) {
                                          "trace|debug|info|warn|error", text));
 }
 
+// The maps an installed pathd bundles: <prefix>/share/pathd/maps, <prefix>
+// being the parent of the folder that holds this executable (/usr/bin/pathd
+// serves /usr/share/pathd/maps; cmake/install.cmake puts them there). Empty
+// when the folder does not exist, as in a build tree.
+std::string BundledMapDir() {
+  std::error_code error;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) return "";
+  const std::filesystem::path maps =
+      exe.parent_path().parent_path() / "share" / "pathd" / "maps";
+  if (!std::filesystem::is_directory(maps, error)) return "";
+  return maps.lexically_normal().string();
+}
+
+// --map_dir as given on the command line or in the --config file (an empty
+// value there means no folder); when neither sets it, the bundled maps, so
+// that an installed `pathd` with no flags serves them (docs/install.md).
+// absl's WasPresentOnCommandLine tells "not given" from --map_dir="".
+std::string MapDirFromFlags() {
+  if (absl::flags_internal::WasPresentOnCommandLine("map_dir") ||
+      !ConfigFileOrigins().Of("map_dir").empty()) {
+    return absl::GetFlag(FLAGS_map_dir);
+  }
+  std::string bundled = BundledMapDir();
+  if (!bundled.empty()) {
+    spdlog::info("no --map_dir given: serving the bundled maps in {}", bundled);
+  }
+  return bundled;
+}
+
 pathd::server::ServerOptions OptionsFromFlags() {
   pathd::server::ServerOptions options;
   options.address = absl::GetFlag(FLAGS_address);
@@ -290,7 +324,7 @@ pathd::server::ServerOptions OptionsFromFlags() {
   const int32_t queue_depth = absl::GetFlag(FLAGS_queue_depth);
   options.max_map_cells = absl::GetFlag(FLAGS_max_map_cells);
   options.max_expansions = absl::GetFlag(FLAGS_max_expansions);
-  options.map_dir = absl::GetFlag(FLAGS_map_dir);
+  options.map_dir = MapDirFromFlags();
   options.shutdown_grace = absl::GetFlag(FLAGS_shutdown_grace);
   if (absl::GetFlag(FLAGS_inflation_cache_entries) < 1) {
     FlagError("inflation_cache_entries", "must be >= 1");

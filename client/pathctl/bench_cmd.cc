@@ -13,7 +13,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "client/map_source.h"
+#include "client/pathctl/map_source.h"
 #include "client/pathctl/command.h"
 #include "client/pathctl/files.h"
 #include "client/pathctl/load_generator.h"
@@ -86,7 +86,7 @@ absl::StatusOr<std::vector<std::pair<v1::Cell, v1::Cell>>> MovingAiEndpoints(
   v1::CreateMapRequest create;
   create.set_name(name);
   create.set_replace(true);
-  PATHD_RETURN_IF_ERROR(client::SetMapSourceFromFile(options.movingai, &create));
+  PATHD_RETURN_IF_ERROR(SetMapSourceFromFile(options.movingai, &create));
   PATHD_RETURN_IF_ERROR(env.client().CreateMap(create).status());
   const std::string scen = options.movingai + ".scen";
   absl::StatusOr<std::string> text = ReadTextFile(scen);
@@ -337,7 +337,7 @@ int Bench(CommandEnv& env, Args args) {
   std::string name;
   if (!options.movingai.empty()) {
     if (args.size() > 1) return env.Usage("bench --movingai FILE takes at most one NAME");
-    if (client::DetectMapFileKind(options.movingai) != client::MapFileKind::kMovingAi) {
+    if (DetectMapFileKind(options.movingai) != MapFileKind::kMovingAi) {
       return env.Usage(absl::StrCat("--movingai ", options.movingai,
                                     ": expected a Moving AI .map file"));
     }

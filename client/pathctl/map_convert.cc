@@ -13,7 +13,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
-#include "client/map_source.h"
+#include "client/pathctl/map_source.h"
 #include "client/pathctl/files.h"
 #include "client/pathctl/png_io.h"
 #include "core/status_macros.h"
@@ -218,11 +218,11 @@ absl::StatusOr<ImportKind> SetImportSource(const std::string& path,
       RequestFromGrid(grid, request);
       return ImportKind::kRosYamlPng;
     }
-    PATHD_RETURN_IF_ERROR(client::SetMapSourceFromFile(path, request));
+    PATHD_RETURN_IF_ERROR(SetMapSourceFromFile(path, request));
     return ImportKind::kRosYaml;
   }
   if (HasExtension(path, {".map"})) {
-    PATHD_RETURN_IF_ERROR(client::SetMapSourceFromFile(path, request));
+    PATHD_RETURN_IF_ERROR(SetMapSourceFromFile(path, request));
     return ImportKind::kMovingAi;
   }
   return absl::InvalidArgumentError(absl::StrCat(

@@ -89,7 +89,7 @@ struct PngImportOptions {
 
 // Sets request->source (and, for images decoded here, its resolution and
 // origin) from the file at `path`: Moving AI and PGM maps go through
-// client::SetMapSourceFromFile, PNG images through GridFromOccupancyPng as
+// SetMapSourceFromFile, PNG images through GridFromOccupancyPng as
 // raw cells. Returns the kind handled. INVALID_ARGUMENT for an unknown
 // extension or bad file contents, NOT_FOUND / INTERNAL for unreadable files,
 // each naming the file.

@@ -12,7 +12,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "client/map_source.h"
+#include "client/pathctl/map_source.h"
 #include "client/pathctl/command.h"
 #include "client/pathctl/progress.h"
 
@@ -28,8 +28,8 @@ int MapsCreate(CommandEnv& env, Args args) {
   const MapsOptions& options = env.options().maps;
   if (args.size() != 1) return env.Usage("maps create takes one NAME");
   if (options.from.empty()) return env.Usage("maps create needs --from FILE");
-  const client::MapFileKind kind = client::DetectMapFileKind(options.from);
-  if (kind == client::MapFileKind::kUnknown) {
+  const MapFileKind kind = DetectMapFileKind(options.from);
+  if (kind == MapFileKind::kUnknown) {
     return env.Usage(
         absl::StrCat("--from ", options.from,
                      ": unknown map file type; expected .map (Moving "
@@ -39,7 +39,7 @@ int MapsCreate(CommandEnv& env, Args args) {
     return env.Usage(
         "--resolution must be a positive number of metres per cell");
   }
-  if (kind == client::MapFileKind::kRosYaml && options.resolution != 0) {
+  if (kind == MapFileKind::kRosYaml && options.resolution != 0) {
     return env.Usage(
         "--resolution applies to .map files; a ROS map's YAML sets "
         "its own resolution");
@@ -49,7 +49,7 @@ int MapsCreate(CommandEnv& env, Args args) {
   request.set_replace(options.replace);
   request.set_resolution(options.resolution);
   if (absl::Status status =
-          client::SetMapSourceFromFile(options.from, &request);
+          SetMapSourceFromFile(options.from, &request);
       !status.ok()) {
     return env.Fail(status);
   }

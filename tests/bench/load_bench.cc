@@ -36,7 +36,7 @@
 #include "absl/time/time.h"
 #include "client/client.h"
 #include "client/pathctl/load_generator.h"
-#include "client/map_source.h"
+#include "client/pathctl/map_source.h"
 #include "client/pathctl/pathctl.h"
 #include "core/search/registry.h"
 #include "core/map_io/map_io.h"
@@ -158,7 +158,7 @@ absl::StatusOr<MapFigures> MeasureMap(const pathd::testing::PathdProcess& daemon
   pathd::v1::CreateMapRequest create;
   create.set_name(name);
   create.set_replace(true);
-  if (absl::Status s = pathd::client::SetMapSourceFromFile(map_path.string(), &create);
+  if (absl::Status s = pathd::pathctl::SetMapSourceFromFile(map_path.string(), &create);
       !s.ok()) {
     return s;
   }

@@ -13,6 +13,7 @@ import itertools
 import math
 import os
 import pathlib
+import shutil
 import socket
 import subprocess
 import sys
@@ -139,7 +140,10 @@ class RealServerTest(unittest.TestCase, PathChecks):
     def setUpClass(cls):
         pathd = os.environ.get("PATHD_BIN", str(SOURCE_DIR / "build" / "server" / "pathd"))
         cls.map_dir = tempfile.TemporaryDirectory()
-        cls.daemon = PathdProcess(pathd, [f"--map_dir={cls.map_dir.name}"])
+        # A progress event per millisecond of planning: PlanStream's
+        # progress shows on a plan of a few milliseconds.
+        cls.daemon = PathdProcess(pathd, [f"--map_dir={cls.map_dir.name}",
+                                          "--progress_interval=1ms"])
         cls.address = cls.daemon.address
         cls.client = PathdClient(cls.address, timeout=10.0)
         # Another program changing the map: its own channel.
@@ -354,6 +358,10 @@ class RealServerTest(unittest.TestCase, PathChecks):
             self.assertEqual(fleet.sum_of_costs, sum(fleet.costs))
             self.assertGreaterEqual(fleet.sum_of_costs, fleet.lower_bound)
             self.assertEqual(len(fleet.world_paths[0]), len(fleet.paths[0]))
+        named = self.client.plan_fleet("fleet", [robots[0] + (None, "amr-1"),
+                                                 robots[1] + (0.4, "amr-2")], solver="pibt")
+        self.assertEqual(named.names, ["amr-1", "amr-2"])
+        self.assertEqual(named.radii_m[1], 0.4)
         with self.assertRaisesRegex(pathd_client.InvalidArgumentError,
                                     r"robots\[1\]\.start \(1, 0\) is the start of robots\[0\]"):
             self.client.plan_fleet("fleet", [robots[0], (Cell(1, 0), Cell(5, 0))])
@@ -508,6 +516,285 @@ class RealServerTest(unittest.TestCase, PathChecks):
             self.assertEqual(next(events).kind, "DELETED")
             self.assertEqual(list(events), [])
 
+    def test_every_rpc_has_a_client_method(self):
+        # A new RPC in proto/pathd/v1 fails this until the client has it
+        # (and this table names it).
+        methods = {
+            "MapService": {"CreateMap": "create_map", "GetMap": "get_map",
+                           "ListMaps": "list_maps", "DeleteMap": "delete_map",
+                           "UpdateMap": "update_map", "WatchMap": "watch_map"},
+            "PlannerService": {"Plan": "plan", "CostToGo": "cost_to_go",
+                               "Navigate": "navigate", "GetCacheStats": "get_cache_stats",
+                               "IsPathValid": "is_path_valid", "PlanStream": "plan_stream",
+                               "PlanBatch": "plan_batch", "Table": "table",
+                               "Nearest": "nearest", "Trip": "trip",
+                               "Isochrone": "isochrone", "PlanFleet": "plan_fleet",
+                               "ListSessions": "list_sessions"},
+        }
+        for module in (map_service_pb2, planner_service_pb2):
+            for service in module.DESCRIPTOR.services_by_name.values():
+                for method in service.methods:
+                    with self.subTest(rpc=f"{service.name}/{method.name}"):
+                        self.assertIn(method.name, methods[service.name])
+                        self.assertTrue(callable(getattr(PathdClient,
+                                                         methods[service.name][method.name])))
+
+    def test_plan_options_set_every_field(self):
+        # One keyword setting per PlanOptions field (a oneof's metres and
+        # cells members each): a field added to the proto fails this until
+        # plan_options() takes it.
+        settings = [
+            dict(connectivity=4), dict(cost_weight=0.5), dict(unknown_is_free=True),
+            dict(max_expansions=10), dict(heuristic_weight=1.2), dict(robot_radius_m=0.2),
+            dict(robot_radius_cells=1.0), dict(simplify=True), dict(lookahead=8),
+            dict(return_cost_to_go=True),
+            dict(potential_field={"attractive": "conic", "attractive_gain": 2.0,
+                                  "switch_distance": 4.0, "repulsive_gain": 5.0,
+                                  "influence_distance": 2.0, "step_size": 0.25,
+                                  "max_steps": 99}),
+            dict(goal_tolerance_m=0.5), dict(goal_tolerance_cells=2.0),
+            dict(return_expansions=True), dict(min_clearance_m=0.5),
+            dict(min_clearance_cells=2.0), dict(inflation_radius_m=1.0),
+            dict(inflation_radius_cells=3.0), dict(cost_scaling_factor=3.0),
+            dict(footprint_m=[(0.3, 0.2), (0.3, -0.2), (-0.3, 0.0)]),
+            dict(footprint_cells=[(3, 2), (3, -2), (-3, 0)]), dict(footprint_radius_m=0.3),
+            dict(footprint_radius_cells=2.0), dict(min_turning_radius_m=1.0),
+            dict(min_turning_radius_cells=4.0), dict(motion_model="reeds_shepp"),
+            dict(reverse_penalty=2.0, change_penalty=0.5, non_straight_penalty=1.1,
+                 cost_penalty=1.5),
+            dict(goal_yaw_tolerance=0.2), dict(lattice="diff_5cm"), dict(smooth=False),
+            dict(snap_start=True), dict(snap_start_max_m=0.4), dict(snap_start_max_cells=4.0),
+        ]
+        covered = set()
+        for keywords in settings:
+            options = pathd_client.plan_options(**keywords)
+            changed = {field.name for field, _ in options.ListFields()} - {"connectivity"}
+            if "connectivity" in keywords:
+                self.assertEqual(options.connectivity, planner_service_pb2.CONNECTIVITY_FOUR)
+                changed.add("connectivity")
+            self.assertTrue(changed, keywords)
+            covered |= changed
+        fields = {f.name for f in planner_service_pb2.PlanOptions.DESCRIPTOR.fields}
+        self.assertEqual(fields - covered, set())
+        self.assertEqual(
+            len(pathd_client.plan_options(reverse_penalty=2.0, change_penalty=0.5,
+                                          non_straight_penalty=1.1,
+                                          cost_penalty=1.5).penalties.ListFields()), 4)
+        self.assertEqual(len(pathd_client.plan_options(
+            potential_field=settings[10]["potential_field"]).potential_field.ListFields()), 7)
+        for bad, message in ((dict(goal_tolerance_m=1, goal_tolerance_cells=1), "not both"),
+                             (dict(footprint_m=[(1, 0)], footprint_radius_m=1), "one of"),
+                             (dict(potential_field={"gain": 1}), "potential_field key"),
+                             (dict(motion_model="hover"), "motion model 'hover'")):
+            with self.assertRaisesRegex(ValueError, message):
+                pathd_client.plan_options(**bad)
+
+    def test_plan_via_points_and_option_keywords(self):
+        self.make_map("via")
+        blocked = blocked_cells(ROWS)
+        start, via, goal = Cell(1, 3), Cell(3, 7), Cell(12, 4)
+        plan = self.client.plan("via", start, goal, via=[via], return_expansions=True)
+        self.assertTrue(plan.found)
+        self.assert_valid_path(plan.path, start, goal, 14, 8, blocked)
+        self.assertEqual(plan.reached_goal_index, 1)
+        self.assertEqual(plan.path[plan.leg_end_indices[0]], via)
+        self.assertAlmostEqual(plan.cost, shortest_cost(14, 8, blocked, start, via)
+                               + shortest_cost(14, 8, blocked, via, goal), places=6)
+        self.assertGreater(len(plan.expanded), 0)  # the option keyword reached the server
+        # A blocked goal with a tolerance: the nearest free cell instead.
+        near = self.client.plan("via", start, Cell(6, 3), goal_tolerance_cells=1.0)
+        self.assertTrue(near.goal_substituted)
+        self.assertEqual(near.goal, Cell(5, 3))  # ties: smaller row, then column
+        # allow_partial: the walled-off second leg leaves the path to the via point.
+        self.client.update_map("via", [SetRect(6, 0, 6, 0, LETHAL), SetRect(6, 7, 6, 7, LETHAL)])
+        partial = self.client.plan("via", start, goal, via=[Cell(2, 2)], allow_partial=True)
+        self.assertFalse(partial.found)
+        self.assertEqual(partial.reached_goal_index, 0)
+        self.assertEqual(partial.path[-1], Cell(2, 2))
+        with self.assertRaisesRegex(ValueError, "not both"):
+            self.client.plan("via", start, goal, options=pathd_client.plan_options(),
+                             simplify=True)
+
+    def test_plan_stream_reports_progress_then_the_plan(self):
+        # 400 x 400 open cells, Dijkstra corner to corner: about 160,000
+        # expansions, so several milliseconds of planning at any speed.
+        side = 400
+        self.client.create_map("stream", cells=bytes(side * side), width=side, height=side,
+                               replace=True)
+        self.addCleanup(self._delete_quietly, "stream")
+        start, goal = Cell(0, 0), Cell(side - 1, side - 2)
+        with self.client.plan_stream("stream", start, goal, planner="dijkstra") as stream:
+            events = list(stream)
+        self.assertIsInstance(events[-1], pathd_client.PlanResult)
+        self.assertIs(events[-1], stream.result)
+        progress = events[:-1]
+        self.assertEqual(progress, stream.progress)
+        self.assertGreater(len(progress), 0, "no progress event from a long plan")
+        for p in progress:
+            self.assertIsInstance(p, pathd_client.PlanProgress)
+        self.assertEqual(sorted(p.expansions for p in progress), [p.expansions for p in progress])
+        self.assertLessEqual(progress[-1].expansions, stream.result.expansions)
+        # The same answer as Plan: on open cells the cheapest cost is the
+        # octile distance.
+        self.assertTrue(stream.result.found)
+        dx, dy = goal.x - start.x, goal.y - start.y
+        self.assertAlmostEqual(stream.result.cost, abs(dx - dy) + math.sqrt(2) * min(dx, dy),
+                               places=6)
+        self.assertEqual(stream.result.cost, self.client.plan("stream", start, goal,
+                                                              planner="dijkstra").cost)
+        # A failed plan raises as Plan does, outcome included.
+        with self.assertRaises(pathd_client.NotFoundError) as missing:
+            self.client.plan_stream("no_such_map", start, goal).wait()
+        self.assertEqual(missing.exception.outcome, "MAP_NOT_FOUND")
+        with self.assertRaises(pathd_client.InvalidArgumentError) as off:
+            self.client.plan_stream("stream", start, Cell(side, 0)).wait()
+        self.assertEqual(off.exception.outcome, "GOAL_OUTSIDE_MAP")
+
+    def test_plan_batch_answers_every_item(self):
+        self.make_map("batch")
+        blocked = blocked_cells(ROWS)
+        pairs = [(Cell(x, y), Cell(13 - x, 7 - y)) for x in range(0, 6) for y in (0, 3, 7)]
+        requests = [pathd_client.plan_request("batch", a, b, planner="astar") for a, b in pairs]
+        requests.append(pathd_client.plan_request("batch", Cell(0, 0), Cell(6, 3)))  # blocked
+        answers = sorted(self.client.plan_batch(requests), key=lambda a: a.index)
+        self.assertEqual([a.index for a in answers], list(range(len(requests))))
+        for answer, (a, b) in zip(answers, pairs):
+            self.assertIsNone(answer.error, answer)
+            self.assertEqual(answer.request_id, str(answer.index))
+            self.assert_valid_path(answer.result.path, a, b, 14, 8, blocked)
+            self.assertAlmostEqual(answer.result.cost, shortest_cost(14, 8, blocked, a, b),
+                                   places=6)
+        bad = answers[-1]
+        self.assertIsNone(bad.result)
+        self.assertIsInstance(bad.error, pathd_client.InvalidArgumentError)
+        self.assertEqual(bad.error.outcome, "GOAL_OCCUPIED")
+        # Own request ids, from a generator.
+        named = list(self.client.plan_batch(
+            ((f"leg-{i}", pathd_client.plan_request("batch", (0, i), (13, i)))
+             for i in range(3)), map_name="batch"))
+        self.assertEqual(sorted(a.request_id for a in named), ["leg-0", "leg-1", "leg-2"])
+
+    def test_cost_to_go_field(self):
+        self.make_map("ctg")
+        blocked = blocked_cells(ROWS)
+        goal = Cell(12, 4)
+        field = self.client.cost_to_go("ctg", goal)
+        self.assertEqual((field.goal, field.window, field.map_version), (goal, (0, 0, 14, 8), 1))
+        for y in range(8):
+            for x in range(14):
+                expected = (math.inf if Cell(x, y) in blocked
+                            else shortest_cost(14, 8, blocked, Cell(x, y), goal))
+                self.assertAlmostEqual(field.cost((x, y)), expected, places=4, msg=(x, y))
+        window = self.client.cost_to_go("ctg", goal, window=(2, 1, 3, 2))
+        self.assertTrue(window.cache_hit)
+        self.assertEqual(len(window.costs), 6)
+        self.assertEqual(window.cost((4, 2)), field.cost((4, 2)))
+        with self.assertRaises(IndexError):
+            window.cost((0, 0))
+        four = self.client.cost_to_go("ctg", goal, connectivity=4)
+        self.assertEqual(four.cost((1, 3)), 11 + 1 + 2 * 3)  # round the wall's end by rows
+
+    def test_is_path_valid(self):
+        self.make_map("valid")
+        plan = self.client.plan("valid", (1, 3), (12, 4))
+        check = self.client.is_path_valid("valid", plan.path)
+        self.assertTrue(check.valid, check.reason)
+        self.assertAlmostEqual(check.cost, plan.cost, places=6)
+        self.assertEqual(check.map_version, 1)
+        through_wall = [Cell(4, 3), Cell(5, 3), Cell(6, 3), Cell(7, 3), Cell(9, 3)]
+        bad = self.client.is_path_valid("valid", through_wall)
+        self.assertFalse(bad.valid)
+        self.assertEqual(bad.invalid_indices, [2])
+        self.assertEqual(bad.invalid_steps, [4])
+        self.assertIn("pose 2 (6, 3) is on a blocked cell", bad.reason)
+        # Option keywords: a robot radius of 1 cell makes cells beside the
+        # wall invalid too.
+        wide = self.client.is_path_valid("valid", through_wall, robot_radius_cells=1.0)
+        self.assertEqual(wide.invalid_indices, [1, 2, 3])
+
+    def test_cache_stats_sessions_and_health(self):
+        self.make_map("stats")
+        self.assertEqual(self.client.health(), "SERVING")
+        before = self.client.get_cache_stats()
+        self.assertIn("spm", before.caches)
+        self.client.plan("stats", (1, 3), (12, 4), planner="spm")
+        self.client.plan("stats", (2, 3), (12, 4), planner="spm")
+        after = self.client.get_cache_stats().caches["spm"]
+        self.assertEqual(after.misses, before.caches["spm"].misses + 1)
+        self.assertEqual(after.hits, before.caches["spm"].hits + 1)
+        self.assertGreater(after.bytes, 0)
+        with self.client.navigate("stats", (1, 3), (12, 4)) as nav:
+            self.assertGreaterEqual(self.client.get_cache_stats().sessions, 1)
+            nav.move(nav.path[1])
+            mine = [s for s in self.client.list_sessions("stats")
+                    if s.session_id == nav.session_id]
+            self.assertEqual(len(mine), 1)
+            self.assertEqual(mine[0].map, "stats")
+            self.assertEqual(mine[0].last.plan.path, nav.path)
+            self.assertGreaterEqual(mine[0].age_s, mine[0].idle_s)
+            self.assertIn(nav.session_id,
+                          [s.session_id for s in self.client.list_sessions()])
+        self.assertEqual(self.client.list_sessions("no_such_map"), [])
+
+    def test_world_and_cell_coordinates(self):
+        origin = (-3.0, 2.0, 0.0)
+        info = self.client.create_map("world", ROWS, resolution=0.5, origin=origin,
+                                      replace=True)
+        self.addCleanup(self._delete_quietly, "world")
+        self.assertEqual(info.origin, pathd_client.Origin(*origin))
+        self.assertEqual(info.world_to_cell(-2.2, 3.7), Cell(1, 3))
+        self.assertIsNone(info.world_to_cell(-3.1, 3.0))
+        self.assertEqual(info.cell_to_world((12, 4)), (3.25, 4.25))
+        plan = self.client.plan("world", pathd_client.WorldPoint(-2.2, 3.7),
+                                pathd_client.CellPose(12.5, 4.5, 0.0))
+        self.assertEqual((plan.start, plan.goal), (Cell(1, 3), Cell(12, 4)))
+        self.assertEqual(len(plan.world_path), len(plan.path))
+        for cell, world in zip(plan.path, plan.world_path):
+            self.assertAlmostEqual(world[0], info.cell_to_world(cell)[0])
+            self.assertAlmostEqual(world[1], info.cell_to_world(cell)[1])
+            self.assertEqual(info.world_to_cell(*world), cell)
+        self.assertAlmostEqual(plan.length_m, plan.length * 0.5)
+        with self.assertRaisesRegex(TypeError, "two integers"):
+            self.client.plan("world", (1.5, 3.0), (12, 4))
+
+    def test_map_files_like_pathctl(self):
+        # .map and ROS .yaml + .pgm from this machine, compared with the
+        # same files read by the server from its --map_dir.
+        for name in ("warehouse.yaml", "warehouse.pgm", "dstar_example.map"):
+            shutil.copy(SOURCE_DIR / "maps" / name, self.map_dir.name)
+        for name, file in (("imported_ros", "warehouse.yaml"),
+                           ("imported_mai", "dstar_example.map")):
+            with self.subTest(file=file):
+                mine = self.client.create_map(name, from_file=SOURCE_DIR / "maps" / file,
+                                              replace=True)
+                self.addCleanup(self._delete_quietly, name)
+                theirs = self.client.create_map(name + "_dir", map_dir_file=file, replace=True)
+                self.addCleanup(self._delete_quietly, name + "_dir")
+                self.assertEqual((mine.width, mine.height, mine.resolution, mine.origin),
+                                 (theirs.width, theirs.height, theirs.resolution,
+                                  theirs.origin))
+                self.assertEqual(self.client.get_cells(name).cells,
+                                 self.client.get_cells(name + "_dir").cells)
+        ros = self.client.get_map("imported_ros")
+        self.assertEqual((ros.width, ros.height, ros.resolution, ros.origin),
+                         (60, 40, 0.1, pathd_client.Origin(-3.0, -2.0, 0.0)))
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = pathlib.Path(tmp)
+            (tmp / "noimage.yaml").write_text("resolution: 0.1\norigin: [0, 0, 0]\n")
+            with self.assertRaisesRegex(ValueError, "noimage.yaml: the YAML names no image"):
+                self.client.create_map("x", from_file=tmp / "noimage.yaml")
+            (tmp / "map.png").write_bytes(b"")
+            with self.assertRaisesRegex(ValueError, "unknown map file type"):
+                self.client.create_map("x", from_file=tmp / "map.png")
+            (tmp / "lost.yaml").write_text("image: lost.pgm\nresolution: 0.1\n"
+                                           "origin: [0, 0, 0]\n")
+            with self.assertRaises(FileNotFoundError):
+                self.client.create_map("x", from_file=tmp / "lost.yaml")
+            # The server's parser judges the contents, naming the problem.
+            (tmp / "bad.map").write_text("type octile\nheight 2\nwidth 3\nmap\n...\n")
+            with self.assertRaisesRegex(pathd_client.InvalidArgumentError, "bad.map|row|height"):
+                self.client.create_map("x", from_file=tmp / "bad.map")
+
     def test_example_robot_loop_reaches_its_goal(self):
         run = subprocess.run(
             [sys.executable, str(EXAMPLE), "--server", self.address, "--map", "example"],
@@ -520,18 +807,130 @@ class RealServerTest(unittest.TestCase, PathChecks):
         self.assertNotIn("example", [m.name for m in self.client.list_maps()])
 
 
+def make_certs(directory: pathlib.Path) -> None:
+    """A CA (ca.crt/.key), a server certificate it signed for the name
+    pathd.test only (server.crt/.key) and a client certificate
+    (client.crt/.key), made with the openssl tool as
+    tests/testing/test_certs.h makes them: P-256 keys, generated in
+    milliseconds."""
+    new_key = ["-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes"]
+
+    def run(*args):
+        subprocess.run(["openssl", *args], cwd=directory, check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    run("req", "-x509", *new_key, "-days", "2", "-subj", "/CN=ca", "-keyout", "ca.key",
+        "-out", "ca.crt", "-addext", "basicConstraints=critical,CA:TRUE",
+        "-addext", "keyUsage=critical,keyCertSign,cRLSign")
+    for name, extra in (("server", ["-addext", "subjectAltName=DNS:pathd.test"]),
+                        ("client", [])):
+        run("req", "-new", *new_key, "-subj", f"/CN={name}", "-keyout", f"{name}.key",
+            "-out", f"{name}.csr", *extra)
+        run("x509", "-req", "-in", f"{name}.csr", "-CA", "ca.crt", "-CAkey", "ca.key",
+            "-CAcreateserial", "-days", "2", "-copy_extensions", "copy",
+            "-out", f"{name}.crt")
+
+
+class TlsAndTokenTest(unittest.TestCase):
+    """A pathd with mutual TLS and bearer tokens (docs/security.md)."""
+
+    WRITE_TOKEN = "w" * 32
+    READ_TOKEN = "r" * 32
+
+    @classmethod
+    def setUpClass(cls):
+        pathd = os.environ.get("PATHD_BIN", str(SOURCE_DIR / "build" / "server" / "pathd"))
+        cls.tmp = tempfile.TemporaryDirectory()
+        d = pathlib.Path(cls.tmp.name)
+        make_certs(d)
+        tokens = d / "tokens.yaml"
+        tokens.write_text("tokens:\n"
+                          f"  - {{name: ops, role: write, token: {cls.WRITE_TOKEN}}}\n"
+                          f"  - {{name: robot, role: read, token: {cls.READ_TOKEN}}}\n")
+        tokens.chmod(0o600)
+        (d / "read.token").write_text(cls.READ_TOKEN + "\n")
+        cls.dir = d
+        cls.daemon = PathdProcess(pathd, [f"--tls_cert={d / 'server.crt'}",
+                                          f"--tls_key={d / 'server.key'}",
+                                          f"--tls_client_ca={d / 'ca.crt'}",
+                                          f"--auth_tokens={tokens}"])
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.daemon.stop()
+        cls.tmp.cleanup()
+
+    def client(self, **kwargs) -> PathdClient:
+        d = self.dir
+        tls = dict(tls_ca=d / "ca.crt", tls_cert=d / "client.crt",
+                   tls_key=(d / "client.key").read_bytes(), tls_server_name="pathd.test")
+        tls.update(kwargs)
+        client = PathdClient(self.daemon.address, timeout=10.0,
+                             **{k: v for k, v in tls.items() if v is not None})
+        self.addCleanup(client.close)
+        return client
+
+    def test_token_reaches_unary_calls_and_streams(self):
+        ops = self.client(token=self.WRITE_TOKEN)
+        ops.create_map("secure", ROWS, replace=True)
+        self.assertEqual([m.name for m in ops.list_maps()], ["secure"])
+        self.assertTrue(ops.plan_stream("secure", (1, 3), (12, 4)).wait().found)
+        self.assertIsNone(next(iter(ops.plan_batch(
+            [pathd_client.plan_request("secure", (1, 3), (12, 4))]))).error)
+        with ops.navigate("secure", (1, 3), (12, 4)) as nav:
+            self.assertTrue(nav.opened.plan.found)
+        with ops.watch_map("secure") as watch:
+            self.assertEqual(next(iter(watch)).kind, "RESYNC")
+
+        robot = self.client(token_file=self.dir / "read.token")
+        self.assertTrue(robot.plan("secure", (1, 3), (12, 4)).found)
+        with self.assertRaisesRegex(pathd_client.PermissionDeniedError, "role read"):
+            robot.update_map("secure", [SetCell(0, 0, LETHAL)])
+
+        anonymous = self.client()
+        self.assertEqual(anonymous.health(), "SERVING")  # probes need no token
+        with self.assertRaises(pathd_client.UnauthenticatedError):
+            anonymous.list_maps()
+        with self.assertRaises(pathd_client.UnauthenticatedError):
+            self.client(token="x" * 32).list_maps()
+
+    def test_tls_is_checked(self):
+        # Plaintext to a TLS port, and a certificate for another name.
+        with PathdClient(self.daemon.address, timeout=5.0, token=self.WRITE_TOKEN) as plain:
+            with self.assertRaises(pathd_client.UnavailableError):
+                plain.list_maps()
+        with self.assertRaises(pathd_client.UnavailableError):
+            self.client(tls_server_name=None, token=self.WRITE_TOKEN).list_maps()
+        # Without a client certificate the mutual-TLS handshake fails.
+        with self.assertRaises(pathd_client.UnavailableError):
+            self.client(tls_cert=None, tls_key=None, token=self.WRITE_TOKEN).list_maps()
+
+    def test_bad_credentials_are_refused_before_connecting(self):
+        for kwargs, message in (
+                (dict(tls_cert=b"x"), "tls_cert and tls_key together"),
+                (dict(tls_server_name="a"), "need tls_ca"),
+                (dict(token="a", token_file="b"), "not both"),
+                (dict(token="two words"), "visible ASCII"),
+                (dict(tls_ca="/no/such/ca.crt"), "tls_ca: cannot read /no/such/ca.crt"),
+                (dict(token_file="/no/such/token"), "token_file: cannot read")):
+            with self.subTest(kwargs=kwargs):
+                with self.assertRaisesRegex(ValueError, message):
+                    PathdClient("127.0.0.1:1", **kwargs)
+
+
 class _Recorder(map_service_pb2_grpc.MapServiceServicer,
                 planner_service_pb2_grpc.PlannerServiceServicer):
     """Answers every call with an empty message, noting what came with it."""
 
     def __init__(self):
         self.calls = []
+        self.authorization = []
         self.lock = threading.Lock()
 
     def _note(self, method, context):
+        metadata = dict(context.invocation_metadata())
         with self.lock:
-            self.calls.append((method, dict(context.invocation_metadata()).get("x-pathd-map"),
-                               context.time_remaining()))
+            self.calls.append((method, metadata.get("x-pathd-map"), context.time_remaining()))
+            self.authorization.append(metadata.get("authorization"))
 
     def CreateMap(self, request, context):
         self._note("CreateMap", context)
@@ -567,6 +966,31 @@ class _Recorder(map_service_pb2_grpc.MapServiceServicer,
             yield planner_service_pb2.NavigateResponse(
                 seq=request.seq, event=planner_service_pb2.NAVIGATE_EVENT_OPENED)
 
+    def PlanStream(self, request, context):
+        self._note("PlanStream", context)
+        yield planner_service_pb2.PlanStreamEvent(
+            progress=planner_service_pb2.PlanProgress(expansions=5))
+        yield planner_service_pb2.PlanStreamEvent(
+            result=planner_service_pb2.PlanResponse(found=True))
+
+    def PlanBatch(self, request_iterator, context):
+        self._note("PlanBatch", context)
+        for item in request_iterator:
+            yield planner_service_pb2.PlanBatchResponse(
+                request_id=item.request_id, result=planner_service_pb2.PlanResponse())
+
+    def CostToGo(self, request, context):
+        self._note("CostToGo", context)
+        return planner_service_pb2.CostToGoResponse()
+
+    def IsPathValid(self, request, context):
+        self._note("IsPathValid", context)
+        return planner_service_pb2.IsPathValidResponse()
+
+    def GetCacheStats(self, request, context):
+        self._note("GetCacheStats", context)
+        return planner_service_pb2.GetCacheStatsResponse()
+
 
 class WireTest(unittest.TestCase):
     """What the client sends, seen by a fake server."""
@@ -579,6 +1003,7 @@ class WireTest(unittest.TestCase):
         port = self.server.add_insecure_port("127.0.0.1:0")
         self.server.start()
         self.addCleanup(self.server.stop, None)
+        self.port = port
         self.client = PathdClient(f"127.0.0.1:{port}", timeout=7.5)
         self.addCleanup(self.client.close)
 
@@ -607,6 +1032,30 @@ class WireTest(unittest.TestCase):
             self.assertIsNotNone(remaining, method)
             self.assertTrue(0 < remaining < 8.0, f"{method}: {remaining}")
         self.assertTrue(0 < calls[6][2] < 2.6, calls[6])
+
+    def test_streams_and_new_calls_have_deadlines_headers_and_the_token(self):
+        c = PathdClient(f"127.0.0.1:{self.port}", timeout=7.5, token="t0ken-" * 4)
+        self.addCleanup(c.close)
+        stream = c.plan_stream("m1", (0, 0), (1, 0))
+        self.assertTrue(stream.wait().found)
+        self.assertEqual(stream.progress, [pathd_client.PlanProgress(5, None, 0.0)])
+        answers = list(c.plan_batch([pathd_client.plan_request("m2", (0, 0), (1, 0))] * 3))
+        self.assertEqual(sorted(a.index for a in answers), [0, 1, 2])
+        c.cost_to_go("m3", (0, 0))
+        c.is_path_valid("m4", [(0, 0), (1, 0)])
+        c.get_cache_stats()
+        with c.navigate("m5", (0, 0), (1, 0)):
+            pass
+        self.assertEqual([event.kind for event in c.watch_map("m6")], ["DELETED"])
+        calls = self.recorder.calls
+        self.assertEqual([(m, h) for m, h, _ in calls], [
+            ("PlanStream", "m1"), ("PlanBatch", "m2"), ("CostToGo", "m3"),
+            ("IsPathValid", "m4"), ("GetCacheStats", None), ("Navigate", "m5"),
+            ("WatchMap", "m6")])
+        for method, _, remaining in calls[:5]:
+            self.assertIsNotNone(remaining, method)
+            self.assertTrue(0 < remaining < 8.0, f"{method}: {remaining}")
+        self.assertEqual(self.recorder.authorization, ["Bearer " + "t0ken-" * 4] * len(calls))
 
     def test_unknown_planner_is_refused_before_sending(self):
         with self.assertRaisesRegex(ValueError, "unknown planner 'warp'"):

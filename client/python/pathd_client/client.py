@@ -9,41 +9,65 @@ the wrapper does not lift out.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Sequence
 
 import grpc
 
+from pathd.v1 import common_pb2
 from pathd.v1 import map_service_pb2
 from pathd.v1 import map_service_pb2_grpc
 from pathd.v1 import planner_service_pb2
 from pathd.v1 import planner_service_pb2_grpc
 
+from pathd_client import health
+from pathd_client.channel import PemSource, make_channel
 from pathd_client.errors import _from_rpc_error
-from pathd_client.streams import MapWatch, NavigationSession
-from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CellLike, Change,
-                                 PositionLike,
-                                 IsochroneResult, MapCells, MapInfo, NearestResult,
-                                 FleetPlanResult, PlanResult, TableResult, TripResult,
-                                 UpdateResult,
-                                 _change_proto, _planner, _position)
+from pathd_client.map_files import set_source_from_file
+from pathd_client.streams import MapWatch, NavigationSession, PlanBatch, PlanStream
+from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CacheStatsResult, Change,
+                                 CostToGoResult, FleetPlanResult, IsochroneResult,
+                                 MapCells, MapInfo, NearestResult, PathCheck,
+                                 PlanResult, PositionLike, SessionInfo, TableResult, TripResult,
+                                 UpdateResult, _change_proto, _options, _planner,
+                                 _position, plan_request)
 
 
 class PathdClient:
     """Typed calls to one pathd server.
 
-    Unary calls get a deadline of `timeout` seconds unless a call passes its
-    own. Pass `channel` to use one you built (TLS, interceptors); otherwise
-    an insecure channel to `address` is opened. Thread-safe, as grpc
-    channels and stubs are. Use as a context manager, or call close().
+    Unary calls (and PlanStream, PlanBatch) get a deadline of `timeout`
+    seconds unless a call passes its own. The channel is plaintext unless
+    `tls_ca` is given (PEM bytes or a file path; `tls_cert` + `tls_key` for
+    mutual TLS, `tls_server_name` when the certificate names another host);
+    `token` or `token_file` is sent as a bearer token on every call (see
+    channel.make_channel). Or pass `channel`, one you built yourself. Every
+    option keyword of plan_options() is accepted by the calls that take
+    `options=`. Thread-safe, as grpc channels and stubs are. Use as a
+    context manager, or call close().
     """
 
     def __init__(self, address: str = "127.0.0.1:50051", *,
                  timeout: float = DEFAULT_TIMEOUT,
-                 channel: grpc.Channel | None = None):
+                 channel: grpc.Channel | None = None,
+                 tls_ca: PemSource | None = None, tls_cert: PemSource | None = None,
+                 tls_key: PemSource | None = None, tls_server_name: str | None = None,
+                 token: str | None = None, token_file: str | os.PathLike | None = None):
         self.timeout = timeout
-        self._channel = channel if channel is not None else grpc.insecure_channel(address)
+        if channel is None:
+            channel = make_channel(address, tls_ca=tls_ca, tls_cert=tls_cert,
+                                   tls_key=tls_key, tls_server_name=tls_server_name,
+                                   token=token, token_file=token_file)
+        elif any(v is not None for v in (tls_ca, tls_cert, tls_key, tls_server_name,
+                                         token, token_file)):
+            raise ValueError("give channel= or the TLS / token arguments, not both")
+        self._channel = channel
         self._maps = map_service_pb2_grpc.MapServiceStub(self._channel)
         self._planner = planner_service_pb2_grpc.PlannerServiceStub(self._channel)
+        self._health_check = self._channel.unary_unary(
+            health.HEALTH_CHECK_METHOD,
+            request_serializer=health.HealthCheckRequest.SerializeToString,
+            response_deserializer=health.HealthCheckResponse.FromString)
 
     def close(self) -> None:
         self._channel.close()
@@ -57,32 +81,64 @@ class PathdClient:
     def _call(self, method, request, map_name: str | None,
               timeout: float | None):
         # ListMaps has no map: without the header a balancer picks any replica.
-        metadata = ((MAP_HEADER, map_name),) if map_name else ()
         try:
-            return method(request, timeout=self.timeout if timeout is None else timeout,
-                          metadata=metadata)
+            return method(request, timeout=self._timeout(timeout),
+                          metadata=self._metadata(map_name))
         except grpc.RpcError as error:
             raise _from_rpc_error(error) from None
+
+    def _timeout(self, timeout: float | None) -> float:
+        return self.timeout if timeout is None else timeout
+
+    @staticmethod
+    def _metadata(map_name: str | None) -> tuple:
+        return ((MAP_HEADER, map_name),) if map_name else ()
+
+    # ---- grpc.health.v1 ----
+
+    def health(self, service: str = "", *, timeout: float | None = None) -> str:
+        """The server's serving state ("SERVING", "NOT_SERVING", ...) from
+        the standard gRPC health check; `service` empty asks about the whole
+        server. Needs no token."""
+        response = self._call(self._health_check,
+                              health.HealthCheckRequest(service=service), None, timeout)
+        return health.status_name(response)
 
     # ---- MapService ----
 
     def create_map(self, name: str, rows: Sequence[str] | None = None, *,
                    cells: bytes | None = None, width: int | None = None,
-                   height: int | None = None, resolution: float = 1.0,
+                   height: int | None = None, from_file: str | os.PathLike | None = None,
+                   map_dir_file: str | None = None, resolution: float = 1.0,
+                   origin: tuple[float, float, float] | None = None,
                    replace: bool = False, timeout: float | None = None) -> MapInfo:
-        """Creates a map from `rows` or from `cells`.
+        """Creates a map from one of `rows`, `cells`, `from_file` and
+        `map_dir_file`.
 
         `rows` are Moving AI map rows, all the same length ('.' free; '@',
         'T', 'O', 'W' blocked), sent as a .map text so the server's parser
         checks them. `cells` are width * height cost bytes, row-major.
-        `replace` replaces a map of the same name instead of raising
-        AlreadyExistsError.
+        `from_file` is a map file on this machine, as `pathctl maps create
+        --from FILE` takes it: a Moving AI .map or a ROS map_server .yaml
+        (with the image it names). `map_dir_file` is a .map or .yaml file
+        in the server's --map_dir. `resolution` (metres per cell) and
+        `origin` ((x, y, yaw) of cell (0, 0)'s corner) apply to rows, cells
+        and .map files; a ROS map carries its own. `replace` replaces a map
+        of the same name instead of raising AlreadyExistsError.
         """
         request = map_service_pb2.CreateMapRequest(
             name=name, resolution=resolution, replace=replace)
-        if (rows is None) == (cells is None):
-            raise ValueError("give exactly one of rows and cells")
-        if rows is not None:
+        if origin is not None:
+            x, y, *yaw = origin
+            request.origin.CopyFrom(common_pb2.Origin(x=x, y=y, yaw=yaw[0] if yaw else 0.0))
+        sources = [s for s in (rows, cells, from_file, map_dir_file) if s is not None]
+        if len(sources) != 1:
+            raise ValueError("give exactly one of rows, cells, from_file and map_dir_file")
+        if from_file is not None:
+            set_source_from_file(request, from_file)
+        elif map_dir_file is not None:
+            request.map_dir_file = map_dir_file
+        elif rows is not None:
             if not rows:
                 raise ValueError("rows is empty")
             request.movingai_text = (
@@ -145,22 +201,104 @@ class PathdClient:
     def plan(self, map_name: str, start: PositionLike, goal: PositionLike, *,
              planner: str | None = None,
              options: planner_service_pb2.PlanOptions | None = None,
-             timeout: float | None = None) -> PlanResult:
+             via: Sequence[PositionLike] = (), allow_partial: bool = False,
+             timeout: float | None = None, **option_keywords) -> PlanResult:
         """Plans one path. `planner` is a name as pathctl spells it ("astar",
-        "dstar_lite", ...; None: the server's default). start and goal are
-        cells or WorldPose (metres, radians; the exact pose for the kinematic
-        planners). No path is a result with found False; a bad start or goal
-        raises with `outcome` set."""
-        request = planner_service_pb2.PlanRequest(
-            map=map_name, start=_position(start), goal=_position(goal),
-            planner=_planner(planner), options=options)
+        "dstar_lite", ...; None: the server's default). start, goal and `via`
+        (intermediate goals, in order) are cells, WorldPoint, WorldPose
+        (metres, radians; the exact pose for the kinematic planners) or
+        CellPose. `allow_partial`: with via, a failed leg answers the path
+        to the last goal reached. Options as `options=plan_options(...)` or
+        as the same keywords here. No path is a result with found False; a
+        bad start or goal raises with `outcome` set."""
+        request = plan_request(map_name, start, goal, planner=planner, options=options,
+                               via=via, allow_partial=allow_partial, **option_keywords)
         return PlanResult.from_proto(
             self._call(self._planner.Plan, request, map_name, timeout))
+
+    def plan_stream(self, map_name: str, start: PositionLike, goal: PositionLike, *,
+                    planner: str | None = None,
+                    options: planner_service_pb2.PlanOptions | None = None,
+                    via: Sequence[PositionLike] = (), allow_partial: bool = False,
+                    timeout: float | None = None, **option_keywords) -> PlanStream:
+        """Plans one path as plan() does, streaming the search's progress:
+        iterate the PlanStream for PlanProgress events, then the PlanResult
+        (or call .wait() for the result alone). The deadline covers the
+        whole plan; leaving a `with` block early cancels it."""
+        request = plan_request(map_name, start, goal, planner=planner, options=options,
+                               via=via, allow_partial=allow_partial, **option_keywords)
+        return PlanStream(self._planner.PlanStream(
+            request, timeout=self._timeout(timeout), metadata=self._metadata(map_name)))
+
+    def plan_batch(self, requests: Iterable[planner_service_pb2.PlanRequest
+                                            | tuple[str, planner_service_pb2.PlanRequest]],
+                   *, map_name: str | None = None,
+                   timeout: float | None = None) -> PlanBatch:
+        """Many plans over one PlanBatch stream: `requests` are PlanRequest
+        messages (plan_request() builds them), each optionally paired with
+        its own request_id (else its index as a string). Iterate the
+        PlanBatch for a BatchAnswer per request as the plans finish. The
+        stream is routed by `map_name` (default: the first request's map,
+        when `requests` is a sequence). The deadline covers the whole batch
+        (default `timeout`): pass a longer one for a long batch."""
+        if map_name is None and isinstance(requests, Sequence) and requests:
+            first = requests[0]
+            map_name = (first[1] if isinstance(first, tuple) else first).map
+        timeout, metadata = self._timeout(timeout), self._metadata(map_name)
+        return PlanBatch(lambda iterator: self._planner.PlanBatch(
+            iterator, timeout=timeout, metadata=metadata), requests)
+
+    def cost_to_go(self, map_name: str, goal: PositionLike, *,
+                   window: tuple[int, int, int, int] | None = None,
+                   options: planner_service_pb2.PlanOptions | None = None,
+                   timeout: float | None = None, **option_keywords) -> CostToGoResult:
+        """The goal's cost-to-go field (the shortest path map the server
+        caches for the spm planner): every cell's cheapest cost to `goal`,
+        math.inf where unreachable; `window` (x, y, width, height) asks for
+        part of the map. Cost options only (connectivity, cost_weight,
+        unknown_is_free, robot radius, ...)."""
+        request = planner_service_pb2.CostToGoRequest(
+            map=map_name, goal=_position(goal), options=_options(options, option_keywords))
+        if window is not None:
+            x, y, width, height = window
+            request.window.CopyFrom(planner_service_pb2.CellWindow(
+                x=x, y=y, width=width, height=height))
+        return CostToGoResult.from_proto(
+            self._call(self._planner.CostToGo, request, map_name, timeout))
+
+    def is_path_valid(self, map_name: str, path: Sequence[PositionLike], *,
+                      options: planner_service_pb2.PlanOptions | None = None,
+                      timeout: float | None = None, **option_keywords) -> PathCheck:
+        """Checks a path the robot holds against the map's current version:
+        poses the robot may not occupy and steps that are not legal moves
+        (with a footprint: the footprint along the poses). An invalid path
+        is a PathCheck with valid False, not an error."""
+        request = planner_service_pb2.IsPathValidRequest(
+            map=map_name, path=[_position(p) for p in path],
+            options=_options(options, option_keywords))
+        return PathCheck.from_proto(
+            self._call(self._planner.IsPathValid, request, map_name, timeout))
+
+    def list_sessions(self, map_name: str | None = None, *,
+                      timeout: float | None = None) -> list[SessionInfo]:
+        """The open Navigate sessions (on `map_name`, or on every map), in
+        session id order, each with the last update it sent."""
+        response = self._call(self._planner.ListSessions,
+                              planner_service_pb2.ListSessionsRequest(map=map_name or ""),
+                              map_name, timeout)
+        return [SessionInfo.from_proto(info) for info in response.sessions]
+
+    def get_cache_stats(self, *, timeout: float | None = None) -> CacheStatsResult:
+        """Counters of the server's incremental-state caches (spm,
+        dstar_lite) and its open Navigate sessions."""
+        return CacheStatsResult.from_proto(self._call(
+            self._planner.GetCacheStats, planner_service_pb2.GetCacheStatsRequest(),
+            None, timeout))
 
     def table(self, map_name: str, sources: Sequence[PositionLike],
               destinations: Sequence[PositionLike], *, method: str | None = None,
               options: planner_service_pb2.PlanOptions | None = None,
-              timeout: float | None = None) -> TableResult:
+              timeout: float | None = None, **option_keywords) -> TableResult:
         """Cheapest costs from every source to every destination (OSRM's
         table); None where no path exists. `method` "backward" (one cached
         cost-to-go field per destination), "forward" (one search per source)
@@ -168,7 +306,8 @@ class PathdClient:
         robot radius (plan_options())."""
         request = planner_service_pb2.TableRequest(
             map=map_name, sources=[_position(p) for p in sources],
-            destinations=[_position(p) for p in destinations], options=options)
+            destinations=[_position(p) for p in destinations],
+            options=_options(options, option_keywords))
         if method:
             request.method = planner_service_pb2.TableMethod.Value(
                 "TABLE_METHOD_" + method.upper())
@@ -177,21 +316,26 @@ class PathdClient:
 
     def nearest(self, map_name: str, point: PositionLike, *,
                 max_distance_m: float | None = None,
+                max_distance_cells: float | None = None,
                 options: planner_service_pb2.PlanOptions | None = None,
-                timeout: float | None = None) -> NearestResult:
+                timeout: float | None = None, **option_keywords) -> NearestResult:
         """The nearest cell to `point` where the robot (options' robot radius,
         or polygon footprint at the point's heading) may stand."""
         request = planner_service_pb2.NearestRequest(
-            map=map_name, point=_position(point), options=options)
+            map=map_name, point=_position(point), options=_options(options, option_keywords))
+        if max_distance_m is not None and max_distance_cells is not None:
+            raise ValueError("give max_distance_m or max_distance_cells, not both")
         if max_distance_m is not None:
             request.max_distance_m = max_distance_m
+        if max_distance_cells is not None:
+            request.max_distance_cells = max_distance_cells
         return NearestResult.from_proto(
             self._call(self._planner.Nearest, request, map_name, timeout))
 
     def trip(self, map_name: str, waypoints: Sequence[PositionLike], *,
              end: str = "round_trip", planner: str | None = None,
              options: planner_service_pb2.PlanOptions | None = None,
-             timeout: float | None = None) -> TripResult:
+             timeout: float | None = None, **option_keywords) -> TripResult:
         """The order to visit `waypoints` starting at the first: `end`
         "round_trip" (back to it), "fixed_last" or "any"; exact up to 12
         stops, a local search with a lower bound above. The legs come back
@@ -199,20 +343,20 @@ class PathdClient:
         request = planner_service_pb2.TripRequest(
             map=map_name, waypoints=[_position(p) for p in waypoints],
             end=planner_service_pb2.TripEnd.Value("TRIP_END_" + end.upper()),
-            planner=_planner(planner), options=options)
+            planner=_planner(planner), options=_options(options, option_keywords))
         return TripResult.from_proto(
             self._call(self._planner.Trip, request, map_name, timeout))
 
     def isochrone(self, map_name: str, start: PositionLike, *,
                   budget_m: float | None = None, budget_cells: float | None = None,
                   options: planner_service_pb2.PlanOptions | None = None,
-                  timeout: float | None = None) -> IsochroneResult:
+                  timeout: float | None = None, **option_keywords) -> IsochroneResult:
         """The region reachable from `start` within a cost budget (metres or
         cells, one of them), as polygons with holes in world metres."""
         if (budget_m is None) == (budget_cells is None):
             raise ValueError("give budget_m or budget_cells, one of them")
         request = planner_service_pb2.IsochroneRequest(
-            map=map_name, start=_position(start), options=options)
+            map=map_name, start=_position(start), options=_options(options, option_keywords))
         if budget_m is not None:
             request.budget_m = budget_m
         else:
@@ -222,15 +366,18 @@ class PathdClient:
 
     def plan_fleet(self, map_name: str,
                    robots: Sequence[tuple[PositionLike, PositionLike]
-                                    | tuple[PositionLike, PositionLike, float]], *,
+                                    | tuple[PositionLike, PositionLike, float | None]
+                                    | tuple[PositionLike, PositionLike, float | None, str]],
+                   *,
                    solver: str = "lacam", time_limit_s: float | None = None,
                    suboptimality: float | None = None, restarts: int | None = None,
                    seed: int | None = None, max_steps: int | None = None,
                    refine: bool = False,
                    options: planner_service_pb2.PlanOptions | None = None,
-                   timeout: float | None = None) -> FleetPlanResult:
+                   timeout: float | None = None, **option_keywords) -> FleetPlanResult:
         """Conflict-free timed paths for many robots: `robots` holds (start,
-        goal) or (start, goal, radius_m) per robot. `solver` "lacam"
+        goal), (start, goal, radius_m) or (start, goal, radius_m, name) per
+        robot (the name comes back in FleetPlanResult.names). `solver` "lacam"
         (complete, scales to hundreds), "pibt" (fastest, incomplete),
         "prioritized" (cooperative A* with restarts) or "cbs" (optimal sum of
         costs; `suboptimality` > 1 for ECBS); `refine` makes lacam improve its
@@ -238,12 +385,14 @@ class PathdClient:
         best plan when `time_limit_s` (default 10 s) runs out; `timeout` is
         the call's deadline."""
         request = planner_service_pb2.PlanFleetRequest(
-            map=map_name, options=options,
+            map=map_name, options=_options(options, option_keywords),
             solver=planner_service_pb2.FleetSolver.Value("FLEET_SOLVER_" + solver.upper()))
         for robot in robots:
             r = request.robots.add(start=_position(robot[0]), goal=_position(robot[1]))
-            if len(robot) > 2:
+            if len(robot) > 2 and robot[2] is not None:
                 r.radius_m = robot[2]
+            if len(robot) > 3:
+                r.name = robot[3]
         if time_limit_s is not None:
             request.time_limit_ms = max(1, round(time_limit_s * 1000))
         if suboptimality is not None:
@@ -262,7 +411,7 @@ class PathdClient:
                  options: planner_service_pb2.PlanOptions | None = None,
                  planner: str | None = None,
                  replan_max_expansions: int = 0,
-                 timeout: float | None = None) -> NavigationSession:
+                 timeout: float | None = None, **option_keywords) -> NavigationSession:
         """Opens a Navigate session and waits for its first path.
 
         D* Lite by default. With planner "hybrid_astar" or "state_lattice"
@@ -279,7 +428,7 @@ class PathdClient:
         """
         open_request = planner_service_pb2.NavigateOpen(
             map=map_name, start=_position(start), goal=_position(goal),
-            options=options, planner=_planner(planner),
+            options=_options(options, option_keywords), planner=_planner(planner),
             replan_max_expansions=replan_max_expansions)
         return NavigationSession(self._planner, map_name, open_request,
                                  self.timeout if timeout is None else timeout)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import grpc
 
+from pathd.v1 import planner_service_pb2
+
 from pathd_client.values import PLAN_OUTCOME_KEY
 
 class PathdError(Exception):
@@ -67,6 +69,16 @@ class UnavailableError(PathdError):
     """UNAVAILABLE: no server there, or it is shutting down."""
 
 
+class UnauthenticatedError(PathdError):
+    """UNAUTHENTICATED: the server wants a token (PathdClient(token=...))
+    and got none, or one it does not know."""
+
+
+class PermissionDeniedError(PathdError):
+    """PERMISSION_DENIED: the token's role may not make this call (a read
+    token and UpdateMap, say)."""
+
+
 _ERROR_CLASSES: dict[grpc.StatusCode, type[PathdError]] = {
     grpc.StatusCode.NOT_FOUND: NotFoundError,
     grpc.StatusCode.INVALID_ARGUMENT: InvalidArgumentError,
@@ -76,7 +88,11 @@ _ERROR_CLASSES: dict[grpc.StatusCode, type[PathdError]] = {
     grpc.StatusCode.RESOURCE_EXHAUSTED: ResourceExhaustedError,
     grpc.StatusCode.DEADLINE_EXCEEDED: DeadlineExceededError,
     grpc.StatusCode.UNAVAILABLE: UnavailableError,
+    grpc.StatusCode.UNAUTHENTICATED: UnauthenticatedError,
+    grpc.StatusCode.PERMISSION_DENIED: PermissionDeniedError,
 }
+
+_CODES_BY_NUMBER = {code.value[0]: code for code in grpc.StatusCode}
 
 
 def make_error(code: grpc.StatusCode, details: str,
@@ -90,3 +106,14 @@ def _from_rpc_error(error: grpc.RpcError) -> PathdError:
     trailing = error.trailing_metadata() or ()
     metadata = {key: value for key, value in trailing if isinstance(value, str)}
     return make_error(error.code(), error.details() or "", metadata)
+
+
+def _from_plan_error(error) -> PathdError:
+    """The PathdError of a PlanStream / PlanBatch PlanError message: its
+    status code and message, its outcome where Plan's trailing metadata
+    would have carried it."""
+    code = _CODES_BY_NUMBER.get(error.code, grpc.StatusCode.UNKNOWN)
+    metadata = {}
+    if error.outcome != planner_service_pb2.PLAN_OUTCOME_UNSPECIFIED:
+        metadata[PLAN_OUTCOME_KEY] = planner_service_pb2.PlanOutcome.Name(error.outcome)
+    return make_error(code, error.message, metadata)

@@ -1,5 +1,6 @@
-"""The client's streaming calls: a WatchMap subscription and a Navigate
-session, each a thread-safe object over one gRPC stream."""
+"""The client's streaming calls: a WatchMap subscription, a Navigate
+session, a PlanStream with its progress and a PlanBatch, each an object
+over one gRPC stream."""
 
 from __future__ import annotations
 
@@ -16,10 +17,11 @@ from pathd.v1 import planner_service_pb2
 from pathd.v1 import planner_service_pb2_grpc
 
 from pathd_client.errors import (DeadlineExceededError, PathdError,
-                                 _from_rpc_error, make_error)
+                                 _from_plan_error, _from_rpc_error, make_error)
 from pathd_client.values import (MAP_HEADER, Cell, Change, MapEvent,
-                                 NavigateUpdate, PositionLike, WorldPose,
-                                 _change_proto, _position)
+                                 NavigateUpdate, PlanProgress, PlanResult,
+                                 PositionLike, WorldPose, _change_proto,
+                                 _position)
 
 
 
@@ -46,6 +48,110 @@ class MapWatch:
         self._call.cancel()
 
     def __enter__(self) -> MapWatch:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.cancel()
+
+
+class PlanStream:
+    """An open PlanStream call. Iterating yields PlanProgress events while
+    the search runs (at most one per the server's --progress_interval; none
+    when the plan ends sooner), then the PlanResult, and stops; a plan that
+    fails raises PathdError as Plan would (with `outcome`). `result` holds
+    the PlanResult once it came, `progress` every event so far; wait()
+    reads to the end and returns the result. A context manager that
+    cancels the call (and so the plan) on exit if it has not ended."""
+
+    def __init__(self, call):
+        self._call = call
+        self.result: PlanResult | None = None
+        self.progress: list[PlanProgress] = []
+
+    def __iter__(self) -> Iterator[PlanProgress | PlanResult]:
+        try:
+            for event in self._call:
+                kind = event.WhichOneof("kind")
+                if kind == "progress":
+                    progress = PlanProgress.from_proto(event.progress)
+                    self.progress.append(progress)
+                    yield progress
+                elif kind == "result":
+                    self.result = PlanResult.from_proto(event.result)
+                    yield self.result
+                elif kind == "error":
+                    self._call.cancel()
+                    raise _from_plan_error(event.error)
+        except grpc.RpcError as error:
+            raise _from_rpc_error(error) from None
+
+    def wait(self) -> PlanResult:
+        for _ in self:
+            pass
+        if self.result is None:  # the server always sends one; a guard
+            raise make_error(grpc.StatusCode.UNKNOWN, "PlanStream ended without a result")
+        return self.result
+
+    def cancel(self) -> None:
+        self._call.cancel()
+
+    def __enter__(self) -> PlanStream:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.cancel()
+
+
+class BatchAnswer(NamedTuple):
+    """One PlanBatch answer: the item's position in the requests given
+    (`index`), its request_id, and its PlanResult or its PathdError (a bad
+    item never ends the batch)."""
+
+    index: int
+    request_id: str
+    result: PlanResult | None
+    error: PathdError | None
+
+
+class PlanBatch:
+    """An open PlanBatch stream: iterate for a BatchAnswer per request, in
+    the order the plans finish (sort by `index` for request order). The
+    requests are sent from grpc's own thread as the server's flow control
+    lets them, so a long generator of requests is fine. A context manager
+    that cancels the stream on exit if it has not ended."""
+
+    def __init__(self, call_factory, requests: Iterable):
+        self._ids: dict[str, int] = {}
+        self._call = call_factory(self._request_iterator(requests))
+
+    def _request_iterator(self, requests: Iterable
+                          ) -> Iterator[planner_service_pb2.PlanBatchRequest]:
+        for index, item in enumerate(requests):
+            if isinstance(item, tuple):
+                request_id, request = item
+            else:
+                request_id, request = str(index), item
+            self._ids[request_id] = index
+            yield planner_service_pb2.PlanBatchRequest(request_id=request_id,
+                                                       request=request)
+
+    def __iter__(self) -> Iterator[BatchAnswer]:
+        try:
+            for answer in self._call:
+                index = self._ids.get(answer.request_id, -1)
+                if answer.WhichOneof("kind") == "result":
+                    yield BatchAnswer(index, answer.request_id,
+                                      PlanResult.from_proto(answer.result), None)
+                else:
+                    yield BatchAnswer(index, answer.request_id, None,
+                                      _from_plan_error(answer.error))
+        except grpc.RpcError as error:
+            raise _from_rpc_error(error) from None
+
+    def cancel(self) -> None:
+        self._call.cancel()
+
+    def __enter__(self) -> PlanBatch:
         return self
 
     def __exit__(self, *exc_info) -> None:

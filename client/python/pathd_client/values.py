@@ -4,6 +4,9 @@ conversions between them and the pathd.v1 messages."""
 from __future__ import annotations
 
 import dataclasses
+import math
+import operator
+from collections.abc import Sequence
 from typing import NamedTuple, Union
 
 from pathd.v1 import common_pb2
@@ -40,10 +43,36 @@ class WorldPose(NamedTuple):
     yaw: float = 0.0
 
 
+class WorldPoint(NamedTuple):
+    """A point in the map's world frame, metres, without a heading: the
+    server uses the cell that contains it (kinematic planners: the point)."""
+
+    x: float
+    y: float
+
+
+class CellPose(NamedTuple):
+    """A pose in continuous cell coordinates: cell (x, y) spans [x, x+1) x
+    [y, y+1), so (x + 0.5, y + 0.5) is its centre; yaw in radians."""
+
+    x: float
+    y: float
+    yaw: float = 0.0
+
+
+class Origin(NamedTuple):
+    """The world pose of the map's cell (0, 0) corner: metres, radians."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+
+
 CellLike = Union[Cell, tuple[int, int]]
-# Where a plan starts or ends: a cell, or an exact world pose (kinematic
-# planners use its position and heading; the others the cell it lies in).
-PositionLike = Union[Cell, tuple[int, int], WorldPose]
+# Where a plan starts or ends: a cell, a world point, or an exact pose (world
+# or cell coordinates; kinematic planners use its position and heading, the
+# others the cell it lies in).
+PositionLike = Union[Cell, tuple[int, int], WorldPose, WorldPoint, CellPose]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,11 +87,44 @@ class MapInfo:
     free_cells: int
     blocked_cells: int
     raw: common_pb2.MapInfo = dataclasses.field(repr=False, compare=False)
+    origin: Origin = Origin()
 
     @classmethod
     def from_proto(cls, info: common_pb2.MapInfo) -> MapInfo:
         return cls(info.name, info.width, info.height, info.resolution,
-                   info.version, info.free_cells, info.blocked_cells, info)
+                   info.version, info.free_cells, info.blocked_cells, info,
+                   Origin(info.origin.x, info.origin.y, info.origin.yaw))
+
+    # World <-> cell conversions as the server makes them: the origin's yaw
+    # is ignored, as Nav2's costmap and pathd do unless pathd runs with
+    # --honour_origin_yaw (then pass honour_origin_yaw=True).
+
+    def cell_to_world(self, cell: CellLike, *,
+                      honour_origin_yaw: bool = False) -> tuple[float, float]:
+        """The world point (metres) of the cell's centre."""
+        x, y = cell
+        return self.cell_point_to_world(x + 0.5, y + 0.5,
+                                        honour_origin_yaw=honour_origin_yaw)
+
+    def cell_point_to_world(self, x: float, y: float, *,
+                            honour_origin_yaw: bool = False) -> tuple[float, float]:
+        """Continuous cell coordinates to the world frame (metres)."""
+        yaw = self.origin.yaw if honour_origin_yaw else 0.0
+        gx, gy = x * self.resolution, y * self.resolution
+        return (self.origin.x + math.cos(yaw) * gx - math.sin(yaw) * gy,
+                self.origin.y + math.sin(yaw) * gx + math.cos(yaw) * gy)
+
+    def world_to_cell(self, x: float, y: float, *,
+                      honour_origin_yaw: bool = False) -> Cell | None:
+        """The cell containing world point (x, y); None when it is off the
+        map (the server answers INVALID_ARGUMENT for such a position)."""
+        yaw = self.origin.yaw if honour_origin_yaw else 0.0
+        dx, dy = x - self.origin.x, y - self.origin.y
+        gx = (math.cos(yaw) * dx + math.sin(yaw) * dy) / self.resolution
+        gy = (-math.sin(yaw) * dx + math.cos(yaw) * dy) / self.resolution
+        if not (0.0 <= gx < self.width and 0.0 <= gy < self.height):
+            return None
+        return Cell(int(gx), int(gy))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,6 +196,28 @@ class PlanResult:
     footprint_collision: int | None = None
     raw: planner_service_pb2.PlanResponse = dataclasses.field(
         default=None, repr=False, compare=False)
+    # The start and goal cells used (after snap_start / goal tolerance, which
+    # start_snapped / goal_substituted report) and the path's cell centres in
+    # the world frame.
+    start: Cell | None = None
+    goal: Cell | None = None
+    start_snapped: bool = False
+    goal_substituted: bool = False
+    world_path: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    # Geometric planners: the exact polyline, cell coordinates and metres.
+    polyline: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    world_polyline: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    # return_expansions: the expanded cells in order (truncated: more were).
+    expanded: list[Cell] = dataclasses.field(default_factory=list)
+    expanded_truncated: bool = False
+    # via points: index into (via..., goal) of the last goal reached, and
+    # where each reached goal's leg ends in `path`.
+    reached_goal_index: int = -1
+    leg_end_indices: list[int] = dataclasses.field(default_factory=list)
+    # The path's smallest clearance in metres when the server measured it
+    # (min_clearance options, the voronoi planner), else None.
+    min_clearance_m: float | None = None
+    planning_time_ms: float = 0.0
 
     @classmethod
     def from_proto(cls, plan: planner_service_pb2.PlanResponse) -> PlanResult:
@@ -155,7 +239,124 @@ class PlanResult:
             frame_id=plan.frame_id,
             footprint_collision=(plan.footprint_collision
                                  if plan.HasField("footprint_collision") else None),
-            raw=plan)
+            raw=plan,
+            start=Cell(plan.start.x, plan.start.y) if plan.HasField("start") else None,
+            goal=Cell(plan.goal.x, plan.goal.y) if plan.HasField("goal") else None,
+            start_snapped=plan.start_snapped,
+            goal_substituted=plan.goal_substituted,
+            world_path=[(p.x, p.y) for p in plan.world_path],
+            polyline=[(p.x, p.y) for p in plan.polyline],
+            world_polyline=[(p.x, p.y) for p in plan.world_polyline],
+            expanded=[Cell(c.x, c.y) for c in plan.expanded],
+            expanded_truncated=plan.expanded_truncated,
+            reached_goal_index=plan.reached_goal_index,
+            leg_end_indices=list(plan.leg_end_indices),
+            min_clearance_m=plan.min_clearance_m if plan.has_clearance else None,
+            planning_time_ms=plan.planning_time_us / 1000.0)
+
+
+class PlanProgress(NamedTuple):
+    """A PlanStream progress event: nodes expanded so far, the open list's
+    smallest key (None for planners without one) and the time since the
+    server received the request."""
+
+    expansions: int
+    best_f: float | None
+    elapsed_ms: float
+
+    @classmethod
+    def from_proto(cls, p: planner_service_pb2.PlanProgress) -> PlanProgress:
+        return cls(p.expansions, p.best_f if p.HasField("best_f") else None,
+                   p.elapsed_us / 1000.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class CostToGoResult:
+    """A goal's cost-to-go field over `window` (x, y, width, height):
+    `costs` row-major within the window, math.inf where the goal cannot be
+    reached; cost() reads one cell by its map coordinates."""
+
+    map_version: int
+    goal: Cell
+    window: tuple[int, int, int, int]
+    costs: list[float]
+    cache_hit: bool
+    expansions: int
+    raw: planner_service_pb2.CostToGoResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    def cost(self, cell: CellLike) -> float:
+        x, y = cell
+        wx, wy, width, height = self.window
+        if not (wx <= x < wx + width and wy <= y < wy + height):
+            raise IndexError(f"cell ({x}, {y}) is outside the window {self.window}")
+        return self.costs[(y - wy) * width + (x - wx)]
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.CostToGoResponse) -> CostToGoResult:
+        w = r.window
+        return cls(map_version=r.map_version, goal=Cell(r.goal.x, r.goal.y),
+                   window=(w.x, w.y, w.width, w.height), costs=list(r.cost),
+                   cache_hit=r.cache_hit, expansions=r.expansions, raw=r)
+
+
+@dataclasses.dataclass(frozen=True)
+class PathCheck:
+    """An IsPathValid answer: `valid`, the poses the robot may not occupy
+    (`invalid_indices`), the steps i (pose i-1 to i) that are not legal
+    moves (`invalid_steps`), the first fault as text (`reason`), and for a
+    valid path its cost and length."""
+
+    valid: bool
+    invalid_indices: list[int]
+    invalid_steps: list[int]
+    reason: str
+    cost: float
+    length: float
+    length_m: float
+    footprint_checked: bool
+    map_version: int
+    raw: planner_service_pb2.IsPathValidResponse = dataclasses.field(
+        default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.IsPathValidResponse) -> PathCheck:
+        return cls(valid=r.valid, invalid_indices=list(r.invalid_indices),
+                   invalid_steps=list(r.invalid_steps), reason=r.reason, cost=r.cost,
+                   length=r.length, length_m=r.length_m,
+                   footprint_checked=r.footprint_checked, map_version=r.map_version, raw=r)
+
+
+@dataclasses.dataclass(frozen=True)
+class CacheStats:
+    """Counters of one incremental-state cache ("spm" or "dstar_lite")."""
+
+    name: str
+    entries: int
+    bytes: int
+    budget_bytes: int
+    hits: int
+    misses: int
+    evictions: int
+    repairs: int
+    rebuilds: int
+
+
+@dataclasses.dataclass(frozen=True)
+class CacheStatsResult:
+    """GetCacheStats: `caches` by name, open Navigate sessions and their
+    bytes."""
+
+    caches: dict[str, CacheStats]
+    sessions: int
+    session_bytes: int
+
+    @classmethod
+    def from_proto(cls, r: planner_service_pb2.GetCacheStatsResponse) -> CacheStatsResult:
+        caches = {c.name: CacheStats(c.name, c.entries, c.bytes, c.budget_bytes, c.hits,
+                                     c.misses, c.evictions, c.repairs, c.rebuilds)
+                  for c in r.caches}
+        return cls(caches=caches, sessions=r.sessions, session_bytes=r.session_bytes)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -295,6 +496,9 @@ class FleetPlanResult:
     map_version: int
     raw: planner_service_pb2.PlanFleetResponse = dataclasses.field(
         default=None, repr=False, compare=False)
+    # Per robot: the name it was given ("" when none) and its radius.
+    names: list[str] = dataclasses.field(default_factory=list)
+    radii_m: list[float] = dataclasses.field(default_factory=list)
 
     @classmethod
     def from_proto(cls, r: planner_service_pb2.PlanFleetResponse) -> FleetPlanResult:
@@ -307,7 +511,8 @@ class FleetPlanResult:
                    solver=_enum_name(planner_service_pb2.FleetSolver, r.solver,
                                      "FLEET_SOLVER_").lower(),
                    solver_time_ms=r.solver_time_us / 1000.0,
-                   map_version=r.map_version, raw=r)
+                   map_version=r.map_version, raw=r,
+                   names=[p.name for p in r.paths], radii_m=[p.radius_m for p in r.paths])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -352,6 +557,25 @@ class NavigateUpdate:
             robot_cell_pose=((response.robot_pose.x, response.robot_pose.y,
                               response.robot_pose.yaw)
                              if response.HasField("robot_pose") else None))
+
+
+@dataclasses.dataclass(frozen=True)
+class SessionInfo:
+    """One open Navigate session (ListSessions): its id, map, the last
+    update it sent (None before its first answer; its plan starts at the
+    robot) and its age and idle time in seconds."""
+
+    session_id: int
+    map: str
+    last: NavigateUpdate | None
+    age_s: float
+    idle_s: float
+
+    @classmethod
+    def from_proto(cls, info: planner_service_pb2.SessionInfo) -> SessionInfo:
+        return cls(info.session_id, info.map,
+                   NavigateUpdate.from_proto(info.last) if info.HasField("last") else None,
+                   info.age_seconds, info.idle_seconds)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -402,7 +626,19 @@ def _position(where: PositionLike) -> common_pb2.Position:
     if isinstance(where, WorldPose):
         return common_pb2.Position(world_pose=common_pb2.WorldPose(
             x=where.x, y=where.y, yaw=where.yaw))
+    if isinstance(where, WorldPoint):
+        return common_pb2.Position(world=common_pb2.WorldPoint(x=where.x, y=where.y))
+    if isinstance(where, CellPose):
+        return common_pb2.Position(cell_pose=common_pb2.CellPose(
+            x=where.x, y=where.y, yaw=where.yaw))
+    if isinstance(where, common_pb2.Position):
+        return where
     x, y = where
+    try:
+        x, y = operator.index(x), operator.index(y)
+    except TypeError:
+        raise TypeError(f"a cell is two integers, not ({x!r}, {y!r}); use WorldPoint, "
+                        "WorldPose or CellPose for coordinates") from None
     return common_pb2.Position(cell=common_pb2.Cell(x=x, y=y))
 
 
@@ -427,82 +663,175 @@ def _planner(name: str | None) -> int:
         raise ValueError(f"unknown planner '{name}'") from None
 
 
+def _enum_value(enum, prefix: str, name: str, what: str) -> int:
+    try:
+        return enum.Value(prefix + name.upper())
+    except ValueError:
+        raise ValueError(f"unknown {what} '{name}'") from None
+
+
+def _one_of(options, field_pair, values) -> None:
+    """Sets the one of two oneof fields (metres / cells) that was given."""
+    given = [(f, v) for f, v in zip(field_pair, values) if v is not None]
+    if len(given) > 1:
+        raise ValueError(f"give {field_pair[0]} or {field_pair[1]}, not both")
+    for field, value in given:
+        setattr(options, field, value)
+
+
+# PotentialFieldOptions' fields plan_options(potential_field={...}) takes.
+_POTENTIAL_FIELD_KEYS = ("attractive", "attractive_gain", "switch_distance",
+                         "repulsive_gain", "influence_distance", "step_size",
+                         "max_steps")
+
+
 def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  unknown_is_free: bool = False,
-                 robot_radius_cells: float | None = None,
+                 max_expansions: int = 0,
+                 heuristic_weight: float | None = None,
                  robot_radius_m: float | None = None,
-                 min_clearance_m: float | None = None,
-                 inflation_radius_m: float | None = None,
-                 cost_scaling_factor: float | None = None,
+                 robot_radius_cells: float | None = None,
                  simplify: bool = False,
+                 lookahead: int = 0,
+                 return_cost_to_go: bool = False,
+                 potential_field: dict | None = None,
+                 goal_tolerance_m: float | None = None,
+                 goal_tolerance_cells: float | None = None,
+                 return_expansions: bool = False,
+                 min_clearance_m: float | None = None,
+                 min_clearance_cells: float | None = None,
+                 inflation_radius_m: float | None = None,
+                 inflation_radius_cells: float | None = None,
+                 cost_scaling_factor: float | None = None,
                  footprint_m: list[tuple[float, float]] | None = None,
+                 footprint_cells: list[tuple[float, float]] | None = None,
+                 footprint_radius_m: float | None = None,
+                 footprint_radius_cells: float | None = None,
                  min_turning_radius_m: float | None = None,
+                 min_turning_radius_cells: float | None = None,
                  motion_model: str | None = None,
-                 goal_yaw_tolerance: float | None = None,
                  reverse_penalty: float | None = None,
+                 change_penalty: float | None = None,
+                 non_straight_penalty: float | None = None,
+                 cost_penalty: float | None = None,
+                 goal_yaw_tolerance: float | None = None,
                  lattice: str = "",
                  smooth: bool | None = None,
                  snap_start: bool = False,
-                 snap_start_max_m: float | None = None) -> planner_service_pb2.PlanOptions:
-    """The common PlanOptions; build the message yourself for the rest.
+                 snap_start_max_m: float | None = None,
+                 snap_start_max_cells: float | None = None,
+                 ) -> planner_service_pb2.PlanOptions:
+    """A PlanOptions message from keyword arguments, one per field of
+    proto/pathd/v1/planner_service.proto's PlanOptions (docs/python.md lists
+    them; the proto says what each does). A metres / cells pair is a oneof:
+    give one. Every call that takes `options=` also takes these keywords.
 
-    min_clearance_m: grid planners prefer keeping this far from obstacles
-    (cells nearer cost more; the response's min_clearance_m says how close
-    the path came).
-    footprint_m: the robot's outline, [(x, y), ...] in metres, x forward, y
-    left (Nav2's footprint). The kinematic planners (hybrid_astar,
-    state_lattice) check it at every pose with min_turning_radius_m,
-    motion_model ("dubins", "reeds_shepp", "differential",
-    "omnidirectional"), goal_yaw_tolerance (radians), reverse_penalty,
-    lattice and smooth; the others plan for its inscribed radius, and with
-    smooth=True also return the path as poses smoothed for it
-    (PlanResult.footprint_collision says where it does not fit).
-    inflation_radius_m, cost_scaling_factor: Nav2's inflation layer for the
-    grid planners: cells up to inflation_radius_m from a lethal cell, beyond
-    the robot radius, cost 252 * exp(-cost_scaling_factor * (distance -
-    robot radius)); the factor is per metre, unset means Nav2's 10.
-    snap_start: a start on a blocked cell or within the robot radius of an
-    obstacle moves to the nearest free cell within snap_start_max_m (unset:
-    twice the robot radius, at least 2 cells); the PlanResult's
-    raw.start_snapped says it did.
+    connectivity 4 or 8; cost_weight (unset 1; 0 ignores cell costs);
+    max_expansions (0: the server's limit); heuristic_weight (weighted_astar,
+    state_lattice); robot_radius_*; simplify (ray-shot any-angle path);
+    lookahead (rtaa_star, lrta_star); return_cost_to_go (distance transform
+    planners); potential_field: a dict of PotentialFieldOptions fields
+    ("attractive": "quadratic" | "conic", "attractive_gain",
+    "switch_distance", "repulsive_gain", "influence_distance", "step_size",
+    "max_steps"); goal_tolerance_* (a blocked goal moves to the nearest free
+    cell within it); return_expansions (PlanResult.expanded);
+    min_clearance_* (grid planners keep this far from obstacles);
+    inflation_radius_*, cost_scaling_factor (Nav2's inflation layer, the
+    factor per metre, unset 10); footprint_m / footprint_cells (polygon,
+    [(x, y), ...], x forward, y left) or footprint_radius_* (a circle);
+    min_turning_radius_*, motion_model ("dubins", "reeds_shepp",
+    "differential", "omnidirectional"), reverse_penalty, change_penalty,
+    non_straight_penalty, cost_penalty (Nav2 Smac's penalties),
+    goal_yaw_tolerance (radians), lattice, smooth (kinematic planners; grid
+    planners with smooth=True also answer poses smoothed for the robot);
+    snap_start, snap_start_max_* (a blocked start moves to the nearest
+    free cell).
     """
-    if robot_radius_cells is not None and robot_radius_m is not None:
-        raise ValueError("give robot_radius_cells or robot_radius_m, not both")
     if connectivity not in (4, 8):
         raise ValueError(f"connectivity must be 4 or 8, not {connectivity}")
     options = planner_service_pb2.PlanOptions(
         connectivity=connectivity, unknown_is_free=unknown_is_free,
-        simplify=simplify)
+        max_expansions=max_expansions, simplify=simplify, lookahead=lookahead,
+        return_cost_to_go=return_cost_to_go, return_expansions=return_expansions,
+        lattice=lattice, snap_start=snap_start)
     if cost_weight is not None:
         options.cost_weight = cost_weight
-    if robot_radius_cells is not None:
-        options.robot_radius_cells = robot_radius_cells
-    if robot_radius_m is not None:
-        options.robot_radius_m = robot_radius_m
-    if min_clearance_m is not None:
-        options.min_clearance_m = min_clearance_m
-    for x, y in footprint_m or []:
-        options.footprint.polygon_m.add(x=x, y=y)
-    if min_turning_radius_m is not None:
-        options.min_turning_radius_m = min_turning_radius_m
-    if motion_model is not None:
-        try:
-            options.motion_model = planner_service_pb2.MotionModel.Value(
-                "MOTION_MODEL_" + motion_model.upper())
-        except ValueError:
-            raise ValueError(f"unknown motion model '{motion_model}'") from None
-    if goal_yaw_tolerance is not None:
-        options.goal_yaw_tolerance = goal_yaw_tolerance
-    if reverse_penalty is not None:
-        options.penalties.reverse = reverse_penalty
-    options.lattice = lattice
-    if smooth is not None:
-        options.smooth = smooth
-    if inflation_radius_m is not None:
-        options.inflation_radius_m = inflation_radius_m
+    if heuristic_weight is not None:
+        options.heuristic_weight = heuristic_weight
+    _one_of(options, ("robot_radius_m", "robot_radius_cells"),
+            (robot_radius_m, robot_radius_cells))
+    _one_of(options, ("goal_tolerance_m", "goal_tolerance_cells"),
+            (goal_tolerance_m, goal_tolerance_cells))
+    _one_of(options, ("min_clearance_m", "min_clearance_cells"),
+            (min_clearance_m, min_clearance_cells))
+    _one_of(options, ("inflation_radius_m", "inflation_radius_cells"),
+            (inflation_radius_m, inflation_radius_cells))
+    _one_of(options, ("min_turning_radius_m", "min_turning_radius_cells"),
+            (min_turning_radius_m, min_turning_radius_cells))
+    _one_of(options, ("snap_start_max_m", "snap_start_max_cells"),
+            (snap_start_max_m, snap_start_max_cells))
     if cost_scaling_factor is not None:
         options.cost_scaling_factor = cost_scaling_factor
-    options.snap_start = snap_start
-    if snap_start_max_m is not None:
-        options.snap_start_max_m = snap_start_max_m
+    if potential_field:
+        unknown = set(potential_field) - set(_POTENTIAL_FIELD_KEYS)
+        if unknown:
+            raise ValueError(f"unknown potential_field key(s) {sorted(unknown)}; "
+                             f"expected {list(_POTENTIAL_FIELD_KEYS)}")
+        fields = dict(potential_field)
+        if "attractive" in fields:
+            fields["attractive"] = _enum_value(
+                planner_service_pb2.AttractivePotential, "ATTRACTIVE_POTENTIAL_",
+                fields["attractive"], "attractive potential")
+        options.potential_field.CopyFrom(planner_service_pb2.PotentialFieldOptions(**fields))
+    shapes = [s for s in (footprint_m, footprint_cells, footprint_radius_m,
+                          footprint_radius_cells) if s is not None]
+    if len(shapes) > 1:
+        raise ValueError("give one of footprint_m, footprint_cells, footprint_radius_m "
+                         "and footprint_radius_cells")
+    for x, y in footprint_m or []:
+        options.footprint.polygon_m.add(x=x, y=y)
+    for x, y in footprint_cells or []:
+        options.footprint.polygon_cells.add(x=x, y=y)
+    if footprint_radius_m is not None:
+        options.footprint.radius_m = footprint_radius_m
+    if footprint_radius_cells is not None:
+        options.footprint.radius_cells = footprint_radius_cells
+    if motion_model is not None:
+        options.motion_model = _enum_value(planner_service_pb2.MotionModel,
+                                           "MOTION_MODEL_", motion_model, "motion model")
+    for field, value in (("reverse", reverse_penalty), ("change", change_penalty),
+                         ("non_straight", non_straight_penalty), ("cost", cost_penalty)):
+        if value is not None:
+            setattr(options.penalties, field, value)
+    if goal_yaw_tolerance is not None:
+        options.goal_yaw_tolerance = goal_yaw_tolerance
+    if smooth is not None:
+        options.smooth = smooth
     return options
+
+
+def _options(options: planner_service_pb2.PlanOptions | None,
+             keywords: dict) -> planner_service_pb2.PlanOptions | None:
+    """A call's PlanOptions: `options` as given, or plan_options(**keywords);
+    not both, so no keyword silently overrides a field of the message."""
+    if keywords:
+        if options is not None:
+            raise ValueError("give options= or option keywords "
+                             f"({', '.join(sorted(keywords))}), not both")
+        return plan_options(**keywords)
+    return options
+
+
+def plan_request(map_name: str, start: PositionLike, goal: PositionLike, *,
+                 planner: str | None = None,
+                 options: planner_service_pb2.PlanOptions | None = None,
+                 via: Sequence[PositionLike] = (), allow_partial: bool = False,
+                 **option_keywords) -> planner_service_pb2.PlanRequest:
+    """A PlanRequest, as PathdClient.plan sends it: for plan_batch, or to
+    keep and send again. `via`: intermediate goals visited in order;
+    `allow_partial`: a failed leg answers the path to the last goal
+    reached."""
+    return planner_service_pb2.PlanRequest(
+        map=map_name, start=_position(start), goal=_position(goal),
+        planner=_planner(planner), options=_options(options, option_keywords),
+        via=[_position(v) for v in via], allow_partial=allow_partial)

@@ -1,5 +1,5 @@
 // Reading map files into CreateMapRequest sources.
-#include "client/map_source.h"
+#include "client/pathctl/map_source.h"
 
 #include <filesystem>
 #include <string>
@@ -11,7 +11,7 @@
 #include "core/map_io/map_io.h"
 #include "core/status_macros.h"
 
-namespace pathd::client {
+namespace pathd::pathctl {
 
 MapFileKind DetectMapFileKind(const std::string& path) {
   const std::string lower = absl::AsciiStrToLower(path);
@@ -62,4 +62,4 @@ absl::Status SetMapSourceFromFile(const std::string& path,
                    ".yaml/.yml (ROS map_server)"));
 }
 
-}  // namespace pathd::client
+}  // namespace pathd::pathctl

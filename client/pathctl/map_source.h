@@ -2,15 +2,15 @@
 // Moving AI .map files travel as text, ROS map_server maps as the YAML text
 // plus the bytes of the image it names. The server parses both, so the client
 // only reads files and never interprets cells.
-#ifndef PATHD_CLIENT_MAP_SOURCE_H_
-#define PATHD_CLIENT_MAP_SOURCE_H_
+#ifndef PATHD_CLIENT_PATHCTL_MAP_SOURCE_H_
+#define PATHD_CLIENT_PATHCTL_MAP_SOURCE_H_
 
 #include <string>
 
 #include "absl/status/status.h"
 #include "pathd/v1/map_service.pb.h"
 
-namespace pathd::client {
+namespace pathd::pathctl {
 
 enum class MapFileKind {
   kUnknown,
@@ -29,6 +29,6 @@ MapFileKind DetectMapFileKind(const std::string& path);
 absl::Status SetMapSourceFromFile(const std::string& path,
                                   v1::CreateMapRequest* request);
 
-}  // namespace pathd::client
+}  // namespace pathd::pathctl
 
-#endif  // PATHD_CLIENT_MAP_SOURCE_H_
+#endif  // PATHD_CLIENT_PATHCTL_MAP_SOURCE_H_
