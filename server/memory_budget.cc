@@ -278,9 +278,11 @@ std::string MemoryBudget::CallerOf(const grpc::ServerContextBase& context) const
   }
   // "ipv4:127.0.0.1:5555", "ipv6:[::1]:5555": the address without the port.
   std::string peer = context.peer();
-  // A call the HTTP gateway forwards over the in-process channel: the HTTP
-  // client's address (only in-process callers can name one).
-  if (absl::StartsWith(peer, "inproc")) {
+  // A call the HTTP gateway forwards over the in-process channel (its peer is
+  // no network address: gRPC names it "unknown"): the HTTP client's address.
+  // Only in-process callers can name one.
+  if (!absl::StartsWith(peer, "ipv4:") && !absl::StartsWith(peer, "ipv6:") &&
+      !absl::StartsWith(peer, "unix:")) {
     const auto& metadata = context.client_metadata();
     if (auto it = metadata.find("x-pathd-http-peer"); it != metadata.end()) {
       return absl::StrCat("http:", std::string(it->second.data(), it->second.size()));

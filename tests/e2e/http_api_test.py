@@ -402,6 +402,24 @@ class HttpApiTest(unittest.TestCase):
             time.sleep(0.2)
         self.assertTrue(ok, "closed streams never freed their slots")
 
+    def test_http_clients_are_callers_by_address(self):
+        # Without tokens, memory shares count an HTTP client by its address
+        # (carried to the service as x-pathd-http-peer), not as the gateway.
+        plain = PathdProcess(PATHD, ["--http_address=127.0.0.1:0", "--max_watchers=2",
+                                     "--caller_memory_share=0.5", "--log_level=warn"])
+        try:
+            d = type("Plain", (), {"http": plain.http_address})()
+            self.assertStatus(request(d, "PUT", "/v1/maps/m", {"movingaiText": MOVINGAI},
+                                      token=None), 200)
+            first = EventStream(d, "GET", "/v1/maps/m:watch", token=None)
+            self.assertEqual(first.status, 200)
+            first.next()
+            body = self.assertStatus(request(d, "GET", "/v1/maps/m:watch", token=None), 429, 8)
+            self.assertIn("this caller (http:127.0.0.1)", body["message"])
+            first.close()
+        finally:
+            plain.stop()
+
     def test_viewer_files(self):
         status, page, headers = request(self.d, "GET", "/", token=None)
         self.assertEqual(status, 200)
