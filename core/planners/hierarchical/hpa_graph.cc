@@ -148,6 +148,12 @@ std::shared_ptr<const HpaCluster> HpaGraph::BuildCluster(const GridView& view,
   return cluster;
 }
 
+namespace {
+// A shared_ptr's control block with make_shared's inline object, and the
+// row's pointer to it.
+constexpr size_t kClusterOverhead = 16 + sizeof(std::shared_ptr<const HpaCluster>);
+}  // namespace
+
 std::shared_ptr<const HpaGraph> HpaGraph::Build(const Grid& grid, const HpaParams& params,
                                                 DerivedStop& stop) {
   std::shared_ptr<HpaGraph> graph(new HpaGraph());
@@ -158,19 +164,26 @@ std::shared_ptr<const HpaGraph> HpaGraph::Build(const Grid& grid, const HpaParam
   graph->clusters_x_ = (grid.width() + c - 1) / c;
   graph->clusters_y_ = (grid.height() + c - 1) / c;
   const int32_t count = graph->clusters_x_ * graph->clusters_y_;
-  graph->clusters_.resize(static_cast<size_t>(count));
+  graph->bytes_ = sizeof(HpaGraph) +
+                  graph->clusters_y_ * (sizeof(std::shared_ptr<const Row>) + sizeof(Row) + 16);
   const GridView view(grid, params.cost);
-  for (int32_t id = 0; id < count; ++id) {
-    if (id % 16 == 0 && stop.Stopped()) {
-      stop.Note(absl::StrFormat("building the HPA* abstract graph of this map version "
-                                "(%d of %d clusters)",
-                                id, count));
-      return nullptr;
+  for (int32_t cy = 0; cy < graph->clusters_y_; ++cy) {
+    auto row = std::make_shared<Row>(static_cast<size_t>(graph->clusters_x_));
+    for (int32_t cx = 0; cx < graph->clusters_x_; ++cx) {
+      const int32_t id = cy * graph->clusters_x_ + cx;
+      if (id % 16 == 0 && stop.Stopped()) {
+        stop.Note(absl::StrFormat("building the HPA* abstract graph of this map version "
+                                  "(%d of %d clusters)",
+                                  id, count));
+        return nullptr;
+      }
+      std::shared_ptr<const HpaCluster> cluster = graph->BuildCluster(view, id);
+      graph->node_count_ += cluster->nodes.size();
+      graph->edge_count_ += cluster->intra.size() + cluster->inter.size();
+      graph->bytes_ += cluster->MemoryBytes() + kClusterOverhead;
+      (*row)[cx] = std::move(cluster);
     }
-    graph->clusters_[id] = graph->BuildCluster(view, id);
-    graph->node_count_ += graph->clusters_[id]->nodes.size();
-    graph->edge_count_ +=
-        graph->clusters_[id]->intra.size() + graph->clusters_[id]->inter.size();
+    graph->rows_.push_back(std::move(row));
   }
   return graph;
 }
@@ -182,15 +195,10 @@ std::shared_ptr<const HpaGraph> HpaGraph::Advance(const Grid& grid,
   const int32_t c = params_.cluster_size;
   // A cluster depends on its own cells and, through its transitions and the
   // costs of its moves out, on the cells just across its borders.
-  std::vector<uint8_t> dirty(clusters_.size(), 0);
   std::vector<int32_t> order;
   auto mark = [&](int32_t cx, int32_t cy) {
     if (cx < 0 || cy < 0 || cx >= clusters_x_ || cy >= clusters_y_) return;
-    const int32_t id = cy * clusters_x_ + cx;
-    if (!dirty[id]) {
-      dirty[id] = 1;
-      order.push_back(id);
-    }
+    order.push_back(cy * clusters_x_ + cx);
   };
   for (const Cell& cell : changed) {
     if (!grid.InBounds(cell)) continue;
@@ -202,8 +210,13 @@ std::shared_ptr<const HpaGraph> HpaGraph::Advance(const Grid& grid,
     if (cell.y % c == 0) mark(cx, cy - 1);
     if (cell.y % c == c - 1 || cell.y == height_ - 1) mark(cx, cy + 1);
   }
+  std::sort(order.begin(), order.end());
+  order.erase(std::unique(order.begin(), order.end()), order.end());
   std::shared_ptr<HpaGraph> next(new HpaGraph(*this));
   const GridView view(grid, params_.cost);
+  // The row being rebuilt, copied from this version's on first write.
+  std::shared_ptr<Row> row;
+  int32_t row_y = -1;
   for (size_t i = 0; i < order.size(); ++i) {
     if (i % 16 == 15 && stop.Stopped()) {
       stop.Note(absl::StrFormat("repairing the HPA* abstract graph (%d of %d clusters)",
@@ -211,24 +224,22 @@ std::shared_ptr<const HpaGraph> HpaGraph::Advance(const Grid& grid,
       return nullptr;
     }
     const int32_t id = order[i];
-    const HpaCluster& old = *next->clusters_[id];
-    next->node_count_ -= old.nodes.size();
-    next->edge_count_ -= old.intra.size() + old.inter.size();
-    next->clusters_[id] = next->BuildCluster(view, id);
-    const HpaCluster& now = *next->clusters_[id];
-    next->node_count_ += now.nodes.size();
-    next->edge_count_ += now.intra.size() + now.inter.size();
+    const int32_t cy = id / clusters_x_;
+    if (cy != row_y) {
+      row = std::make_shared<Row>(*rows_[cy]);
+      next->rows_[cy] = row;
+      row_y = cy;
+    }
+    std::shared_ptr<const HpaCluster>& slot = (*row)[id % clusters_x_];
+    next->node_count_ -= slot->nodes.size();
+    next->edge_count_ -= slot->intra.size() + slot->inter.size();
+    next->bytes_ -= slot->MemoryBytes();
+    slot = next->BuildCluster(view, id);
+    next->node_count_ += slot->nodes.size();
+    next->edge_count_ += slot->intra.size() + slot->inter.size();
+    next->bytes_ += slot->MemoryBytes();
   }
   return next;
-}
-
-size_t HpaGraph::MemoryBytes() const {
-  // A shared_ptr's control block, with make_shared's inline object, adds
-  // about two words.
-  size_t bytes = sizeof(HpaGraph) +
-                 clusters_.capacity() * sizeof(std::shared_ptr<const HpaCluster>);
-  for (const auto& cluster : clusters_) bytes += cluster->MemoryBytes() + 16;
-  return bytes;
 }
 
 std::string HpaGraph::FirstDifference(const HpaGraph& a, const HpaGraph& b) {
@@ -240,9 +251,9 @@ std::string HpaGraph::FirstDifference(const HpaGraph& a, const HpaGraph& b) {
     return absl::StrFormat("%d nodes / %d edges vs %d / %d", a.node_count_, a.edge_count_,
                            b.node_count_, b.edge_count_);
   }
-  for (size_t id = 0; id < a.clusters_.size(); ++id) {
-    const HpaCluster& x = *a.clusters_[id];
-    const HpaCluster& y = *b.clusters_[id];
+  for (int32_t id = 0; id < a.clusters_x_ * a.clusters_y_; ++id) {
+    const HpaCluster& x = a.cluster(id);
+    const HpaCluster& y = b.cluster(id);
     const std::string where = absl::StrFormat("cluster %d (%d, %d)", id,
                                               id % a.clusters_x_, id / a.clusters_x_);
     if (x.nodes != y.nodes) {
