@@ -43,6 +43,7 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeStateLatticePlanner),
              PlannerRegistry::Factory(&MakeHybridAStarPlanner),
              PlannerRegistry::Factory(&MakeHpaStarPlanner),
+             PlannerRegistry::Factory(&MakeQuadtreePlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

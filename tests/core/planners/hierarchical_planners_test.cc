@@ -25,6 +25,7 @@
 #include "core/map_io/map_io.h"
 #include "core/planners/hierarchical/hpa_graph.h"
 #include "core/planners/hierarchical/hpa_star.h"
+#include "core/planners/hierarchical/quadtree.h"
 #include "core/search/planner.h"
 #include "core/search/registry.h"
 #include "gtest/gtest.h"
@@ -160,7 +161,8 @@ std::string Check(const Model& m, const PlanResult& r, Cell s, Cell g, double op
   if (cost < optimum - 1e-9 * (1 + optimum)) {
     return absl::StrFormat("cost %.12g below the optimum %.12g", cost, optimum);
   }
-  const double bound = Bound(optimum, crossings, c, m.MaxFactor());
+  // c < 0: no bound to check (quadtree).
+  const double bound = c < 0 ? kInf : Bound(optimum, crossings, c, m.MaxFactor());
   if (cost > bound) {
     return absl::StrFormat("cost %.12g over the bound %.12g (optimum %.12g, %d crossings)",
                            cost, bound, optimum, crossings);
@@ -429,6 +431,118 @@ TEST(HpaStar, ExpiredDeadlineStopsTheBuild) {
   EXPECT_EQ(r->outcome, PlanOutcome::kTimeout);
 }
 
+TEST(Quadtree, IsRegisteredCompleteAndNotOptimal) {
+  const Planner* p = PlannerRegistry::Default().Get("quadtree");
+  ASSERT_NE(p, nullptr);
+  EXPECT_TRUE(p->traits().complete);
+  EXPECT_FALSE(p->traits().optimal);
+}
+
+// quadtree on the random maps: complete, legal, never below the optimum
+// (it promises no bound).
+TEST(Quadtree, RandomMapsAgreeWithDijkstra) {
+  std::mt19937 rng(20261203);
+  const int trials = Cases(600);
+  const Planner* planner = PlannerRegistry::Default().Get("quadtree");
+  SearchScratch scratch;
+  int found = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const int w = 2 + static_cast<int>(rng() % 40);
+    const int h = 2 + static_cast<int>(rng() % 40);
+    // Half the maps mostly open, so leaves grow past single cells.
+    const int obstacle_pct = trial % 2 ? static_cast<int>(rng() % 45) : 3;
+    const Grid grid = RandomGrid(rng, w, h, obstacle_pct, trial % 3 == 0);
+    const CostParams params = RandomParams(rng, trial);
+    const Model m{grid, params};
+    for (int q = 0; q < 6; ++q) {
+      const Cell s = RandomCell(rng, grid);
+      const Cell g = RandomCell(rng, grid);
+      if (!m.Open(s.x, s.y) || !m.Open(g.x, g.y)) continue;
+      std::vector<int> parent;
+      const double optimum = Reference(m, s, parent)[grid.Index(g)];
+      auto r = planner->Plan(grid, PlanRequest::Between(s, g, params), StopCondition::None(),
+                             scratch);
+      ASSERT_TRUE(r.ok()) << r.status();
+      ASSERT_EQ(Check(m, *r, s, g, optimum, 0, -1), "")
+          << "trial " << trial << " " << w << "x" << h << " " << CellToString(s) << " -> "
+          << CellToString(g);
+      found += r->found();
+    }
+  }
+  EXPECT_GT(found, trials);
+}
+
+// Random update sequences on mostly open maps (big leaves that updates
+// split, and blocks that merge back): the advanced tree equals a rebuilt
+// one leaf for leaf, and the planner answers alike through an advancing
+// store, the scratch's own copy and a fresh build.
+TEST(Quadtree, AdvancedTreeEqualsRebuiltOne) {
+  std::mt19937 rng(11);
+  const int sequences = Cases(40);
+  const Planner* planner = PlannerRegistry::Default().Get("quadtree");
+  for (int seq = 0; seq < sequences; ++seq) {
+    const int w = 10 + static_cast<int>(rng() % 90);
+    const int h = 10 + static_cast<int>(rng() % 90);
+    // Two in three maps start empty, so leaves are large, split under
+    // updates and merge back when a step restores the first map.
+    Grid grid = seq % 3 == 0 ? RandomGrid(rng, w, h, 20, seq % 2 == 0)
+                             : Grid::Create(w, h).value();
+    const Grid first = grid;
+    const bool unknown_is_free = seq % 4 == 0;
+    DerivedStop never;
+    std::shared_ptr<const Quadtree> advanced = Quadtree::Build(grid, unknown_is_free, never);
+    ASSERT_NE(advanced, nullptr);
+    AdvancingStore store;
+    SearchScratch with_store, own_copy;
+    CostParams params = RandomParams(rng, seq);
+    params.unknown_is_free = unknown_is_free;
+    for (int step = 0; step < 15; ++step) {
+      const Grid before = grid;
+      if (step % 5 == 4) {
+        grid = first;
+      } else if (step % 3 == 0) {
+        const int n = 1 + static_cast<int>(rng() % 6);
+        for (int k = 0; k < n; ++k) {
+          grid.set_cost(RandomCell(rng, grid), rng() % 2 ? kLethalCost : kFreeCost);
+        }
+      } else {
+        // Blocks, half of them cleared to free (merging leaves again).
+        const Cell at = RandomCell(rng, grid);
+        const int bw = 1 + static_cast<int>(rng() % 20), bh = 1 + static_cast<int>(rng() % 20);
+        const uint8_t v = rng() % 2 ? kLethalCost : kFreeCost;
+        for (int y = at.y; y < std::min(h, at.y + bh); ++y) {
+          for (int x = at.x; x < std::min(w, at.x + bw); ++x) grid.set_cost(x, y, v);
+        }
+      }
+      const std::vector<Cell> changed = AdvancingStore::Diff(before, grid);
+      std::shared_ptr<const Quadtree> next = advanced->Advance(grid, changed);
+      ASSERT_NE(next, nullptr);
+      const std::shared_ptr<const Quadtree> rebuilt =
+          Quadtree::Build(grid, unknown_is_free, never);
+      ASSERT_EQ(Quadtree::FirstDifference(*next, *rebuilt), "")
+          << "sequence " << seq << " step " << step;
+      advanced = next;
+      store.SetGrid(grid);
+      const Model m{grid, params};
+      for (int q = 0; q < 3; ++q) {
+        const Cell s = RandomCell(rng, grid);
+        const Cell g = RandomCell(rng, grid);
+        if (!m.Open(s.x, s.y) || !m.Open(g.x, g.y)) continue;
+        PlanRequest request = PlanRequest::Between(s, g, params);
+        SearchScratch fresh;
+        auto expected = planner->Plan(grid, request, StopCondition::None(), fresh);
+        auto own = planner->Plan(grid, request, StopCondition::None(), own_copy);
+        request.derived = &store;
+        auto stored = planner->Plan(grid, request, StopCondition::None(), with_store);
+        ASSERT_TRUE(expected.ok() && own.ok() && stored.ok());
+        EXPECT_EQ(expected->path, stored->path) << "sequence " << seq << " step " << step;
+        EXPECT_EQ(expected->path, own->path) << "sequence " << seq << " step " << step;
+      }
+    }
+    EXPECT_GT(store.stats().advances, 0);
+  }
+}
+
 fs::path BenchmarkDir() {
   if (const char* env = std::getenv("PATHD_MOVINGAI_DIR")) return env;
   return "../shared/benchmarks/movingai";
@@ -445,6 +559,7 @@ TEST(HpaStar, SampledMovingAiScenarios) {
   }
   const int per_map = Cases(30);
   const Planner* hpa = PlannerRegistry::Default().Get("hpa_star");
+  const Planner* quadtree = PlannerRegistry::Default().Get("quadtree");
   // A*, checked against Dijkstra and the files' optima by
   // movingai_conformance_test, at a fraction of Dijkstra's time.
   const Planner* dijkstra = PlannerRegistry::Default().Get("astar");
@@ -459,7 +574,7 @@ TEST(HpaStar, SampledMovingAiScenarios) {
     ASSERT_TRUE(file.ok()) << file.status();
     const size_t count = file->scenarios.size();
     const Model m{*grid, {}};
-    double ratio_sum = 0, worst = 1;
+    double ratio_sum = 0, worst = 1, quad_sum = 0;
     int n = 0;
     for (int k = 0; k < per_map; ++k) {
       // Spread over the file, skipping its (short) beginning.
@@ -477,6 +592,11 @@ TEST(HpaStar, SampledMovingAiScenarios) {
       ASSERT_EQ(Check(m, *r, s.start, s.goal, d->cost, crossings, kHpaDefaultClusterSize),
                 "")
           << name << " line " << s.line;
+      auto quad = quadtree->Plan(*grid, request, StopCondition::None(), scratch);
+      ASSERT_TRUE(quad.ok());
+      ASSERT_EQ(Check(m, *quad, s.start, s.goal, d->cost, 0, -1), "")
+          << "quadtree " << name << " line " << s.line;
+      quad_sum += quad->cost / std::max(d->cost, 1e-9);
       if (d->cost > 0) {
         ratio_sum += r->cost / d->cost;
         worst = std::max(worst, r->cost / d->cost);
@@ -484,8 +604,10 @@ TEST(HpaStar, SampledMovingAiScenarios) {
       }
       ++checked;
     }
-    std::printf("%-28s %3d scenarios, cost / optimum mean %.4f max %.4f\n", name.c_str(), n,
-                n > 0 ? ratio_sum / n : 0.0, worst);
+    std::printf("%-28s %3d scenarios, hpa_star cost / optimum mean %.4f max %.4f, "
+                "quadtree mean %.4f\n",
+                name.c_str(), n, n > 0 ? ratio_sum / n : 0.0, worst,
+                n > 0 ? quad_sum / n : 0.0);
   }
   if (checked == 0) GTEST_SKIP() << "none of the sampled maps is present";
 }

@@ -1,0 +1,88 @@
+// A region quadtree of a grid (lecture "Spatial Decomposition"; Samet, "The
+// Quadtree and Related Hierarchical Data Structures", 1984): the grid,
+// padded to a power-of-two square with blocked cells, split into aligned
+// squares until each holds cells of one kind (one traversable cost byte, or
+// blocked). The canonical tree (every square that can be a leaf is one) is
+// unique, so a tree advanced around changed cells can be compared with a
+// rebuilt one leaf for leaf. A derived value per map version
+// (core/search/derived.h); the `quadtree` planner (quadtree_planner.cc)
+// searches its leaf adjacency.
+#ifndef PATHD_CORE_PLANNERS_HIERARCHICAL_QUADTREE_H_
+#define PATHD_CORE_PLANNERS_HIERARCHICAL_QUADTREE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/types/span.h"
+#include "core/map/grid.h"
+#include "core/search/derived.h"
+
+namespace pathd {
+
+// Immutable once built; thread-safe to share.
+class Quadtree {
+ public:
+  // A leaf's value for blocked cells (and the padding outside the grid).
+  static constexpr uint16_t kBlocked = 256;
+
+  struct Node {
+    // Index of the first of four children (NW, NE, SW, SE: x then y), or -1
+    // for a leaf.
+    int32_t first_child;
+    int32_t x0;
+    int32_t y0;
+    int32_t size;
+    // Leaves: the cost byte of every cell, or kBlocked.
+    uint16_t value;
+    bool leaf() const { return first_child < 0; }
+    bool open() const { return value != kBlocked; }
+  };
+
+  // The tree of `grid` (unknown cells traversable when unknown_is_free);
+  // null when `stop` fired first.
+  static std::shared_ptr<const Quadtree> Build(const Grid& grid, bool unknown_is_free,
+                                               DerivedStop& stop);
+  // The tree of `grid` from this one of an older version whose cells differ
+  // from `grid` only in `changed`: the leaves holding a changed cell are
+  // split down to the kBlock-sized squares around it, those squares are
+  // rebuilt from the grid, and squares whose four children became equal
+  // leaves merge again. Null when the sizes differ.
+  std::shared_ptr<const Quadtree> Advance(const Grid& grid,
+                                          absl::Span<const Cell> changed) const;
+
+  // The leaf holding cell (x, y), which must be on the grid.
+  int32_t Locate(int32_t x, int32_t y) const;
+  const Node& node(int32_t id) const { return nodes_[id]; }
+  size_t node_slots() const { return nodes_.size(); }
+  size_t leaf_count() const { return leaves_; }
+  int32_t width() const { return width_; }
+  int32_t height() const { return height_; }
+  size_t MemoryBytes() const { return sizeof(Quadtree) + nodes_.capacity() * sizeof(Node); }
+
+  // Empty when both trees have the same leaves; else the first difference.
+  static std::string FirstDifference(const Quadtree& a, const Quadtree& b);
+
+  // Squares Advance rebuilds from the grid around a changed cell.
+  static constexpr int32_t kBlock = 16;
+
+ private:
+  Quadtree() = default;
+  uint16_t Value(const Grid& grid, int32_t x, int32_t y) const;
+  // Fills node `id` (already allocated) for the square at (x0, y0).
+  void Fill(const Grid& grid, int32_t id, int32_t x0, int32_t y0, int32_t size);
+  void CountLeaves();
+
+  int32_t width_ = 0;
+  int32_t height_ = 0;
+  int32_t side_ = 1;
+  bool unknown_is_free_ = false;
+  std::vector<Node> nodes_;
+  size_t leaves_ = 0;
+};
+
+}  // namespace pathd
+
+#endif  // PATHD_CORE_PLANNERS_HIERARCHICAL_QUADTREE_H_
