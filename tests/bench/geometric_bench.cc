@@ -41,6 +41,7 @@
 #include "core/map_io/map_io.h"
 #include "core/planners/hierarchical/hpa_graph.h"
 #include "core/planners/hierarchical/hpa_star.h"
+#include "core/planners/hierarchical/quadtree.h"
 #include "core/postprocess/path_simplify.h"
 #include "core/search/planner.h"
 #include "core/search/registry.h"
@@ -81,7 +82,7 @@ ABSL_FLAG(std::string, tile_map, "",
           "section 4 (huge maps): a map tiled to --tile_sizes cells square by "
           "MirrorTile; empty = skip section 4");
 ABSL_FLAG(std::string, tile_sizes, "4096,8192", "sides of the section-4 maps, cells");
-ABSL_FLAG(std::string, tile_planners, "astar,jps,hpa_star",
+ABSL_FLAG(std::string, tile_planners, "astar,jps,hpa_star,quadtree",
           "section-4 planners; the first is the baseline the others are compared with");
 ABSL_FLAG(int, tile_queries, 20,
           "section-4 queries per map: random pairs of free cells at least a quarter "
@@ -443,38 +444,42 @@ void TiledRows(const std::string& map_name, const pathd::Grid& grid) {
                 n > 0 ? ratio / n : 0.0, worst, n > 0 ? sm / n : 0.0, sm_worst);
     std::fflush(stdout);
   }
-  // Repairs of hpa_star's graph (HpaGraph::Advance timed alone, with the
-  // changed cells a map store records): a 10 x 10 block of cells toggled
-  // (100 cells), and 100 cells scattered over the map, each on the last
-  // version.
+  // Repairs (Advance timed alone, with the changed cells a map store
+  // records): a 10 x 10 block of cells toggled (100 cells), then 100 cells
+  // scattered over the map, each on the last version; the same sequence
+  // for hpa_star's graph and the quadtree.
   const int repeats = std::max(1, absl::GetFlag(FLAGS_tile_repairs));
+  std::vector<pathd::Grid> versions;
+  std::vector<std::vector<pathd::Cell>> updates;
   pathd::Grid live = grid;
-  std::vector<double> block_ms, scattered_ms;
-  for (int kind = 0; kind < 2; ++kind) {
-    for (int rep = 0; rep < repeats; ++rep) {
-      std::vector<pathd::Cell> changed;
-      if (kind == 0) {
-        const int x0 = static_cast<int>(rng() % (live.width() - 10));
-        const int y0 = static_cast<int>(rng() % (live.height() - 10));
-        for (int y = y0; y < y0 + 10; ++y) {
-          for (int x = x0; x < x0 + 10; ++x) changed.push_back({x, y});
-        }
-      } else {
-        for (int i = 0; i < 100; ++i) {
-          changed.push_back({static_cast<int32_t>(rng() % live.width()),
-                             static_cast<int32_t>(rng() % live.height())});
-        }
+  for (int i = 0; i < 2 * repeats; ++i) {
+    std::vector<pathd::Cell> changed;
+    if (i < repeats) {
+      const int x0 = static_cast<int>(rng() % (live.width() - 10));
+      const int y0 = static_cast<int>(rng() % (live.height() - 10));
+      for (int y = y0; y < y0 + 10; ++y) {
+        for (int x = x0; x < x0 + 10; ++x) changed.push_back({x, y});
       }
-      for (const pathd::Cell c : changed) {
-        live.set_cost(c, live.cost(c) == pathd::kFreeCost ? pathd::kLethalCost
-                                                          : pathd::kFreeCost);
+    } else {
+      for (int k = 0; k < 100; ++k) {
+        changed.push_back({static_cast<int32_t>(rng() % live.width()),
+                           static_cast<int32_t>(rng() % live.height())});
       }
-      t0 = absl::Now();
-      std::shared_ptr<const pathd::HpaGraph> next = graph->Advance(live, changed, never);
-      (kind == 0 ? block_ms : scattered_ms)
-          .push_back(absl::ToDoubleMilliseconds(absl::Now() - t0));
-      graph = std::move(next);
     }
+    for (const pathd::Cell c : changed) {
+      live.set_cost(c, live.cost(c) == pathd::kFreeCost ? pathd::kLethalCost
+                                                        : pathd::kFreeCost);
+    }
+    versions.push_back(live);
+    updates.push_back(std::move(changed));
+  }
+  std::vector<double> block_ms, scattered_ms;
+  for (size_t i = 0; i < versions.size(); ++i) {
+    t0 = absl::Now();
+    std::shared_ptr<const pathd::HpaGraph> next = graph->Advance(versions[i], updates[i], never);
+    (static_cast<int>(i) < repeats ? block_ms : scattered_ms)
+        .push_back(absl::ToDoubleMilliseconds(absl::Now() - t0));
+    graph = std::move(next);
   }
   const size_t hpa_bytes = graph->MemoryBytes();
   std::printf("| %s %dx%d | hpa_star graph | build %.0f ms | %.1f MiB (%.2f bytes/cell), "
@@ -483,6 +488,27 @@ void TiledRows(const std::string& map_name, const pathd::Grid& grid) {
               static_cast<double>(hpa_bytes) / (1 << 20),
               static_cast<double>(hpa_bytes) / static_cast<double>(grid.size()),
               graph->node_count(), Ms(Median(block_ms)).c_str(), Ms(Median(scattered_ms)).c_str());
+  if (std::find(names.begin(), names.end(), "quadtree") != names.end()) {
+    t0 = absl::Now();
+    std::shared_ptr<const pathd::Quadtree> tree = pathd::Quadtree::Build(grid, false, never);
+    const double build_ms = absl::ToDoubleMilliseconds(absl::Now() - t0);
+    block_ms.clear();
+    scattered_ms.clear();
+    for (size_t i = 0; i < versions.size(); ++i) {
+      t0 = absl::Now();
+      std::shared_ptr<const pathd::Quadtree> next = tree->Advance(versions[i], updates[i]);
+      (static_cast<int>(i) < repeats ? block_ms : scattered_ms)
+          .push_back(absl::ToDoubleMilliseconds(absl::Now() - t0));
+      tree = std::move(next);
+    }
+    std::printf("| %s %dx%d | quadtree | build %.0f ms | %.1f MiB (%.2f bytes/cell), "
+                "%zu leaves | repair 10x10 block %s ms | repair 100 scattered cells %s ms | | |\n",
+                map_name.c_str(), grid.width(), grid.height(), build_ms,
+                static_cast<double>(tree->MemoryBytes()) / (1 << 20),
+                static_cast<double>(tree->MemoryBytes()) / static_cast<double>(grid.size()),
+                tree->leaf_count(), Ms(Median(block_ms)).c_str(),
+                Ms(Median(scattered_ms)).c_str());
+  }
   std::fflush(stdout);
 }
 }  // namespace
