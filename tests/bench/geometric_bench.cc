@@ -96,16 +96,22 @@ namespace {
 using pathd::testing::AdvancingStore;
 
 
-// A registered planner, or `hpa_star:N`: HPA* with N x N clusters (made
-// here, kept for the run), so cluster sizes can be compared in one run.
+// A registered planner, or `hpa_star:N` / `hpa_star:N:edges`: HPA* with
+// N x N clusters, refined in the corridor or edge by edge (made here, kept
+// for the run), so sizes and refinements can be compared in one run.
 const pathd::Planner* PlannerByName(const std::string& name) {
   static std::map<std::string, std::unique_ptr<pathd::Planner>>* made =
       new std::map<std::string, std::unique_ptr<pathd::Planner>>();
+  const std::vector<std::string> parts = absl::StrSplit(name, ':');
   int size = 0;
-  if (absl::StartsWith(name, "hpa_star:") &&
-      absl::SimpleAtoi(name.substr(std::string("hpa_star:").size()), &size) && size >= 2) {
+  if (parts.size() >= 2 && parts[0] == "hpa_star" && absl::SimpleAtoi(parts[1], &size) &&
+      size >= 2 && (parts.size() == 2 || (parts.size() == 3 && parts[2] == "edges"))) {
     auto& planner = (*made)[name];
-    if (planner == nullptr) planner = pathd::MakeHpaStarPlanner(size);
+    if (planner == nullptr) {
+      planner = pathd::MakeHpaStarPlanner(size, parts.size() == 3
+                                                    ? pathd::HpaRefinement::kPerEdge
+                                                    : pathd::HpaRefinement::kCorridor);
+    }
     return planner.get();
   }
   return pathd::PlannerRegistry::Default().Get(name);
@@ -392,8 +398,14 @@ void TiledRows(const std::string& map_name, const pathd::Grid& grid) {
     store.SetGrid(grid);
     for (const auto& [s, g] : queries) {
       pathd::PlanRequest request = pathd::PlanRequest::Between(s, g, cost);
-      request.derived = names[p] == "hpa_star" ? static_cast<pathd::DerivedStore*>(&hpa_store)
-                                               : &store;
+      // Every HPA* of the default cluster size shares the graph built above.
+      const bool default_hpa = names[p] == "hpa_star" ||
+                               absl::StartsWith(names[p], absl::StrFormat(
+                                   "hpa_star:%d:", pathd::kHpaDefaultClusterSize)) ||
+                               names[p] == absl::StrFormat("hpa_star:%d",
+                                                           pathd::kHpaDefaultClusterSize);
+      request.derived =
+          default_hpa ? static_cast<pathd::DerivedStore*>(&hpa_store) : &store;
       const absl::Time t0 = absl::Now();
       auto r = planner->Plan(grid, request, pathd::StopCondition::None(), scratch);
       const double us = absl::ToDoubleMicroseconds(absl::Now() - t0);

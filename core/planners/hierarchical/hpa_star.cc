@@ -11,10 +11,12 @@
 //     the shared graph is never written;
 //  3. runs A* (the one best-first loop, octile or Manhattan heuristic) over
 //     the abstract nodes, numbered per query;
-//  4. refines every intra-cluster edge of the abstract path by A* inside its
-//     cluster (the edge's cost was that search's optimum, so the refined
-//     path costs what the abstract path did) and every inter-cluster edge by
-//     its single move.
+//  4. refines the abstract path by one A* over the cells of the clusters it
+//     passes through (its corridor), so the answer is the best path in the
+//     corridor and costs at most what the abstract path did; or, as the
+//     paper does (HpaRefinement::kPerEdge), every intra-cluster edge by A*
+//     inside its cluster (the edge's cost was that search's optimum) and
+//     every inter-cluster edge by its single move.
 // Complete: every grid path crosses cluster borders through entrances, and
 // each entrance's cells on either side form a straight run of traversable
 // cells inside their cluster that reaches the entrance's transition, so the
@@ -60,6 +62,15 @@ struct HpaScratch final : public SearchScratch::Extension {
   std::vector<uint32_t> cells;
   std::vector<HpaEdge> start_edges;
   std::vector<double> goal_costs;
+  // The corridor: per cluster its slot in this query's corridor, valid
+  // where corridor_stamp equals the query's stamp, and per slot its
+  // cluster.
+  std::vector<uint32_t> corridor_stamp;
+  std::vector<uint32_t> corridor_slot;
+  std::vector<int32_t> corridor_clusters;
+  // Per slot, its cluster's first cell.
+  std::vector<Cell> corridor_origin;
+  uint32_t stamp = 0;
 
   std::string key;
   int32_t width = 0;
@@ -70,6 +81,8 @@ struct HpaScratch final : public SearchScratch::Extension {
   size_t MemoryBytes() const override {
     return ids.capacity() * (sizeof(uint32_t) * 2 + 1) + cells.capacity() * 4 +
            start_edges.capacity() * sizeof(HpaEdge) + goal_costs.capacity() * 8 +
+           (corridor_stamp.capacity() + corridor_slot.capacity() +
+            corridor_clusters.capacity()) * 4 + corridor_origin.capacity() * sizeof(Cell) +
            grid_cells.capacity() + (graph != nullptr ? graph->MemoryBytes() : 0);
   }
 };
@@ -177,16 +190,81 @@ class HpaExpansion {
   const int32_t goal_cluster_;
 };
 
+// The expansion policy of the corridor search: cells of the corridor's
+// clusters, numbered slot * C^2 + the cell's place in its cluster, with the
+// grid's moves that stay in the corridor. Shifts and masks replace the
+// divisions when C is a power of two (the registered 16): they ran in
+// every neighbour test. Single use; not thread-safe.
+class CorridorExpansion {
+ public:
+  CorridorExpansion(const HpaGraph& graph, const GridView& view, const HpaScratch& state)
+      : graph_(graph), view_(view), state_(state), c_(graph.params().cluster_size) {
+    if ((c_ & (c_ - 1)) == 0) {
+      while ((1 << shift_) < c_) ++shift_;
+    } else {
+      shift_ = -1;
+    }
+  }
+
+  // Precondition: c lies in the corridor.
+  uint32_t Id(Cell c) const {
+    if (shift_ >= 0) {
+      const int32_t mask = c_ - 1;
+      const int32_t cluster = (c.y >> shift_) * graph_.clusters_x() + (c.x >> shift_);
+      return (state_.corridor_slot[cluster] << (2 * shift_)) |
+             static_cast<uint32_t>(((c.y & mask) << shift_) | (c.x & mask));
+    }
+    const int32_t cluster = graph_.ClusterOf(c.x, c.y);
+    return state_.corridor_slot[cluster] * static_cast<uint32_t>(c_ * c_) +
+           static_cast<uint32_t>((c.y % c_) * c_ + c.x % c_);
+  }
+  Cell CellOf(uint32_t id) const {
+    if (shift_ >= 0) {
+      const Cell origin = state_.corridor_origin[id >> (2 * shift_)];
+      const auto local = static_cast<int32_t>(id & ((1u << (2 * shift_)) - 1));
+      return Cell{origin.x + (local & (c_ - 1)), origin.y + (local >> shift_)};
+    }
+    const uint32_t per = static_cast<uint32_t>(c_ * c_);
+    const Cell origin = state_.corridor_origin[id / per];
+    const auto local = static_cast<int32_t>(id % per);
+    return Cell{origin.x + local % c_, origin.y + local / c_};
+  }
+  template <typename Visit>
+  void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
+    const Cell at = CellOf(id);
+    view_.ForEachNeighbor(at.x, at.y,
+                          [&](uint32_t index, int32_t nx, int32_t ny, double length) {
+                            if (!InCorridor(nx, ny)) return;
+                            visit(Id(Cell{nx, ny}), nx, ny, g + length * view_.Factor(index));
+                          });
+  }
+
+ private:
+  bool InCorridor(int32_t x, int32_t y) const {
+    const int32_t cluster = shift_ >= 0
+                                ? (y >> shift_) * graph_.clusters_x() + (x >> shift_)
+                                : graph_.ClusterOf(x, y);
+    return state_.corridor_stamp[cluster] == state_.stamp;
+  }
+
+  const HpaGraph& graph_;
+  const GridView& view_;
+  const HpaScratch& state_;
+  const int32_t c_;
+  int32_t shift_ = 0;
+};
+
 class HpaStarPlanner final : public GridPlanner {
  public:
-  explicit HpaStarPlanner(int32_t cluster_size)
+  HpaStarPlanner(int32_t cluster_size, HpaRefinement refinement)
       : GridPlanner("hpa_star",
                     PlannerTraits{
                         .description =
                             "HPA*: A* over cluster entrances (abstract graph kept per "
                             "map version, repaired per changed cluster), refined to "
                             "grid moves; complete, not optimal (a few percent longer)"}),
-        cluster_size_(cluster_size) {}
+        cluster_size_(cluster_size),
+        refinement_(refinement) {}
 
  protected:
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
@@ -219,7 +297,11 @@ class HpaStarPlanner final : public GridPlanner {
     }
     if (result.found()) {
       std::vector<Cell> path;
-      result.outcome = Refine(*graph, view, nodes, stop, expansions, state, path);
+      result.outcome =
+          refinement_ == HpaRefinement::kCorridor
+              ? RefineInCorridor(*graph, view, request, nodes, stop, expansions, q.scratch,
+                                 state, path)
+              : Refine(*graph, view, nodes, stop, expansions, state, path);
       if (result.found()) internal::SetMeasuredPath(grid, request.cost, std::move(path), &result);
     }
     result.expansions = expansions;
@@ -321,13 +403,66 @@ class HpaStarPlanner final : public GridPlanner {
     return PlanOutcome::kFound;
   }
 
+  // Step 4 by one A* over the corridor's cells, into `path`.
+  static PlanOutcome RefineInCorridor(const HpaGraph& graph, const GridView& view,
+                                      const PlanRequest& request,
+                                      const std::vector<Cell>& nodes,
+                                      const StopCondition& stop, int64_t& expansions,
+                                      SearchScratch& scratch, HpaScratch& state,
+                                      std::vector<Cell>& path) {
+    const size_t clusters = static_cast<size_t>(graph.clusters_x()) * graph.clusters_y();
+    if (state.corridor_stamp.size() != clusters) {
+      state.corridor_stamp.assign(clusters, 0);
+      state.corridor_slot.assign(clusters, 0);
+      state.stamp = 0;
+    }
+    if (++state.stamp == 0) {
+      std::fill(state.corridor_stamp.begin(), state.corridor_stamp.end(), 0);
+      state.stamp = 1;
+    }
+    state.corridor_clusters.clear();
+    state.corridor_origin.clear();
+    // Every abstract edge runs inside one cluster or crosses into the next,
+    // so the clusters of the nodes hold the whole abstract path.
+    for (const Cell& node : nodes) {
+      const int32_t cluster = graph.ClusterOf(node.x, node.y);
+      if (state.corridor_stamp[cluster] == state.stamp) continue;
+      state.corridor_stamp[cluster] = state.stamp;
+      state.corridor_slot[cluster] = static_cast<uint32_t>(state.corridor_clusters.size());
+      state.corridor_clusters.push_back(cluster);
+      int32_t x0, y0, x1, y1;
+      graph.Bounds(cluster, x0, y0, x1, y1);
+      state.corridor_origin.push_back(Cell{x0, y0});
+    }
+    const int32_t c = graph.params().cluster_size;
+    scratch.BeginSearch(state.corridor_clusters.size() * static_cast<size_t>(c * c));
+    const CorridorExpansion expansion(graph, view, state);
+    const internal::AStarPriority<internal::GridDistanceHeuristic> priority{
+        {request.goal, request.cost.connectivity}};
+    internal::OpenList open(scratch);
+    const uint32_t goal = expansion.Id(request.goal);
+    internal::PushRoot(scratch, open, expansion.Id(request.start), request.start, priority);
+    const PlanOutcome outcome = internal::BestFirstSearch(scratch, open, goal, stop,
+                                                          expansions, priority, expansion);
+    // kNoPath cannot happen: the abstract path's refinement lies in the
+    // corridor.
+    if (outcome != PlanOutcome::kFound) return outcome;
+    path.clear();
+    for (uint32_t at = goal; at != SearchScratch::kNoParent; at = scratch.Raw(at).parent) {
+      path.push_back(expansion.CellOf(at));
+    }
+    std::reverse(path.begin(), path.end());
+    return PlanOutcome::kFound;
+  }
+
   int32_t cluster_size_;
+  HpaRefinement refinement_;
 };
 
 }  // namespace
 
-std::unique_ptr<Planner> MakeHpaStarPlanner(int32_t cluster_size) {
-  return std::make_unique<HpaStarPlanner>(cluster_size);
+std::unique_ptr<Planner> MakeHpaStarPlanner(int32_t cluster_size, HpaRefinement refinement) {
+  return std::make_unique<HpaStarPlanner>(cluster_size, refinement);
 }
 
 std::unique_ptr<Planner> MakeHpaStarPlanner() {

@@ -16,9 +16,21 @@ namespace pathd {
 // gives the measurements it was chosen by.
 inline constexpr int32_t kHpaDefaultClusterSize = 16;
 
+// How the abstract path becomes grid moves.
+enum class HpaRefinement {
+  // One A* inside the union of the clusters the abstract path passes
+  // through (its corridor): the best path in that corridor, so the detours
+  // through transitions mostly vanish. The registered planner's.
+  kCorridor,
+  // Botea et al.'s: one A* inside the cluster of each abstract edge, so
+  // the path runs through every transition of the abstract path.
+  kPerEdge,
+};
+
 // An `hpa_star` planner with clusters of cluster_size x cluster_size cells
 // (precondition: >= 2). Thread-safe like every Planner.
-std::unique_ptr<Planner> MakeHpaStarPlanner(int32_t cluster_size);
+std::unique_ptr<Planner> MakeHpaStarPlanner(
+    int32_t cluster_size, HpaRefinement refinement = HpaRefinement::kCorridor);
 
 }  // namespace pathd
 
