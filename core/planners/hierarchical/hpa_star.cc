@@ -21,8 +21,8 @@
 // each entrance's cells on either side form a straight run of traversable
 // cells inside their cluster that reaches the entrance's transition, so the
 // abstract graph connects whatever the grid does (docs/decisions.md, "HPA*").
-// Not optimal: paths bend through transitions; docs/performance.md gives
-// the measured excess.
+// Not optimal: the abstract path picks the corridor, and the best path may
+// leave it; docs/performance.md gives the measured excess.
 //
 // Expansions count abstract nodes taken off the open list plus the cells the
 // insertion and refinement searches expand; the expansion recorder gets the
@@ -261,8 +261,9 @@ class HpaStarPlanner final : public GridPlanner {
                     PlannerTraits{
                         .description =
                             "HPA*: A* over cluster entrances (abstract graph kept per "
-                            "map version, repaired per changed cluster), refined to "
-                            "grid moves; complete, not optimal (a few percent longer)"}),
+                            "map version, repaired per changed cluster), refined by A* "
+                            "in the clusters it passes; complete, not optimal (0.02-0.5% "
+                            "longer on the Moving AI maps)"}),
         cluster_size_(cluster_size),
         refinement_(refinement) {}
 
