@@ -1,12 +1,15 @@
-// hpa_star (core/planners/hierarchical): paths are legal move chains under
-// an independent move check, found exactly when an independent Dijkstra
-// reaches the goal, never cheaper than its optimum and within the additive
-// bound docs/decisions.md ("HPA*") derives; the abstract graph advanced
-// through random update sequences equals a rebuilt one node for node and
-// edge for edge, and answers like it; hand-made maps whose only passage is
-// at a cluster corner or one cell wide on a border; sampled Moving AI
-// scenarios (skipped, saying so, without ../shared/benchmarks/movingai).
-// PATHD_HPA_CASES scales the randomised counts (the ASan run lowers it).
+// The hierarchical planners (core/planners/hierarchical). hpa_star: paths
+// are legal move chains under an independent move check, found exactly when
+// an independent Dijkstra reaches the goal, never cheaper than its optimum
+// and within the additive bound docs/decisions.md ("HPA*") derives; the
+// abstract graph advanced through random update sequences equals a rebuilt
+// one node for node and edge for edge, and answers like it; hand-made maps
+// whose only passage is at a cluster corner or one cell wide on a border.
+// quadtree: complete, legal, never below the optimum; the tree advanced
+// through update sequences that split and re-merge big leaves equals a
+// rebuilt one leaf for leaf. Both on sampled Moving AI scenarios (skipped,
+// saying so, without ../shared/benchmarks/movingai). PATHD_HPA_CASES
+// scales the randomised counts (the ASan run lowers it).
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
