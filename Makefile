@@ -20,6 +20,7 @@ BUILD_DIR ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 ADDRESS ?= 127.0.0.1:50051
+HTTP_ADDRESS ?= 127.0.0.1:8080
 CMAKE_CONFIGURE = cmake -S . -G Ninja
 
 .PHONY: setup-serve setup-test configure configure-test build-serve serve \
@@ -44,7 +45,7 @@ build-serve: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd pathctl
 
 serve: build-serve
-	exec $(BUILD_DIR)/server/pathd --address=$(ADDRESS) --map_dir=maps
+	exec $(BUILD_DIR)/server/pathd --address=$(ADDRESS) --map_dir=maps --http_address=$(HTTP_ADDRESS)
 
 build: configure-test
 	@cmake --build $(BUILD_DIR) -j $(JOBS)

@@ -390,6 +390,16 @@ absl::StatusOr<v1::GetCacheStatsResponse> PathdClient::GetCacheStats() const {
       });
 }
 
+absl::StatusOr<v1::ListSessionsResponse> PathdClient::ListSessions(
+    const std::string& map) const {
+  v1::ListSessionsRequest request;
+  request.set_map(map);
+  return Invoke<v1::ListSessionsResponse>(
+      timeout_, [&](grpc::ClientContext* context, v1::ListSessionsResponse* response) {
+        return planner_->ListSessions(context, request, response);
+      });
+}
+
 std::unique_ptr<
     grpc::ClientReaderWriterInterface<v1::NavigateRequest, v1::NavigateResponse>>
 PathdClient::Navigate(grpc::ClientContext* context,

@@ -137,6 +137,8 @@ class PathdClient {
   absl::StatusOr<v1::CostToGoResponse> CostToGo(
       const v1::CostToGoRequest& request) const;
   absl::StatusOr<v1::GetCacheStatsResponse> GetCacheStats() const;
+  // The open Navigate sessions of `map` (every map when empty).
+  absl::StatusOr<v1::ListSessionsResponse> ListSessions(const std::string& map) const;
   // Fleet map queries. Unreachable pairs, "none within the distance" and
   // "no trip" are OK responses.
   absl::StatusOr<v1::TableResponse> Table(const v1::TableRequest& request) const;

@@ -15,6 +15,9 @@ SERVE_PACKAGES=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libyaml-cpp-dev
   prometheus-cpp-dev libcurl4-openssl-dev
+  # libcivetweb-dev: the HTTP/JSON API and viewer (server/http/); the same
+  # civetweb prometheus-cpp serves /metrics with.
+  libcivetweb-dev
   libpng-dev
   libisal-dev
   libcsv-dev
@@ -38,6 +41,9 @@ TEST_PACKAGES=(
   # the test's user with its own config; the package's system service is not
   # used (on a machine without a policy-rc.d, apt starts it on port 80).
   nginx
+  # The viewer's browser test (tests/e2e/viewer_browser_test.py): headless
+  # Chromium, driven over the DevTools protocol with python3-websocket.
+  chromium python3-websocket
   # make fuzz: clang, its libFuzzer runtime, llvm-symbolizer for the reports;
   # make check-thread-safety: clang's -Wthread-safety.
   clang libclang-rt-14-dev llvm

@@ -55,6 +55,7 @@ constexpr MethodRole kMethodRoles[] = {
     {kMethodTrip, Role::kRead},
     {kMethodIsochrone, Role::kRead},
     {kMethodPlanFleet, Role::kRead},
+    {kMethodListSessions, Role::kRead},
     {"/grpc.health.v1.Health/Check", Role::kPublic},
     {"/grpc.health.v1.Health/Watch", Role::kPublic},
     {"/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",

@@ -64,6 +64,8 @@ inline constexpr char kMethodNearest[] = "/pathd.v1.PlannerService/Nearest";
 inline constexpr char kMethodTrip[] = "/pathd.v1.PlannerService/Trip";
 inline constexpr char kMethodIsochrone[] = "/pathd.v1.PlannerService/Isochrone";
 inline constexpr char kMethodPlanFleet[] = "/pathd.v1.PlannerService/PlanFleet";
+inline constexpr char kMethodListSessions[] =
+    "/pathd.v1.PlannerService/ListSessions";
 // Not an RPC: a Navigate observation with session_only = false writes the
 // shared map like UpdateMap, so it needs the role UpdateMap needs.
 inline constexpr char kNavigateSharedObservation[] =

@@ -9,6 +9,10 @@ namespace pathd::server {
 // Followed by the bound "host:port" and a newline.
 inline constexpr char kListeningPrefix[] = "pathd listening on ";
 
+// With --http_address, the second line: followed by the bound "host:port"
+// of the HTTP API and a newline.
+inline constexpr char kHttpListeningPrefix[] = "pathd http on ";
+
 }  // namespace pathd::server
 
 #endif  // PATHD_SERVER_LISTENING_LINE_H_

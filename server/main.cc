@@ -133,6 +133,13 @@ ABSL_FLAG(std::string, metrics_address, "",
           "IP:PORT serving Prometheus text metrics at /metrics over plain HTTP "
           "(e.g. 127.0.0.1:9464; port 0 picks a free port); empty = no "
           "metrics endpoint");
+ABSL_FLAG(std::string, http_address, "",
+          "HOST:PORT serving the HTTP/JSON API (one route per RPC, "
+          "docs/http.md) and the map viewer at / (e.g. 127.0.0.1:8080; port 0 "
+          "picks a free port); empty = no HTTP");
+ABSL_FLAG(int, http_max_streams, 16,
+          "HTTP Server-Sent Event streams (WatchMap, PlanStream, Navigate) "
+          "served at once; more get 429 RESOURCE_EXHAUSTED");
 ABSL_FLAG(absl::Duration, slow_request_threshold, absl::Seconds(1),
           "requests (not Navigate/WatchMap streams) taking at least this long "
           "are logged at warn level and counted in pathd_slow_requests_total; "
@@ -204,7 +211,8 @@ void SetUpFlagsUsage() {
       "Every flag but --config can also be set in the --config YAML file "
       "('threads: 2', 'shutdown_grace: 5s'); a flag given on the command line "
       "overrides the file, the file overrides the default.\n"
-      "Prints 'pathd listening on HOST:PORT' on stdout once it serves; "
+      "Prints 'pathd listening on HOST:PORT' on stdout once it serves (and "
+      "'pathd http on HOST:PORT' with --http_address); "
       "SIGINT/SIGTERM shut it down gracefully (exit 0).");
 }
 
@@ -298,6 +306,7 @@ pathd::server::ServerOptions OptionsFromFlags() {
       static_cast<size_t>(absl::GetFlag(FLAGS_derived_cache_bytes));
   options.honour_origin_yaw = absl::GetFlag(FLAGS_honour_origin_yaw);
   if (threads < 0) FlagError("threads", "must be >= 0");
+  if (absl::GetFlag(FLAGS_http_max_streams) < 1) FlagError("http_max_streams", "must be >= 1");
   if (queue_depth < 1) FlagError("queue_depth", "must be >= 1");
   if (options.max_map_cells < 1) FlagError("max_map_cells", "must be >= 1");
   if (options.max_expansions < 0) FlagError("max_expansions", "must be >= 0");
@@ -373,6 +382,8 @@ pathd::server::ServerOptions OptionsFromFlags() {
   options.threads = threads;
   options.queue_depth = static_cast<size_t>(queue_depth);
   options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  options.http_address = absl::GetFlag(FLAGS_http_address);
+  options.http_max_streams = absl::GetFlag(FLAGS_http_max_streams);
   options.replica_name = absl::GetFlag(FLAGS_replica_name);
   for (const char c : options.replica_name) {
     if (c < 0x20 || c > 0x7e) {
@@ -469,6 +480,10 @@ int main(int argc, char** argv) {
   }
   std::printf("%s%s\n", pathd::server::kListeningPrefix,
               server.listen_address().c_str());
+  if (server.http_port() != 0) {
+    std::printf("%s%s\n", pathd::server::kHttpListeningPrefix,
+                pathd::server::ReplacePort(options.http_address, server.http_port()).c_str());
+  }
   std::fflush(stdout);
 
   int signal_number = 0;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <utility>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
@@ -277,6 +278,14 @@ std::string MemoryBudget::CallerOf(const grpc::ServerContextBase& context) const
   }
   // "ipv4:127.0.0.1:5555", "ipv6:[::1]:5555": the address without the port.
   std::string peer = context.peer();
+  // A call the HTTP gateway forwards over the in-process channel: the HTTP
+  // client's address (only in-process callers can name one).
+  if (absl::StartsWith(peer, "inproc")) {
+    const auto& metadata = context.client_metadata();
+    if (auto it = metadata.find("x-pathd-http-peer"); it != metadata.end()) {
+      return absl::StrCat("http:", std::string(it->second.data(), it->second.size()));
+    }
+  }
   if (const size_t colon = peer.rfind(':');
       colon != std::string::npos && peer.find(':') != colon) {
     peer.resize(colon);

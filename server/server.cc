@@ -12,6 +12,7 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server_builder.h>
+#include <grpcpp/support/channel_arguments.h>
 #include <grpcpp/support/server_interceptor.h>
 
 #include "absl/strings/str_cat.h"
@@ -255,6 +256,31 @@ absl::Status PathdServer::Start() {
         "pathd?), not local, or not a valid host:port",
         options_.address));
   }
+  if (!options_.http_address.empty()) {
+    grpc::ChannelArguments channel_args;
+    channel_args.SetMaxReceiveMessageSize(-1);
+    channel_args.SetMaxSendMessageSize(-1);
+    absl::StatusOr<std::unique_ptr<HttpGateway>> http = HttpGateway::Start(
+        HttpGatewayOptions{.address = options_.http_address,
+                           .max_streams = options_.http_max_streams,
+                           .max_body_bytes = max_message_bytes(),
+                           .replica_name = options_.replica_name},
+        server_->InProcessChannel(channel_args));
+    if (!http.ok()) {
+      server_->Shutdown();
+      server_->Wait();
+      server_.reset();
+      pool_->Shutdown(WorkerPool::ShutdownMode::kDrop);
+      if (metrics_ != nullptr) {
+        ClearRequestObserver(metrics_.get());
+        metrics_.reset();
+      }
+      return http.status();
+    }
+    http_ = *std::move(http);
+    spdlog::info("serving the HTTP API and viewer on http://{}/",
+                 ReplacePort(options_.http_address, http_->port()));
+  }
   if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
     health->SetServingStatus(true);
   }
@@ -283,6 +309,9 @@ void PathdServer::Shutdown() {
     if (grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService()) {
       health->SetServingStatus(false);
     }
+    // New HTTP requests are refused and its event streams end; HTTP calls in
+    // flight finish with the gRPC calls they made.
+    if (http_ != nullptr) http_->BeginShutdown();
     // Open sessions would otherwise hold the shutdown for the whole grace.
     sessions_->Shutdown();
     // Likewise for WatchMap streams, which never end on their own.
@@ -296,6 +325,11 @@ void PathdServer::Shutdown() {
     // Anything still queued answers UNAVAILABLE; joining guarantees no job
     // touches a call after the server below is gone.
     pool_->Shutdown(WorkerPool::ShutdownMode::kDrop);
+  }
+  if (http_ != nullptr) {
+    // Every HTTP handler has returned: their gRPC calls have ended.
+    http_->Stop();
+    http_.reset();
   }
   if (server_ != nullptr) {
     server_->Wait();

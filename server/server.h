@@ -18,6 +18,7 @@
 #include "server/auth.h"
 #include "server/storage/durable_store.h"
 #include "server/derived_cache.h"
+#include "server/http/http_gateway.h"
 #include "server/incremental_cache.h"
 #include "server/rpc/map_service.h"
 #include "server/map_store.h"
@@ -93,6 +94,11 @@ struct ServerOptions {
   // "IP:PORT" serving Prometheus text metrics at /metrics; port 0 picks a
   // free port (see PathdServer::metrics_port); empty = no metrics.
   std::string metrics_address;
+  // "host:port" of the HTTP/JSON API and the viewer (server/http/); port 0
+  // picks a free port (see PathdServer::http_port); empty = no HTTP.
+  std::string http_address;
+  // Server-Sent Event streams the HTTP API serves at once.
+  int http_max_streams = 16;
   // Non-stream requests taking at least this long are logged at warn level;
   // zero = never. Process-wide (server/request_log.h).
   absl::Duration slow_request_threshold = absl::Seconds(1);
@@ -153,6 +159,8 @@ class PathdServer {
   int port() const { return port_; }
   // "host:port" with the bound port, for the "listening" line and clients.
   std::string listen_address() const;
+  // The bound HTTP port; 0 without --http_address or before Start.
+  int http_port() const { return http_ == nullptr ? 0 : http_->port(); }
   // The bound metrics port; 0 without --metrics_address or before Start.
   int metrics_port() const { return metrics_ == nullptr ? 0 : metrics_->port(); }
 
@@ -198,6 +206,9 @@ class PathdServer {
   std::unique_ptr<PlannerServiceImpl> planner_service_;
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
+  // Forwards to server_ over its in-process channel: declared after it,
+  // stopped before it.
+  std::unique_ptr<HttpGateway> http_;
 
   absl::Mutex shutdown_mu_;
   bool shut_down_ ABSL_GUARDED_BY(shutdown_mu_) = false;

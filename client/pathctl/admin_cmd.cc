@@ -1,4 +1,5 @@
-// pathctl cache-stats, health and metrics: GetCacheStats, the gRPC health
+// pathctl cache-stats, sessions, health and metrics: GetCacheStats,
+// ListSessions, the gRPC health
 // check, and an HTTP GET of pathd's Prometheus endpoint (libcurl).
 #include "client/pathctl/admin_cmd.h"
 
@@ -47,6 +48,50 @@ int CacheStats(CommandEnv& env, Args args) {
   env.out() << table.Aligned();
   env.out() << absl::StrFormat("sessions:    %d open, %d bytes of D* Lite state\n",
                                response->sessions(), response->session_bytes());
+  return kExitOk;
+}
+
+// --- sessions ----------------------------------------------------------------
+
+int Sessions(CommandEnv& env, Args args) {
+  if (args.size() > 1) return env.Usage("sessions takes at most one map NAME");
+  absl::StatusOr<v1::ListSessionsResponse> response =
+      env.client().ListSessions(args.empty() ? "" : args[0]);
+  if (!response.ok()) return env.Fail(response.status());
+  if (env.json()) return env.PrintJson(*response);
+  Table table(env.csv() ? std::vector<std::string>{"session", "map", "robot_x", "robot_y",
+                                                   "goal_x", "goal_y", "path_cells",
+                                                   "length_m", "age_s", "idle_s"}
+                        : std::vector<std::string>{"SESSION", "MAP", "ROBOT", "GOAL",
+                                                   "PATH", "LENGTH_M", "AGE_S", "IDLE_S"});
+  for (const v1::SessionInfo& s : response->sessions()) {
+    const v1::PlanResponse& plan = s.last().plan();
+    // The robot is where its latest path starts (kinematic sessions: the
+    // pose the answer planned from).
+    std::string x = "-", y = "-";
+    if (s.last().has_robot_pose()) {
+      x = absl::StrFormat("%.2f", s.last().robot_pose().x());
+      y = absl::StrFormat("%.2f", s.last().robot_pose().y());
+    } else if (plan.path_size() > 0) {
+      x = absl::StrCat(plan.path(0).x());
+      y = absl::StrCat(plan.path(0).y());
+    }
+    const std::string gx = s.last().has_plan() ? absl::StrCat(plan.goal().x()) : "-";
+    const std::string gy = s.last().has_plan() ? absl::StrCat(plan.goal().y()) : "-";
+    const std::string length = plan.found() ? absl::StrFormat("%.2f", plan.length_m()) : "-";
+    const std::string age = absl::StrFormat("%.1f", s.age_seconds());
+    const std::string idle = absl::StrFormat("%.1f", s.idle_seconds());
+    if (env.csv()) {
+      table.AddRow({absl::StrCat(s.session_id()), s.map(), x, y, gx, gy,
+                    absl::StrCat(plan.path_size()), length, age, idle});
+    } else {
+      table.AddRow({absl::StrCat(s.session_id()), s.map(), absl::StrCat("(", x, ", ", y, ")"),
+                    absl::StrCat("(", gx, ", ", gy, ")"), absl::StrCat(plan.path_size()),
+                    length, age, idle});
+    }
+  }
+  if (env.csv()) return env.PrintCsv(table);
+  env.out() << table.Aligned();
   return kExitOk;
 }
 
@@ -168,6 +213,16 @@ const Command kCacheStatsCommand = {
             "repairs and rebuilds, and the open Navigate sessions.",
     .flags = {},
     .run = CacheStats,
+};
+
+const Command kSessionsCommand = {
+    .name = "sessions",
+    .synopsis = "[NAME]",
+    .help = "Lists the open Navigate sessions (of map NAME, or of every map): where\n"
+            "each robot is, its goal, its current path's cells and length, and how\n"
+            "long since it opened and since its last message (ListSessions).",
+    .flags = {},
+    .run = Sessions,
 };
 
 const Command kHealthCommand = {

@@ -23,7 +23,7 @@ const Command* const kCommands[] = {
     &kMapsWatchCommand,  &kMapsImportCommand, &kMapsExportCommand,
     &kMapsStatsCommand,
     &kPlanCommand,       &kBatchCommand,      &kNavigateCommand,
-    &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand,
+    &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand, &kSessionsCommand,
     &kHealthCommand,     &kMetricsCommand,    &kBenchCommand,
     &kTableCommand,      &kNearestCommand,    &kTripCommand,
     &kIsochroneCommand,  &kFleetPlanCommand,
@@ -165,7 +165,7 @@ int Run(const Options& options, const std::vector<std::string>& args,
   }
   if (env.options().global.output == OutputFormat::kGeoJson && !command->geojson) {
     return env.Usage(absl::StrCat("--output geojson: ", command->name,
-                                  " prints table, json or csv (geojson is for isochrone)"));
+                                  " prints table, json or csv (geojson is for plan and isochrone)"));
   }
   const Args rest = Args(args).subspan(words);
   if (command->map_arg != MapArg::kNone && !rest.empty()) {

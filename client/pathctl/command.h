@@ -112,6 +112,7 @@ extern const Command kIsochroneCommand;
 extern const Command kFleetPlanCommand;
 extern const Command kCheckCommand;
 extern const Command kCacheStatsCommand;
+extern const Command kSessionsCommand;
 extern const Command kHealthCommand;
 extern const Command kMetricsCommand;
 extern const Command kBenchCommand;

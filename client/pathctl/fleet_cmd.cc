@@ -12,6 +12,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "client/pathctl/command.h"
+#include "proto/geojson.h"
 
 namespace pathd::pathctl {
 namespace {
@@ -247,39 +248,6 @@ int RunTrip(CommandEnv& env, Args args) {
 
 // ---- isochrone ----
 
-// A ring as GeoJSON positions, the first repeated at the end as RFC 7946
-// asks.
-std::string GeoRing(const v1::WorldRing& ring) {
-  std::vector<std::string> coords;
-  for (const v1::WorldPoint& p : ring.points()) {
-    coords.push_back(absl::StrFormat("[%.6f, %.6f]", p.x(), p.y()));
-  }
-  if (!coords.empty()) coords.push_back(coords.front());
-  return absl::StrCat("[", absl::StrJoin(coords, ", "), "]");
-}
-
-// A FeatureCollection with one MultiPolygon feature: exteriors
-// counter-clockwise, holes clockwise, as RFC 7946 asks (the world frame's y
-// axis points the way cell rows grow, so cell orientation carries over).
-// Written out here: a few fixed keys and numbers, and the map name, which
-// needs no escaping (names are A-Z a-z 0-9 . _ -, map_name.h).
-std::string GeoJson(const v1::IsochroneResponse& r, const std::string& map) {
-  std::vector<std::string> polygons;
-  for (const v1::IsochronePolygon& p : r.polygons()) {
-    std::vector<std::string> rings{GeoRing(p.world_exterior())};
-    for (const v1::WorldRing& hole : p.world_holes()) rings.push_back(GeoRing(hole));
-    polygons.push_back(absl::StrCat("[", absl::StrJoin(rings, ", "), "]"));
-  }
-  return absl::StrFormat(
-      "{\"type\": \"FeatureCollection\", \"features\": [{\"type\": \"Feature\", "
-      "\"geometry\": {\"type\": \"MultiPolygon\", \"coordinates\": [%s]}, "
-      "\"properties\": {\"map\": \"%s\", \"map_version\": %d, \"frame_id\": \"%s\", "
-      "\"start\": [%d, %d], \"budget_m\": %.6f, \"reachable_cells\": %d, "
-      "\"area_m2\": %.6f}}]}\n",
-      absl::StrJoin(polygons, ", "), map, r.map_version(), r.frame_id(), r.start().x(),
-      r.start().y(), r.budget_m(), r.reachable_cells(), r.area_m2());
-}
-
 int RunIsochrone(CommandEnv& env, Args args) {
   const FleetOptions& o = env.options().fleet;
   if (args.size() != 3) return env.Usage("isochrone takes NAME X Y and --budget");
@@ -301,7 +269,7 @@ int RunIsochrone(CommandEnv& env, Args args) {
   if (!response.ok()) return env.Fail(response.status());
   if (env.json()) return env.PrintJson(*response);
   if (env.options().global.output == OutputFormat::kGeoJson) {
-    env.out() << GeoJson(*response, request.map());
+    env.out() << IsochroneGeoJson(*response, request.map());
     return kExitOk;
   }
   if (env.csv()) {

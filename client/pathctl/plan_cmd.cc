@@ -12,6 +12,7 @@
 #include "absl/strings/strip.h"
 #include "client/pathctl/command.h"
 #include "client/pathctl/cost_to_go_cmd.h"
+#include "proto/geojson.h"
 
 namespace pathd::pathctl {
 namespace {
@@ -214,6 +215,10 @@ int Plan(CommandEnv& env, Args args) {
     const int print_code = env.PrintJson(*response);
     return print_code == kExitOk ? code : print_code;
   }
+  if (env.options().global.output == OutputFormat::kGeoJson) {
+    env.out() << PlanGeoJson(*response, request.map());
+    return code;
+  }
   if (env.csv()) {
     env.PrintCsv(PlanPathCsv(*response));
     return code;
@@ -382,16 +387,18 @@ const Command kPlanCommand = {
                 " [--start_yaw R] [--goal_yaw R] [--goal_yaw_tolerance R]\n"
                 " [--reverse_penalty P] [--lattice L] [--no_smooth] [--smooth]\n"
                 " [--via X,Y[;X,Y...] [--allow_partial]] [--expansions]\n"
-                " [--progress]",
+                " [--progress] [--output table|json|csv|geojson]",
     .help = "Plans a path on map NAME from cell (SX, SY) to (GX, GY) (world metres\n"
             "with --world) and prints whether one was found, its cost, length,\n"
             "expansions and cells. Exit code 3 when no path was found (the outcome\n"
             "says why). --progress streams the search's progress to stderr.\n"
             "The kinematic planners (hybrid_astar, state_lattice) plan poses for the\n"
-            "--footprint (metres) with --min_turning_radius; see docs/pathctl.md.",
+            "--footprint (metres) with --min_turning_radius; see docs/pathctl.md.\n"
+            "--output geojson prints the path as a GeoJSON LineString in world metres.",
     .flags = kPlanFlagNames,
     .run = Plan,
     .map_arg = MapArg::kExisting,
+    .geojson = true,
 };
 
 }  // namespace pathd::pathctl

@@ -75,6 +75,19 @@ class NavigationSession final : public NavigateReactor {
     return map_name_ == name;
   }
 
+  // ListSessions' entry: the map, the last answer or push, the ages.
+  // `map` empty matches every session; false when this one is not listed.
+  bool Describe(std::string_view map, absl::Time now, v1::SessionInfo& info) const {
+    absl::MutexLock lock(&mu_);
+    if (!map.empty() && map_name_ != map) return false;
+    info.set_session_id(id_);
+    info.set_map(map_name_);
+    if (last_sent_.has_value()) *info.mutable_last() = *last_sent_;
+    info.set_age_seconds(absl::ToDoubleSeconds(now - opened_at_));
+    info.set_idle_seconds(absl::ToDoubleSeconds(now - last_activity_));
+    return true;
+  }
+
   // A new version of this session's map: repair the search and push the path
   // if it changed. Coalesced: one pending push covers any number of versions.
   void SchedulePush() {
@@ -216,6 +229,7 @@ class NavigationSession final : public NavigateReactor {
   void EnqueueLocked(v1::NavigateResponse response) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     if (finish_requested_) return;
     response.set_session_id(id_);
+    last_sent_ = response;
     writes_.push_back(std::move(response));
     if (!writing_) StartNextWriteLocked();
   }
@@ -323,6 +337,8 @@ class NavigationSession final : public NavigateReactor {
   bool push_pending_ ABSL_GUARDED_BY(mu_) = false;
   std::optional<absl::Status> pending_end_ ABSL_GUARDED_BY(mu_);
   std::deque<v1::NavigateResponse> writes_ ABSL_GUARDED_BY(mu_);
+  // The last answer or push queued, for ListSessions.
+  std::optional<v1::NavigateResponse> last_sent_ ABSL_GUARDED_BY(mu_);
   // Owned by gRPC between StartWrite and OnWriteDone.
   v1::NavigateResponse current_write_;
   bool writing_ ABSL_GUARDED_BY(mu_) = false;
@@ -433,6 +449,16 @@ void NavigationSessions::ReapIdle() {
     for (const auto& [id, session] : sessions_) {
       session->EndIfIdle(now, options_.idle_timeout);
     }
+  }
+}
+
+void NavigationSessions::List(std::string_view map, v1::ListSessionsResponse& out) const {
+  const absl::Time now = absl::Now();
+  // Holding mu_ keeps every listed session alive (deletion waits for Remove).
+  absl::MutexLock lock(&mu_);
+  for (const auto& [id, session] : sessions_) {
+    v1::SessionInfo info;
+    if (session->Describe(map, now, info)) *out.add_sessions() = std::move(info);
   }
 }
 

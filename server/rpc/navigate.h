@@ -82,6 +82,11 @@ class NavigationSessions {
   // robots to hang up.
   void Shutdown();
 
+  // Appends the open sessions of `map` (every map when empty) to `out`, in
+  // id order, each with the last answer or push it sent.
+  void List(std::string_view map, v1::ListSessionsResponse& out) const
+      ABSL_LOCKS_EXCLUDED(mu_);
+
   // Open sessions and the bytes of their D* Lite state.
   int64_t count() const;
   int64_t bytes() const;

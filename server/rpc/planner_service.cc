@@ -110,6 +110,22 @@ grpc::ServerUnaryReactor* PlannerServiceImpl::GetCacheStats(
   return reactor;
 }
 
+grpc::ServerUnaryReactor* PlannerServiceImpl::ListSessions(
+    grpc::CallbackServerContext* context, const v1::ListSessionsRequest* request,
+    v1::ListSessionsResponse* response) {
+  if (auto* refused =
+          RefuseUnauthorized(options_.authenticator, context, kMethodListSessions)) {
+    return refused;
+  }
+  const absl::Time received = absl::Now();
+  sessions_.List(request->map(), *response);
+  LogRequest("ListSessions", request->map().empty() ? "-" : request->map(), "",
+             absl::OkStatus(), received);
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  reactor->Finish(grpc::Status::OK);
+  return reactor;
+}
+
 grpc::ServerWriteReactor<v1::PlanStreamEvent>* PlannerServiceImpl::PlanStream(
     grpc::CallbackServerContext* context, const v1::PlanRequest* request) {
   if (auto* refused = RefuseUnauthorized<grpc::ServerWriteReactor<v1::PlanStreamEvent>>(

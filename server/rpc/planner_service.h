@@ -98,6 +98,11 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
                                           const v1::GetCacheStatsRequest* request,
                                           v1::GetCacheStatsResponse* response) override;
 
+  // Answers on the gRPC thread: it copies each session's last answer.
+  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,
+                                         const v1::ListSessionsRequest* request,
+                                         v1::ListSessionsResponse* response) override;
+
   // Plan with progress events (planner_service.proto); the plan runs on the
   // pool like Plan's, and its stop condition reports the progress.
   grpc::ServerWriteReactor<v1::PlanStreamEvent>* PlanStream(

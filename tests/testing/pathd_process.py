@@ -18,6 +18,8 @@ import time
 # The line pathd prints on stdout once it serves: this prefix, then
 # HOST:PORT (server/listening_line.h defines it for C++).
 LISTENING_PREFIX = "pathd listening on "
+# With --http_address, the second line: this prefix, then the HTTP HOST:PORT.
+HTTP_PREFIX = "pathd http on "
 
 # Hang guard of every wait: generous for a loaded machine, never a timing
 # assertion.
@@ -48,6 +50,7 @@ class PathdProcess:
                  extra_env=None):
         self.bound = bound
         self.log_path = log_path
+        self._pending = b""
         self._log = open(log_path, "ab") if log_path is not None else None
         env = {k: v for k, v in os.environ.items() if k != "PATHD_SERVER"}
         env.update(extra_env or {})
@@ -65,15 +68,24 @@ class PathdProcess:
             raise RuntimeError(f"{binary}: unexpected first stdout line '{line}'"
                                f"{self._see_log()}")
         self.address = line[len(LISTENING_PREFIX):]
+        # The HTTP API's address when the flags ask for one, else None.
+        self.http_address = None
+        if any(f.startswith("--http_address=") and f != "--http_address=" for f in flags):
+            line = self._read_line()
+            if not line.startswith(HTTP_PREFIX):
+                self.kill()
+                raise RuntimeError(f"{binary}: expected '{HTTP_PREFIX}...', got '{line}'"
+                                   f"{self._see_log()}")
+            self.http_address = line[len(HTTP_PREFIX):]
 
     def _see_log(self):
         return f"; see {self.log_path}" if self.log_path is not None else ""
 
     def _read_line(self):
-        """The first stdout line, without its newline."""
+        """The next stdout line, without its newline."""
         fd = self.proc.stdout.fileno()
         deadline = time.monotonic() + self.bound
-        data = b""
+        data = self._pending
         while b"\n" not in data:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
@@ -89,7 +101,8 @@ class PathdProcess:
                     f"pathd exited (code {code}) before listening"
                     f"{self._see_log()}", code)
             data += chunk
-        return data.split(b"\n", 1)[0].decode()
+        line, self._pending = data.split(b"\n", 1)
+        return line.decode()
 
     def stop(self):
         """SIGTERM, then the exit code (negative: the signal that ended it);
