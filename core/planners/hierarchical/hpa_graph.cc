@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <cstring>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -260,8 +259,9 @@ std::string HpaGraph::FirstDifference(const HpaGraph& a, const HpaGraph& b) {
       return absl::StrFormat("%s: %d vs %d nodes or different cells", where,
                              x.nodes.size(), y.nodes.size());
     }
-    if (x.intra.size() != y.intra.size() ||
-        std::memcmp(x.intra.data(), y.intra.data(), x.intra.size() * sizeof(float)) != 0) {
+    // Costs are never NaN, so == on the floats is equality of the bits
+    // (but for 0 and -0, which no search produces).
+    if (x.intra != y.intra) {
       return where + ": intra-cluster costs differ";
     }
     if (x.inter_begin != y.inter_begin || x.inter.size() != y.inter.size()) {
