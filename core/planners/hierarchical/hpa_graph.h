@@ -128,7 +128,7 @@ class HpaGraph {
   // Clusters row by row, each row shared between versions until a cluster
   // in it is rebuilt, so an advance copies one pointer per row and one per
   // cluster of the rows it touches (not one per cluster: 262,144 of them
-  // on a 8192 x 8192 map, half a millisecond of reference counting alone).
+  // on a 8192 x 8192 map).
   using Row = std::vector<std::shared_ptr<const HpaCluster>>;
   std::vector<std::shared_ptr<const Row>> rows_;
   size_t node_count_ = 0;
