@@ -35,6 +35,8 @@ std::unique_ptr<Planner> MakeEuclideanSpmPlanner();
 std::unique_ptr<Planner> MakeNavMeshPlanner();
 std::unique_ptr<Planner> MakeStateLatticePlanner();
 std::unique_ptr<Planner> MakeHybridAStarPlanner();
+std::unique_ptr<Planner> MakeHpaStarPlanner();
+std::unique_ptr<Planner> MakeQuadtreePlanner();
 
 }  // namespace pathd
 

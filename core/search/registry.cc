@@ -42,6 +42,8 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeNavMeshPlanner),
              PlannerRegistry::Factory(&MakeStateLatticePlanner),
              PlannerRegistry::Factory(&MakeHybridAStarPlanner),
+             PlannerRegistry::Factory(&MakeHpaStarPlanner),
+             PlannerRegistry::Factory(&MakeQuadtreePlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list
