@@ -71,7 +71,7 @@ TEST_F(E2eTest, NavigateReplaysTheDstarLiteDemo) {
 // change when another client blocks a cell on it, without asking.
 TEST_F(E2eTest, NavigateSessionReceivesAPushWhenAnotherClientBlocksItsPath) {
   ASSERT_NO_FATAL_FAILURE(CreateMap("room", OpenRoomMap()));
-  const std::string script = MapFile("push.nav", "expect-push 1000\n");
+  const std::string script = MapFile("push.nav", "expect-push 30000\n");
   std::unique_ptr<PathctlProcess> robot =
       StartCtl({"navigate", "room", "0", "0", "9", "9", "--script", script});
   ASSERT_TRUE(robot->WaitForLine(" cells): ")) << robot->Finish();
