@@ -32,6 +32,7 @@
 #include "pathd/v1/planner_service.grpc.pb.h"
 #include "proto/geojson.h"
 #include "proto/planner_names.h"
+#include "server/grpc_status.h"
 #include "server/http/exchange.h"
 #include "server/http/web_assets.h"
 
@@ -107,11 +108,6 @@ absl::Status RequestFromQuery(const std::map<std::string, std::string>& query,
         absl::StrCat("bad query parameter: ", std::string(parsed.message())));
   }
   return absl::OkStatus();
-}
-
-grpc::Status ToGrpc(const absl::Status& status) {
-  return grpc::Status(static_cast<grpc::StatusCode>(status.code()),
-                      std::string(status.message()));
 }
 
 bool PrintableAscii(std::string_view text) {
@@ -385,11 +381,11 @@ class HttpGateway::Impl {
             grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Response*),
             std::string (*geojson)(const Response&, std::string_view) = nullptr) {
     absl::StatusOr<std::pair<bool, Format>> output = TakeOutputOptions(x, geojson != nullptr);
-    if (!output.ok()) return x.SendError(ToGrpc(output.status()));
+    if (!output.ok()) return x.SendError(ToGrpcStatus(output.status()));
     Request request;
     if (absl::Status s = ReadRequest(x, map, request); !s.ok()) return RefuseRequest(x, s);
     grpc::ClientContext context;
-    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpcStatus(s));
     Response response;
     const grpc::Status status = (stub.*method)(&context, request, &response);
     if (!status.ok()) return x.SendError(status);
@@ -397,7 +393,7 @@ class HttpGateway::Impl {
       return x.Send(200, "application/geo+json", geojson(response, map));
     }
     absl::StatusOr<std::string> json = ToJson(response, output->first);
-    if (!json.ok()) return x.SendError(ToGrpc(json.status()));
+    if (!json.ok()) return x.SendError(ToGrpcStatus(json.status()));
     return x.SendJson(*json);
   }
 
@@ -410,7 +406,7 @@ class HttpGateway::Impl {
       return x.Send(413, "application/json",
                     StatusJson(grpc::StatusCode::RESOURCE_EXHAUSTED, std::string(status.message())));
     }
-    return x.SendError(ToGrpc(status));
+    return x.SendError(ToGrpcStatus(status));
   }
 
   // Admits one more event stream (--http_max_streams) and registers it.
@@ -449,9 +445,9 @@ class HttpGateway::Impl {
                    IdOf id_of) {
     if (absl::Status s = ReadRequest(x, map, request); !s.ok()) return RefuseRequest(x, s);
     grpc::ClientContext context;
-    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpcStatus(s));
     OpenStream open{&x, &context};
-    if (absl::Status s = OpenEventStream(open); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = OpenEventStream(open); !s.ok()) return x.SendError(ToGrpcStatus(s));
     std::unique_ptr<grpc::ClientReader<Event>> reader = (stub.*method)(&context, request);
     Event event;
     while (reader->Read(&event)) {
@@ -471,7 +467,7 @@ class HttpGateway::Impl {
   // them by request_id). Each request's map defaults to the URL's.
   int PlanBatch(HttpExchange& x, const std::string& map) {
     absl::StatusOr<std::pair<bool, Format>> output = TakeOutputOptions(x, false);
-    if (!output.ok()) return x.SendError(ToGrpc(output.status()));
+    if (!output.ok()) return x.SendError(ToGrpcStatus(output.status()));
     if (!x.query().empty()) {
       return x.SendError(grpc::StatusCode::INVALID_ARGUMENT,
                          absl::StrFormat("unknown query parameter \"%s\"", x.query().begin()->first));
@@ -479,7 +475,7 @@ class HttpGateway::Impl {
     absl::StatusOr<std::string> body = x.ReadBody();
     if (!body.ok()) return RefuseRequest(x, body.status());
     google::protobuf::Struct parsed;
-    if (absl::Status s = FromJson(*body, parsed); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = FromJson(*body, parsed); !s.ok()) return x.SendError(ToGrpcStatus(s));
     const auto& fields = parsed.fields();
     auto requests_field = fields.find("requests");
     if (fields.size() != 1 || requests_field == fields.end() ||
@@ -506,7 +502,7 @@ class HttpGateway::Impl {
       requests.push_back(std::move(request));
     }
     grpc::ClientContext context;
-    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpcStatus(s));
     auto stream = planner_->PlanBatch(&context);
     // The writer runs beside the reader: the server answers while requests
     // are still arriving, and its flow control would stall one thread doing
@@ -543,12 +539,12 @@ class HttpGateway::Impl {
                          "the body must be a NavigateRequest with \"open\"");
     }
     if (absl::Status s = SetMapName(*first.mutable_open(), map); !s.ok()) {
-      return x.SendError(ToGrpc(s));
+      return x.SendError(ToGrpcStatus(s));
     }
     grpc::ClientContext context;
-    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = PrepareContext(x, context); !s.ok()) return x.SendError(ToGrpcStatus(s));
     OpenStream open{&x, &context};
-    if (absl::Status s = OpenEventStream(open); !s.ok()) return x.SendError(ToGrpc(s));
+    if (absl::Status s = OpenEventStream(open); !s.ok()) return x.SendError(ToGrpcStatus(s));
     auto navigation = std::make_shared<Navigation>();
     navigation->authorization = x.Header("Authorization").value_or("");
     auto stream = planner_->Navigate(&context);
