@@ -26,7 +26,7 @@ const Command* const kCommands[] = {
     &kCostToGoCommand,   &kCheckCommand,      &kCacheStatsCommand, &kSessionsCommand,
     &kHealthCommand,     &kMetricsCommand,    &kBenchCommand,
     &kTableCommand,      &kNearestCommand,    &kTripCommand,
-    &kIsochroneCommand,  &kFleetPlanCommand,
+    &kIsochroneCommand,  &kFleetPlanCommand,  &kSimulateCommand,
     &kRenderCommand,     &kCompletionCommand, &kHelpCommand,
 };
 

@@ -110,6 +110,7 @@ extern const Command kNearestCommand;
 extern const Command kTripCommand;
 extern const Command kIsochroneCommand;
 extern const Command kFleetPlanCommand;
+extern const Command kSimulateCommand;
 extern const Command kCheckCommand;
 extern const Command kCacheStatsCommand;
 extern const Command kSessionsCommand;

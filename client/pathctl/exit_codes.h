@@ -19,6 +19,8 @@ enum ExitCode : int {
   kExitDeadline = 6,     // DEADLINE_EXCEEDED: --timeout ran out
   kExitNotFound = 7,     // NOT_FOUND: no such map (or local file or folder)
   kExitDenied = 8,       // UNAUTHENTICATED or PERMISSION_DENIED
+  // simulate ran, and a robot collided or did not arrive.
+  kExitSimulationFailed = 9,
 };
 
 // The exit code of a command that failed with `code`: kExitUnavailable,

@@ -191,7 +191,11 @@ ABSL_FLAG(uint64_t, seed, 1,
           "solver's random choices");
 ABSL_FLAG(bool, plan, false,
           "render: plan from SX SY to GX GY and draw the path");
-ABSL_FLAG(std::string, out, "", "render: write the picture to this PNG file");
+ABSL_FLAG(std::string, out, "", "render, simulate: write the picture to this PNG file");
+ABSL_FLAG(std::string, trajectory, "",
+          "simulate: write the trajectories to this CSV file (one row per robot and control period)");
+ABSL_FLAG(std::string, log_json, "",
+          "simulate: write the summary and the trajectories to this JSON file");
 // -o is --out's short spelling; Abseil flags have no aliases.
 ABSL_FLAG(std::string, o, "", "render: the same as --out");
 ABSL_FLAG(bool, ascii, false, "render: print the picture as text");
@@ -379,6 +383,9 @@ int main(int argc, char** argv) {
   bench.requests = absl::GetFlag(FLAGS_requests);
   bench.movingai = absl::GetFlag(FLAGS_movingai);
   bench.seed = absl::GetFlag(FLAGS_seed);
+
+  options.simulate.trajectory = absl::GetFlag(FLAGS_trajectory);
+  options.simulate.log_json = absl::GetFlag(FLAGS_log_json);
 
   pathctl::RenderFlags& render = options.render;
   render.plan = absl::GetFlag(FLAGS_plan);

@@ -180,6 +180,13 @@ struct FleetOptions {
   uint64_t seed = 1;
 };
 
+// simulate: where to write the run's trajectories (the picture takes
+// render's --out, --scale and --y_up).
+struct SimulateOptions {
+  std::string trajectory;  // CSV
+  std::string log_json;
+};
+
 struct MetricsOptions {
   std::string metrics_address = kDefaultMetricsAddress;
 };
@@ -225,6 +232,7 @@ struct Options {
   NavigateOptions navigate;
   CostToGoOptions cost_to_go;
   FleetOptions fleet;
+  SimulateOptions simulate;
   MetricsOptions metrics;
   BenchOptions bench;
   RenderFlags render;

@@ -255,6 +255,44 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
                       radius * 0.5, kFreeColour);
     }
   }
+  // Simulated trails: thin lines, so that robots passing each other stay
+  // apart in the picture; then every start, outline and goal.
+  const int64_t trail_half = scale < 6 ? 0 : 1;
+  for (size_t i = 0; i < overlay.trails.size(); ++i) {
+    const std::vector<CellPoint>& points = overlay.trails[i].points;
+    const Rgb colour = FleetColour(i);
+    for (size_t k = 0; k + 1 < points.size(); ++k) {
+      ForEachLinePoint(point_x(points[k]), point_y(points[k]), point_x(points[k + 1]),
+                       point_y(points[k + 1]), [&](int64_t x, int64_t y) {
+                         canvas.FillRect(x - trail_half, y - trail_half, 2 * trail_half + 1,
+                                         colour);
+                       });
+    }
+  }
+  for (size_t i = 0; i < overlay.trails.size(); ++i) {
+    const SimTrail& trail = overlay.trails[i];
+    if (trail.points.empty()) continue;
+    const Rgb colour = FleetColour(i);
+    const auto px = [&](const CellPoint& p) { return p.x * scale; };
+    const auto py = [&](const CellPoint& p) {
+      return (options.y_up ? grid.height() - p.y : p.y) * scale;
+    };
+    const CellPoint& start = trail.points.front();
+    canvas.FillDisc(px(start), py(start), radius * 0.6 + 1.0, kMarkerOutlineColour);
+    canvas.FillDisc(px(start), py(start), radius * 0.6, colour);
+    canvas.FillDisc(px(trail.goal), py(trail.goal), radius * 0.6 + 1.0, colour);
+    canvas.FillDisc(px(trail.goal), py(trail.goal), radius * 0.3, kFreeColour);
+    // The robot's disc where it ended, as a polygon of 32 sides.
+    const CellPoint& end = trail.points.back();
+    constexpr int kSides = 32;
+    for (int k = 0; k < kSides; ++k) {
+      const double a0 = 2.0 * M_PI * k / kSides, a1 = 2.0 * M_PI * (k + 1) / kSides;
+      const CellPoint p0{end.x + trail.radius * std::cos(a0), end.y + trail.radius * std::sin(a0)};
+      const CellPoint p1{end.x + trail.radius * std::cos(a1), end.y + trail.radius * std::sin(a1)};
+      ForEachLinePoint(point_x(p0), point_y(p0), point_x(p1), point_y(p1),
+                       [&](int64_t x, int64_t y) { canvas.FillRect(x, y, 1, colour); });
+    }
+  }
   return canvas.Take();
 }
 

@@ -56,6 +56,14 @@ inline constexpr int64_t kMaxImagePixels = int64_t{1} << 25;
 inline constexpr int kMaxScale = 64;
 inline constexpr int32_t kTargetImageSide = 1024;
 
+// A simulated robot's run (pathctl simulate): where it drove, in cell
+// coordinates, its disc's radius in cells and its goal.
+struct SimTrail {
+  std::vector<CellPoint> points;
+  double radius = 0.0;
+  CellPoint goal;
+};
+
 // What to draw over the map; every part is optional.
 struct PlanOverlay {
   // Path vertices; consecutive ones are joined by straight lines, so grid
@@ -78,6 +86,10 @@ struct PlanOverlay {
   // A fleet plan's timed paths (PlanFleet), one colour per robot
   // (FleetColour): each path, its start as a disc and its goal as a ring.
   std::vector<std::vector<Cell>> fleet_paths;
+  // Simulated robots, one colour each (FleetColour): the trail as a thin
+  // line, the start as a disc, the robot's outline where it ended, and the
+  // goal as a ring.
+  std::vector<SimTrail> trails;
 };
 
 // Robot i's colour in a fleet picture: twelve well-separated hues, then

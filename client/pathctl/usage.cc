@@ -367,6 +367,7 @@ exit codes:
      not exist
   8  UNAUTHENTICATED or PERMISSION_DENIED (also a local file not writable)
      (render --plan: 3 when the plan found no path; the map is still drawn)
+  9  simulate ran, and a robot collided or did not arrive
 
 )",
       kNavigateScriptHelp);
