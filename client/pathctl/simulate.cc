@@ -108,6 +108,8 @@ absl::Status ApplyRobotKeys(const Reader& r, const YAML::Node& node, const std::
       has_goal = true;
     } else if (key == "radius") {
       s = number(robot.radius, true);
+    } else if (key == "inflation_radius") {
+      s = number(robot.inflation_radius, false, 0.0);
     } else if (key == "goal_tolerance") {
       s = number(robot.goal_tolerance, true);
     } else if (key == "drive") {
@@ -146,9 +148,9 @@ absl::Status ApplyRobotKeys(const Reader& r, const YAML::Node& node, const std::
       }
     } else {
       return r.Error(at, is_robot ? "unknown robot key (name, start, goal, radius, "
-                                    "goal_tolerance, drive, local_planner, max_v, min_v, "
+                                    "inflation_radius, goal_tolerance, drive, local_planner, max_v, min_v, "
                                     "max_vy, max_w, acc_v, acc_vy, acc_w, options)"
-                                  : "unknown key in defaults (radius, goal_tolerance, drive, "
+                                  : "unknown key in defaults (radius, inflation_radius, goal_tolerance, drive, "
                                     "local_planner, max_v, min_v, max_vy, max_w, acc_v, "
                                     "acc_vy, acc_w, options)");
     }

@@ -33,6 +33,10 @@ struct SimRobotSpec {
   // How close to its goal the robot stops (sent to the local planner as its
   // goal_tolerance).
   double goal_tolerance = 0.15;
+  // The global path's inflation radius (Nav2's inflation costs keep it off
+  // walls, so that the local planner has room beside it); not above the
+  // radius: none.
+  double inflation_radius = 0.0;
   v1::LocalPlanner local_planner = v1::LOCAL_PLANNER_ORCA;
   // Every limit explicit (the scenario's, else the simulator's defaults,
   // which are the server's documented ones), so the referee can check each

@@ -91,10 +91,17 @@ v1::NavigateOpen OpenMessage(const SimScenario& scenario, const SimRobotSpec& ro
   goal->set_x(robot.goal_x);
   goal->set_y(robot.goal_y);
   open.mutable_options()->set_robot_radius_m(robot.radius);
+  if (robot.inflation_radius > robot.radius) {
+    open.mutable_options()->set_inflation_radius_m(robot.inflation_radius);
+  }
   v1::ControlOptions* control = open.mutable_control();
   control->set_local_planner(robot.local_planner);
   *control->mutable_limits() = robot.limits;
   control->set_control_period(scenario.control_period);
+  // Every robot's stamp is the simulated time: the server moves the others
+  // on by stamp differences, not by its own clock (which runs much faster
+  // than the simulation).
+  control->set_shared_clock(true);
   for (const auto& [name, value] : robot.local_options) {
     (*control->mutable_local_options())[name] = value;
   }
