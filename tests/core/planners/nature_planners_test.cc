@@ -1,0 +1,464 @@
+// The nature-inspired heuristic planners (core/planners/nature): ant_colony
+// and reaction_diffusion against an independent cost model and Dijkstra
+// written here (no core search code): every returned path is a legal move
+// chain whose recomputed cost is the reported one and never below the
+// optimum; unreachable goals are NO_PATH; bad parameters are
+// INVALID_ARGUMENT naming the parameter. ant_colony: its success rate on
+// random maps, equal-cost paths in corridors, one answer per seed, honest
+// "no ant arrived" outcomes. reaction_diffusion: arrival time decreasing
+// along the path, the reported deviation from the exact cost-to-go
+// recomputed here, and the front's accuracy on an open map.
+// PATHD_NATURE_CASES=N caps the randomised counts (the ASan run sets it low).
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <random>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "core/map/cost_model.h"
+#include "core/map/grid.h"
+#include "core/planners/nature/ant_colony.h"
+#include "core/planners/nature/reaction_diffusion.h"
+#include "core/search/planner.h"
+#include "core/search/registry.h"
+#include "absl/strings/str_cat.h"
+#include "gtest/gtest.h"
+#include "tests/testing/test_grids.h"
+
+namespace pathd {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+int Cases(int fallback) {
+  const char* env = std::getenv("PATHD_NATURE_CASES");
+  const int scale = env != nullptr ? std::atoi(env) : 0;
+  return scale > 0 ? std::min(fallback, scale) : fallback;
+}
+
+// The cost model written out again from DESIGN.md: free 0..252 (unknown 255
+// with unknown_is_free, at factor 1), a move pays its length times
+// 1 + w * c / 252 of the cell it enters, a diagonal needs both side cells.
+struct Model {
+  const Grid& grid;
+  CostParams p;
+  bool Open(int x, int y) const {
+    if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height()) return false;
+    const uint8_t c = grid.cost(x, y);
+    return c <= 252 || (p.unknown_is_free && c == 255);
+  }
+  double Factor(int x, int y) const {
+    const uint8_t c = grid.cost(x, y);
+    return c == 255 ? 1.0 : 1.0 + p.cost_weight * c / 252.0;
+  }
+  // Cost of the move a -> b, or -1 when it is not a legal move.
+  double Step(Cell a, Cell b) const {
+    const int dx = b.x - a.x, dy = b.y - a.y;
+    if (std::abs(dx) > 1 || std::abs(dy) > 1 || (dx == 0 && dy == 0)) return -1;
+    if (!Open(a.x, a.y) || !Open(b.x, b.y)) return -1;
+    if (dx != 0 && dy != 0) {
+      if (p.connectivity == Connectivity::kFour) return -1;
+      if (!Open(a.x + dx, a.y) || !Open(a.x, a.y + dy)) return -1;
+      return std::sqrt(2.0) * Factor(b.x, b.y);
+    }
+    return Factor(b.x, b.y);
+  }
+  // The path's cost, or -1 when it is not a legal chain from s to g.
+  double PathCost(const std::vector<Cell>& path, Cell s, Cell g) const {
+    if (path.empty() || !(path.front() == s) || !(path.back() == g)) return -1;
+    double cost = 0;
+    for (size_t i = 1; i < path.size(); ++i) {
+      const double step = Step(path[i - 1], path[i]);
+      if (step < 0) return -1;
+      cost += step;
+    }
+    return cost;
+  }
+};
+
+// Dijkstra from `from` over reversed moves: the cost from every cell to
+// `from` (moves are priced by the cell entered, so cost(a -> b) is read as
+// Step(a, b) with b nearer `from`).
+std::vector<double> CostTo(const Model& m, Cell to) {
+  const int w = m.grid.width();
+  std::vector<double> dist(m.grid.size(), kInf);
+  using Item = std::tuple<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+  dist[to.y * w + to.x] = 0;
+  open.push({0.0, to.y * w + to.x});
+  while (!open.empty()) {
+    const auto [d, i] = open.top();
+    open.pop();
+    if (d > dist[i]) continue;
+    const Cell b{i % w, i / w};
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const Cell a{b.x + dx, b.y + dy};
+        const double step = m.Step(a, b);
+        if (step < 0) continue;
+        const int j = a.y * w + a.x;
+        if (d + step < dist[j]) {
+          dist[j] = d + step;
+          open.push({dist[j], j});
+        }
+      }
+    }
+  }
+  return dist;
+}
+
+struct RandomCase {
+  Grid grid;
+  CostParams params;
+  Cell s;
+  Cell g;
+};
+
+// A random map with traversable endpoints: 8..24 cells a side, up to 30%
+// blocked, weighted cells on two maps in three, 4- and 8-connected.
+RandomCase MakeRandomCase(std::mt19937& rng, int trial) {
+  const int w = 8 + static_cast<int>(rng() % 17);
+  const int h = 8 + static_cast<int>(rng() % 17);
+  RandomCase c{Grid::Create(w, h).value(), {}, {}, {}};
+  const int blocked_pct = static_cast<int>(rng() % 31);
+  for (size_t i = 0; i < c.grid.size(); ++i) {
+    const int roll = static_cast<int>(rng() % 100);
+    uint8_t v = kFreeCost;
+    if (roll < blocked_pct) {
+      v = kLethalCost;
+    } else if (trial % 3 != 0 && rng() % 3 == 0) {
+      v = static_cast<uint8_t>(rng() % 253);
+    }
+    c.grid.mutable_cells()[i] = v;
+  }
+  c.params.connectivity = trial % 2 ? Connectivity::kFour : Connectivity::kEight;
+  c.params.cost_weight = static_cast<double>(rng() % 300) / 100.0;
+  c.s = {static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+  c.g = {static_cast<int32_t>(rng() % w), static_cast<int32_t>(rng() % h)};
+  c.grid.set_cost(c.s, kFreeCost);
+  c.grid.set_cost(c.g, kFreeCost);
+  return c;
+}
+
+const Planner& Get(const char* name) {
+  const Planner* p = PlannerRegistry::Default().Get(name);
+  EXPECT_NE(p, nullptr) << name;
+  return *p;
+}
+
+absl::StatusOr<PlanResult> Plan(const char* name, const Grid& grid,
+                                const PlanRequest& request) {
+  SearchScratch scratch;
+  return Get(name).Plan(grid, request, StopCondition::None(), scratch);
+}
+
+// Checks a result against the model and the optimum; returns whether found.
+bool CheckResult(const Model& m, const PlanRequest& request, const PlanResult& r,
+                 double optimum, const std::string& where) {
+  if (!std::isfinite(optimum)) {
+    EXPECT_EQ(r.outcome, PlanOutcome::kNoPath) << where;
+    return false;
+  }
+  if (!r.found()) return false;
+  const double cost = m.PathCost(r.path, request.start, request.goal);
+  EXPECT_GE(cost, 0.0) << where << ": not a legal move chain from start to goal";
+  EXPECT_NEAR(r.cost, cost, 1e-9 * (1 + cost)) << where;
+  EXPECT_GE(cost, optimum - 1e-9 * (1 + optimum)) << where << ": below the optimum";
+  return true;
+}
+
+// ---------------------------------------------------------------- ant_colony
+
+// Over random maps with a path, the default colony (20 ants, up to 100
+// iterations, seed 1) finds one on at least 95% of them. A colony whose
+// pheromone or desirability did nothing would be a random walk with a tabu
+// list: with beta = 0 and alpha = 0 (both terms switched off) the same maps
+// give clearly less (checked below), so the floor measures the heuristic.
+TEST(AntColony, RandomMapsLegalNeverBelowOptimumAndMostlyFound) {
+  std::mt19937 rng(20261202);
+  const int trials = Cases(300);
+  int reachable = 0, found = 0, found_blind = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const RandomCase c = MakeRandomCase(rng, trial);
+    const Model m{c.grid, c.params};
+    const double optimum = CostTo(m, c.g)[c.grid.Index(c.s)];
+    PlanRequest request = PlanRequest::Between(c.s, c.g, c.params);
+    auto r = Plan("ant_colony", c.grid, request);
+    ASSERT_TRUE(r.ok()) << r.status();
+    const std::string where = absl::StrCat("trial ", trial);
+    ASSERT_TRUE(r->ant_colony.has_value());
+    if (std::isfinite(optimum)) ++reachable;
+    if (CheckResult(m, request, *r, optimum, where)) {
+      ++found;
+      EXPECT_GE(r->ant_colony->best_iteration, 1) << where;
+      EXPECT_LE(r->ant_colony->best_iteration, r->ant_colony->iterations_run) << where;
+      EXPECT_NEAR(r->ant_colony->best_cost, r->cost, 1e-6 * (1 + r->cost)) << where;
+    } else if (std::isfinite(optimum)) {
+      EXPECT_EQ(r->outcome, PlanOutcome::kExpansionLimit) << where;
+      EXPECT_NE(r->reason.find("reachable"), std::string::npos) << r->reason;
+    }
+    request.ant_colony.alpha = 0.0;
+    request.ant_colony.beta = 0.0;
+    request.ant_colony.iterations = 3;
+    auto blind = Plan("ant_colony", c.grid, request);
+    ASSERT_TRUE(blind.ok());
+    if (CheckResult(m, request, *blind, optimum, where + " blind")) ++found_blind;
+  }
+  ASSERT_GT(reachable, trials / 3);
+  const double rate = static_cast<double>(found) / reachable;
+  std::printf("ant_colony found %d of %d reachable goals (%.1f%%); blind: %d\n", found,
+              reachable, 100 * rate, found_blind);
+  EXPECT_GE(rate, 0.95);
+  EXPECT_LT(found_blind, found);
+}
+
+TEST(AntColony, CorridorsGiveTheOptimum) {
+  // One way through: every ant that arrives took it.
+  const Grid grid = MakeGrid({"......#...",
+                              "#####.#.#.",
+                              "......#.#.",
+                              ".######.#.",
+                              "........#."});
+  const Model m{grid, {}};
+  const PlanRequest request = PlanRequest::Between({0, 0}, {9, 0});
+  auto r = Plan("ant_colony", grid, request);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_TRUE(r->found()) << r->reason;
+  EXPECT_NEAR(r->cost, CostTo(m, {9, 0})[0], 1e-9);
+  // An open strip 3 cells high: the straight row is optimal and the colony
+  // converges to it.
+  const Grid strip = MakeGrid({"..............................",
+                               "..............................",
+                               ".............................."});
+  r = Plan("ant_colony", strip, PlanRequest::Between({0, 1}, {29, 1}));
+  ASSERT_TRUE(r.ok() && r->found());
+  EXPECT_NEAR(r->cost, 29.0, 1e-9);
+}
+
+TEST(AntColony, OneSeedOneAnswer) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < Cases(20); ++trial) {
+    const RandomCase c = MakeRandomCase(rng, trial);
+    PlanRequest request = PlanRequest::Between(c.s, c.g, c.params);
+    request.ant_colony.seed = 1234 + trial;
+    auto a = Plan("ant_colony", c.grid, request);
+    auto b = Plan("ant_colony", c.grid, request);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->outcome, b->outcome);
+    EXPECT_EQ(a->path, b->path);
+    EXPECT_EQ(a->expansions, b->expansions);
+    EXPECT_EQ(a->ant_colony->best_iteration, b->ant_colony->best_iteration);
+  }
+}
+
+TEST(AntColony, StallsAndReportsConvergence) {
+  const Grid grid = Grid::Create(20, 20).value();
+  PlanRequest request = PlanRequest::Between({0, 0}, {19, 13});
+  request.ant_colony.iterations = 500;
+  request.ant_colony.stall_iterations = 10;
+  auto r = Plan("ant_colony", grid, request);
+  ASSERT_TRUE(r.ok() && r->found());
+  const AntColonyStats& s = *r->ant_colony;
+  EXPECT_EQ(s.stopped_by, "stalled");
+  // Stalled exactly stall_iterations after the last improvement.
+  EXPECT_EQ(s.iterations_run, s.best_iteration + 10);
+  EXPECT_EQ(s.ants_reached_goal + s.ants_died, int64_t{20} * s.iterations_run);
+}
+
+TEST(AntColony, UnreachableIsNoPathAndLostAntsAreNot) {
+  const Grid walled = MakeGrid({"..#..", "..#..", "..#.."});
+  auto r = Plan("ant_colony", walled, PlanRequest::Between({0, 0}, {4, 2}));
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->outcome, PlanOutcome::kNoPath);
+  // Reachable, but no ant may walk far enough.
+  const Grid open = Grid::Create(30, 30).value();
+  PlanRequest request = PlanRequest::Between({0, 0}, {29, 29});
+  request.ant_colony.max_steps = 5;
+  request.ant_colony.iterations = 3;
+  r = Plan("ant_colony", open, request);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->outcome, PlanOutcome::kExpansionLimit);
+  EXPECT_NE(r->reason.find("none of the 20 ants of 3 iterations reached the goal"),
+            std::string::npos)
+      << r->reason;
+  EXPECT_NE(r->reason.find("the goal is reachable"), std::string::npos) << r->reason;
+  EXPECT_EQ(r->ant_colony->ants_died, 60);
+}
+
+TEST(AntColony, BadParametersNameTheParameter) {
+  const Grid grid = Grid::Create(4, 4).value();
+  const std::vector<std::pair<std::function<void(AntColonyParams&)>, std::string>> bad = {
+      {[](AntColonyParams& p) { p.ants = 0; }, "ant_colony.ants 0"},
+      {[](AntColonyParams& p) { p.iterations = -2; }, "ant_colony.iterations -2"},
+      {[](AntColonyParams& p) { p.alpha = std::nan(""); }, "ant_colony.alpha nan"},
+      {[](AntColonyParams& p) { p.beta = 17; }, "ant_colony.beta 17"},
+      {[](AntColonyParams& p) { p.rho = 0; }, "ant_colony.rho 0"},
+      {[](AntColonyParams& p) { p.xi = 1.5; }, "ant_colony.xi 1.5"},
+      {[](AntColonyParams& p) { p.q0 = -0.1; }, "ant_colony.q0 -0.1"},
+      {[](AntColonyParams& p) { p.tau0 = kInf; }, "ant_colony.tau0 inf"},
+      {[](AntColonyParams& p) { p.max_steps = -1; }, "ant_colony.max_steps -1"},
+      {[](AntColonyParams& p) { p.stall_iterations = -1; }, "ant_colony.stall_iterations"},
+  };
+  for (const auto& [change, message] : bad) {
+    PlanRequest request = PlanRequest::Between({0, 0}, {3, 3});
+    change(request.ant_colony);
+    auto r = Plan("ant_colony", grid, request);
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << message;
+    EXPECT_NE(r.status().message().find(message), std::string::npos) << r.status();
+  }
+}
+
+TEST(AntColony, RefusesMapsAboveThePheromoneCap) {
+  const Grid big = Grid::Create(2048, 1025).value();
+  auto r = Plan("ant_colony", big, PlanRequest::Between({0, 0}, {5, 5}));
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_NE(r.status().message().find("2099200 cells"), std::string::npos) << r.status();
+}
+
+// -------------------------------------------------------- reaction_diffusion
+
+TEST(ReactionDiffusion, RandomMapsLegalNeverBelowOptimumAndHonestStatistics) {
+  std::mt19937 rng(20261203);
+  const int trials = Cases(200);
+  int reachable = 0, found = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const RandomCase c = MakeRandomCase(rng, trial);
+    const Model m{c.grid, c.params};
+    const std::vector<double> exact = CostTo(m, c.g);
+    const double optimum = exact[c.grid.Index(c.s)];
+    const PlanRequest request = PlanRequest::Between(c.s, c.g, c.params);
+    auto r = Plan("reaction_diffusion", c.grid, request);
+    ASSERT_TRUE(r.ok()) << r.status();
+    const std::string where = absl::StrCat("trial ", trial);
+    if (std::isfinite(optimum)) ++reachable;
+    const bool ok = CheckResult(m, request, *r, optimum, where);
+    found += ok;
+    ASSERT_TRUE(r->reaction_diffusion.has_value());
+    const ReactionDiffusionStats& s = *r->reaction_diffusion;
+    // The statistics recomputed from the front's arrival times and the
+    // reference cost-to-go.
+    const Autowave wave = PropagateAutowave(c.grid, request, StopCondition::None());
+    double max_e = 0, sum_e = 0;
+    int64_t count = 0, reached = 0;
+    for (size_t i = 0; i < c.grid.size(); ++i) {
+      if (!std::isfinite(wave.arrival[i])) continue;
+      ++reached;
+      if (i == c.grid.Index(c.g)) continue;
+      const double e = std::abs(s.front_speed * wave.arrival[i] - exact[i]) / exact[i];
+      max_e = std::max(max_e, e);
+      sum_e += e;
+      ++count;
+    }
+    EXPECT_EQ(s.reached_cells, reached) << where;
+    EXPECT_NEAR(s.max_relative_error, max_e, 1e-9) << where;
+    EXPECT_NEAR(s.mean_relative_error, count ? sum_e / count : 0.0, 1e-9) << where;
+    EXPECT_EQ(s.optimal_cost, optimum) << where;
+    if (!ok) continue;
+    EXPECT_NEAR(s.cost_ratio, optimum > 0 ? r->cost / optimum : 1.0, 1e-9) << where;
+    // Arrival time strictly decreasing along the path to 0 at the goal.
+    for (size_t k = 1; k < r->path.size(); ++k) {
+      EXPECT_LT(wave.arrival[c.grid.Index(r->path[k])],
+                wave.arrival[c.grid.Index(r->path[k - 1])])
+          << where << " step " << k;
+    }
+  }
+  ASSERT_GT(reachable, trials / 3);
+  std::printf("reaction_diffusion found %d of %d reachable goals\n", found, reachable);
+  EXPECT_GE(found, reachable * 95 / 100);
+}
+
+// On an open map the front is a circle growing from the goal. Two effects
+// keep speed * T from the Euclidean distance d, and are what the test
+// bounds: the ignition delay (one excited cell is smaller than the
+// critical nucleus, so the front needs time to form: about 26 time units,
+// ten cells' worth, at the defaults) and curvature, which slows a front of
+// radius r to about speed - D / r. Between 10 and 30 cells from the goal the
+// front moves at 85% to 100% of the plane-wave speed, along the axis and the
+// diagonal alike (the 9-point Laplacian is isotropic: arrival times at the
+// same distance in the two directions agree within 3%).
+TEST(ReactionDiffusion, OpenMapFrontMovesAtThePlaneWaveSpeedLessCurvature) {
+  const Grid grid = Grid::Create(81, 81).value();
+  const PlanRequest request = PlanRequest::Between({0, 0}, {40, 40});
+  const Autowave wave = PropagateAutowave(grid, request, StopCondition::None());
+  const double speed = NagumoFrontSpeed(request.reaction_diffusion);
+  auto at = [&](int x, int y) { return wave.arrival[grid.Index(x, y)]; };
+  // Along the axis: cells 10 and 30 to the right of the goal.
+  const double axis = (30 - 10) / (at(70, 40) - at(50, 40));
+  // Along the diagonal: cells 7 and 21 diagonal steps away (9.9 and 29.7).
+  const double diagonal = (21 - 7) * std::sqrt(2.0) / (at(61, 61) - at(47, 47));
+  std::printf("open map: front speed %.4f along the axis, %.4f along the diagonal, "
+              "plane wave %.4f; ignition delay %.2f\n",
+              axis, diagonal, speed, at(50, 40) - 10 / axis);
+  for (const double measured : {axis, diagonal}) {
+    EXPECT_GE(measured, 0.85 * speed);
+    EXPECT_LE(measured, 1.0 * speed);
+  }
+  // The same Euclidean distance, 28.28 cells, both ways: (60, 60) is 20
+  // diagonal steps away; along the axis interpolate between 28 and 29.
+  const double along_axis = at(68, 40) + 0.28 * (at(69, 40) - at(68, 40));
+  EXPECT_NEAR(at(60, 60) / along_axis, 1.0, 0.03);
+  for (int x = 41; x < 81; ++x) EXPECT_GT(at(x, 40), at(x - 1, 40)) << x;
+}
+
+TEST(ReactionDiffusion, CorridorGivesTheOptimumAndWallsStopTheFront) {
+  const Grid grid = MakeGrid({"......#...",
+                              "#####.#.#.",
+                              "......#.#.",
+                              ".######.#.",
+                              "........#."});
+  const Model m{grid, {}};
+  auto r = Plan("reaction_diffusion", grid, PlanRequest::Between({0, 0}, {9, 0}));
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_TRUE(r->found()) << r->reason;
+  EXPECT_NEAR(r->cost, CostTo(m, {9, 0})[0], 1e-9);
+  const Grid walled = MakeGrid({"..#..", "..#..", "..#.."});
+  r = Plan("reaction_diffusion", walled, PlanRequest::Between({0, 0}, {4, 2}));
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->outcome, PlanOutcome::kNoPath);
+  EXPECT_EQ(r->reaction_diffusion->reached_cells, 6);
+}
+
+TEST(ReactionDiffusion, BadParametersNameTheParameter) {
+  const Grid grid = Grid::Create(4, 4).value();
+  const std::vector<std::pair<std::function<void(ReactionDiffusionParams&)>, std::string>>
+      bad = {
+          {[](ReactionDiffusionParams& p) { p.diffusion = 0; }, "reaction_diffusion.diffusion 0"},
+          {[](ReactionDiffusionParams& p) { p.reaction_rate = kInf; },
+           "reaction_diffusion.reaction_rate inf"},
+          {[](ReactionDiffusionParams& p) { p.threshold = 0.5; },
+           "reaction_diffusion.threshold 0.5"},
+          {[](ReactionDiffusionParams& p) { p.time_step = 0.5; },
+           "reaction_diffusion.time_step 0.5 must be <= 1 / (4 diffusion + reaction_rate)"},
+          {[](ReactionDiffusionParams& p) { p.max_steps = -3; },
+           "reaction_diffusion.max_steps -3"},
+      };
+  for (const auto& [change, message] : bad) {
+    PlanRequest request = PlanRequest::Between({0, 0}, {3, 3});
+    change(request.reaction_diffusion);
+    auto r = Plan("reaction_diffusion", grid, request);
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << message;
+    EXPECT_NE(r.status().message().find(message), std::string::npos) << r.status();
+  }
+}
+
+TEST(ReactionDiffusion, AFrontThatDiesIsNotCalledUnreachable) {
+  // A threshold close to 1/2 with weak diffusion: the front stalls in the
+  // one-cell corridor (propagation failure of discrete bistable media).
+  const Grid grid = MakeGrid({"..........", "#########.", ".........."});
+  PlanRequest request = PlanRequest::Between({0, 2}, {0, 0});
+  request.reaction_diffusion.threshold = 0.45;
+  request.reaction_diffusion.diffusion = 0.05;
+  auto r = Plan("reaction_diffusion", grid, request);
+  ASSERT_TRUE(r.ok()) << r.status();
+  if (r->found()) GTEST_SKIP() << "the front got through";
+  EXPECT_EQ(r->outcome, PlanOutcome::kExpansionLimit);
+  EXPECT_NE(r->reason.find("which is reachable"), std::string::npos) << r->reason;
+}
+
+}  // namespace
+}  // namespace pathd
