@@ -108,8 +108,9 @@ int main(int argc, char** argv) {
     std::printf("%s absent: Moving AI maps skipped\n", root.string().c_str());
     return 0;
   }
-  for (const std::string& map :
-       absl::StrSplit(absl::GetFlag(FLAGS_movingai_maps), ',', absl::SkipEmpty())) {
+  const std::vector<std::string> maps =
+      absl::StrSplit(absl::GetFlag(FLAGS_movingai_maps), ',', absl::SkipEmpty());
+  for (const std::string& map : maps) {
     RunMap(map, (root / map).string() + ".map", planners);
   }
   return 0;

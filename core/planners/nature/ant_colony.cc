@@ -36,7 +36,7 @@
 #include "core/planners/planners.h"
 #include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
-#include "core/search/path_measure.h"
+#include "core/search/checked_path.h"
 #include "core/status_macros.h"
 
 namespace pathd {
@@ -343,15 +343,7 @@ class AntColonyPlanner final : public GridPlanner {
     result.outcome = PlanOutcome::kFound;
     result.path.reserve(best_cells.size());
     for (uint32_t c : best_cells) result.path.push_back(view.CellOf(c));
-    const PathMeasure measure = MeasurePath(grid, result.path, request.cost);
-    if (!measure.valid) {
-      return absl::InternalError(absl::StrFormat(
-          "ant_colony built an illegal move at path cell %d %s",
-          measure.first_invalid,
-          CellToString(result.path[measure.first_invalid])));
-    }
-    result.cost = measure.cost;
-    result.length = measure.length;
+    PATHD_RETURN_IF_ERROR(MeasureAssembledPath(grid, request.cost, "ant_colony", &result));
     return result;
   }
 };

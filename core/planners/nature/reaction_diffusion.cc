@@ -44,7 +44,7 @@
 #include "core/planners/planners.h"
 #include "core/search/grid_planner.h"
 #include "core/search/grid_view.h"
-#include "core/search/path_measure.h"
+#include "core/search/checked_path.h"
 #include "core/status_macros.h"
 
 namespace pathd {
@@ -328,16 +328,10 @@ class ReactionDiffusionPlanner final : public GridPlanner {
       at = best;
       path.push_back(view.CellOf(at));
     }
-    const PathMeasure measure = MeasurePath(grid, path, request.cost);
-    if (!measure.valid) {
-      return absl::InternalError(absl::StrFormat(
-          "reaction_diffusion built an illegal move at path cell %d %s",
-          measure.first_invalid, CellToString(path[measure.first_invalid])));
-    }
     result.outcome = PlanOutcome::kFound;
     result.path = std::move(path);
-    result.cost = measure.cost;
-    result.length = measure.length;
+    PATHD_RETURN_IF_ERROR(
+        MeasureAssembledPath(grid, request.cost, "reaction_diffusion", &result));
     stats.cost_ratio =
         stats.optimal_cost > 0.0 ? result.cost / stats.optimal_cost : 1.0;
     return result;
