@@ -66,7 +66,7 @@ void RunMap(const std::string& label, const std::string& path,
       continue;
     }
     int found = 0, queries = 0;
-    double ratio_sum = 0, ratio_max = 0, ms_sum = 0, extra_sum = 0;
+    double ratio_sum = 0, ratio_max = 0, ms_sum = 0, extra_sum = 0, expansions = 0;
     for (size_t i = 0; i < scenarios.size(); ++i) {
       if (optimum[i] < 0) continue;
       ++queries;
@@ -76,6 +76,7 @@ void RunMap(const std::string& label, const std::string& path,
                                                          scenarios[i].goal, cost),
                              pathd::StopCondition::None(), scratch);
       ms_sum += absl::ToDoubleMilliseconds(absl::Now() - t0);
+      if (r.ok()) expansions += static_cast<double>(r->expansions);
       if (!r.ok() || !r->found()) continue;
       ++found;
       const double ratio = optimum[i] > 0 ? r->cost / optimum[i] : 1.0;
@@ -86,10 +87,11 @@ void RunMap(const std::string& label, const std::string& path,
     }
     const char* extra_name = name == "ant_colony" ? "best iteration" : "T error (mean)";
     std::printf("%-26s %-19s found %3d/%-3d cost/opt mean %.4f max %.4f  "
-                "%9.1f ms/query  %s %.3f\n",
+                "%9.1f ms/query %11.0f expansions/query  %s %.3f\n",
                 label.c_str(), name.c_str(), found, queries,
                 found ? ratio_sum / found : 0.0, ratio_max,
-                queries ? ms_sum / queries : 0.0, extra_name,
+                queries ? ms_sum / queries : 0.0, queries ? expansions / queries : 0.0,
+                extra_name,
                 found ? extra_sum / found : 0.0);
   }
 }
