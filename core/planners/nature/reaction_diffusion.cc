@@ -88,9 +88,12 @@ double NagumoFrontSpeed(const ReactionDiffusionParams& p) {
 namespace {
 
 // A cell leaves the band frozen when it and its neighbours are within this
-// of the excited state, asleep when within kRest of rest.
+// of the excited state, asleep when within kRest of rest. The activator ahead
+// of the front decays like exp(-x / 2) at the defaults, so kRest sets how far
+// ahead the band reaches: 1e-4 is 18 cells, 1e-9 was 41 for the same arrival
+// times to three decimals (nature_bench) and 43% more cell updates.
 constexpr double kExcited = 1.0 - 1e-4;
-constexpr double kRest = 1e-9;
+constexpr double kRest = 1e-4;
 
 enum CellState : uint8_t { kDormant = 0, kActive = 1, kFrozen = 2 };
 
