@@ -617,6 +617,7 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
     report->set_mean_relative_error(rd->mean_relative_error);
     report->set_optimal_cost(rd->optimal_cost);
     report->set_cost_ratio(rd->cost_ratio);
+    report->set_escapes(rd->escapes);
   }
   response->set_episodes(result.episodes);
   response->mutable_trajectory()->Reserve(static_cast<int>(result.trajectory.size()));

@@ -383,7 +383,8 @@ int Plan(CommandEnv& env, Args args) {
         100.0 * rd.mean_relative_error(), 100.0 * rd.max_relative_error(),
         rd.optimal_cost());
     if (rd.cost_ratio() > 0.0) {
-      out << absl::StrFormat(", path cost %.4f x optimum", rd.cost_ratio());
+      out << absl::StrFormat(", path cost %.4f x optimum, %d escapes", rd.cost_ratio(),
+                             rd.escapes());
     }
     out << "\n";
   }

@@ -140,6 +140,9 @@ struct ReactionDiffusionStats {
   // returned path's cost over it (0 when no path).
   double optimal_cost = 0.0;
   double cost_ratio = 0.0;
+  // Moves of the path that do not descend T: climbs out of the shallow pits
+  // the lattice leaves in the arrival time (reaction_diffusion.cc).
+  int64_t escapes = 0;
 };
 
 // Collects the cells a search expands (takes from its open list or queue to

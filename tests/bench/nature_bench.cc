@@ -66,6 +66,7 @@ void RunMap(const std::string& label, const std::string& path,
       continue;
     }
     int found = 0, queries = 0;
+    std::string misses;  // the outcomes of the queries not found
     double ratio_sum = 0, ratio_max = 0, ms_sum = 0, extra_sum = 0, expansions = 0;
     for (size_t i = 0; i < scenarios.size(); ++i) {
       if (optimum[i] < 0) continue;
@@ -77,6 +78,10 @@ void RunMap(const std::string& label, const std::string& path,
                              pathd::StopCondition::None(), scratch);
       ms_sum += absl::ToDoubleMilliseconds(absl::Now() - t0);
       if (r.ok()) expansions += static_cast<double>(r->expansions);
+      if (r.ok() && !r->found()) {
+        if (!misses.empty()) misses += ", ";
+        misses += std::string(pathd::PlanOutcomeName(r->outcome));
+      }
       if (!r.ok() || !r->found()) continue;
       ++found;
       const double ratio = optimum[i] > 0 ? r->cost / optimum[i] : 1.0;
@@ -93,6 +98,7 @@ void RunMap(const std::string& label, const std::string& path,
                 queries ? ms_sum / queries : 0.0, queries ? expansions / queries : 0.0,
                 extra_name,
                 found ? extra_sum / found : 0.0);
+    if (!misses.empty()) std::printf("%26s not found: %s\n", "", misses.c_str());
   }
 }
 

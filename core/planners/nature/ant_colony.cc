@@ -233,7 +233,11 @@ class AntColonyPlanner final : public GridPlanner {
       std::vector<uint32_t> iteration_cells;
       std::vector<uint8_t> iteration_moves;
       for (int32_t ant = 0; ant < p.ants; ++ant) {
-        ++ant_number;
+        if (++ant_number == 0) {
+          // 2^32 ants (4096 x 1000000 is more): restart the stamps.
+          std::fill(visited.begin(), visited.end(), 0);
+          ant_number = 1;
+        }
         cells.assign(1, start);
         taken.clear();
         visited[start] = ant_number;

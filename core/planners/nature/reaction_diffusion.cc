@@ -15,9 +15,8 @@
 // spreads until it passes the start. A cell's arrival time T is when its u
 // crosses 1/2 (interpolated within the step). The path descends T from the
 // start, each move to the neighbour with the steepest drop of T per unit of
-// move cost; T has no other minimum than the goal wherever the front was a
-// single wave, and where the discretisation makes one anyway the result is
-// a LOCAL_MINIMUM with its cell.
+// move cost, out of the lattice's shallow pits in T by the lowest unvisited
+// neighbour (counted as escapes).
 //
 // Only the band around the front is updated: a cell wakes when a neighbour
 // carries activator, and leaves the band when it and its neighbours are
@@ -304,14 +303,24 @@ class ReactionDiffusionPlanner final : public GridPlanner {
       return result;
     }
 
-    // Descent of the arrival time.
+    // Descent of the arrival time, never re-entering a cell. The lattice
+    // leaves shallow pits in T (a cell in a corner, with fewer neighbours to
+    // share activator with, fires a little before the cell the front came
+    // through); from one the descent steps to the lowest unvisited reached
+    // neighbour, climbing out over the pit's rim, and counts the step in
+    // stats.escapes. Only a cell with no unvisited reached neighbour ends it.
     std::vector<Cell> path = {request.start};
+    std::vector<uint8_t> visited(n, 0);
     uint32_t at = start;
+    visited[at] = 1;
     while (at != goal) {
       const Cell c = view.CellOf(at);
       uint32_t best = at;
       double best_slope = 0.0;
+      uint32_t lowest = at;
       view.ForEachNeighbor(c.x, c.y, [&](uint32_t j, int32_t, int32_t, double length) {
+        if (visited[j] || arrival[j] == inf) return;
+        if (lowest == at || arrival[j] < arrival[lowest]) lowest = j;
         if (!(arrival[j] < arrival[at])) return;
         const double slope = (arrival[at] - arrival[j]) / (length * view.Factor(j));
         if (slope > best_slope) {
@@ -320,15 +329,20 @@ class ReactionDiffusionPlanner final : public GridPlanner {
         }
       });
       if (best == at) {
-        result.outcome = PlanOutcome::kLocalMinimum;
-        result.stall_point = CellPoint{c.x + 0.5, c.y + 0.5};
-        result.reason = absl::StrFormat(
-            "reaction_diffusion: the arrival time has no lower neighbour at %s "
-            "(a discretisation artefact of the front)",
-            CellToString(c));
-        return result;
+        if (lowest == at) {
+          result.outcome = PlanOutcome::kLocalMinimum;
+          result.stall_point = CellPoint{c.x + 0.5, c.y + 0.5};
+          result.reason = absl::StrFormat(
+              "reaction_diffusion: the arrival-time descent is stuck at %s (every "
+              "neighbour reached by the front is on the path already)",
+              CellToString(c));
+          return result;
+        }
+        best = lowest;
+        ++stats.escapes;
       }
       at = best;
+      visited[at] = 1;
       path.push_back(view.CellOf(at));
     }
     result.outcome = PlanOutcome::kFound;
