@@ -10,6 +10,8 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 #include "core/map/inflation_cost.h"
+#include "core/planners/nature/ant_colony.h"
+#include "core/planners/nature/reaction_diffusion.h"
 #include "core/postprocess/plan_through.h"
 #include "core/search/endpoints.h"
 #include "core/status_macros.h"
@@ -133,6 +135,65 @@ absl::StatusOr<double> DistanceCells(std::string_view name, std::optional<double
 }
 
 }  // namespace
+
+namespace {
+
+// The core validators name parameters "ant_colony.rho"; on the wire they are
+// options.ant_colony.rho.
+absl::Status AsOption(absl::Status status) {
+  if (status.ok()) return status;
+  return absl::Status(status.code(), absl::StrFormat("options.%s", status.message()));
+}
+
+}  // namespace
+
+absl::Status AntColonyFromOptions(const v1::AntColonyOptions& options,
+                                  AntColonyParams* params) {
+  if (options.has_ants()) params->ants = options.ants();
+  if (options.has_iterations()) params->iterations = options.iterations();
+  if (options.has_stall_iterations()) params->stall_iterations = options.stall_iterations();
+  if (options.has_alpha()) params->alpha = options.alpha();
+  if (options.has_beta()) params->beta = options.beta();
+  if (options.has_rho()) params->rho = options.rho();
+  if (options.has_xi()) params->xi = options.xi();
+  if (options.has_q0()) params->q0 = options.q0();
+  if (options.has_tau0()) {
+    if (!(options.tau0() > 0.0)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "options.ant_colony.tau0 %s must be > 0 (unset: the default)",
+          Num(options.tau0())));
+    }
+    params->tau0 = options.tau0();
+  }
+  if (options.has_max_steps()) {
+    if (options.max_steps() <= 0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "options.ant_colony.max_steps %d must be > 0 (unset: the default)",
+          options.max_steps()));
+    }
+    params->max_steps = options.max_steps();
+  }
+  if (options.has_seed()) params->seed = options.seed();
+  return AsOption(ValidateAntColonyParams(*params));
+}
+
+absl::Status ReactionDiffusionFromOptions(const v1::ReactionDiffusionOptions& options,
+                                          ReactionDiffusionParams* params) {
+  if (options.has_diffusion()) params->diffusion = options.diffusion();
+  if (options.has_reaction_rate()) params->reaction_rate = options.reaction_rate();
+  if (options.has_threshold()) params->threshold = options.threshold();
+  if (options.has_time_step()) params->time_step = options.time_step();
+  if (options.has_max_steps()) {
+    if (options.max_steps() <= 0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "options.reaction_diffusion.max_steps %d must be > 0 (unset: the "
+          "default)",
+          options.max_steps()));
+    }
+    params->max_steps = options.max_steps();
+  }
+  return AsOption(ValidateReactionDiffusionParams(*params));
+}
 
 absl::StatusOr<std::string_view> PlannerName(int planner) {
   if (planner == v1::PLANNER_UNSPECIFIED) return std::string_view("astar");
@@ -324,7 +385,9 @@ absl::Status PlanOptionsToRequest(const v1::PlanOptions& options,
         "options.potential_field.max_steps %d must be >= 0", pf.max_steps()));
   }
   params.max_steps = pf.max_steps();
-  return absl::OkStatus();
+  PATHD_RETURN_IF_ERROR(AntColonyFromOptions(options.ant_colony(), &request->ant_colony));
+  return ReactionDiffusionFromOptions(options.reaction_diffusion(),
+                                      &request->reaction_diffusion);
 }
 
 const char* ExpansionLimitSource(const v1::PlanOptions& options,
@@ -536,6 +599,26 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
       response->mutable_stall_point()->set_y(result.stall_point.y);
       break;
   }
+  if (!result.found() && !result.reason.empty()) response->set_reason(result.reason);
+  if (const std::optional<AntColonyStats>& aco = result.ant_colony) {
+    v1::AntColonyReport* report = response->mutable_ant_colony();
+    report->set_iterations_run(aco->iterations_run);
+    report->set_best_iteration(aco->best_iteration);
+    report->set_ants_reached_goal(aco->ants_reached_goal);
+    report->set_ants_died(aco->ants_died);
+    report->set_stopped_by(aco->stopped_by);
+  }
+  if (const std::optional<ReactionDiffusionStats>& rd = result.reaction_diffusion) {
+    v1::ReactionDiffusionReport* report = response->mutable_reaction_diffusion();
+    report->set_steps(rd->steps);
+    report->set_reached_cells(rd->reached_cells);
+    report->set_front_speed(rd->front_speed);
+    report->set_max_relative_error(rd->max_relative_error);
+    report->set_mean_relative_error(rd->mean_relative_error);
+    report->set_optimal_cost(rd->optimal_cost);
+    report->set_cost_ratio(rd->cost_ratio);
+    report->set_escapes(rd->escapes);
+  }
   response->set_episodes(result.episodes);
   response->mutable_trajectory()->Reserve(static_cast<int>(result.trajectory.size()));
   for (const CellPoint& p : result.trajectory) {
@@ -611,8 +694,9 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
     response->mutable_cost_to_go()->Reserve(static_cast<int>(field.size()));
     response->mutable_cost_to_go()->Add(field.begin(), field.end());
   }
+  // A planner's own reason (PlanResult::reason) is not the budget's.
   if (result.outcome == PlanOutcome::kExpansionLimit &&
-      !expansion_limit_source.empty()) {
+      !expansion_limit_source.empty() && result.reason.empty()) {
     response->set_reason(
         absl::StrFormat("%s (%s)", response->reason(), expansion_limit_source));
   }

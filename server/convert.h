@@ -100,9 +100,18 @@ absl::StatusOr<int64_t> EffectiveMaxExpansions(const v1::PlanOptions& options,
 
 // Everything in PlanOptions except the expansion budget and robot radius:
 // cost parameters, heuristic weight (unset: 1.5), look-ahead, cost-to-go,
-// potential-field parameters (0 keeps each default). INVALID_ARGUMENT naming
-// the field for a bad value.
+// potential-field parameters (0 keeps each default), ant-colony and
+// reaction-diffusion parameters (unset keeps each default). INVALID_ARGUMENT
+// naming the field for a bad value.
 absl::Status PlanOptionsToRequest(const v1::PlanOptions& options, PlanRequest* request);
+
+// options.ant_colony / options.reaction_diffusion into `params` (which hold
+// the defaults): set fields replace them, then the whole is validated;
+// INVALID_ARGUMENT names the field as options.ant_colony.NAME.
+absl::Status AntColonyFromOptions(const v1::AntColonyOptions& options,
+                                  AntColonyParams* params);
+absl::Status ReactionDiffusionFromOptions(const v1::ReactionDiffusionOptions& options,
+                                          ReactionDiffusionParams* params);
 
 // The robot radius in cells (0 when unset): robot_radius_cells as given, or
 // robot_radius_m / resolution, capped at the map's diagonal. INVALID_ARGUMENT

@@ -135,6 +135,13 @@ ABSL_FLAG(double, pf_influence, 0.0,
           "plan: potential_field obstacle influence distance, cells");
 ABSL_FLAG(double, pf_step, 0.0, "plan: potential_field descent step, cells");
 ABSL_FLAG(int64_t, pf_max_steps, 0, "plan: potential_field step limit");
+ABSL_FLAG(std::string, ant_colony, "",
+          "plan: ant_colony parameters KEY=VALUE[,KEY=VALUE...] (ants, "
+          "iterations, stall_iterations, alpha, beta, rho, xi, q0, tau0, "
+          "max_steps, seed)");
+ABSL_FLAG(std::string, reaction_diffusion, "",
+          "plan: reaction_diffusion parameters KEY=VALUE[,KEY=VALUE...] "
+          "(diffusion, reaction_rate, threshold, time_step, max_steps)");
 ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
 ABSL_FLAG(std::string, sources, "", "table: source points X,Y[;X,Y...]");
@@ -341,6 +348,8 @@ int main(int argc, char** argv) {
   plan.pf_influence = absl::GetFlag(FLAGS_pf_influence);
   plan.pf_step = absl::GetFlag(FLAGS_pf_step);
   plan.pf_max_steps = absl::GetFlag(FLAGS_pf_max_steps);
+  plan.ant_colony = absl::GetFlag(FLAGS_ant_colony);
+  plan.reaction_diffusion = absl::GetFlag(FLAGS_reaction_diffusion);
   plan.progress = absl::GetFlag(FLAGS_progress);
   plan.snap_start = absl::GetFlag(FLAGS_snap_start);
   plan.snap_start_max_m = absl::GetFlag(FLAGS_snap_start_max);

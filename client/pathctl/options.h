@@ -123,6 +123,11 @@ struct PlanFlags {
   double pf_influence = 0.0;
   double pf_step = 0.0;
   int64_t pf_max_steps = 0;
+  // ant_colony / reaction_diffusion parameters as KEY=VALUE[,KEY=VALUE...]
+  // (the AntColonyOptions / ReactionDiffusionOptions field names); empty:
+  // the server's defaults.
+  std::string ant_colony;
+  std::string reaction_diffusion;
   // Use PlanStream and show its progress on stderr.
   bool progress = false;
   // Start in an obstacle or the inflated zone: plan from the nearest free

@@ -8,9 +8,13 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "client/pathctl/command.h"
+#include "google/protobuf/descriptor.h"
+#include "google/protobuf/message.h"
 #include "client/pathctl/cost_to_go_cmd.h"
 #include "proto/geojson.h"
 
@@ -23,6 +27,67 @@ std::string FormatProgress(const v1::PlanProgress& progress) {
       "progress: %d expansions, best f %s, %.3f s", progress.expansions(),
       progress.has_best_f() ? absl::StrFormat("%.3f", progress.best_f()) : "-",
       progress.elapsed_us() / 1e6);
+}
+
+// Sets fields of `message` (scalar numbers only) from `list`,
+// "KEY=VALUE[,KEY=VALUE...]" with the message's field names: --ant_colony
+// and --reaction_diffusion. Reflection keeps the keys the proto's, so a new
+// option needs no code here. The server checks the ranges.
+absl::Status SetFieldsFromList(absl::string_view flag, absl::string_view list,
+                               google::protobuf::Message* message) {
+  const google::protobuf::Descriptor* descriptor = message->GetDescriptor();
+  const google::protobuf::Reflection* reflection = message->GetReflection();
+  for (absl::string_view item : absl::StrSplit(list, ',', absl::SkipWhitespace())) {
+    const std::pair<absl::string_view, absl::string_view> kv =
+        absl::StrSplit(item, absl::MaxSplits('=', 1));
+    const absl::string_view key = absl::StripAsciiWhitespace(kv.first);
+    const absl::string_view value = absl::StripAsciiWhitespace(kv.second);
+    const google::protobuf::FieldDescriptor* field =
+        descriptor->FindFieldByName(std::string(key));
+    if (field == nullptr) {
+      std::vector<std::string> known;
+      for (int i = 0; i < descriptor->field_count(); ++i) {
+        known.push_back(descriptor->field(i)->name());
+      }
+      return absl::InvalidArgumentError(
+          absl::StrCat("--", flag, ": unknown key '", key, "' (known: ",
+                       absl::StrJoin(known, ", "), ")"));
+    }
+    bool ok = false;
+    switch (field->cpp_type()) {
+      case google::protobuf::FieldDescriptor::CPPTYPE_INT32: {
+        int32_t v;
+        ok = absl::SimpleAtoi(value, &v);
+        if (ok) reflection->SetInt32(message, field, v);
+        break;
+      }
+      case google::protobuf::FieldDescriptor::CPPTYPE_INT64: {
+        int64_t v;
+        ok = absl::SimpleAtoi(value, &v);
+        if (ok) reflection->SetInt64(message, field, v);
+        break;
+      }
+      case google::protobuf::FieldDescriptor::CPPTYPE_UINT64: {
+        uint64_t v;
+        ok = absl::SimpleAtoi(value, &v);
+        if (ok) reflection->SetUInt64(message, field, v);
+        break;
+      }
+      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE: {
+        double v;
+        ok = absl::SimpleAtod(value, &v);
+        if (ok) reflection->SetDouble(message, field, v);
+        break;
+      }
+      default:
+        break;
+    }
+    if (!ok) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "--", flag, ": ", key, "='", value, "' is not a ", field->cpp_type_name()));
+    }
+  }
+  return absl::OkStatus();
 }
 
 // A PlanError as the status it stands for, its typed outcome appended to the
@@ -191,6 +256,16 @@ int Plan(CommandEnv& env, Args args) {
   pf->set_influence_distance(options.pf_influence);
   pf->set_step_size(options.pf_step);
   pf->set_max_steps(options.pf_max_steps);
+  if (absl::Status s = SetFieldsFromList("ant_colony", options.ant_colony,
+                                         plan_options->mutable_ant_colony());
+      !s.ok()) {
+    return env.Usage(s.message());
+  }
+  if (absl::Status s = SetFieldsFromList("reaction_diffusion", options.reaction_diffusion,
+                                         plan_options->mutable_reaction_diffusion());
+      !s.ok()) {
+    return env.Usage(s.message());
+  }
   if (absl::Status s = SetRobotOptions(env.options().robot, &request); !s.ok()) {
     return env.Usage(s.message());
   }
@@ -290,6 +365,29 @@ int Plan(CommandEnv& env, Args args) {
   if (response->episodes() > 0) {
     out << absl::StrFormat("episodes:    %d\n", response->episodes());
   }
+  if (response->has_ant_colony()) {
+    const v1::AntColonyReport& aco = response->ant_colony();
+    out << absl::StrFormat(
+        "ant colony:  best path from iteration %d of %d run (%s); %d ants "
+        "reached the goal, %d died\n",
+        aco.best_iteration(), aco.iterations_run(), aco.stopped_by(),
+        aco.ants_reached_goal(), aco.ants_died());
+  }
+  if (response->has_reaction_diffusion()) {
+    const v1::ReactionDiffusionReport& rd = response->reaction_diffusion();
+    out << absl::StrFormat(
+        "front:       %d steps, %d cells reached, speed %.4g cells/time\n"
+        "vs exact:    arrival time off by %.2f%% mean, %.2f%% max; optimum "
+        "%.6g",
+        rd.steps(), rd.reached_cells(), rd.front_speed(),
+        100.0 * rd.mean_relative_error(), 100.0 * rd.max_relative_error(),
+        rd.optimal_cost());
+    if (rd.cost_ratio() > 0.0) {
+      out << absl::StrFormat(", path cost %.4f x optimum, %d escapes", rd.cost_ratio(),
+                             rd.escapes());
+    }
+    out << "\n";
+  }
   if (response->outcome() == v1::PLAN_OUTCOME_LOCAL_MINIMUM) {
     out << absl::StrFormat("stalled at:  (%.3f, %.3f)\n", response->stall_point().x(),
                            response->stall_point().y());
@@ -358,7 +456,8 @@ constexpr absl::string_view kPlanFlagNames[] = {
     "via", "allow_partial", "expansions", "goal_tolerance", "goal_tolerance_cells",
     "snap_start", "snap_start_max", "snap_start_max_cells",
     "cost_to_go_file", "pf_attractive", "pf_attractive_gain", "pf_switch_distance",
-    "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "progress",
+    "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "ant_colony",
+    "reaction_diffusion", "progress",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
@@ -380,6 +479,7 @@ const Command kPlanCommand = {
                 " [--cost_scaling_factor K]\n"
                 " [--heuristic_weight W] [--lookahead N]\n"
                 " [--cost_to_go_file F] [--pf_* ...]\n"
+                " [--ant_colony K=V,...] [--reaction_diffusion K=V,...]\n"
                 " [--goal_tolerance M | --goal_tolerance_cells C]\n"
                 " [--snap_start [--snap_start_max M | --snap_start_max_cells C]]\n"
                 " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"

@@ -180,6 +180,13 @@ a usage error naming the flag (e.g. plan ... -o x.png):
   --pf_attractive_gain K, --pf_switch_distance D, --pf_repulsive_gain ETA,
   --pf_influence Q, --pf_step S, --pf_max_steps N
                        plan: potential_field parameters (cells; 0 = default)
+  --ant_colony KEY=VALUE[,KEY=VALUE...]
+                       plan: ant_colony parameters: ants, iterations,
+                       stall_iterations, alpha, beta, rho, xi, q0, tau0,
+                       max_steps, seed (docs/planners.md; unset = default)
+  --reaction_diffusion KEY=VALUE[,KEY=VALUE...]
+                       plan: reaction_diffusion parameters: diffusion,
+                       reaction_rate, threshold, time_step, max_steps
 
   --concurrency N      bench: requests in flight; each worker sends its next
                        request when the previous answer arrives (default 4)

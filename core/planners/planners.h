@@ -37,6 +37,8 @@ std::unique_ptr<Planner> MakeStateLatticePlanner();
 std::unique_ptr<Planner> MakeHybridAStarPlanner();
 std::unique_ptr<Planner> MakeHpaStarPlanner();
 std::unique_ptr<Planner> MakeQuadtreePlanner();
+std::unique_ptr<Planner> MakeAntColonyPlanner();
+std::unique_ptr<Planner> MakeReactionDiffusionPlanner();
 
 }  // namespace pathd
 

@@ -18,6 +18,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/search/checked_path.h"
 #include "core/search/path_measure.h"
 #include "core/search/endpoints.h"
 #include "core/search/grid_planner.h"
@@ -397,15 +398,8 @@ class PotentialFieldPlanner final : public GridPlanner {
 
     if (result.found()) {
       result.path = CellChain(grid, result.trajectory, request.cost, scratch);
-      const PathMeasure measure = MeasurePath(grid, result.path, request.cost);
-      if (!measure.valid) {
-        return absl::InternalError(absl::StrFormat(
-            "potential_field built an illegal move at path cell %d %s",
-            measure.first_invalid,
-            CellToString(result.path[measure.first_invalid])));
-      }
-      result.cost = measure.cost;
-      result.length = measure.length;
+      PATHD_RETURN_IF_ERROR(
+          MeasureAssembledPath(grid, request.cost, "potential_field", &result));
     }
     return result;
   }

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -53,6 +54,97 @@ struct PotentialFieldParams {
   int64_t max_steps = 0;
 };
 
+// Parameters of the ant_colony planner: Dorigo & Gambardella's Ant Colony
+// System ("Ant colony system: a cooperative learning approach to the
+// traveling salesman problem", IEEE TEC 1997) on the grid graph
+// (core/planners/nature/ant_colony.h). ValidateAntColonyParams says what is
+// refused.
+struct AntColonyParams {
+  // Ants walking per iteration.
+  int32_t ants = 20;
+  // Iterations at most.
+  int32_t iterations = 100;
+  // Stop once this many iterations in a row have not improved the best path;
+  // 0: never stop early.
+  int32_t stall_iterations = 25;
+  // Exponent of the pheromone in the transition rule.
+  double alpha = 1.0;
+  // Exponent of the desirability eta (Dorigo & Gambardella's 2).
+  double beta = 2.0;
+  // Global evaporation rho on the best path's edges, in (0, 1].
+  double rho = 0.1;
+  // Local evaporation xi on every edge an ant takes, in (0, 1].
+  double xi = 0.1;
+  // Probability of the greedy (exploiting) choice, in [0, 1].
+  double q0 = 0.9;
+  // Initial pheromone tau0 > 0; 0: 1 / (ants * octile(start, goal)), the
+  // paper's 1 / (n * L_nn) with the octile distance for L_nn.
+  double tau0 = 0.0;
+  // Moves an ant may make before it is given up (0: 4 * (width + height)).
+  int64_t max_steps = 0;
+  // Seed of the pseudo-random choices: one seed, one answer.
+  uint64_t seed = 1;
+};
+
+// What an ant_colony run did; filled by that planner only.
+struct AntColonyStats {
+  int32_t iterations_run = 0;
+  // The 1-based iteration whose ant found the best path returned: no later
+  // iteration found a cheaper one ("iterations to convergence"); 0 when no
+  // ant reached the goal.
+  int32_t best_iteration = 0;
+  int64_t ants_reached_goal = 0;
+  // Ants stuck with every neighbour visited or blocked, or out of steps.
+  int64_t ants_died = 0;
+  // Cost of the best path found (+inf when none).
+  double best_cost = 0.0;
+  // Why the iterations ended: "iterations", "stalled", or the stop
+  // condition's outcome name.
+  std::string stopped_by;
+};
+
+// Parameters of the reaction_diffusion planner
+// (core/planners/nature/reaction_diffusion.h): the bistable Nagumo
+// equation du/dt = D lap(u) + k u (1 - u) (u - a) on the free cells, started
+// at the goal. ValidateReactionDiffusionParams says what is refused.
+struct ReactionDiffusionParams {
+  // Diffusion coefficient D, cells^2 per unit time.
+  double diffusion = 1.0;
+  // Reaction rate k.
+  double reaction_rate = 0.5;
+  // Excitation threshold a, in (0, 0.5): a cell pushed past it switches to
+  // the excited state; the front moves at sqrt(D k / 2) (1 - 2 a) cells per
+  // unit time.
+  double threshold = 0.1;
+  // Explicit Euler time step; dt (10/3 D + k) <= 1 keeps the update stable.
+  double time_step = 0.2;
+  // Time steps at most (0: enough for the front to cross the map's free
+  // cells at the plane-wave speed four times over).
+  int64_t max_steps = 0;
+};
+
+// How the reaction_diffusion front differs from the exact wave front
+// (Dijkstra's cost-to-go on the same costs); filled by that planner only.
+struct ReactionDiffusionStats {
+  int64_t steps = 0;
+  // Cells the front reached (u crossed 1/2) before it stopped.
+  int64_t reached_cells = 0;
+  // The front's plane-wave speed sqrt(D k / 2) (1 - 2 a), cells per unit time:
+  // arrival time T becomes the cost estimate speed * T.
+  double front_speed = 0.0;
+  // Over reached cells other than the goal: |speed * T - d| / d with d the
+  // exact cost-to-go, the largest and the mean.
+  double max_relative_error = 0.0;
+  double mean_relative_error = 0.0;
+  // Exact optimum from start to goal (+inf when unreachable), and the
+  // returned path's cost over it (0 when no path).
+  double optimal_cost = 0.0;
+  double cost_ratio = 0.0;
+  // Moves of the path that do not descend T: climbs out of the shallow pits
+  // the lattice leaves in the arrival time (reaction_diffusion.cc).
+  int64_t escapes = 0;
+};
+
 // Collects the cells a search expands (takes from its open list or queue to
 // close), in expansion order, up to a cap, so tools can draw what a search
 // touched. Not thread-safe: one per query. A PlanRequest points to one only
@@ -94,6 +186,8 @@ struct PlanRequest {
   // Planners with PlannerTraits::cost_to_go fill PlanResult::cost_to_go.
   bool want_cost_to_go = false;
   PotentialFieldParams potential;
+  AntColonyParams ant_colony;
+  ReactionDiffusionParams reaction_diffusion;
   // Not owned; null: record nothing. When set, the planners that search cell
   // by cell record every expansion here (one cell per unit of
   // PlanResult::expansions); the incremental planners (lpa_star, dstar_lite,
@@ -178,6 +272,13 @@ struct PlanResult {
   std::vector<CellPoint> trajectory;
   // kLocalMinimum: where the descent stalled.
   CellPoint stall_point;
+  // Filled by ant_colony / reaction_diffusion only.
+  std::optional<AntColonyStats> ant_colony;
+  std::optional<ReactionDiffusionStats> reaction_diffusion;
+  // Why a search ended without a path, in words, when the outcome alone
+  // would mislead (ant_colony: no ant reached a goal that may be
+  // reachable); the server's reason then. Empty otherwise.
+  std::string reason;
   // When requested and supported: cost-to-go to the goal of every cell,
   // row-major; +infinity for cells that cannot reach it.
   std::vector<double> cost_to_go;

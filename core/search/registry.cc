@@ -44,6 +44,8 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeHybridAStarPlanner),
              PlannerRegistry::Factory(&MakeHpaStarPlanner),
              PlannerRegistry::Factory(&MakeQuadtreePlanner),
+             PlannerRegistry::Factory(&MakeAntColonyPlanner),
+             PlannerRegistry::Factory(&MakeReactionDiffusionPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

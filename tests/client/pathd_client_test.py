@@ -564,6 +564,11 @@ class RealServerTest(unittest.TestCase, PathChecks):
                  cost_penalty=1.5),
             dict(goal_yaw_tolerance=0.2), dict(lattice="diff_5cm"), dict(smooth=False),
             dict(snap_start=True), dict(snap_start_max_m=0.4), dict(snap_start_max_cells=4.0),
+            dict(ant_colony={"ants": 5, "iterations": 7, "stall_iterations": 0, "alpha": 1.5,
+                             "beta": 3.0, "rho": 0.2, "xi": 0.05, "q0": 0.0, "tau0": 0.01,
+                             "max_steps": 50, "seed": 9}),
+            dict(reaction_diffusion={"diffusion": 2.0, "reaction_rate": 0.3,
+                                     "threshold": 0.2, "time_step": 0.1, "max_steps": 500}),
         ]
         covered = set()
         for keywords in settings:
@@ -582,9 +587,18 @@ class RealServerTest(unittest.TestCase, PathChecks):
                                           cost_penalty=1.5).penalties.ListFields()), 4)
         self.assertEqual(len(pathd_client.plan_options(
             potential_field=settings[10]["potential_field"]).potential_field.ListFields()), 7)
+        # Every field set, a zero (q0 0, stall_iterations 0) included: they are
+        # optional on the wire, so 0 is a value, not "unset".
+        self.assertEqual(len(pathd_client.plan_options(
+            ant_colony=settings[-2]["ant_colony"]).ant_colony.ListFields()), 11)
+        self.assertEqual(len(pathd_client.plan_options(
+            reaction_diffusion=settings[-1]["reaction_diffusion"])
+            .reaction_diffusion.ListFields()), 5)
         for bad, message in ((dict(goal_tolerance_m=1, goal_tolerance_cells=1), "not both"),
                              (dict(footprint_m=[(1, 0)], footprint_radius_m=1), "one of"),
                              (dict(potential_field={"gain": 1}), "potential_field key"),
+                             (dict(ant_colony={"ant": 1}), "ant_colony key"),
+                             (dict(reaction_diffusion={"speed": 1}), "reaction_diffusion key"),
                              (dict(motion_model="hover"), "motion model 'hover'")):
             with self.assertRaisesRegex(ValueError, message):
                 pathd_client.plan_options(**bad)

@@ -212,6 +212,55 @@ void BadInputTest::AddPlannerCases(std::vector<Case>& cases) {
       },
       StatusCode::INVALID_ARGUMENT, "options.potential_field.max_steps");
   plan_case(
+      "ant_colony rho above 1",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_ANT_COLONY);
+        r.mutable_options()->mutable_ant_colony()->set_rho(1.5);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.ant_colony.rho 1.5");
+  plan_case(
+      "ant_colony zero ants",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_ANT_COLONY);
+        r.mutable_options()->mutable_ant_colony()->set_ants(0);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.ant_colony.ants 0");
+  plan_case(
+      "ant_colony NaN alpha",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_ANT_COLONY);
+        r.mutable_options()->mutable_ant_colony()->set_alpha(kNaN);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.ant_colony.alpha");
+  plan_case(
+      "ant_colony q0 above 1",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_ANT_COLONY);
+        r.mutable_options()->mutable_ant_colony()->set_q0(2);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.ant_colony.q0");
+  plan_case(
+      "reaction_diffusion threshold 0.5",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_REACTION_DIFFUSION);
+        r.mutable_options()->mutable_reaction_diffusion()->set_threshold(0.5);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.reaction_diffusion.threshold 0.5");
+  plan_case(
+      "reaction_diffusion unstable time_step",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_REACTION_DIFFUSION);
+        r.mutable_options()->mutable_reaction_diffusion()->set_time_step(1.0);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.reaction_diffusion.time_step 1");
+  plan_case(
+      "reaction_diffusion negative diffusion",
+      [](P& r) {
+        r.set_planner(v1::PLANNER_REACTION_DIFFUSION);
+        r.mutable_options()->mutable_reaction_diffusion()->set_diffusion(-1);
+      },
+      StatusCode::INVALID_ARGUMENT, "options.reaction_diffusion.diffusion");
+  plan_case(
       "via off the map", [](P& r) { *r.add_via() = CellPos(3, 99); },
       StatusCode::INVALID_ARGUMENT, "via[0]");
   plan_case(

@@ -381,6 +381,58 @@ TEST_F(E2eTest, DistanceTransformWritesItsCostToGoField) {
   EXPECT_NEAR(start_cost, astar.cost(), 1e-5);
 }
 
+TEST_F(E2eTest, AntColonyThroughPathctl) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  const ProcessResult text =
+      Ctl({"plan", "walled", "2", "2", "17", "3", "--planner=ant_colony",
+           "--ant_colony=ants=30,iterations=60,seed=7"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "ant colony:  best path from iteration"))
+      << text;
+  const std::vector<std::string> args = {"walled", "2", "2", "17", "3",
+                                         "--planner=ant_colony",
+                                         "--ant_colony=ants=30,iterations=60,seed=7"};
+  const v1::PlanResponse a = PlanJson(args);
+  const v1::PlanResponse b = PlanJson(args);
+  ASSERT_TRUE(a.found());
+  EXPECT_GE(a.ant_colony().best_iteration(), 1);
+  EXPECT_LE(a.ant_colony().best_iteration(), a.ant_colony().iterations_run());
+  EXPECT_LE(a.ant_colony().iterations_run(), 60);
+  // One seed, one answer, and never below A*'s optimum.
+  EXPECT_EQ(a.path_size(), b.path_size());
+  EXPECT_DOUBLE_EQ(a.cost(), b.cost());
+  EXPECT_GE(a.cost(), PlanJson({"walled", "2", "2", "17", "3"}).cost() - 1e-9);
+  // A bad value is the server's INVALID_ARGUMENT naming the option; an
+  // unknown key is pathctl's usage error.
+  ExpectRpcError({"plan", "walled", "2", "2", "17", "3", "--planner=ant_colony",
+                  "--ant_colony=rho=2"},
+                 "INVALID_ARGUMENT", {"options.ant_colony.rho 2"});
+  const ProcessResult unknown = Ctl({"plan", "walled", "2", "2", "17", "3",
+                                     "--planner=ant_colony", "--ant_colony=ant=3"});
+  EXPECT_EQ(unknown.exit_code, 2) << unknown;
+  EXPECT_TRUE(absl::StrContains(unknown.err, "unknown key 'ant'")) << unknown;
+}
+
+TEST_F(E2eTest, ReactionDiffusionThroughPathctl) {
+  ASSERT_NO_FATAL_FAILURE(CreateMap("walled", WalledRoomMap()));
+  const ProcessResult text = Ctl({"plan", "walled", "2", "2", "17", "3",
+                                  "--planner=reaction_diffusion",
+                                  "--reaction_diffusion=threshold=0.15"});
+  ASSERT_EQ(text.exit_code, 0) << text;
+  EXPECT_TRUE(absl::StrContains(text.out, "vs exact:    arrival time off by")) << text;
+  const v1::PlanResponse plan =
+      PlanJson({"walled", "2", "2", "17", "3", "--planner=reaction_diffusion"});
+  ASSERT_TRUE(plan.found());
+  const v1::PlanResponse astar = PlanJson({"walled", "2", "2", "17", "3"});
+  EXPECT_NEAR(plan.reaction_diffusion().optimal_cost(), astar.cost(), 1e-9);
+  EXPECT_NEAR(plan.reaction_diffusion().cost_ratio(), plan.cost() / astar.cost(), 1e-9);
+  EXPECT_GE(plan.reaction_diffusion().cost_ratio(), 1.0 - 1e-12);
+  EXPECT_GT(plan.reaction_diffusion().reached_cells(), 0);
+  ExpectRpcError({"plan", "walled", "2", "2", "17", "3", "--planner=reaction_diffusion",
+                  "--reaction_diffusion=time_step=1"},
+                 "INVALID_ARGUMENT", {"options.reaction_diffusion.time_step 1"});
+}
+
 TEST_F(E2eTest, PotentialFieldReportsWhereItStalled) {
   // A cup open towards the start: the goal's pull holds the robot inside it.
   std::string text = "type octile\nheight 15\nwidth 15\nmap\n";

@@ -720,6 +720,8 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  snap_start: bool = False,
                  snap_start_max_m: float | None = None,
                  snap_start_max_cells: float | None = None,
+                 ant_colony: dict | None = None,
+                 reaction_diffusion: dict | None = None,
                  ) -> planner_service_pb2.PlanOptions:
     """A PlanOptions message from keyword arguments, one per field of
     proto/pathd/v1/planner_service.proto's PlanOptions (docs/python.md lists
@@ -745,7 +747,12 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     goal_yaw_tolerance (radians), lattice, smooth (kinematic planners; grid
     planners with smooth=True also answer poses smoothed for the robot);
     snap_start, snap_start_max_* (a blocked start moves to the nearest
-    free cell).
+    free cell); ant_colony: a dict of AntColonyOptions fields ("ants",
+    "iterations", "stall_iterations", "alpha", "beta", "rho", "xi", "q0",
+    "tau0", "max_steps", "seed"); reaction_diffusion: a dict of
+    ReactionDiffusionOptions fields ("diffusion", "reaction_rate",
+    "threshold", "time_step", "max_steps"). Unknown keys are a ValueError;
+    the server checks the ranges.
     """
     if connectivity not in (4, 8):
         raise ValueError(f"connectivity must be 4 or 8, not {connectivity}")
@@ -783,6 +790,17 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                 planner_service_pb2.AttractivePotential, "ATTRACTIVE_POTENTIAL_",
                 fields["attractive"], "attractive potential")
         options.potential_field.CopyFrom(planner_service_pb2.PotentialFieldOptions(**fields))
+    for name, given, message in (
+            ("ant_colony", ant_colony, planner_service_pb2.AntColonyOptions),
+            ("reaction_diffusion", reaction_diffusion,
+             planner_service_pb2.ReactionDiffusionOptions)):
+        if not given:
+            continue
+        known = [f.name for f in message.DESCRIPTOR.fields]
+        unknown = set(given) - set(known)
+        if unknown:
+            raise ValueError(f"unknown {name} key(s) {sorted(unknown)}; expected {known}")
+        getattr(options, name).CopyFrom(message(**given))
     shapes = [s for s in (footprint_m, footprint_cells, footprint_radius_m,
                           footprint_radius_cells) if s is not None]
     if len(shapes) > 1:

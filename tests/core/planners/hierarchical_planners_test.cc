@@ -34,12 +34,14 @@
 #include "core/search/registry.h"
 #include "gtest/gtest.h"
 #include "tests/testing/advancing_store.h"
+#include "tests/testing/reference_model.h"
 #include "tests/testing/test_grids.h"
 
 namespace pathd {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::Model;
 using testing::AdvancingStore;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -49,42 +51,6 @@ int Cases(int fallback) {
   const int scale = env != nullptr ? std::atoi(env) : 0;
   return scale > 0 ? std::min(fallback, scale) : fallback;
 }
-
-// The cost model written out again, apart from core's GridView and CostTable.
-struct Model {
-  const Grid& grid;
-  CostParams p;
-  bool Open(int x, int y) const {
-    if (x < 0 || y < 0 || x >= grid.width() || y >= grid.height()) return false;
-    const uint8_t c = grid.cost(x, y);
-    return c <= 252 || (p.unknown_is_free && c == 255);
-  }
-  double Factor(int x, int y) const {
-    const uint8_t c = grid.cost(x, y);
-    return c == 255 ? 1.0 : 1.0 + p.cost_weight * c / 252.0;
-  }
-  // Cost of the move a -> b, or -1 when it is not a legal move.
-  double Step(Cell a, Cell b) const {
-    const int dx = b.x - a.x, dy = b.y - a.y;
-    if (std::abs(dx) > 1 || std::abs(dy) > 1 || (dx == 0 && dy == 0)) return -1;
-    if (!Open(a.x, a.y) || !Open(b.x, b.y)) return -1;
-    if (dx != 0 && dy != 0) {
-      if (p.connectivity == Connectivity::kFour) return -1;
-      if (!Open(a.x + dx, a.y) || !Open(a.x, a.y + dy)) return -1;  // corner cut
-      return std::sqrt(2.0) * Factor(b.x, b.y);
-    }
-    return Factor(b.x, b.y);
-  }
-  double MaxFactor() const {
-    double f = 1.0;
-    for (int y = 0; y < grid.height(); ++y) {
-      for (int x = 0; x < grid.width(); ++x) {
-        if (Open(x, y)) f = std::max(f, Factor(x, y));
-      }
-    }
-    return f;
-  }
-};
 
 // Dijkstra from `s` with its own queue and move loop; fills `parent` so an
 // optimal path can be traced.
