@@ -378,7 +378,7 @@ class HttpApiTest(unittest.TestCase):
         self.assertStatus(request(self.d, "POST", f"/v1/sessions/{session}:send",
                                   {"seq": 3, "pose": {"cell": {"x": 3, "y": 1}}}, token=READ_TOKEN), 404, 5)
 
-    def test_control_session_state_through_send(self):
+    def test_navigate_session_control_state_through_send(self):
         # A control session (issue 20) over HTTP: its states go through
         # :send like any NavigateRequest and come back as CONTROL events.
         opened = EventStream(self.d, "POST", "/v1/maps/room:navigate",
