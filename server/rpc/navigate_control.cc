@@ -165,7 +165,9 @@ absl::Status ApplyLocalOptions(const v1::ControlOptions& control, double resolut
   // Sorted, so the first bad name reported does not depend on hashing.
   std::map<std::string, double> sorted(control.local_options().begin(),
                                        control.local_options().end());
-  for (const auto& [name, value] : sorted) {
+  for (const auto& entry : sorted) {
+    const std::string& name = entry.first;
+    const double value = entry.second;
     const std::string field = absl::StrFormat("local_options[\"%s\"]", name);
     auto spec = std::find_if(specs.begin(), specs.end(),
                              [&](const OptionSpec& s) { return name == s.name; });
