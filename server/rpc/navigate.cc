@@ -16,6 +16,7 @@
 #include <atomic>
 #include <chrono>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -104,24 +105,10 @@ class NavigationSession final : public NavigateReactor {
       return;
     }
     if (push_pending_ || finish_requested_ || done_) return;
-    push_pending_ = true;
-    ++outstanding_;
-    const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this](SearchScratch& scratch) { RunPush(scratch); }, [this] { Release(); },
-        [this](const absl::Status& failed) {
-          // The search may be half-repaired: the session cannot go on.
-          {
-            absl::MutexLock lock(&mu_);
-            push_pending_ = false;
-            EndWithLocked(failed);
-          }
-          Release();
-        }));
-    if (!submitted.ok()) {
-      // Not worth failing the session for: its next message repairs anyway.
-      push_pending_ = false;
-      --outstanding_;
-    }
+    // A refused push is not worth failing the session for: its next message
+    // repairs anyway.
+    SubmitBackgroundLocked(&push_pending_,
+                           [this](SearchScratch& scratch) { RunPush(scratch); });
   }
 
   // Ends the session with `status` as soon as no message is being handled.
@@ -240,24 +227,35 @@ class NavigationSession final : public NavigateReactor {
       replan_cell_ = robot;
     }
     if (replan_pending_ || finish_requested_ || done_) return;
-    replan_pending_ = true;
+    if (!SubmitBackgroundLocked(&replan_pending_,
+                                [this](SearchScratch&) { RunControlReplan(); })) {
+      // The next state asks again.
+      replan_incomplete_ = true;
+    }
+  }
+
+  // Queues `run` on the worker pool as a job of the session besides its
+  // messages (a push, a control replan): `*pending` (a flag guarded by mu_)
+  // is set until the job clears it or fails. False when the pool refused it.
+  bool SubmitBackgroundLocked(bool* pending, std::function<void(SearchScratch&)> run)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    *pending = true;
     ++outstanding_;
     const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this](SearchScratch&) { RunControlReplan(); }, [this] { Release(); },
-        [this](const absl::Status& failed) {
+        std::move(run), [this] { Release(); },
+        [this, pending](const absl::Status& failed) {
+          // The search may be half-repaired: the session cannot go on.
           {
             absl::MutexLock lock(&mu_);
-            replan_pending_ = false;
+            *pending = false;
             EndWithLocked(failed);
           }
           Release();
         }));
-    if (!submitted.ok()) {
-      // The next state asks again (replan_incomplete_ makes sure it does).
-      replan_pending_ = false;
-      replan_incomplete_ = true;
-      --outstanding_;
-    }
+    if (submitted.ok()) return true;
+    *pending = false;
+    --outstanding_;
+    return false;
   }
 
   void RunControlReplan() {

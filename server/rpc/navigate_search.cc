@@ -367,6 +367,13 @@ absl::Status NavigationSearch::Push(SearchScratch& scratch, v1::NavigateResponse
     *changed = had_path || kinematic_->has_path();
     return absl::OkStatus();
   }
+  if (control_ != nullptr) {
+    // A push that raced with the open of a control session: the path goes
+    // to its control answers, never out as a push.
+    bool incomplete = false;
+    *changed = false;
+    return ReplanControl(std::nullopt, &incomplete);
+  }
   return PlanInto(response->mutable_plan(), changed);
 }
 
