@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -431,6 +432,44 @@ TEST_F(ControlTest, MapChangeRepairsThePathAndTheAnswerCarriesIt) {
     through_gap = through_gap || (c.x() == 45 && c.y() >= 27);
   }
   EXPECT_TRUE(through_gap);
+  EXPECT_TRUE(client.Close().ok());
+}
+
+TEST_F(ControlTest, BudgetedReplansContinueWhileAnswersGoOn) {
+  // 200 x 200 open cells, 50 expansions per replan: the open's plan and the
+  // first replans run out; every state is still answered at once (NO_PATH,
+  // the robot told to stand), and the next replans continue the same D* Lite
+  // search until the path is found and carried.
+  ASSERT_TRUE(
+      server_->CreateRawMap("wide", 200, 200, std::string(200 * 200, '\0'), kRes).ok());
+  ControlClient client(server_->planner());
+  v1::NavigateRequest open;
+  open.set_seq(1);
+  open.mutable_open()->set_map("wide");
+  open.mutable_open()->mutable_start()->mutable_cell()->set_x(5);
+  open.mutable_open()->mutable_start()->mutable_cell()->set_y(5);
+  open.mutable_open()->mutable_goal()->mutable_cell()->set_x(190);
+  open.mutable_open()->mutable_goal()->mutable_cell()->set_y(190);
+  open.mutable_open()->mutable_options()->set_robot_radius_m(0.2);
+  open.mutable_open()->set_replan_max_expansions(50);
+  open.mutable_open()->mutable_control();
+  const v1::NavigateResponse opened = client.Exchange(open);
+  EXPECT_EQ(opened.plan().outcome(), v1::PLAN_OUTCOME_EXPANSION_LIMIT);
+  const Sim still{0.55, 0.55, 0.0};
+  int no_path = 0;
+  std::optional<v1::NavigateResponse> found;
+  for (int i = 0; i < 20000 && !found.has_value(); ++i) {
+    v1::NavigateResponse answer = client.Send(still, i * 0.1);
+    if (answer.command().outcome() == v1::LOCAL_OUTCOME_NO_PATH) {
+      ++no_path;
+      EXPECT_EQ(answer.command().v(), 0.0);
+    } else if (answer.has_plan() && answer.plan().found()) {
+      found = answer;
+    }
+  }
+  ASSERT_TRUE(found.has_value());
+  EXPECT_GT(no_path, 0);
+  EXPECT_NEAR(found->plan().cost(), 185 * std::sqrt(2.0), 1e-6);
   EXPECT_TRUE(client.Close().ok());
 }
 
