@@ -394,7 +394,8 @@ int64_t ControlSession::bytes() const {
     }
   }
   absl::MutexLock lock(&mu_);
-  total += static_cast<int64_t>(progress_.remaining.size() * sizeof(double));
+  total += static_cast<int64_t>(progress_.remaining.size() * sizeof(double) +
+                                carried_.capacity() * sizeof(CellPoint));
   return total;
 }
 
@@ -531,8 +532,21 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
   if (path != nullptr) {
     command->set_map_version(path->map_version);
     if (path->generation > sent_generation_) {
-      *response->mutable_plan() = path->plan;
       sent_generation_ = path->generation;
+      // Replans published while no answer went out may end on the rest of
+      // the path the client has: that is not news.
+      const std::vector<CellPoint>& next = path->points;
+      const bool rest_of_carried =
+          !next.empty() && next.size() <= carried_.size() &&
+          std::equal(next.begin(), next.end(),
+                     carried_.end() - static_cast<std::ptrdiff_t>(next.size()),
+                     [](const CellPoint& a, const CellPoint& b) {
+                       return a.x == b.x && a.y == b.y;
+                     });
+      if (!rest_of_carried) {
+        *response->mutable_plan() = path->plan;
+        carried_ = next;
+      }
     }
   }
   if (path == nullptr || path->points.empty()) {

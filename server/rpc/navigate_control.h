@@ -153,6 +153,8 @@ class ControlSession {
   ProgressWindow progress_ ABSL_GUARDED_BY(mu_);
   double last_yaw_ ABSL_GUARDED_BY(mu_) = 0.0;
   uint64_t sent_generation_ ABSL_GUARDED_BY(mu_) = 0;
+  // The points of the path last carried to the client.
+  std::vector<CellPoint> carried_ ABSL_GUARDED_BY(mu_);
   // The newest map version seen and its static obstacles.
   std::shared_ptr<const MapSnapshot> snapshot_ ABSL_GUARDED_BY(mu_);
   std::shared_ptr<const ObstaclePolygons> polygons_ ABSL_GUARDED_BY(mu_);
