@@ -303,6 +303,9 @@ class NavigationSession final : public NavigateReactor {
       absl::MutexLock lock(&mu_);
       done_ = true;
       registered = !removed_;
+      // Whatever ended the call, its robot leaves while the registry is
+      // certainly alive (the owner waits for Remove below).
+      if (control_ != nullptr) owner_.robots_.Remove(map_name_, id_);
     }
     if (registered) owner_.Remove(this);
     bool destroy;

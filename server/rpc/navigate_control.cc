@@ -376,8 +376,6 @@ ControlSession::ControlSession(Deps deps, ControlConfig config, std::string map,
   }
 }
 
-ControlSession::~ControlSession() { deps_.robots.Remove(map_, robot_id_); }
-
 void ControlSession::SetPath(GlobalPath path) {
   absl::MutexLock lock(&path_mu_);
   path.generation = next_generation_++;

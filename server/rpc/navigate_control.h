@@ -112,8 +112,8 @@ class ControlSession {
   };
   // `map` is the session's map, `robot_id` its session id.
   ControlSession(Deps deps, ControlConfig config, std::string map, uint64_t robot_id);
-  // Removes the robot from the registry: a closed session is no obstacle.
-  ~ControlSession();
+  // The stream half removes the robot from the registry when the session
+  // finishes (the registry may be gone by the time this is destroyed).
   ControlSession(const ControlSession&) = delete;
   ControlSession& operator=(const ControlSession&) = delete;
 
