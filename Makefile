@@ -61,7 +61,7 @@ test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 bench: configure-test
-	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd_bench
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd_bench control_bench
 	$(BUILD_DIR)/tests/bench/pathd_bench --movingai_dir=../shared/benchmarks/movingai
 
 clean:
@@ -83,7 +83,7 @@ check-thread-safety: setup-test configure
 # labelled tsan (tests/*/CMakeLists.txt), which ctest runs with the
 # TSAN_OPTIONS set in CMakeLists.txt (halt_on_error, tests/tsan/tsan.supp).
 TSAN_BUILD_DIR ?= build-tsan
-TSAN_TARGETS ?= concurrency_test
+TSAN_TARGETS ?= concurrency_test navigate_control_test
 
 test-tsan: setup-test
 	@$(CMAKE_CONFIGURE) -B $(TSAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_TSAN=ON >/dev/null

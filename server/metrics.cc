@@ -8,7 +8,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <exception>
+#include <limits>
 #include <string>
 #include <thread>
 #include <utility>
@@ -133,6 +135,7 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
     families.push_back(Single("pathd_navigate_session_bytes",
                               "Bytes of the open sessions' D* Lite state.", kGauge,
                               static_cast<double>(s_.sessions->bytes())));
+    AddControl(families);
     families.push_back(Single("pathd_map_watchers", "Open WatchMap streams.", kGauge,
                               static_cast<double>(s_.watchers->count())));
     families.push_back(Single(
@@ -144,6 +147,40 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
   }
 
  private:
+  // Control sessions: the cycle latency histogram and the robots per map
+  // (the first kMaxMapSeries maps by name, as pathd_map_version).
+  void AddControl(std::vector<prometheus::MetricFamily>& families) const {
+    const CycleHistogram::Snapshot cycles = s_.sessions->control_cycles().Read();
+    prometheus::ClientMetric histogram;
+    int64_t cumulative = 0;
+    for (size_t i = 0; i < cycles.counts.size(); ++i) {
+      cumulative += cycles.counts[i];
+      prometheus::ClientMetric::Bucket bucket;
+      bucket.cumulative_count = static_cast<std::uint64_t>(cumulative);
+      bucket.upper_bound = i < CycleHistogram::kBounds.size()
+                               ? CycleHistogram::kBounds[i]
+                               : std::numeric_limits<double>::infinity();
+      histogram.histogram.bucket.push_back(bucket);
+    }
+    histogram.histogram.sample_count = static_cast<std::uint64_t>(cycles.count);
+    histogram.histogram.sample_sum = cycles.sum;
+    families.push_back(Family("pathd_control_cycle_seconds",
+                              "Control cycles of control sessions: from a state's arrival to "
+                              "its command being queued.",
+                              prometheus::MetricType::Histogram, {histogram}));
+    std::vector<prometheus::ClientMetric> robots;
+    for (const auto& [map, count] :
+         s_.sessions->robots().Counts(std::chrono::steady_clock::now())) {
+      if (robots.size() >= kMaxMapSeries) break;
+      robots.push_back(Value(prometheus::MetricType::Gauge, static_cast<double>(count),
+                             {{"map", map}}));
+    }
+    families.push_back(Family("pathd_control_robots",
+                              "Robots of control sessions per map that still count as "
+                              "obstacles (fresh or stale, not forgotten).",
+                              prometheus::MetricType::Gauge, std::move(robots)));
+  }
+
   // One series per cache: the two incremental caches, the inflation cache
   // (which has no byte budget and evicts by entry count, so it has neither
   // budget nor evictions; its advances from an older version's shaped grid

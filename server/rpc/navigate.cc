@@ -5,11 +5,18 @@
 // Lock order: owner's mu_ -> session mu_; plan_mu_ -> session mu_. gRPC never
 // runs a user reactor's reactions inline from Start*/Finish (they are not
 // InternalInlineable), so those may be called with mu_ held.
+//
+// Control sessions (navigate_control.h) answer a state message on the thread
+// that read it, without plan_mu_: the cycle is bounded work and follows the
+// newest published global path, while the D* Lite replans the robot's moves
+// and the map's changes call for run as coalesced jobs on the worker pool.
 #include "server/rpc/navigate.h"
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -46,7 +53,7 @@ class NavigationSession final : public NavigateReactor {
         search_(NavigationSearch::Deps{owner.store_, owner.inflation_,
                                        owner.options_.budget,
                                        owner.options_.max_expansions,
-                                       owner.options_.derived},
+                                       owner.options_.derived, &owner.robots_, id},
                 std::move(caller), std::move(shared_observations), &cancelled_,
                 &bytes_, [this](const std::string& map_name) {
                   absl::MutexLock lock(&mu_);
@@ -92,25 +99,16 @@ class NavigationSession final : public NavigateReactor {
   // if it changed. Coalesced: one pending push covers any number of versions.
   void SchedulePush() {
     absl::MutexLock lock(&mu_);
-    if (push_pending_ || finish_requested_ || done_) return;
-    push_pending_ = true;
-    ++outstanding_;
-    const absl::Status submitted = owner_.pool_.Submit(MakeJob(
-        [this](SearchScratch& scratch) { RunPush(scratch); }, [this] { Release(); },
-        [this](const absl::Status& failed) {
-          // The search may be half-repaired: the session cannot go on.
-          {
-            absl::MutexLock lock(&mu_);
-            push_pending_ = false;
-            EndWithLocked(failed);
-          }
-          Release();
-        }));
-    if (!submitted.ok()) {
-      // Not worth failing the session for: its next message repairs anyway.
-      push_pending_ = false;
-      --outstanding_;
+    if (control_ != nullptr) {
+      // Control answers carry the repaired path; nothing is pushed.
+      ScheduleReplanLocked(std::nullopt);
+      return;
     }
+    if (push_pending_ || finish_requested_ || done_) return;
+    // A refused push is not worth failing the session for: its next message
+    // repairs anyway.
+    SubmitBackgroundLocked(&push_pending_,
+                           [this](SearchScratch& scratch) { RunPush(scratch); });
   }
 
   // Ends the session with `status` as soon as no message is being handled.
@@ -128,21 +126,38 @@ class NavigationSession final : public NavigateReactor {
   }
 
   void OnReadDone(bool ok) override {
-    absl::MutexLock lock(&mu_);
-    // A message that raced with the end of the session is not answered.
-    if (finish_requested_) return;
-    if (!ok) {
-      // The client closed its side (or the call is cancelled): done.
-      FinishLocked(absl::OkStatus());
-      return;
+    std::shared_ptr<ControlSession> control;
+    v1::NavigateRequest state;
+    {
+      absl::MutexLock lock(&mu_);
+      // A message that raced with the end of the session is not answered.
+      if (finish_requested_) return;
+      if (!ok) {
+        // The client closed its side (or the call is cancelled): done.
+        FinishLocked(absl::OkStatus());
+        return;
+      }
+      last_activity_ = absl::Now();
+      if (pending_end_.has_value()) {
+        FinishLocked(*pending_end_);
+        return;
+      }
+      handling_ = true;
+      ++outstanding_;
+      if (control_ == nullptr || request_.kind_case() != v1::NavigateRequest::kState) {
+        SubmitMessageLocked();
+        return;
+      }
+      control = control_;
+      state = std::move(request_);
+      request_.Clear();
     }
-    last_activity_ = absl::Now();
-    if (pending_end_.has_value()) {
-      FinishLocked(*pending_end_);
-      return;
-    }
-    handling_ = true;
-    ++outstanding_;
+    RunControl(state, *control);
+  }
+
+ private:
+  // Queues a message job for request_ (handling_ set and outstanding_ counted).
+  void SubmitMessageLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     auto message = std::make_shared<v1::NavigateRequest>(std::move(request_));
     request_.Clear();
     const absl::Status submitted = owner_.pool_.Submit(MakeJob(
@@ -172,6 +187,100 @@ class NavigationSession final : public NavigateReactor {
     }
   }
 
+  // One control cycle, on the reading thread (handling_ set, outstanding_
+  // counted): answers the state and asks for a replan when the robot moved
+  // to another cell.
+  void RunControl(const v1::NavigateRequest& message, ControlSession& control) {
+    const SteadyTime arrived = std::chrono::steady_clock::now();
+    v1::NavigateResponse response;
+    response.set_seq(message.seq());
+    Cell cell;
+    const absl::Status status = control.Cycle(message.state(), &response, &cell);
+    owner_.control_cycles_.Observe(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - arrived).count());
+    {
+      absl::MutexLock lock(&mu_);
+      handling_ = false;
+      ++messages_;
+      if (!status.ok()) {
+        FinishLocked(status);
+      } else {
+        EnqueueLocked(std::move(response));
+        ScheduleReplanLocked(cell);
+        if (pending_end_.has_value()) {
+          FinishLocked(*pending_end_);
+        } else if (!finish_requested_) {
+          StartRead(&request_);
+        }
+      }
+    }
+    Release();
+  }
+
+  // Control sessions: a D* Lite replan from `robot` (nullopt: the map
+  // changed) on the worker pool, unless the robot is still in the cell the
+  // last replan planned from and that replan finished. Coalesced: a pending
+  // replan takes the newest cell.
+  void ScheduleReplanLocked(std::optional<Cell> robot) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (robot.has_value()) {
+      if (planned_cell_.has_value() && *planned_cell_ == *robot && !replan_incomplete_) return;
+      replan_cell_ = robot;
+    }
+    if (replan_pending_ || finish_requested_ || done_) return;
+    if (!SubmitBackgroundLocked(&replan_pending_,
+                                [this](SearchScratch&) { RunControlReplan(); })) {
+      // The next state asks again.
+      replan_incomplete_ = true;
+    }
+  }
+
+  // Queues `run` on the worker pool as a job of the session besides its
+  // messages (a push, a control replan): `*pending` (a flag guarded by mu_)
+  // is set until the job clears it or fails. False when the pool refused it.
+  bool SubmitBackgroundLocked(bool* pending, std::function<void(SearchScratch&)> run)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    *pending = true;
+    ++outstanding_;
+    const absl::Status submitted = owner_.pool_.Submit(MakeJob(
+        std::move(run), [this] { Release(); },
+        [this, pending](const absl::Status& failed) {
+          // The search may be half-repaired: the session cannot go on.
+          {
+            absl::MutexLock lock(&mu_);
+            *pending = false;
+            EndWithLocked(failed);
+          }
+          Release();
+        }));
+    if (submitted.ok()) return true;
+    *pending = false;
+    --outstanding_;
+    return false;
+  }
+
+  void RunControlReplan() {
+    std::optional<Cell> robot;
+    {
+      absl::MutexLock lock(&mu_);
+      replan_pending_ = false;
+      robot = replan_cell_;
+      planned_cell_ = replan_cell_;
+    }
+    bool incomplete = false;
+    absl::Status status;
+    {
+      absl::MutexLock plan_lock(&plan_mu_);
+      status = search_.ReplanControl(robot, &incomplete);
+    }
+    {
+      absl::MutexLock lock(&mu_);
+      replan_incomplete_ = incomplete;
+      if (!status.ok()) EndWithLocked(status);
+    }
+    Release();
+  }
+
+ public:
   void OnWriteDone(bool ok) override {
     absl::MutexLock lock(&mu_);
     writing_ = false;
@@ -194,6 +303,9 @@ class NavigationSession final : public NavigateReactor {
       absl::MutexLock lock(&mu_);
       done_ = true;
       registered = !removed_;
+      // Whatever ended the call, its robot leaves while the registry is
+      // certainly alive (the owner waits for Remove below).
+      if (control_ != nullptr) owner_.robots_.Remove(map_name_, id_);
     }
     if (registered) owner_.Remove(this);
     bool destroy;
@@ -212,6 +324,9 @@ class NavigationSession final : public NavigateReactor {
     if (finish_requested_) return;
     finish_requested_ = true;
     final_status_ = status;
+    // A closed session's robot is no obstacle from now on (not only once
+    // gRPC is done with the call).
+    if (control_ != nullptr) owner_.robots_.Remove(map_name_, id_);
     // Stops a push still planning for a session nobody will read.
     cancelled_.store(true, std::memory_order_relaxed);
     if (!writing_) DoFinishLocked();
@@ -265,12 +380,15 @@ class NavigationSession final : public NavigateReactor {
   void RunMessage(const v1::NavigateRequest& message, SearchScratch& scratch) {
     v1::NavigateResponse response;
     absl::Status status;
+    std::shared_ptr<ControlSession> control;
     {
       absl::MutexLock plan_lock(&plan_mu_);
       status = search_.Handle(message, scratch, &response);
+      control = search_.control();
     }
     {
       absl::MutexLock lock(&mu_);
+      control_ = std::move(control);
       handling_ = false;
       ++messages_;
       if (!status.ok()) {
@@ -335,6 +453,14 @@ class NavigationSession final : public NavigateReactor {
   // A message job is queued or running; the next read starts when it ends.
   bool handling_ ABSL_GUARDED_BY(mu_) = false;
   bool push_pending_ ABSL_GUARDED_BY(mu_) = false;
+  // Control sessions: the control half (set once the open succeeded), and
+  // the replans: one queued, the robot's newest cell for it, the cell the
+  // last one planned from, and whether it ran out of its budget.
+  std::shared_ptr<ControlSession> control_ ABSL_GUARDED_BY(mu_);
+  bool replan_pending_ ABSL_GUARDED_BY(mu_) = false;
+  std::optional<Cell> replan_cell_ ABSL_GUARDED_BY(mu_);
+  std::optional<Cell> planned_cell_ ABSL_GUARDED_BY(mu_);
+  bool replan_incomplete_ ABSL_GUARDED_BY(mu_) = false;
   std::optional<absl::Status> pending_end_ ABSL_GUARDED_BY(mu_);
   std::deque<v1::NavigateResponse> writes_ ABSL_GUARDED_BY(mu_);
   // The last answer or push queued, for ListSessions.

@@ -21,6 +21,8 @@
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
+#include "server/rpc/navigate_control.h"
+#include "server/rpc/robot_registry.h"
 #include "server/worker_pool.h"
 
 namespace pathd::server {
@@ -91,6 +93,11 @@ class NavigationSessions {
   int64_t count() const;
   int64_t bytes() const;
 
+  // Control sessions' robots per map, and their control cycles' latencies
+  // (from the state's arrival to its answer being queued), for the metrics.
+  const RobotRegistry& robots() const { return robots_; }
+  const CycleHistogram& control_cycles() const { return control_cycles_; }
+
  private:
   friend class NavigationSession;
 
@@ -107,6 +114,8 @@ class NavigationSessions {
   WorkerPool& pool_;
   InflationCache& inflation_;
   const Options options_;
+  RobotRegistry robots_;
+  CycleHistogram control_cycles_;
 
   mutable absl::Mutex mu_;
   uint64_t next_id_ ABSL_GUARDED_BY(mu_) = 1;

@@ -75,9 +75,16 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
       response->set_applied_version(applied);
       break;
     }
+    case v1::NavigateRequest::kState:
+      // A control session's states never come here (the stream answers
+      // them without the search).
+      PATHD_RETURN_IF_ERROR(RequireOpen(message));
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "message seq %d: state is only for control sessions (open.control)",
+          message.seq()));
     case v1::NavigateRequest::KIND_NOT_SET:
       return absl::InvalidArgumentError(absl::StrFormat(
-          "message seq %d sets none of open, pose, observe", message.seq()));
+          "message seq %d sets none of open, pose, observe, state", message.seq()));
   }
   if (kinematic_ != nullptr) {
     const bool opening = message.kind_case() == v1::NavigateRequest::kOpen;
@@ -86,7 +93,9 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
     ++plans_;
     return absl::OkStatus();
   }
-  return PlanInto(response->mutable_plan(), /*changed=*/nullptr);
+  PATHD_RETURN_IF_ERROR(PlanInto(response->mutable_plan(), /*changed=*/nullptr));
+  if (control_ != nullptr) PublishPath(response->plan());
+  return absl::OkStatus();
 }
 
 absl::Status NavigationSearch::RequireOpen(const v1::NavigateRequest& message) {
@@ -102,6 +111,12 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
       DecodePlanQuery(WireQueryOf(open), deps_.store,
                       QueryLimits{.max_expansions = deps_.max_expansions}));
   const Planner* named = PlannerRegistry::Default().Get(decoded.query.planner);
+  if (open.has_control() && named != nullptr && named->traits().kinematic) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "open.control: a control session follows a dstar_lite path (its local planner "
+        "handles the robot's kinematics), not %s",
+        std::string(decoded.query.planner)));
+  }
   if (named != nullptr && named->traits().kinematic) {
     return OpenKinematic(open, std::move(decoded));
   }
@@ -122,6 +137,25 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
   cost_ = decoded.query.request.cost;
   shape_ = PlanningShape(decoded.query);
   max_expansions_ = decoded.query.max_expansions;
+  std::optional<ControlConfig> control;
+  if (open.has_control()) {
+    if (deps_.robots == nullptr) {
+      return absl::UnimplementedError("this server runs no control sessions");
+    }
+    PATHD_ASSIGN_OR_RETURN(control, DecodeControlOptions(open.control(), open.options(), stored));
+    // Every replan of a control session is bounded as a kinematic session's
+    // is: the control cycles never wait for it, but the worker does.
+    if (open.replan_max_expansions() < 0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "open.replan_max_expansions %d must be >= 0 (0: options.max_expansions, else %d)",
+          open.replan_max_expansions(), KinematicNavigation::kDefaultReplanExpansions));
+    }
+    int64_t budget = open.replan_max_expansions();
+    if (budget == 0) budget = decoded.query.max_expansions;
+    if (budget == 0) budget = KinematicNavigation::kDefaultReplanExpansions;
+    if (deps_.max_expansions > 0) budget = std::min(budget, deps_.max_expansions);
+    max_expansions_ = budget;
+  }
   PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
   PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
   if (shape_.robot_radius_cells > 0.0) {
@@ -130,6 +164,11 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
   }
   PATHD_ASSIGN_OR_RETURN(search_, DStarLite::Create(grid_, goal_, cost_));
   PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
+  if (control.has_value()) {
+    control_ = std::make_shared<ControlSession>(
+        ControlSession::Deps{deps_.store, deps_.derived, *deps_.robots}, *std::move(control),
+        snapshot_->name, deps_.session_id);
+  }
   on_open_(snapshot_->name);
   return absl::OkStatus();
 }
@@ -188,7 +227,8 @@ KinematicView NavigationSearch::ViewForKinematic() {
 void NavigationSearch::AccountBytes(int64_t state_bytes) {
   // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
   const int64_t bytes = state_bytes + static_cast<int64_t>(overlay_.size()) * 48 +
-                        (overlay_.empty() ? 0 : static_cast<int64_t>(grid_->size()));
+                        (overlay_.empty() ? 0 : static_cast<int64_t>(grid_->size())) +
+                        (control_ != nullptr ? control_->bytes() : 0);
   bytes_->store(bytes, std::memory_order_relaxed);
   reservation_.Update(bytes);
 }
@@ -327,13 +367,21 @@ absl::Status NavigationSearch::Push(SearchScratch& scratch, v1::NavigateResponse
     *changed = had_path || kinematic_->has_path();
     return absl::OkStatus();
   }
+  if (control_ != nullptr) {
+    // A push that raced with the open of a control session: the path goes
+    // to its control answers, never out as a push.
+    bool incomplete = false;
+    *changed = false;
+    return ReplanControl(std::nullopt, &incomplete);
+  }
   return PlanInto(response->mutable_plan(), changed);
 }
 
 // Repairs the search, extracts the path from the robot's cell and fills
 // `plan`. `changed` (optional) says whether the path differs from the one
 // last sent. A robot standing on a blocked cell is an answer, not an error.
-absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
+absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed,
+                                        PlanOutcome* outcome) {
   const StopCondition stop(absl::InfiniteFuture(), cancelled_, max_expansions_);
   absl::StatusOr<PlanResult> result = search_->Plan(stop);
   if (!result.ok() &&
@@ -354,6 +402,7 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
   answer.source =
       PlanSource{grid_, snapshot_->version, plans_ > 0, repaired_cells_};
   if (result.ok()) answer.result = *std::move(result);
+  if (outcome != nullptr) *outcome = result.ok() ? answer.result.outcome : PlanOutcome::kNoPath;
   ReportClearance(query, &answer);
   SetSingleLeg(&answer);
   BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
@@ -365,6 +414,47 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed) {
   last_path_ = std::move(path);
   AccountBytes(static_cast<int64_t>(search_->MemoryBytes()));
   return absl::OkStatus();
+}
+
+absl::Status NavigationSearch::ReplanControl(std::optional<Cell> robot, bool* incomplete) {
+  *incomplete = false;
+  PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
+  // A robot whose centre strays onto a cell the planning grid blocks (it
+  // slid along a wall the grid inflates by its radius) keeps following the
+  // path from the old start; a start there would have no path at all.
+  if (robot.has_value() && grid_->InBounds(*robot) && *robot != start_ &&
+      Traversable(grid_->cost(*robot), cost_.unknown_is_free)) {
+    start_ = *robot;
+    PATHD_RETURN_IF_ERROR(search_->SetStart(start_));
+  }
+  v1::PlanResponse plan;
+  bool changed = false;
+  PlanOutcome outcome = PlanOutcome::kNoPath;
+  PATHD_RETURN_IF_ERROR(PlanInto(&plan, &changed, &outcome));
+  if (outcome == PlanOutcome::kExpansionLimit) {
+    *incomplete = true;
+    return absl::OkStatus();
+  }
+  // The rest of the published path (the robot moved along it) is not
+  // published again: the local planner follows the published one from the
+  // point nearest the robot.
+  const bool rest_of_published =
+      !last_path_.empty() && last_path_.size() <= published_path_.size() &&
+      std::equal(last_path_.begin(), last_path_.end(),
+                 published_path_.end() - static_cast<std::ptrdiff_t>(last_path_.size()));
+  if (changed && !rest_of_published) PublishPath(plan);
+  return absl::OkStatus();
+}
+
+void NavigationSearch::PublishPath(const v1::PlanResponse& plan) {
+  GlobalPath path;
+  path.map_version = snapshot_->version;
+  path.points.reserve(last_path_.size());
+  for (const Cell& c : last_path_) path.points.push_back(CellPoint{c.x + 0.5, c.y + 0.5});
+  path.plan = plan;
+  published_path_ = last_path_;
+  control_->SetPath(std::move(path));
+  AccountBytes(static_cast<int64_t>(search_->MemoryBytes()));
 }
 
 }  // namespace pathd::server

@@ -14,6 +14,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,7 +30,9 @@
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
+#include "server/rpc/navigate_control.h"
 #include "server/rpc/navigate_kinematic.h"
+#include "server/rpc/robot_registry.h"
 
 namespace pathd::server {
 
@@ -46,6 +49,10 @@ class NavigationSearch {
     // The server's derived values per map version (kinematic sessions read
     // the obstacle heuristic there); null: each session builds its own.
     DerivedCache* derived = nullptr;
+    // Control sessions: where robots meet (null: control sessions refused),
+    // and this session's robot id there.
+    RobotRegistry* robots = nullptr;
+    uint64_t session_id = 0;
   };
 
   // `caller`: whose share of the budget the session counts against.
@@ -72,6 +79,16 @@ class NavigationSearch {
   // replan. Requires is_open().
   absl::Status Push(SearchScratch& scratch, v1::NavigateResponse* response, bool* changed);
 
+  // Control sessions: the control state (null for other sessions), shared
+  // with the stream half, which runs the control cycles without plan_mu_.
+  const std::shared_ptr<ControlSession>& control() const { return control_; }
+  // Control sessions: moves to the map's newest version and to the robot's
+  // cell `robot` (unless it is blocked on the planning grid, where the old
+  // start stays), repairs D* Lite within the replan budget and publishes the
+  // path to control() when it changed. `incomplete` is set when the budget
+  // ran out (the previous path stays; the next replan continues).
+  absl::Status ReplanControl(std::optional<Cell> robot, bool* incomplete);
+
  private:
   absl::Status RequireOpen(const v1::NavigateRequest& message);
   absl::Status Open(const v1::NavigateOpen& open);
@@ -84,7 +101,11 @@ class NavigationSearch {
   absl::StatusOr<std::shared_ptr<const Grid>> EffectiveGrid(
       const MapSnapshot& snapshot);
   absl::Status Refresh(bool overlay_changed);
-  absl::Status PlanInto(v1::PlanResponse* plan, bool* changed);
+  // `outcome` (optional) receives the search's outcome.
+  absl::Status PlanInto(v1::PlanResponse* plan, bool* changed,
+                        PlanOutcome* outcome = nullptr);
+  // Control sessions: publishes last_path_ and `plan` to control_.
+  void PublishPath(const v1::PlanResponse& plan);
   // Stores the session's bytes and updates the reservation.
   void AccountBytes(int64_t state_bytes);
 
@@ -104,6 +125,8 @@ class NavigationSearch {
   // session's replanning.
   std::unique_ptr<DStarLite> search_;
   std::unique_ptr<KinematicNavigation> kinematic_;
+  // Control sessions (with search_): the control half.
+  std::shared_ptr<ControlSession> control_;
   // Kinematic sessions: the server's derived store for snapshot_ (when the
   // session plans on the version's own grid) and the version it is for.
   std::unique_ptr<DerivedStore> shared_derived_;
@@ -120,6 +143,8 @@ class NavigationSearch {
   int64_t repaired_cells_ = 0;
   int64_t plans_ = 0;
   std::vector<Cell> last_path_;
+  // Control sessions: the path last published to control_.
+  std::vector<Cell> published_path_;
 };
 
 }  // namespace pathd::server

@@ -491,6 +491,50 @@ class RealServerTest(unittest.TestCase, PathChecks):
             # Round the wall: the robot's centre passes above row 6 there.
             self.assertTrue(any(p.y > 6.0 for p in push.plan.poses if 8.5 <= p.x <= 11.5))
 
+    def test_control_session_drives_a_robot_to_its_goal(self):
+        # An open hall, 20 x 10 cells of 1 m; a 0.4 m robot from (2.5, 4.5) to
+        # (12.5, 4.5), integrated here (a unicycle) under each command.
+        self.client.create_map("ctl", ["." * 20] * 10, replace=True)
+        self.addCleanup(self._delete_quietly, "ctl")
+        control = {"local_planner": "orca",
+                   "limits": {"max_v": 1.0, "max_w": 2.0, "acc_v": 2.0, "acc_w": 4.0},
+                   "control_period": 0.1, "local_options": {"goal_tolerance": 0.3}}
+        x, y, yaw, v, w = 2.5, 4.5, 0.0, 0.0, 0.0
+        with self.client.navigate("ctl", pathd_client.WorldPose(x, y, yaw),
+                                  pathd_client.WorldPose(12.5, 4.5, 0.0),
+                                  robot_radius_m=0.4, control=control) as nav:
+            self.assertTrue(nav.opened.plan.found)
+            outcome = None
+            for step in range(400):
+                answer = nav.control(pathd_client.WorldPose(x, y, yaw), v=v, w=w,
+                                     stamp=step * 0.1,
+                                     obstacles=[(x + 3.0, y + 3.0, 0.0, 0.0, 0.3)])
+                self.assertEqual(answer.event, "CONTROL")
+                command = answer.command
+                self.assertEqual(answer.has_plan, step == 0)
+                self.assertAlmostEqual(command.stamp, step * 0.1)
+                self.assertEqual(command.neighbours, 1)  # the reported obstacle
+                self.assertLessEqual(command.v, 1.0 + 1e-9)
+                self.assertLessEqual(abs(command.v - v), 2.0 * 0.1 + 1e-9)
+                self.assertLessEqual(abs(command.w - w), 4.0 * 0.1 + 1e-9)
+                self.assertAlmostEqual(command.trajectory[0].x, x)
+                outcome = command.outcome
+                if outcome == "GOAL_REACHED":
+                    break
+                self.assertEqual(outcome, "OK", command.reason)
+                v, w = command.v, command.w
+                for _ in range(10):
+                    x += v * math.cos(yaw + w * 0.005) * 0.01
+                    y += v * math.sin(yaw + w * 0.005) * 0.01
+                    yaw += w * 0.01
+            self.assertEqual(outcome, "GOAL_REACHED")
+            self.assertLess(math.hypot(x - 12.5, y - 4.5), 0.3 + 1e-6)
+            # The global path stays the one the first answer carried.
+            self.assertEqual(nav.path[-1], (12, 4))
+        with self.assertRaises(pathd_client.InvalidArgumentError) as bad:
+            self.client.navigate("ctl", (2, 4), (12, 4), control={})
+        self.assertIn("open.options.robot_radius", bad.exception.details)
+
     def test_bad_navigate_message_ends_the_session(self):
         self.make_map("nav_bad")
         with self.client.navigate("nav_bad", (0, 0), (13, 7)) as nav:

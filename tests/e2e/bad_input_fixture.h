@@ -502,6 +502,7 @@ class BadInputTest : public ::testing::Test {
   void AddMapCases(std::vector<Case>& cases);
   void AddPlannerCases(std::vector<Case>& cases);
   void AddFleetCases(std::vector<Case>& cases);
+  void AddControlCases(std::vector<Case>& cases);
 
   // A map file start-up must skip.
   struct File {

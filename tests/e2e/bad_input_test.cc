@@ -171,6 +171,7 @@ TEST_F(BadInputTest, EveryRpcAnswersBadInputAndKeepsServing) {
   AddMapCases(cases);
   AddPlannerCases(cases);
   AddFleetCases(cases);
+  AddControlCases(cases);
 
   ASSERT_NO_FATAL_FAILURE(Run(cases));
 

@@ -378,6 +378,47 @@ class HttpApiTest(unittest.TestCase):
         self.assertStatus(request(self.d, "POST", f"/v1/sessions/{session}:send",
                                   {"seq": 3, "pose": {"cell": {"x": 3, "y": 1}}}, token=READ_TOKEN), 404, 5)
 
+    def test_navigate_session_control_state_through_send(self):
+        # A control session (issue 20) over HTTP: its states go through
+        # :send like any NavigateRequest and come back as CONTROL events.
+        opened = EventStream(self.d, "POST", "/v1/maps/room:navigate",
+                             {"seq": 1, "open": {"start": {"cell": {"x": 1, "y": 1}},
+                                                 "goal": {"cell": {"x": 14, "y": 1}},
+                                                 "options": {"robotRadiusM": 0.3},
+                                                 "control": {"localPlanner": "LOCAL_PLANNER_ORCA",
+                                                             "limits": {"maxV": 0.5}}}},
+                             token=READ_TOKEN)
+        self.assertEqual(opened.status, 200)
+        _, first, _ = opened.next()
+        self.assertEqual(first["event"], "NAVIGATE_EVENT_OPENED")
+        session = first["sessionId"]
+        self.assertStatus(request(self.d, "POST", f"/v1/sessions/{session}:send",
+                                  {"seq": 2, "state": {"pose": {"worldPose": {"x": 1.5, "y": 1.5}},
+                                                       "stamp": 7.5}},
+                                  token=READ_TOKEN), 200)
+        _, answer, _ = opened.next()
+        self.assertEqual((answer["event"], answer["seq"]), ("NAVIGATE_EVENT_CONTROL", "2"))
+        command = answer["command"]
+        self.assertEqual(command["outcome"], "LOCAL_OUTCOME_OK")
+        self.assertEqual(command["stamp"], 7.5)
+        self.assertLessEqual(command.get("v", 0.0), 0.5)
+        self.assertAlmostEqual(command["trajectory"][0]["x"], 1.5)
+        self.assertIn("plan", answer)  # the first answer carries the global path
+        # ListSessions shows the last command (the viewer draws the robot).
+        listed = self.assertStatus(request(self.d, "GET", "/v1/maps/room/sessions",
+                                           token=READ_TOKEN), 200)
+        mine = [s for s in listed["sessions"] if s["sessionId"] == session]
+        self.assertEqual(mine[0]["last"]["command"]["trajectory"][0]["x"], 1.5)
+        # A bad state ends the session with the field named.
+        self.assertStatus(request(self.d, "POST", f"/v1/sessions/{session}:send",
+                                  {"seq": 3, "state": {"pose": {"worldPose": {"x": 1.5, "y": 1.5}},
+                                                       "vy": 0.2}},
+                                  token=READ_TOKEN), 200)
+        name, end, _ = opened.next()
+        self.assertEqual((name, end["code"]), ("end", 3))
+        self.assertIn("state.vy", end["message"])
+        opened.close()
+
     def test_stream_limit_and_vanished_client(self):
         streams = [EventStream(self.d, "GET", "/v1/maps/room:watch", token=READ_TOKEN) for _ in range(3)]
         for s in streams:

@@ -50,6 +50,7 @@ ROWS = [
 ]
 PATH_RGB = (224, 0, 122)   # viewer.js PATH_COLOUR
 ROBOT_RGB = (31, 119, 180)  # viewer.js ROBOT_COLOURS[0]
+CONTROL_RGB = (44, 160, 44)  # viewer.js ROBOT_COLOURS[1]
 LETHAL_RGB = (25, 25, 25)   # viewer.js palette[254]
 FREE_RGB = (255, 255, 255)
 
@@ -241,6 +242,31 @@ def main():
         time.sleep(0.2)  # one more frame
         browser.screenshot("viewer-4-robot.png")
         assert close(browser.pixel(28, 10), ROBOT_RGB), browser.pixel(28, 10)
+
+        # A control session's robot is drawn at the pose of its last state
+        # (its answers carry no path once the first has).
+        control = http.client.HTTPConnection(host, int(port), timeout=60)
+        control.request("POST", "/v1/maps/room:navigate", body=json.dumps(
+            {"seq": 1, "open": {"start": {"cell": {"x": 3, "y": 1}},
+                                "goal": {"cell": {"x": 3, "y": 10}},
+                                "options": {"robotRadiusM": 0.1}, "control": {}}}))
+        control_events = control.getresponse()
+        assert control_events.status == 200
+        session = None
+        while session is None:
+            line = control_events.readline().decode()
+            assert line, "the control session's stream ended"
+            if line.startswith("data:"):
+                session = json.loads(line[5:])["sessionId"]
+        for seq, x in ((2, 3.5), (3, 5.5)):
+            pathd.call("POST", f"/v1/sessions/{session}:send",
+                       {"seq": seq, "state": {"pose": {"cellPose": {"x": x, "y": 1.5}}}})
+        browser.wait_for("pathdViewer.state.sessions.length === 2 && pathdViewer.state.sessions"
+                         ".some((s) => s.last && s.last.seq === '3')", "the control robot")
+        time.sleep(0.2)  # one more frame
+        browser.screenshot("viewer-4b-control-robot.png")
+        assert close(browser.pixel(5, 1), CONTROL_RGB), browser.pixel(5, 1)
+        control.close()
         conn.close()
 
         # Responsiveness on a 2048 x 2048 map: figures only.

@@ -200,6 +200,9 @@ TEST_F(MetricsTest, CountsRequestsByRpcAndCodeAndReadsServerState) {
   EXPECT_GT(s.at("pathd_worker_busy_seconds_total"), 0);
   EXPECT_EQ(s.at("pathd_map_watchers"), 1);
   EXPECT_EQ(s.at("pathd_navigate_sessions"), 0);
+  // No control session ran: an empty latency histogram, no robots.
+  EXPECT_EQ(s.at("pathd_control_cycle_seconds_count"), 0);
+  EXPECT_EQ(s.at(R"(pathd_control_cycle_seconds_bucket{le="+Inf"})"), 0);
 
   watch_context.TryCancel();
   v1::MapEvent ignored;

@@ -411,6 +411,7 @@ class PathdClient:
                  options: planner_service_pb2.PlanOptions | None = None,
                  planner: str | None = None,
                  replan_max_expansions: int = 0,
+                 control: planner_service_pb2.ControlOptions | dict | None = None,
                  timeout: float | None = None, **option_keywords) -> NavigationSession:
         """Opens a Navigate session and waits for its first path.
 
@@ -422,6 +423,13 @@ class PathdClient:
         replan spending at most `replan_max_expansions` (0: the server's
         default, 20000).
 
+        With `control` (a ControlOptions, or a dict of its fields:
+        {"local_planner": "orca", "limits": {"max_v": 0.8}, "control_period":
+        0.1, "local_options": {"time_horizon": 2.0}}; {} for every default)
+        it is a control session: session.control(pose, v=..., w=...) answers
+        each robot state with a velocity command (docs/service.md, "Control
+        sessions"). The robot needs a size: robot_radius_m or a footprint.
+
         `timeout` bounds each wait for an answer, not the session, which
         lasts until closed (the server ends it after --session_idle_timeout
         without a message).
@@ -430,5 +438,29 @@ class PathdClient:
             map=map_name, start=_position(start), goal=_position(goal),
             options=_options(options, option_keywords), planner=_planner(planner),
             replan_max_expansions=replan_max_expansions)
+        if control is not None:
+            open_request.control.CopyFrom(_control_options(control))
         return NavigationSession(self._planner, map_name, open_request,
                                  self.timeout if timeout is None else timeout)
+
+
+def _control_options(value: planner_service_pb2.ControlOptions | dict
+                     ) -> planner_service_pb2.ControlOptions:
+    """A ControlOptions from itself or a dict of its fields (local_planner by
+    name: "orca", "dwa" or "firas")."""
+    if isinstance(value, planner_service_pb2.ControlOptions):
+        return value
+    fields = dict(value)
+    planner = fields.pop("local_planner", None)
+    limits = fields.pop("limits", None)
+    local_options = fields.pop("local_options", None)
+    options = planner_service_pb2.ControlOptions(**fields)
+    if planner is not None:
+        options.local_planner = planner_service_pb2.LocalPlanner.Value(
+            "LOCAL_PLANNER_" + str(planner).upper())
+    if limits is not None:
+        options.limits.CopyFrom(planner_service_pb2.VelocityLimits(**limits))
+    if local_options is not None:
+        for name, number in local_options.items():
+            options.local_options[name] = float(number)
+    return options

@@ -204,6 +204,7 @@ class NavigationSession:
             self.cancel()
             raise
         self.latest = self.opened
+        self._latest_plan = self.opened
 
     @property
     def session_id(self) -> int:
@@ -211,14 +212,15 @@ class NavigationSession:
 
     @property
     def path(self) -> list[Cell]:
-        """The newest path, from the robot's cell to the goal."""
-        return self.latest.plan.path
+        """The newest path, from the robot's cell to the goal (a control
+        session's: the global path it follows)."""
+        return self._latest_plan.plan.path
 
     @property
     def poses(self) -> list[WorldPose]:
         """The newest path as world poses (a kinematic session's own poses,
         from the robot's pose to the goal)."""
-        return self.latest.plan.poses
+        return self._latest_plan.plan.poses
 
     # ---- sending ----
 
@@ -243,6 +245,31 @@ class NavigationSession:
         observation = planner_service_pb2.NavigateObservation(
             changes=[_change_proto(c) for c in changes], session_only=session_only)
         return self._send(planner_service_pb2.NavigateRequest(observe=observation))
+
+    def send_state(self, pose: WorldPose, *, v: float = 0.0, vy: float = 0.0,
+                   w: float = 0.0, stamp: float = 0.0,
+                   obstacles: Iterable[tuple[float, float, float, float, float]] = ()
+                   ) -> int:
+        """Control sessions: the robot is at `pose` (world, metres and
+        radians) moving at (v, vy, w) in its body frame; `obstacles` are
+        non-robot moving discs it sees, (x, y, vx, vy, radius) in the map
+        frame, for this message only. Returns the message's seq."""
+        state = planner_service_pb2.RobotState(
+            pose=_position(pose), v=v, vy=vy, w=w, stamp=stamp)
+        for x, y, vx, ovy, radius in obstacles:
+            report = state.obstacles.add(vx=vx, vy=ovy, radius=radius)
+            report.position.world.x = x
+            report.position.world.y = y
+        return self._send(planner_service_pb2.NavigateRequest(state=state))
+
+    def control(self, pose: WorldPose, *, v: float = 0.0, vy: float = 0.0,
+                w: float = 0.0, stamp: float = 0.0,
+                obstacles: Iterable[tuple[float, float, float, float, float]] = (),
+                timeout: float | None = None) -> NavigateUpdate:
+        """Control sessions: sends the robot's state and returns its answer,
+        whose `command` is the velocity to hold for one control period."""
+        return self._answer(self.send_state(pose, v=v, vy=vy, w=w, stamp=stamp,
+                                            obstacles=obstacles), timeout)
 
     def move(self, where: PositionLike, *, timeout: float | None = None) -> NavigateUpdate:
         """Sends a pose and returns its answer (the path from `where`)."""
@@ -285,6 +312,8 @@ class NavigationSession:
                     f"no message from the Navigate session within {wait:g} s") from None
             if isinstance(item, NavigateUpdate):
                 self.latest = item
+                if item.has_plan:
+                    self._latest_plan = item
                 if item.pushed:
                     self.pushes.append(item)
                 return item

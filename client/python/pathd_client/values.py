@@ -519,8 +519,8 @@ class FleetPlanResult:
 class NavigateUpdate:
     """One message of a Navigate session's server side.
 
-    `event` is "OPENED", "MOVED" or "OBSERVED" (the answer to request `seq`)
-    or "MAP_CHANGED" (pushed unasked, seq 0).
+    `event` is "OPENED", "MOVED", "OBSERVED" or "CONTROL" (the answer to
+    request `seq`) or "MAP_CHANGED" (pushed unasked, seq 0).
     """
 
     event: str
@@ -536,6 +536,10 @@ class NavigateUpdate:
     kept_previous_path: bool = False
     replan_max_expansions: int = 0
     robot_cell_pose: tuple[float, float, float] | None = None
+    # Control sessions, event "CONTROL": the command for the state (plan is
+    # then set only when the global path changed; has_plan says so).
+    command: VelocityCommand | None = None
+    has_plan: bool = True
 
     @property
     def pushed(self) -> bool:
@@ -556,7 +560,41 @@ class NavigateUpdate:
             replan_max_expansions=response.replan_max_expansions,
             robot_cell_pose=((response.robot_pose.x, response.robot_pose.y,
                               response.robot_pose.yaw)
-                             if response.HasField("robot_pose") else None))
+                             if response.HasField("robot_pose") else None),
+            command=(VelocityCommand.from_proto(response.command)
+                     if response.HasField("command") else None),
+            has_plan=response.HasField("plan"))
+
+
+@dataclasses.dataclass(frozen=True)
+class VelocityCommand:
+    """A control session's answer to a robot state: the body-frame command
+    (m/s forward, m/s to the left, rad/s), how the cycle ended ("OK",
+    "BLOCKED", "LOCAL_MINIMUM", "GOAL_REACHED" or "NO_PATH") and why, the
+    predicted world poses under it (from the reported pose), the echoed
+    stamp, the neighbours taken into account and the map version of the
+    global path followed."""
+
+    v: float
+    vy: float
+    w: float
+    outcome: str
+    reason: str
+    trajectory: list[WorldPose]
+    stamp: float
+    neighbours: int
+    map_version: int
+
+    @classmethod
+    def from_proto(cls, command: planner_service_pb2.VelocityCommand) -> VelocityCommand:
+        return cls(
+            v=command.v, vy=command.vy, w=command.w,
+            outcome=_enum_name(planner_service_pb2.LocalOutcome, command.outcome,
+                               "LOCAL_OUTCOME_"),
+            reason=command.reason,
+            trajectory=[WorldPose(p.x, p.y, p.yaw) for p in command.trajectory],
+            stamp=command.stamp, neighbours=command.neighbours,
+            map_version=command.map_version)
 
 
 @dataclasses.dataclass(frozen=True)

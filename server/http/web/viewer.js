@@ -358,8 +358,21 @@
     const px = 1 / v.scale;  // one screen pixel in cells
     state.sessions.forEach((s, i) => {
       const last = s.last;
-      if (!last || !last.plan) return;
       const colour = ROBOT_COLOURS[i % ROBOT_COLOURS.length];
+      // A control session's answer: the robot at the pose it reported (the
+      // command's trajectory starts there, world metres), its path only when
+      // the answer carried one.
+      const command = last && last.command;
+      if (command && command.trajectory && command.trajectory.length) {
+        const o = (state.info && state.info.origin) || {};
+        const res = (state.info && state.info.resolution) || 1;
+        const p = command.trajectory[0];
+        if (last.plan) strokePath(polylineOf(last.plan), colour, 2);
+        disc(((p.x || 0) - (o.x || 0)) / res, ((p.y || 0) - (o.y || 0)) / res,
+             Math.max(0.5, 5 * px), colour);
+        return;
+      }
+      if (!last || !last.plan) return;
       const points = polylineOf(last.plan);
       strokePath(points, colour, 2);
       const at = last.robotPose && last.robotPose.x !== undefined
