@@ -312,6 +312,7 @@ absl::StatusOr<ControlConfig> DecodeControlOptions(const v1::ControlOptions& con
                          seconds("stale_after", control.stale_after(), 1.0, 0.001, 3600.0));
   PATHD_ASSIGN_OR_RETURN(config.forget_after,
                          seconds("forget_after", control.forget_after(), 10.0, 0.001, 86400.0));
+  config.shared_clock = control.shared_clock();
   if (config.forget_after < config.stale_after) {
     return Bad("forget_after", absl::StrFormat("%s must be at least stale_after (%s)",
                                                Num(config.forget_after),
@@ -502,6 +503,8 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
   report.received = received;
   report.stale_after = std::chrono::duration<double>(config_.stale_after);
   report.forget_after = std::chrono::duration<double>(config_.forget_after);
+  report.stamp = state.stamp();
+  report.shared_clock = config_.shared_clock;
   deps_.robots.Publish(map_, robot_id_, report);
 
   double range = 0.0;
@@ -520,7 +523,9 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
       break;
   }
   std::vector<MovingObstacle> robots =
-      deps_.robots.Near(map_, robot_id_, robot.pose.point(), range, received);
+      deps_.robots.Near(map_, robot_id_, robot.pose.point(), range, received,
+                        config_.shared_clock ? std::optional<double>(state.stamp())
+                                             : std::nullopt);
   obstacles.insert(obstacles.end(), robots.begin(), robots.end());
 
   response->set_event(v1::NAVIGATE_EVENT_CONTROL);

@@ -47,6 +47,7 @@ struct ControlConfig {
   double period = 0.1;    // s
   double stale_after = 1.0;  // s
   double forget_after = 10.0;  // s
+  bool shared_clock = false;  // ControlOptions.shared_clock
   DwaOptions dwa;
   OrcaOptions orca;
   FirasOptions firas;

@@ -53,7 +53,8 @@ void RobotRegistry::Remove(const std::string& map, uint64_t id) {
 
 std::vector<MovingObstacle> RobotRegistry::Near(const std::string& map, uint64_t self,
                                                 CellPoint center, double range,
-                                                SteadyTime now) const {
+                                                SteadyTime now,
+                                                std::optional<double> clock) const {
   std::vector<MovingObstacle> out;
   absl::MutexLock lock(&mu_);
   auto it = maps_.find(map);
@@ -68,8 +69,9 @@ std::vector<MovingObstacle> RobotRegistry::Near(const std::string& map, uint64_t
     if (age < r.stale_after.count()) {
       // Constant velocity since its last state: where it is now if it kept
       // its command, which it does for about one control period.
-      obstacle.position = CellPoint{r.position.x + r.velocity.x * age,
-                                    r.position.y + r.velocity.y * age};
+      const double dt = clock.has_value() && r.shared_clock ? *clock - r.stamp : age;
+      obstacle.position = CellPoint{r.position.x + r.velocity.x * dt,
+                                    r.position.y + r.velocity.y * dt};
       obstacle.velocity = r.velocity;
       obstacle.reciprocal = true;
     } else {

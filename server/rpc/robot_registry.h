@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,10 @@ struct RobotReport {
   // Its own session's thresholds (ControlOptions.stale_after, forget_after).
   std::chrono::duration<double> stale_after{1.0};
   std::chrono::duration<double> forget_after{10.0};
+  // RobotState.stamp, and whether it is on the clock the map's robots
+  // share (ControlOptions.shared_clock).
+  double stamp = 0.0;
+  bool shared_clock = false;
 };
 
 // Thread-safe. Robots are kept per map in a vector under one mutex: a cycle
@@ -53,9 +58,13 @@ class RobotRegistry {
   // at its reported position moved on by its velocity for the state's age,
   // reciprocal; a stale one (younger than forget_after) where it last was,
   // still and not reciprocal. Forgotten robots are skipped.
+  // `clock`: the asking robot's stamp when it is on the shared clock; then a
+  // fresh robot on the shared clock too is moved on by the difference of
+  // the stamps instead (which may be negative: it reported from later).
   std::vector<MovingObstacle> Near(const std::string& map, uint64_t self,
-                                   CellPoint center, double range,
-                                   SteadyTime now) const ABSL_LOCKS_EXCLUDED(mu_);
+                                   CellPoint center, double range, SteadyTime now,
+                                   std::optional<double> clock = std::nullopt) const
+      ABSL_LOCKS_EXCLUDED(mu_);
 
   // Robots not yet forgotten at `now`, per map (maps without any are left
   // out), for the metrics.

@@ -72,7 +72,7 @@ TEST(RunTest, UnknownAndMissingCommandsListTheCommands) {
   EXPECT_TRUE(absl::StrContains(
       r.err,
       "unknown command 'frobnicate'; expected maps, plan, batch, navigate, cost-to-go, "
-      "check, cache-stats, sessions, health, metrics, bench, table, nearest, trip, isochrone, fleet, "
+      "check, cache-stats, sessions, health, metrics, bench, table, nearest, trip, isochrone, fleet, simulate, "
       "render, completion, help"))
       << r.err;
   r = RunArgs({"maps", "shred"});
@@ -90,7 +90,7 @@ TEST(RunTest, AFlagTheCommandDoesNotReadIsAUsageError) {
   options.given_flags = {"o"};
   Result r = RunWith(options, {"plan", "room", "0", "0", "1", "1"});
   EXPECT_EQ(r.code, kExitUsage);
-  EXPECT_TRUE(absl::StartsWith(r.err, "error: -o does not apply to plan; render reads it\n"))
+  EXPECT_TRUE(absl::StartsWith(r.err, "error: -o does not apply to plan; simulate, render read it\n"))
       << r.err;
   options.given_flags = {"server", "json", "cells"};
   r = RunWith(options, {"maps", "list"});

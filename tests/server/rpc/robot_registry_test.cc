@@ -55,6 +55,40 @@ TEST(RobotRegistryTest, FreshStaleForgotten) {
   EXPECT_EQ(registry.Counts(t0 + milliseconds(6000)).count("m"), 0u);
 }
 
+// ControlOptions.shared_clock: a robot on the shared clock asking at its
+// stamp sees another robot on it moved on by the difference of the stamps
+// (forwards or backwards), whatever the server's clock says; a robot off the
+// shared clock is still moved on by the server's.
+TEST(RobotRegistryTest, SharedClockUsesStampDifferences) {
+  RobotRegistry registry;
+  const SteadyTime t0 = std::chrono::steady_clock::now();
+  RobotReport shared = Report(10, 10, 4, -2, t0);
+  shared.shared_clock = true;
+  shared.stamp = 100.0;
+  registry.Publish("m", 1, shared);
+  RobotReport own = Report(-10, 0, 2, 0, t0);
+  own.stamp = 7.0;  // its own clock: not comparable
+  registry.Publish("m", 3, own);
+
+  // Simulated time 0.1 s on; the server's clock only 1 ms.
+  std::vector<MovingObstacle> near =
+      registry.Near("m", 2, {0, 0}, 100, t0 + milliseconds(1), 100.1);
+  ASSERT_EQ(near.size(), 2u);
+  const MovingObstacle& a = near[0].velocity.x == 4 ? near[0] : near[1];
+  const MovingObstacle& b = near[0].velocity.x == 4 ? near[1] : near[0];
+  EXPECT_NEAR(a.position.x, 10.4, 1e-12);
+  EXPECT_NEAR(a.position.y, 9.8, 1e-12);
+  EXPECT_NEAR(b.position.x, -10.0 + 2 * 0.001, 1e-9);
+  // A report from later than the asking robot's stamp is moved back.
+  near = registry.Near("m", 2, {0, 0}, 100, t0 + milliseconds(1), 99.5);
+  const MovingObstacle& back = near[0].velocity.x == 4 ? near[0] : near[1];
+  EXPECT_NEAR(back.position.x, 8.0, 1e-12);
+  // Without a clock of its own the server's is used for everyone.
+  near = registry.Near("m", 2, {0, 0}, 100, t0 + milliseconds(500));
+  const MovingObstacle& server = near[0].velocity.x == 4 ? near[0] : near[1];
+  EXPECT_NEAR(server.position.x, 12.0, 1e-12);
+}
+
 TEST(RobotRegistryTest, RangeSelfMapsAndRemoval) {
   RobotRegistry registry;
   const SteadyTime t0 = std::chrono::steady_clock::now();
