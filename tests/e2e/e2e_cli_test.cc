@@ -46,7 +46,7 @@ TEST_F(E2eTest, BashCompletionCompletesCommandsFlagsPlannersAndMapNames) {
   ASSERT_GE(lines.size(), 10u) << r;
   EXPECT_EQ(lines[0],
             "maps plan batch navigate cost-to-go check cache-stats sessions health metrics "
-            "bench table nearest trip isochrone fleet render completion help");
+            "bench table nearest trip isochrone fleet simulate render completion help");
   EXPECT_EQ(lines[1], "maps");
   EXPECT_EQ(lines[2], "create list get delete set rect watch import export stats");
   EXPECT_EQ(lines[3], "--planner");

@@ -661,7 +661,7 @@ TEST_F(E2eTest, UsageErrorsExitTwo) {
       // A flag the command does not read is named, not ignored: plan used
       // to write no picture for -o and say nothing.
       {{"plan", "room", "0", "0", "1", "1", "-o", "x.png"},
-       "-o does not apply to plan; render reads it"},
+       "-o does not apply to plan; simulate, render read it"},
       {{"maps", "list", "--planner=astar"}, "--planner does not apply to maps list"},
       {{"health", "--count=3"}, "--count does not apply to health"},
   };
