@@ -164,6 +164,7 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
   entry->changed_cells = changed_cells;
   entry->time = absl::Now() - start;
   entry->done = true;
+  done_cv_.SignalAll();
   bytes_ += bytes;
   ++(advanced ? advances_ : builds_);
   EvictLocked();
@@ -171,12 +172,18 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
 }
 
 bool DerivedCache::AwaitLocked(Entry* entry, const DerivedStop& stop) {
-  const absl::Condition done(+[](Entry* e) -> bool { return e->done.load(); }, entry);
-  // The deadline wakes the wait on time; the cancel flag is only read, so
-  // the wait comes up for it every kStopPollInterval.
-  while (!mu_.AwaitWithDeadline(
-      done, std::min(stop.deadline(), absl::Now() + kStopPollInterval))) {
-    if (stop.Stopped()) return false;
+  // A CondVar and the flag checked here, not Await with a Condition: Abseil
+  // evaluates a waiter's Condition (an object on the waiter's stack) inside
+  // another thread's Unlock, which ThreadSanitizer with Debian's
+  // uninstrumented Abseil reported as a race on that stack (as the memory
+  // budget's trimmer did). The deadline wakes the wait on time; the cancel
+  // flag is only read, so the wait comes up for it every kStopPollInterval.
+  while (!entry->done.load()) {
+    if (done_cv_.WaitWithDeadline(
+            &mu_, std::min(stop.deadline(), absl::Now() + kStopPollInterval)) &&
+        !entry->done.load() && stop.Stopped()) {
+      return false;
+    }
   }
   return true;
 }
@@ -184,6 +191,7 @@ bool DerivedCache::AwaitLocked(Entry* entry, const DerivedStop& stop) {
 void DerivedCache::AbandonLocked(const std::shared_ptr<Entry>& entry) {
   entries_.remove(entry);
   entry->done = true;
+  done_cv_.SignalAll();
 }
 
 std::list<std::shared_ptr<DerivedCache::Entry>>::iterator DerivedCache::DropLocked(

@@ -139,6 +139,8 @@ class DerivedCache {
 
   const size_t max_bytes_;
   mutable absl::Mutex mu_;
+  // Signalled whenever an entry becomes done (AwaitLocked's waiters).
+  absl::CondVar done_cv_;
   // Most recently used first.
   std::list<std::shared_ptr<Entry>> entries_ ABSL_GUARDED_BY(mu_);
   size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
