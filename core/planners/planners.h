@@ -24,6 +24,8 @@ std::unique_ptr<Planner> MakeLrtaStarPlanner();
 std::unique_ptr<Planner> MakeThetaStarPlanner();
 std::unique_ptr<Planner> MakeLazyThetaStarPlanner();
 std::unique_ptr<Planner> MakeJpsPlanner();
+// JPS+ over per-version jump tables advanced around changed cells.
+std::unique_ptr<Planner> MakeJpsPlusPlanner();
 std::unique_ptr<Planner> MakeLpaStarPlanner();
 std::unique_ptr<Planner> MakeDStarLitePlanner();
 std::unique_ptr<Planner> MakeShortestPathMapPlanner();

@@ -46,6 +46,7 @@ const PlannerRegistry& PlannerRegistry::Default() {
              PlannerRegistry::Factory(&MakeQuadtreePlanner),
              PlannerRegistry::Factory(&MakeAntColonyPlanner),
              PlannerRegistry::Factory(&MakeReactionDiffusionPlanner),
+             PlannerRegistry::Factory(&MakeJpsPlusPlanner),
          }) {
       absl::Status status = registry->Register(std::move(factory));
       if (!status.ok()) std::abort();  // a programming error in this list

@@ -34,9 +34,11 @@
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/planners/jps/bit_grid.h"
+#include "core/planners/jps/jump_table.h"
 #include "core/planners/planners.h"
 #include "core/search/best_first.h"
 #include "core/search/derived.h"
@@ -347,22 +349,158 @@ std::shared_ptr<const JpsVersion> SharedJpsVersion(DerivedStore* store, const Gr
       [](const JpsVersion& v) { return sizeof(JpsVersion) + v.map.MemoryBytes(); });
 }
 
+// Scans of the online search: straight scans read the go maps 64 cells at a
+// time, diagonal ones step cell by cell and scan straight at every step.
+// Successors reach `relax(x, y, g)`. Single use; not thread-safe.
+class BitScans {
+ public:
+  BitScans(const JpsMap& map, Cell goal) : map_(map), rows_(map.rows()), goal_(goal) {}
+
+  bool Free(int32_t x, int32_t y) const { return BitLines::Get(rows_.Line(y), x); }
+
+  // Scans from (x, y) in the straight direction (dx, dy) and offers the goal
+  // or the jump point found; (x, y) is reached at cost g.
+  template <typename Relax>
+  void Straight(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+    if (dx != 0) {
+      const uint64_t* open = map_.rows().Line(y);
+      const ScanStop stop = dx > 0 ? ScanForward(map_.east().Line(y), open, x)
+                                   : ScanBackward(map_.west().Line(y), open, x);
+      if (goal_.y == y && (goal_.x - x) * dx > 0 &&
+          (stop.pos - goal_.x) * dx >= 0) {
+        relax(goal_.x, y, g + std::abs(goal_.x - x));
+      } else if (stop.jump) {
+        relax(stop.pos, y, g + std::abs(stop.pos - x));
+      }
+    } else {
+      const uint64_t* open = map_.cols().Line(x);
+      const ScanStop stop = dy > 0
+                                ? ScanForward(map_.south().Line(x), open, y)
+                                : ScanBackward(map_.north().Line(x), open, y);
+      if (goal_.x == x && (goal_.y - y) * dy > 0 &&
+          (stop.pos - goal_.y) * dy >= 0) {
+        relax(x, goal_.y, g + std::abs(goal_.y - y));
+      } else if (stop.jump) {
+        relax(x, stop.pos, g + std::abs(stop.pos - y));
+      }
+    }
+  }
+
+  // Steps diagonally from (x, y) while the move is legal, scanning straight
+  // along both axes at every step; jump points found that way get the
+  // expanded node as their parent.
+  template <typename Relax>
+  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+    for (int32_t k = 1;; ++k) {
+      if (!Free(x + dx, y) || !Free(x, y + dy) || !Free(x + dx, y + dy)) return;
+      x += dx;
+      y += dy;
+      const double gk = g + k * kSqrt2;
+      if (x == goal_.x && y == goal_.y) {
+        relax(x, y, gk);
+        return;
+      }
+      Straight(x, y, dx, 0, gk, relax);
+      Straight(x, y, 0, dy, gk, relax);
+    }
+  }
+
+ private:
+  const JpsMap& map_;
+  const BitLines& rows_;
+  const Cell goal_;
+};
+
+// The same scans answered from a JPS+ jump table (core/planners/jps/
+// jump_table.h): one lookup per straight scan, one per diagonal jump point
+// instead of one step per cell. They offer the same successors in the same
+// order at the same costs as BitScans (diagonal costs as g + k * sqrt(2)
+// from the expanded node, as there), so jps_plus ties and paths are jps's.
+// The goal is checked where it could interrupt a jump ("goal bounding"): on
+// the straight run before the jump point or wall, and on the diagonal at the
+// step that reaches its row or column. Single use; not thread-safe.
+class TableScans {
+ public:
+  TableScans(const internal::JumpTable& table, Cell goal) : table_(table), goal_(goal) {}
+
+  bool Free(int32_t x, int32_t y) const { return table_.Free(x, y); }
+
+  template <typename Relax>
+  void Straight(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+    const int32_t e = table_.Entry(x, y, dx, dy);
+    // Cells up to `reach` along the direction are traversable (the goal is).
+    const int32_t reach = e > 0 ? e : -e;
+    if (dx != 0) {
+      if (goal_.y == y && (goal_.x - x) * dx > 0 && std::abs(goal_.x - x) <= reach) {
+        relax(goal_.x, y, g + std::abs(goal_.x - x));
+      } else if (e > 0) {
+        relax(x + e * dx, y, g + e);
+      }
+    } else {
+      if (goal_.x == x && (goal_.y - y) * dy > 0 && std::abs(goal_.y - y) <= reach) {
+        relax(x, goal_.y, g + std::abs(goal_.y - y));
+      } else if (e > 0) {
+        relax(x, y + e * dy, g + e);
+      }
+    }
+  }
+
+  template <typename Relax>
+  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+    // Steps taken from the expanded node, for its costs.
+    int32_t k = 0;
+    for (;;) {
+      const int32_t e = table_.Entry(x, y, dx, dy);
+      const int32_t reach = e > 0 ? e : -e;
+      // Before the next diagonal jump point (or the last legal step) the
+      // straight scans can only find the goal, at the one step that lands on
+      // its row or column.
+      if ((goal_.x - x) * dx > 0 && (goal_.y - y) * dy > 0) {
+        const int32_t to_goal = std::min(std::abs(goal_.x - x), std::abs(goal_.y - y));
+        if (to_goal <= reach && to_goal != e) {
+          const int32_t gx = x + to_goal * dx;
+          const int32_t gy = y + to_goal * dy;
+          const double gk = g + (k + to_goal) * kSqrt2;
+          if (gx == goal_.x && gy == goal_.y) {
+            relax(gx, gy, gk);
+            return;
+          }
+          Straight(gx, gy, dx, 0, gk, relax);
+          Straight(gx, gy, 0, dy, gk, relax);
+        }
+      }
+      if (e <= 0) return;
+      x += e * dx;
+      y += e * dy;
+      k += e;
+      const double gk = g + k * kSqrt2;
+      if (x == goal_.x && y == goal_.y) {
+        relax(x, y, gk);
+        return;
+      }
+      Straight(x, y, dx, 0, gk, relax);
+      Straight(x, y, 0, dy, gk, relax);
+    }
+  }
+
+ private:
+  const internal::JumpTable& table_;
+  const Cell goal_;
+};
+
 // The expansion policy of one JPS query: node ids are JumpPointTable ids (so
 // the SearchScratch records are indexed by them, not by cells), successors are
 // the jump points (and the goal) the scans from a node find, pruned by the
 // direction its parent reached it in. Searches with unit cell factor (the
 // map's single factor scales every path alike); the caller scales the
-// reported cost. Single use; not thread-safe.
+// reported cost. `Scans` is BitScans (jps) or TableScans (jps_plus). Single
+// use; not thread-safe.
+template <typename Scans>
 class JpsExpansion {
  public:
-  JpsExpansion(const JpsMap& map, JumpPointTable& points, int32_t width,
-               const SearchScratch& scratch, Cell goal)
-      : map_(map),
-        rows_(map.rows()),
-        points_(points),
-        width_(width),
-        scratch_(scratch),
-        goal_(goal) {}
+  JpsExpansion(const Scans& scans, JumpPointTable& points, int32_t width,
+               const SearchScratch& scratch)
+      : scans_(scans), points_(points), width_(width), scratch_(scratch) {}
 
   uint32_t Id(Cell c) const { return points_.Id(Index(c.x, c.y), c.x, c.y); }
   Cell CellOf(uint32_t id) const {
@@ -374,14 +512,17 @@ class JpsExpansion {
   // at cost g).
   template <typename Visit>
   void ForEachSuccessor(uint32_t id, double g, Visit&& visit) const {
+    auto relax = [this, &visit](int32_t x, int32_t y, double gx) {
+      visit(points_.Id(Index(x, y), x, y), x, y, gx);
+    };
     const auto [x, y] = points_.point(id);
     const uint32_t parent = scratch_.Raw(id).parent;
     if (parent == SearchScratch::kNoParent) {
       for (int d = -1; d <= 1; d += 2) {
-        Straight(x, y, d, 0, g, visit);
-        Straight(x, y, 0, d, g, visit);
-        Diagonal(x, y, d, -1, g, visit);
-        Diagonal(x, y, d, 1, g, visit);
+        scans_.Straight(x, y, d, 0, g, relax);
+        scans_.Straight(x, y, 0, d, g, relax);
+        scans_.Diagonal(x, y, d, -1, g, relax);
+        scans_.Diagonal(x, y, d, 1, g, relax);
       }
       return;
     }
@@ -392,22 +533,22 @@ class JpsExpansion {
     const int32_t oy = y - from.y;
     if (std::abs(ox) > std::abs(oy)) {
       const int dx = Sign(ox);
-      Straight(x, y, dx, 0, g, visit);
+      scans_.Straight(x, y, dx, 0, g, relax);
       for (int s = -1; s <= 1; s += 2) {
-        if (Free(x, y + s) && !Free(x - dx, y + s)) {
-          Straight(x, y, 0, s, g, visit);
-          Diagonal(x, y, dx, s, g, visit);
+        if (scans_.Free(x, y + s) && !scans_.Free(x - dx, y + s)) {
+          scans_.Straight(x, y, 0, s, g, relax);
+          scans_.Diagonal(x, y, dx, s, g, relax);
         }
       }
     } else {
       // Only the goal is ever reached by a purely diagonal path, and it is
       // never expanded, so |oy| > |ox| here.
       const int dy = Sign(oy);
-      Straight(x, y, 0, dy, g, visit);
+      scans_.Straight(x, y, 0, dy, g, relax);
       for (int s = -1; s <= 1; s += 2) {
-        if (Free(x + s, y) && !Free(x + s, y - dy)) {
-          Straight(x, y, s, 0, g, visit);
-          Diagonal(x, y, s, dy, g, visit);
+        if (scans_.Free(x + s, y) && !scans_.Free(x + s, y - dy)) {
+          scans_.Straight(x, y, s, 0, g, relax);
+          scans_.Diagonal(x, y, s, dy, g, relax);
         }
       }
     }
@@ -418,86 +559,102 @@ class JpsExpansion {
     return static_cast<uint32_t>(y) * static_cast<uint32_t>(width_) +
            static_cast<uint32_t>(x);
   }
-  bool Free(int32_t x, int32_t y) const {
-    return BitLines::Get(rows_.Line(y), x);
-  }
 
-  template <typename Visit>
-  void Relax(int32_t x, int32_t y, double g, Visit& visit) const {
-    visit(points_.Id(Index(x, y), x, y), x, y, g);
-  }
-
-  // Scans from (x, y) in the straight direction (dx, dy) and offers the goal
-  // or the jump point found; (x, y) is reached at cost g.
-  template <typename Visit>
-  void Straight(int32_t x, int32_t y, int dx, int dy, double g,
-                Visit& visit) const {
-    if (dx != 0) {
-      const uint64_t* open = map_.rows().Line(y);
-      const ScanStop stop = dx > 0 ? ScanForward(map_.east().Line(y), open, x)
-                                   : ScanBackward(map_.west().Line(y), open, x);
-      if (goal_.y == y && (goal_.x - x) * dx > 0 &&
-          (stop.pos - goal_.x) * dx >= 0) {
-        Relax(goal_.x, y, g + std::abs(goal_.x - x), visit);
-      } else if (stop.jump) {
-        Relax(stop.pos, y, g + std::abs(stop.pos - x), visit);
-      }
-    } else {
-      const uint64_t* open = map_.cols().Line(x);
-      const ScanStop stop = dy > 0
-                                ? ScanForward(map_.south().Line(x), open, y)
-                                : ScanBackward(map_.north().Line(x), open, y);
-      if (goal_.x == x && (goal_.y - y) * dy > 0 &&
-          (stop.pos - goal_.y) * dy >= 0) {
-        Relax(x, goal_.y, g + std::abs(goal_.y - y), visit);
-      } else if (stop.jump) {
-        Relax(x, stop.pos, g + std::abs(stop.pos - y), visit);
-      }
-    }
-  }
-
-  // Steps diagonally from (x, y) while the move is legal, scanning straight
-  // along both axes at every step; jump points found that way get the
-  // expanded node as their parent.
-  template <typename Visit>
-  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g,
-                Visit& visit) const {
-    for (int32_t k = 1;; ++k) {
-      if (!Free(x + dx, y) || !Free(x, y + dy) || !Free(x + dx, y + dy)) return;
-      x += dx;
-      y += dy;
-      const double gk = g + k * kSqrt2;
-      if (x == goal_.x && y == goal_.y) {
-        Relax(x, y, gk, visit);
-        return;
-      }
-      Straight(x, y, dx, 0, gk, visit);
-      Straight(x, y, 0, dy, gk, visit);
-    }
-  }
-
-  const JpsMap& map_;
-  const BitLines& rows_;
+  const Scans& scans_;
   JumpPointTable& points_;
   const int32_t width_;
   const SearchScratch& scratch_;
-  const Cell goal_;
 };
 
-class JpsPlanner final : public GridPlanner {
- public:
-  JpsPlanner()
-      : GridPlanner("jps",
-                    PlannerTraits{
-                        .optimal = true,
-                        .needs_uniform_cost = true,
-                        .needs_eight_connected = true,
-                        .description =
-                            "Jump Point Search with block-based scans; optimal, "
-                            "for 8-connected maps whose traversable cells all "
-                            "cost the same; expansions count jump points"}) {}
+// Expands the chain of jump points ending at `goal` into single moves
+// (diagonal first between consecutive jump points, as the scans went) and
+// sums cost and length step by step in path order, as MeasurePath does.
+void FillPath(const JumpPointTable& points, const SearchScratch& scratch,
+              uint32_t goal, double factor, PlanResult& result) {
+  std::vector<uint32_t> jumps;
+  for (uint32_t at = goal; at != SearchScratch::kNoParent;
+       at = scratch.Raw(at).parent) {
+    jumps.push_back(at);
+  }
+  auto cell = [&points](uint32_t id) {
+    const JumpPoint& p = points.point(id);
+    return Cell{p.x, p.y};
+  };
+  std::vector<Cell>& path = result.path;
+  path.push_back(cell(jumps.back()));
+  for (size_t j = jumps.size() - 1; j-- > 0;) {
+    const Cell to = cell(jumps[j]);
+    Cell at = path.back();
+    const int sx = Sign(to.x - at.x);
+    const int sy = Sign(to.y - at.y);
+    while (at.x != to.x || at.y != to.y) {
+      const int mx = at.x != to.x ? sx : 0;
+      const int my = at.y != to.y ? sy : 0;
+      at.x += mx;
+      at.y += my;
+      const double length = mx != 0 && my != 0 ? kSqrt2 : 1.0;
+      result.length += length;
+      result.cost += length * factor;
+      path.push_back(at);
+    }
+  }
+}
 
+// The best-first search over jump points that jps and jps_plus share, with
+// `scans` finding successors. result.expansions counts jump points taken
+// from the open list (the start and goal included), not the cells the scans
+// pass over.
+template <typename Scans>
+PlanResult SearchJumpPoints(const Scans& scans, const GridQuery& q,
+                            JumpPointTable& points) {
+  const Grid& grid = q.grid;
+  const PlanRequest& request = q.request;
+  SearchScratch& scratch = q.scratch;
+  scratch.BeginSearch(grid.size());
+  points.Clear();
+  const JpsExpansion<Scans> expansion(scans, points, grid.width(), scratch);
+  const internal::AStarPriority<internal::OctileHeuristic> priority{{request.goal}};
+  internal::OpenList open(scratch);
+  const uint32_t start = expansion.Id(request.start);
+  const uint32_t goal = expansion.Id(request.goal);
+  internal::PushRoot(scratch, open, start, request.start, priority);
+  PlanResult result;
+  result.outcome = internal::WithExpansionListener(
+      request.expansion_recorder, expansion, [&](auto listener) {
+        return internal::BestFirstSearch(scratch, open, goal, q.stop, result.expansions,
+                                         priority, expansion,
+                                         internal::PlainParentUpdate(), listener);
+      });
+  if (result.found()) {
+    // Every traversable cell has the factor of the start cell.
+    const uint8_t start_cost = grid.cost(request.start);
+    const double factor = CellFactor(start_cost, request.cost.cost_weight);
+    FillPath(points, scratch, goal, factor, result);
+  }
+  return result;
+}
+
+// How a query reads the uniform-cost precondition from PackRows.
+PackRule RuleFor(const Grid& grid, const PlanRequest& request) {
+  const uint8_t start_cost = grid.cost(request.start);
+  return PackRule{
+      .unknown_is_free = request.cost.unknown_is_free,
+      .check_uniform = request.cost.cost_weight != 0.0,
+      .uniform_cost = start_cost == kUnknownCost ? kFreeCost : start_cost,
+  };
+}
+
+// What jps and jps_plus share: traits, and endpoint checks apart from the
+// uniform-cost precondition (the map pass of each checks that).
+class JumpPlannerBase : public GridPlanner {
  protected:
+  // `name` and `description` must outlive the planner (string literals).
+  JumpPlannerBase(std::string_view name, std::string_view description)
+      : GridPlanner(name, PlannerTraits{.optimal = true,
+                                        .needs_uniform_cost = true,
+                                        .needs_eight_connected = true,
+                                        .description = description}) {}
+
   // The uniform-cost precondition needs every cell read, and so does the
   // map update: Search() checks the precondition in the same pass, and the
   // full ValidateRequest runs only to word the error when it fails.
@@ -507,21 +664,22 @@ class JpsPlanner final : public GridPlanner {
     endpoint_traits.needs_uniform_cost = false;
     return ValidateRequest(grid, request, name(), endpoint_traits);
   }
+};
 
-  // result.expansions counts jump points taken from the open list (the start
-  // and goal included), not the cells the scans pass over.
+class JpsPlanner final : public JumpPlannerBase {
+ public:
+  JpsPlanner()
+      : JumpPlannerBase("jps",
+                        "Jump Point Search with block-based scans; optimal, "
+                        "for 8-connected maps whose traversable cells all "
+                        "cost the same; expansions count jump points") {}
+
+ protected:
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
-    [[maybe_unused]] const Grid& grid = q.grid;
-    [[maybe_unused]] const PlanRequest& request = q.request;
-    [[maybe_unused]] const StopCondition& stop = q.stop;
-    [[maybe_unused]] SearchScratch& scratch = q.scratch;
-    const uint8_t start_cost = grid.cost(request.start);
-    const PackRule rule{
-        .unknown_is_free = request.cost.unknown_is_free,
-        .check_uniform = request.cost.cost_weight != 0.0,
-        .uniform_cost = start_cost == kUnknownCost ? kFreeCost : start_cost,
-    };
-    JpsScratch& state = scratch.extension<JpsScratch>();
+    const Grid& grid = q.grid;
+    const PlanRequest& request = q.request;
+    const PackRule rule = RuleFor(grid, request);
+    JpsScratch& state = q.scratch.extension<JpsScratch>();
     // With a store the version's map is packed once; without one (a robot
     // linking core, benchmarks) the scratch's copy is brought up to date.
     std::shared_ptr<const JpsVersion> version;
@@ -534,66 +692,140 @@ class JpsPlanner final : public GridPlanner {
       return ValidateRequest(grid, request, name(), traits());
     }
     const JpsMap& map = version != nullptr ? version->map : state.map;
-    scratch.BeginSearch(grid.size());
-    state.points.Clear();
+    return SearchJumpPoints(BitScans(map, request.goal), q, state.points);
+  }
+};
 
-    const JpsExpansion expansion(map, state.points, grid.width(), scratch,
-                                 request.goal);
-    const internal::AStarPriority<internal::OctileHeuristic> priority{
-        {request.goal}};
-    internal::OpenList open(scratch);
-    const uint32_t start = expansion.Id(request.start);
-    const uint32_t goal = expansion.Id(request.goal);
-    internal::PushRoot(scratch, open, start, request.start, priority);
-    PlanResult result;
-    result.outcome = internal::WithExpansionListener(
-        request.expansion_recorder, expansion, [&](auto listener) {
-          return internal::BestFirstSearch(scratch, open, goal, stop,
-                                           result.expansions, priority, expansion,
-                                           internal::PlainParentUpdate(), listener);
-        });
-    if (result.found()) {
-      // Every traversable cell has the factor of the start cell.
-      const double factor = CellFactor(start_cost, request.cost.cost_weight);
-      FillPath(state.points, scratch, goal, factor, result);
-    }
-    return result;
+// Bit c of word c / 64: some traversable cell among `cells` has effective
+// cost c (unknown cells traversed as free count as kFreeCost).
+void AddCosts(const Grid& grid, absl::Span<const Cell> cells, bool unknown_is_free,
+              std::array<uint64_t, 4>& costs) {
+  for (const Cell& cell : cells) {
+    const uint8_t c = grid.cost(cell);
+    if (!Traversable(c, unknown_is_free)) continue;
+    const int effective = c == kUnknownCost ? kFreeCost : c;
+    costs[effective / 64] |= uint64_t{1} << (effective % 64);
+  }
+}
+
+// The jump table of one map version with the costs its traversable cells
+// have. An advance only adds the costs of the changed cells, so `costs` may
+// keep a cost no cell has any more: a superset, which can only send a query
+// to the full check (ValidateRequest), never let a non-uniform map through.
+struct JpsPlusVersion {
+  std::shared_ptr<const internal::JumpTable> table;
+  std::array<uint64_t, 4> costs{};
+
+  static std::shared_ptr<const JpsPlusVersion> Build(const Grid& grid,
+                                                     bool unknown_is_free) {
+    auto version = std::make_shared<JpsPlusVersion>();
+    version->table = internal::JumpTable::Build(grid, unknown_is_free);
+    const JpsVersion costs_of = *JpsVersion::Build(grid, unknown_is_free, nullptr);
+    version->costs = costs_of.costs;
+    return version;
   }
 
- private:
-  // Expands the chain of jump points ending at `goal` into single moves
-  // (diagonal first between consecutive jump points, as the scans went) and
-  // sums cost and length step by step in path order, as MeasurePath does.
-  static void FillPath(const JumpPointTable& points,
-                       const SearchScratch& scratch, uint32_t goal,
-                       double factor, PlanResult& result) {
-    std::vector<uint32_t> jumps;
-    for (uint32_t at = goal; at != SearchScratch::kNoParent;
-         at = scratch.Raw(at).parent) {
-      jumps.push_back(at);
-    }
-    auto cell = [&points](uint32_t id) {
-      const JumpPoint& p = points.point(id);
-      return Cell{p.x, p.y};
-    };
-    std::vector<Cell>& path = result.path;
-    path.push_back(cell(jumps.back()));
-    for (size_t j = jumps.size() - 1; j-- > 0;) {
-      const Cell to = cell(jumps[j]);
-      Cell at = path.back();
-      const int sx = Sign(to.x - at.x);
-      const int sy = Sign(to.y - at.y);
-      while (at.x != to.x || at.y != to.y) {
-        const int mx = at.x != to.x ? sx : 0;
-        const int my = at.y != to.y ? sy : 0;
-        at.x += mx;
-        at.y += my;
-        const double length = mx != 0 && my != 0 ? kSqrt2 : 1.0;
-        result.length += length;
-        result.cost += length * factor;
-        path.push_back(at);
+  static std::shared_ptr<const JpsPlusVersion> Advance(const JpsPlusVersion& previous,
+                                                       const Grid& grid,
+                                                       absl::Span<const Cell> changed) {
+    auto version = std::make_shared<JpsPlusVersion>();
+    version->table = internal::JumpTable::Advance(*previous.table, grid, changed);
+    version->costs = previous.costs;
+    AddCosts(grid, changed, previous.table->unknown_is_free(), version->costs);
+    return version;
+  }
+
+  bool OnlyCost(uint8_t cost) const {
+    std::array<uint64_t, 4> only{};
+    only[cost / 64] = uint64_t{1} << (cost % 64);
+    return costs == only;
+  }
+};
+
+// What jps_plus keeps in a SearchScratch between queries without a store:
+// the packed rows to notice an edited grid, and the table they gave.
+struct JpsPlusScratch final : public SearchScratch::Extension {
+  int32_t width = -1;
+  int32_t height = -1;
+  bool unknown_is_free = false;
+  BitLines rows;
+  std::vector<uint8_t> dirty;
+  std::shared_ptr<const internal::JumpTable> table;
+  JumpPointTable points;
+  size_t MemoryBytes() const override {
+    return rows.MemoryBytes() + dirty.capacity() + points.MemoryBytes() +
+           (table != nullptr ? table->MemoryBytes() : 0);
+  }
+};
+
+// JPS+ (Harabor & Grastien 2014, "Improving Jump Point Search", ICAPS;
+// Rabin & Silva 2015, "JPS+", Game AI Pro 2): jps's search with every scan
+// answered by the version's jump table (core/planners/jps/jump_table.h),
+// which the derived store builds once per map version and advances line by
+// line around the changed cells of the next one.
+class JpsPlusPlanner final : public JumpPlannerBase {
+ public:
+  JpsPlusPlanner()
+      : JumpPlannerBase("jps_plus",
+                        "JPS+: Jump Point Search reading per-cell jump "
+                        "distances built once per map version and repaired "
+                        "line by line on updates; optimal, same preconditions "
+                        "and answers as jps; expansions count jump points") {}
+
+ protected:
+  absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
+    const Grid& grid = q.grid;
+    const PlanRequest& request = q.request;
+    const PackRule rule = RuleFor(grid, request);
+    JpsPlusScratch& state = q.scratch.extension<JpsPlusScratch>();
+    std::shared_ptr<const internal::JumpTable> table;
+    if (request.derived != nullptr) {
+      const bool unknown_is_free = rule.unknown_is_free;
+      std::shared_ptr<const JpsPlusVersion> version = GetDerived<JpsPlusVersion>(
+          request.derived, grid,
+          std::string("jps_plus_table unknown_is_free=") + (unknown_is_free ? "1" : "0"),
+          [unknown_is_free](const Grid& g) {
+            return JpsPlusVersion::Build(g, unknown_is_free);
+          },
+          [](const JpsPlusVersion& previous, const Grid& g,
+             absl::Span<const Cell> changed) {
+            return JpsPlusVersion::Advance(previous, g, changed);
+          },
+          [](const JpsPlusVersion& v) {
+            return sizeof(JpsPlusVersion) + v.table->MemoryBytes();
+          });
+      if (rule.check_uniform && !version->OnlyCost(rule.uniform_cost)) {
+        // The costs may be a stale superset: only the full check decides.
+        absl::Status status = ValidateRequest(grid, request, name(), traits());
+        if (!status.ok()) return status;
       }
+      table = version->table;
+    } else {
+      // A Grid may be edited in place between queries: re-pack it, and
+      // rebuild the table when any row changed.
+      const bool resized = grid.width() != state.width || grid.height() != state.height ||
+                           rule.unknown_is_free != state.unknown_is_free;
+      if (resized) {
+        state.width = grid.width();
+        state.height = grid.height();
+        state.unknown_is_free = rule.unknown_is_free;
+        state.rows.Reset(grid.height(), grid.width());
+        state.table = nullptr;
+      }
+      state.dirty.assign(static_cast<size_t>((grid.width() + 63) / 64) *
+                             static_cast<size_t>((grid.height() + 63) / 64),
+                         0);
+      static const PackIsa kIsa = internal::BestPackIsa();
+      if (!internal::PackRows(kIsa, grid, rule, state.rows, state.dirty)) {
+        return ValidateRequest(grid, request, name(), traits());
+      }
+      if (state.table == nullptr ||
+          std::find(state.dirty.begin(), state.dirty.end(), 1) != state.dirty.end()) {
+        state.table = internal::JumpTable::Build(grid, rule.unknown_is_free);
+      }
+      table = state.table;
     }
+    return SearchJumpPoints(TableScans(*table, request.goal), q, state.points);
   }
 };
 
@@ -601,6 +833,10 @@ class JpsPlanner final : public GridPlanner {
 
 std::unique_ptr<Planner> MakeJpsPlanner() {
   return std::make_unique<JpsPlanner>();
+}
+
+std::unique_ptr<Planner> MakeJpsPlusPlanner() {
+  return std::make_unique<JpsPlusPlanner>();
 }
 
 }  // namespace pathd
