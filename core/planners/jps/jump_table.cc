@@ -3,10 +3,10 @@
 // Every entry is a function of the passability near a cell and of the entry
 // one step further in the same direction (see Compute), so a build fills each
 // direction in the order that visits (x + dx, y + dy) before (x, y). A
-// changed cell p changes the inputs of that function only for cells within
-// two cells of p (a straight entry reads the next cell, its two side cells
-// and the side cells one step back; a diagonal entry the three cells of its
-// move), and for diagonal entries whose next cell's straight entry changed
+// changed cell p changes the inputs of that function only for the 3 x 3
+// cells around p (a straight entry at c reads the next cell, its two side
+// cells and the two side cells of c; a diagonal entry the three cells of its
+// move: all within one cell of c), and for diagonal entries whose next cell's straight entry changed
 // sign (gained or lost a jump point ahead). Repair recomputes those cells in
 // build order and walks back along each one's line while the entry changes:
 // once an entry comes out unchanged, every entry behind it reads the same
@@ -151,10 +151,10 @@ std::shared_ptr<const JumpTable> JumpTable::Advance(const JumpTable& previous,
   }
   if (!flipped.empty()) {
     std::vector<Cell> near;
-    near.reserve(flipped.size() * 25);
+    near.reserve(flipped.size() * 9);
     for (const Cell& p : flipped) {
-      for (int32_t y = std::max(0, p.y - 2); y <= std::min(table->height_ - 1, p.y + 2); ++y) {
-        for (int32_t x = std::max(0, p.x - 2); x <= std::min(table->width_ - 1, p.x + 2);
+      for (int32_t y = std::max(0, p.y - 1); y <= std::min(table->height_ - 1, p.y + 1); ++y) {
+        for (int32_t x = std::max(0, p.x - 1); x <= std::min(table->width_ - 1, p.x + 1);
              ++x) {
           near.push_back(Cell{x, y});
         }
