@@ -121,6 +121,7 @@ void RunMap(const std::string& label, const std::string& path) {
 // Advance around `changes` random flipped cells against a full build, on
 // `grid` (1024 x 1024).
 void RunUpdates(const std::string& label, pathd::Grid grid) {
+  if (absl::GetFlag(FLAGS_updates) <= 0) return;
   std::mt19937 rng(19);
   auto table = JumpTable::Build(grid, false);
   std::vector<double> advance_us;
