@@ -720,8 +720,13 @@ struct JpsPlusVersion {
                                                      bool unknown_is_free) {
     auto version = std::make_shared<JpsPlusVersion>();
     version->table = internal::JumpTable::Build(grid, unknown_is_free);
-    const JpsVersion costs_of = *JpsVersion::Build(grid, unknown_is_free, nullptr);
-    version->costs = costs_of.costs;
+    std::array<bool, 256> seen{};
+    for (const uint8_t c : grid.cells()) seen[c] = true;
+    for (int c = 0; c < 256; ++c) {
+      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free)) continue;
+      const int effective = c == kUnknownCost ? kFreeCost : c;
+      version->costs[effective / 64] |= uint64_t{1} << (effective % 64);
+    }
     return version;
   }
 

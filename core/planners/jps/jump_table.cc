@@ -142,6 +142,9 @@ void JumpTable::Repair(int dx, int dy, std::vector<Cell>& seeds,
 std::shared_ptr<const JumpTable> JumpTable::Advance(const JumpTable& previous,
                                                     const Grid& grid,
                                                     absl::Span<const Cell> changed) {
+  if (grid.width() != previous.width_ || grid.height() != previous.height_) {
+    return Build(grid, previous.unknown_is_free_);
+  }
   auto table = std::make_shared<JumpTable>();
   table->width_ = previous.width_;
   table->height_ = previous.height_;

@@ -51,7 +51,8 @@ class JumpTable {
   // exactly in `changed` (cells listed without a change are allowed).
   // Recomputes only the runs of the rows, columns and diagonals whose
   // entries the changes reach: O(changed cells + entries that change), plus a
-  // copy of the tile pointers and of the tiles written.
+  // copy of the tile pointers and of the tiles written. A grid of another
+  // size is built from scratch.
   static std::shared_ptr<const JumpTable> Advance(const JumpTable& previous,
                                                   const Grid& grid,
                                                   absl::Span<const Cell> changed);
