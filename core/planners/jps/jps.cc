@@ -822,6 +822,9 @@ class JpsPlusPlanner final : public JumpPlannerBase {
                          0);
       static const PackIsa kIsa = internal::BestPackIsa();
       if (!internal::PackRows(kIsa, grid, rule, state.rows, state.dirty)) {
+        // The rows now match the grid but the table may not: the next query
+        // would find nothing dirty.
+        state.table = nullptr;
         return ValidateRequest(grid, request, name(), traits());
       }
       if (state.table == nullptr ||

@@ -356,6 +356,28 @@ TEST_F(JpsPlusTest, StartEqualsGoalUnreachableAndBorders) {
   ExpectAsJps(open, PlanRequest::Between({0, 0}, {5, 2}), "past the diagonal");
 }
 
+// Without a store the table lives in the scratch and follows a grid edited
+// in place; an edit that a refused query saw first (the map turned
+// weighted) must still reach the table used by the next query.
+TEST_F(JpsPlusTest, TableFollowsAGridEditedAfterARefusedQuery) {
+  Grid grid = MakeGrid({
+      "..........",
+      "..........",
+      "..........",
+      "..........",
+  });
+  ExpectAsJps(grid, PlanRequest::Between({0, 0}, {9, 3}), "before");
+  // A wall with a gap, and one weighted cell: refused with cost_weight 1.
+  for (int32_t y = 0; y < 3; ++y) grid.set_cost(5, y, kLethalCost);
+  grid.set_cost(0, 3, 90);
+  auto refused = Get("jps_plus").Plan(grid, PlanRequest::Between({1, 0}, {9, 0}),
+                                      StopCondition::None(), scratch_);
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  CostParams ignore_costs;
+  ignore_costs.cost_weight = 0.0;
+  ExpectAsJps(grid, PlanRequest::Between({1, 0}, {9, 0}, ignore_costs), "after the edit");
+}
+
 // Moving AI scenarios sampled across every shared map file (the files are
 // sorted by length, so a stride over the whole file): the stored optimal
 // length, and jps's answer.
