@@ -27,6 +27,12 @@
 // The search is the best-first loop of core/search/best_first.h with
 // JpsExpansion as its expansion policy (node ids are jump-point ids, the
 // successors the jump points the scans find) and the octile heuristic.
+//
+// jps_plus (JPS+, the offline jump points of the same 2014 paper) is the
+// same search with the scans answered from a per-version jump table
+// (core/planners/jps/jump_table.h) instead of the bit maps: JpsExpansion
+// takes its scanner as a template parameter, BitScans or TableScans, so the
+// two planners share pruning, ties, path output and preconditions.
 #include <algorithm>
 #include <array>
 #include <bit>
