@@ -722,10 +722,12 @@ struct JpsPlusVersion {
   std::shared_ptr<const internal::JumpTable> table;
   std::array<uint64_t, 4> costs{};
 
-  static std::shared_ptr<const JpsPlusVersion> Build(const Grid& grid,
-                                                     bool unknown_is_free) {
+  // Null when `stop` fired.
+  static std::shared_ptr<const JpsPlusVersion> Build(const Grid& grid, bool unknown_is_free,
+                                                     DerivedStop& stop) {
     auto version = std::make_shared<JpsPlusVersion>();
-    version->table = internal::JumpTable::Build(grid, unknown_is_free);
+    version->table = internal::JumpTable::Build(grid, unknown_is_free, &stop);
+    if (version->table == nullptr) return nullptr;
     std::array<bool, 256> seen{};
     for (const uint8_t c : grid.cells()) seen[c] = true;
     for (int c = 0; c < 256; ++c) {
@@ -790,21 +792,24 @@ class JpsPlusPlanner final : public JumpPlannerBase {
     const PackRule rule = RuleFor(grid, request);
     JpsPlusScratch& state = q.scratch.extension<JpsPlusScratch>();
     std::shared_ptr<const internal::JumpTable> table;
+    // A table build is O(map) (0.1-0.3 s for 1024 x 1024): it polls the
+    // query's deadline and cancellation.
+    DerivedStop derived_stop(q.stop);
     if (request.derived != nullptr) {
       const bool unknown_is_free = rule.unknown_is_free;
       std::shared_ptr<const JpsPlusVersion> version = GetDerived<JpsPlusVersion>(
           request.derived, grid,
           std::string("jps_plus_table unknown_is_free=") + (unknown_is_free ? "1" : "0"),
-          [unknown_is_free](const Grid& g) {
-            return JpsPlusVersion::Build(g, unknown_is_free);
+          "the jump table of this map version", derived_stop,
+          [unknown_is_free](const Grid& g, DerivedStop& s) {
+            return JpsPlusVersion::Build(g, unknown_is_free, s);
           },
-          [](const JpsPlusVersion& previous, const Grid& g,
-             absl::Span<const Cell> changed) {
-            return JpsPlusVersion::Advance(previous, g, changed);
-          },
+          [](const JpsPlusVersion& previous, const Grid& g, absl::Span<const Cell> changed,
+             DerivedStop&) { return JpsPlusVersion::Advance(previous, g, changed); },
           [](const JpsPlusVersion& v) {
             return sizeof(JpsPlusVersion) + v.table->MemoryBytes();
           });
+      if (version == nullptr) return StoppedWhileDeriving(derived_stop);
       if (rule.check_uniform && !version->OnlyCost(rule.uniform_cost)) {
         // The costs may be a stale superset: only the full check decides.
         absl::Status status = ValidateRequest(grid, request, name(), traits());
@@ -835,7 +840,8 @@ class JpsPlusPlanner final : public JumpPlannerBase {
       }
       if (state.table == nullptr ||
           std::find(state.dirty.begin(), state.dirty.end(), 1) != state.dirty.end()) {
-        state.table = internal::JumpTable::Build(grid, rule.unknown_is_free);
+        state.table = internal::JumpTable::Build(grid, rule.unknown_is_free, &derived_stop);
+        if (state.table == nullptr) return StoppedWhileDeriving(derived_stop);
       }
       table = state.table;
     }

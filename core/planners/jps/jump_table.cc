@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <tuple>
 
+#include "absl/strings/str_format.h"
 #include "core/map/cost_model.h"
 
 namespace pathd::internal {
@@ -77,7 +78,8 @@ void JumpTable::Set(int32_t x, int32_t y, int dx, int dy, int32_t value) {
   tiles_[t]->e[Slot(x, y, Dir(dx, dy))] = value;
 }
 
-std::shared_ptr<const JumpTable> JumpTable::Build(const Grid& grid, bool unknown_is_free) {
+std::shared_ptr<const JumpTable> JumpTable::Build(const Grid& grid, bool unknown_is_free,
+                                                  DerivedStop* stop) {
   auto table = std::make_shared<JumpTable>();
   table->Init(grid, unknown_is_free);
   const int32_t w = table->width_;
@@ -89,7 +91,15 @@ std::shared_ptr<const JumpTable> JumpTable::Build(const Grid& grid, bool unknown
   // diagonal entry reads the straight entries of its next cell, one row
   // back in the same sweep (east and west of a north-bound one come from
   // the first sweep).
+  auto stopped = [&](int32_t rows_done) {
+    if (stop == nullptr || rows_done % 64 != 0 || !stop->Stopped()) return false;
+    stop->Note(absl::StrFormat(
+        "building the jump table of this map version (row %d of %d in its two sweeps)",
+        rows_done, 2 * h));
+    return true;
+  };
   for (int32_t y = h - 1; y >= 0; --y) {
+    if (stopped(h - 1 - y)) return nullptr;
     for (int32_t x = w - 1; x >= 0; --x) table->Set(x, y, 1, 0, table->Compute(x, y, 1, 0));
     for (int32_t x = 0; x < w; ++x) {
       table->Set(x, y, -1, 0, table->Compute(x, y, -1, 0));
@@ -99,6 +109,7 @@ std::shared_ptr<const JumpTable> JumpTable::Build(const Grid& grid, bool unknown
     }
   }
   for (int32_t y = 0; y < h; ++y) {
+    if (stopped(h + y)) return nullptr;
     for (int32_t x = 0; x < w; ++x) {
       table->Set(x, y, 0, -1, table->Compute(x, y, 0, -1));
       table->Set(x, y, 1, -1, table->Compute(x, y, 1, -1));

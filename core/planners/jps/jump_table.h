@@ -14,6 +14,7 @@
 #include "absl/types/span.h"
 #include "core/map/grid.h"
 #include "core/planners/jps/bit_grid.h"
+#include "core/search/derived.h"
 
 namespace pathd::internal {
 
@@ -44,7 +45,10 @@ class JumpTable {
   static constexpr int32_t kTileSide = 1 << kTileBits;
 
   // The table of `grid`'s passability (unknown cells per `unknown_is_free`).
-  static std::shared_ptr<const JumpTable> Build(const Grid& grid, bool unknown_is_free);
+  // Polls `stop` (when given) every 64 rows: null when it fired, after
+  // noting how far the build got. A 1024 x 1024 table takes 0.1-0.3 s.
+  static std::shared_ptr<const JumpTable> Build(const Grid& grid, bool unknown_is_free,
+                                                DerivedStop* stop = nullptr);
 
   // The table of `grid` from `previous`, the table of an older version of the
   // same map (same size and unknown_is_free) whose cells differ from `grid`

@@ -5,6 +5,7 @@
 // every shared map file; the refusals are jps's. PATHD_JPS_PLUS_CASES scales
 // the randomised counts (default 20; the ASan run lowers it).
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -13,6 +14,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
+#include "absl/time/clock.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/map_io/map_io.h"
@@ -376,6 +378,30 @@ TEST_F(JpsPlusTest, TableFollowsAGridEditedAfterARefusedQuery) {
   CostParams ignore_costs;
   ignore_costs.cost_weight = 0.0;
   ExpectAsJps(grid, PlanRequest::Between({1, 0}, {9, 0}, ignore_costs), "after the edit");
+}
+
+// A past deadline or a cancelled query stops the table build (with and
+// without a store) and then the search; nothing half-built is kept.
+TEST_F(JpsPlusTest, DeadlineAndCancellationStopTheBuildAndTheSearch) {
+  const Grid grid = Grid::Create(300, 300).value();
+  testing::AdvancingStore store;
+  store.SetGrid(grid);
+  for (const bool with_store : {false, true}) {
+    PlanRequest request = PlanRequest::Between({0, 0}, {299, 299});
+    if (with_store) request.derived = &store;
+    auto r = Get("jps_plus").Plan(grid, request,
+                                  StopCondition(absl::Now() - absl::Seconds(1), nullptr, 0),
+                                  scratch_);
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_EQ(r->outcome, PlanOutcome::kTimeout);
+    EXPECT_TRUE(r->path.empty());
+    std::atomic<bool> cancelled{true};
+    r = Get("jps_plus").Plan(grid, request, StopCondition(absl::InfiniteFuture(), &cancelled, 0),
+                             scratch_);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->outcome, PlanOutcome::kCancelled);
+    ExpectAsJps(grid, request, with_store ? "store, after the stops" : "after the stops");
+  }
 }
 
 // Moving AI scenarios sampled across every shared map file (the files are
