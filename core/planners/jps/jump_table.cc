@@ -5,9 +5,10 @@
 // direction in an order that visits (x + dx, y + dy) before (x, y). A
 // changed cell p changes the inputs of that function only for the 3 x 3
 // cells around p (a straight entry at c reads the next cell, its two side
-// cells and the two side cells of c; a diagonal entry the three cells of its
-// move: all within one cell of c), and for diagonal entries whose next cell's straight entry changed
-// sign (gained or lost a jump point ahead). Repair recomputes those cells in
+// cells and the two side cells of c; a diagonal entry the three cells of
+// its move: all within one cell of c), and for diagonal entries whose next
+// cell's straight entry changed sign (gained or lost a jump point ahead).
+// The seeds are those cells. Repair recomputes them, per direction, in
 // build order and walks back along each one's line while the entry changes:
 // once an entry comes out unchanged, every entry behind it reads the same
 // inputs as before, unless it is a seed itself, which is visited in its turn.
