@@ -293,12 +293,14 @@ class ConcurrencyTest : public ::testing::Test {
       v1::Planner planner;
       const char* name;
     };
-    constexpr std::array<Choice, 5> kPlanners = {
+    constexpr std::array<Choice, 6> kPlanners = {
         {{v1::PLANNER_ASTAR, "astar"},
          {v1::PLANNER_DIJKSTRA, "dijkstra"},
          {v1::PLANNER_JPS, "jps"},
          {v1::PLANNER_DSTAR_LITE, "dstar_lite"},
-         {v1::PLANNER_SPM, "spm"}}};
+         {v1::PLANNER_SPM, "spm"},
+         // Its jump table is advanced by the derived cache per version.
+         {v1::PLANNER_JPS_PLUS, "jps_plus"}}};
     RandomPlan plan;
     {
       const size_t m = rng() % maps_.size();
@@ -316,14 +318,16 @@ class ConcurrencyTest : public ::testing::Test {
       request.set_planner(choice.planner);
       *request.mutable_start() = CellPosition(start);
       *request.mutable_goal() = CellPosition(goal);
-      if (choice.planner == v1::PLANNER_JPS) {
+      const bool jump = choice.planner == v1::PLANNER_JPS ||
+                        choice.planner == v1::PLANNER_JPS_PLUS;
+      if (jump) {
         // JPS needs uniform cost: cost_weight 0 makes every traversable cell
         // cost the same.
         cost.cost_weight = 0.0;
       } else if (rng() % 3 == 0) {
         cost.cost_weight = 0.5;
       }
-      if (choice.planner != v1::PLANNER_JPS && rng() % 3 == 0) {
+      if (!jump && rng() % 3 == 0) {
         cost.connectivity = Connectivity::kFour;
       }
       request.mutable_options()->set_cost_weight(cost.cost_weight);

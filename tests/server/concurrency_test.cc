@@ -1,7 +1,7 @@
 // 32 client threads against one in-process PathdServer on 127.0.0.1:0, all on
 // the same three maps at once: Plan calls with the optimal planners (astar,
-// dijkstra, jps, dstar_lite, spm), Navigate sessions (open, poses, shared
-// observations, pushed paths) and UpdateMap calls. Every answer names the map
+// dijkstra, jps, jps_plus, dstar_lite, spm), Navigate sessions (open, poses,
+// shared observations, pushed paths) and UpdateMap calls. Every answer names the map
 // version it was planned on; after the run the test rebuilds every version
 // from the recorded updates and observations alone and checks each answer's
 // cost against the reference Dijkstra on that version. A watchdog aborts the
