@@ -266,11 +266,21 @@ CostToGoField RasterDistanceTransform(const Grid& grid, Cell goal, const CostPar
 CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& cost,
                                const StopCondition& stop, SearchScratch& scratch,
                                ExpansionRecorder* recorder) {
+  return internal::DijkstraCostToGoOn<internal::MonotoneOpenList>(grid, goal, cost, stop,
+                                                                  scratch, recorder);
+}
+
+namespace internal {
+
+template <typename Open>
+CostToGoField DijkstraCostToGoOn(const Grid& grid, Cell goal, const CostParams& cost,
+                                 const StopCondition& stop, SearchScratch& scratch,
+                                 ExpansionRecorder* recorder) {
   const GridView view(grid, cost);
   const internal::ReverseGridExpansion expansion(view);
   const internal::AStarPriority<internal::ZeroHeuristic> priority{};
   scratch.BeginSearch(grid.size());
-  internal::OpenList open(scratch);
+  Open open(scratch);
   internal::PushRoot(scratch, open, expansion.Id(goal), goal, priority);
   CostToGoField field;
   const PlanOutcome outcome = internal::WithExpansionListener(
@@ -289,6 +299,17 @@ CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& co
   }
   return field;
 }
+
+template CostToGoField DijkstraCostToGoOn<OpenList>(const Grid&, Cell, const CostParams&,
+                                                    const StopCondition&, SearchScratch&,
+                                                    ExpansionRecorder*);
+template CostToGoField DijkstraCostToGoOn<MonotoneOpenList>(const Grid&, Cell,
+                                                            const CostParams&,
+                                                            const StopCondition&,
+                                                            SearchScratch&,
+                                                            ExpansionRecorder*);
+
+}  // namespace internal
 
 std::vector<Cell> DescendCostToGo(const Grid& grid, const CostParams& cost,
                                   const std::vector<double>& field, Cell start) {
