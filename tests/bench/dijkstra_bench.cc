@@ -10,7 +10,10 @@
 // out, as ours does). The three variants of one
 // query run back to back in a rotating order, each timed in the thread's CPU
 // time; a variant's figure is its mean per query, the minimum over --rounds.
-// Costs are compared bit for bit (old vs new, new vs textbook).
+// Costs are compared bit for bit (old vs new, new vs textbook). Fields are
+// also timed as the shortest path map cache builds them (ShortestPathMap::
+// Build: the incremental engine from its initial state, 4-byte floats,
+// the fleet Table's fields), a fourth variant in the rotation.
 //
 //   build/tests/bench/dijkstra_bench --movingai_dir=../shared/benchmarks/movingai
 //       --sample=100 --fields=10 --rounds=3
@@ -22,6 +25,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,9 +33,11 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/str_format.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
 #include "core/map_io/map_io.h"
+#include "core/incremental/incremental_search.h"
 #include "core/planners/cost_to_go.h"
 #include "core/search/best_first.h"
 #include "core/search/open_list.h"
@@ -139,8 +145,9 @@ class Textbook {
 };
 
 struct Figures {
-  double seconds[3] = {0, 0, 0};  // textbook, old, new
-  int64_t expansions[3] = {0, 0, 0};
+  // textbook, old, new; fields also the incremental engine's build
+  double seconds[4] = {0, 0, 0, 0};
+  int64_t expansions[4] = {0, 0, 0, 0};
   int64_t old_new_mismatch = 0;   // costs (or field cells) not bit-identical
   int64_t textbook_mismatch = 0;  // new vs textbook
 };
@@ -195,15 +202,20 @@ Figures PointToPoint(const Grid& grid, const std::vector<Scenario>& scenarios,
 Figures Fields(const Grid& grid, const std::vector<Scenario>& goals, SearchScratch& scratch) {
   const CostParams cost;
   Textbook textbook(grid, cost);
+  const auto shared = std::make_shared<const Grid>(grid);
   Figures f;
   for (size_t q = 0; q < goals.size(); ++q) {
     const Cell goal = goals[q].goal;
     CostToGoField fields[3];
     std::vector<double> textbook_field;
-    for (int k = 0; k < 3; ++k) {
-      const int variant = static_cast<int>((q + k) % 3);
+    for (int k = 0; k < 4; ++k) {
+      const int variant = static_cast<int>((q + k) % 4);
       const double t0 = CpuNow();
-      if (variant == 0) {
+      if (variant == 3) {
+        // The shortest path map cache's build (the fleet Table's fields).
+        auto spm = ShortestPathMap::Build(shared, goal, cost, StopCondition::None());
+        if (spm.ok()) f.expansions[3] += (*spm)->last_stats().expansions;
+      } else if (variant == 0) {
         f.expansions[0] +=
             textbook.Run(static_cast<int32_t>(grid.Index(goal.x, goal.y)), -1, true, true);
         textbook_field = textbook.TakeField();
@@ -230,17 +242,21 @@ Figures Fields(const Grid& grid, const std::vector<Scenario>& goals, SearchScrat
 Figures Best(const std::vector<Figures>& rounds) {
   Figures best = rounds.front();
   for (const Figures& r : rounds) {
-    for (int v = 0; v < 3; ++v) best.seconds[v] = std::min(best.seconds[v], r.seconds[v]);
+    for (int v = 0; v < 4; ++v) best.seconds[v] = std::min(best.seconds[v], r.seconds[v]);
   }
   return best;
 }
 
 void PrintRow(const std::string& map, const char* kind, size_t queries, const Figures& f) {
   const double n = static_cast<double>(queries);
-  const double us[3] = {1e6 * f.seconds[0] / n, 1e6 * f.seconds[1] / n, 1e6 * f.seconds[2] / n};
-  std::printf("| %s | %s | %zu | %.0f | %.0f | %.0f | %.3f | %.3f | %.3f | %.0f / %.0f | %lld | %lld |\n",
+  const double us[4] = {1e6 * f.seconds[0] / n, 1e6 * f.seconds[1] / n, 1e6 * f.seconds[2] / n,
+                        1e6 * f.seconds[3] / n};
+  const std::string spm =
+      us[3] > 0 ? absl::StrFormat("%.0f (%.2fx)", us[3], us[3] / us[0]) : std::string("-");
+  std::printf("| %s | %s | %zu | %.0f | %.0f | %.0f | %.3f | %.3f | %.3f | %s | %.0f / %.0f | %lld | "
+              "%lld |\n",
               map.c_str(), kind, queries, us[0], us[1], us[2], us[1] / us[0], us[2] / us[0],
-              us[2] / us[1], static_cast<double>(f.expansions[0]) / n,
+              us[2] / us[1], spm.c_str(), static_cast<double>(f.expansions[0]) / n,
               static_cast<double>(f.expansions[2]) / n,
               static_cast<long long>(f.old_new_mismatch),
               static_cast<long long>(f.textbook_mismatch));
@@ -258,10 +274,12 @@ int Main() {
   std::printf("sample %d, fields %d, rounds %d; mean us per query, best round per variant\n\n",
               absl::GetFlag(FLAGS_sample), absl::GetFlag(FLAGS_fields), rounds);
   std::printf("| map | kind | queries | textbook us | old us | new us | old/textbook | "
-              "new/textbook | new/old | settled textbook / ours | old!=new | new!=textbook |\n");
-  std::printf("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+              "new/textbook | new/old | spm build us (/textbook) | settled textbook / ours | old!=new | "
+              "new!=textbook |\n");
+  std::printf("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | "
+              "---: |\n");
   SearchScratch scratch;
-  double totals[2][3] = {};
+  double totals[2][4] = {};
   for (const std::string& name : bench::MovingAiMaps(root, absl::GetFlag(FLAGS_maps))) {
     const fs::path path = root / name;
     auto grid = ReadMovingAiMapFile(path.string());
@@ -280,16 +298,20 @@ int Main() {
     const Figures a = Best(p2p), b = Best(fields);
     PrintRow(name, "dijkstra", queries.size(), a);
     PrintRow(name, "cost-to-go", goals.size(), b);
-    for (int v = 0; v < 3; ++v) {
+    for (int v = 0; v < 4; ++v) {
       totals[0][v] += 1e6 * a.seconds[v] / static_cast<double>(queries.size());
       totals[1][v] += 1e6 * b.seconds[v] / static_cast<double>(goals.size());
     }
   }
   for (int k = 0; k < 2; ++k) {
     std::printf("\n%s, sum of the maps' means: textbook %.0f us, old %.0f us (%.3fx), new %.0f us "
-                "(%.3fx)\n",
+                "(%.3fx)%s\n",
                 k == 0 ? "dijkstra" : "cost-to-go", totals[k][0], totals[k][1],
-                totals[k][1] / totals[k][0], totals[k][2], totals[k][2] / totals[k][0]);
+                totals[k][1] / totals[k][0], totals[k][2], totals[k][2] / totals[k][0],
+                k == 0 ? ""
+                       : absl::StrFormat(", spm build %.0f us (%.3fx)", totals[k][3],
+                                         totals[k][3] / totals[k][0])
+                             .c_str());
   }
   return 0;
 }
