@@ -54,6 +54,9 @@ ABSL_FLAG(std::string, maps,
 ABSL_FLAG(int, sample, 100, "point-to-point scenarios per map, spread over the file");
 ABSL_FLAG(int, fields, 10, "full-map cost-to-go builds per map, goals spread over the file");
 ABSL_FLAG(int, rounds, 3, "rounds; each variant's figure is its best round");
+ABSL_FLAG(bool, textbook_fresh_fields, true,
+          "the textbook allocates each field (as ours must, to hand it out); false: it "
+          "reuses one array, which shows what allocating costs");
 
 namespace pathd {
 namespace {
@@ -130,6 +133,7 @@ class Textbook {
   }
   double dist(int32_t i) const { return dist_[i]; }
   std::vector<double> TakeField() { return std::move(dist_); }
+  const std::vector<double>& field() const { return dist_; }
 
  private:
   void Push(double d, int32_t v) {
@@ -203,6 +207,7 @@ Figures Fields(const Grid& grid, const std::vector<Scenario>& goals, SearchScrat
   const CostParams cost;
   Textbook textbook(grid, cost);
   const auto shared = std::make_shared<const Grid>(grid);
+  const bool fresh = absl::GetFlag(FLAGS_textbook_fresh_fields);
   Figures f;
   for (size_t q = 0; q < goals.size(); ++q) {
     const Cell goal = goals[q].goal;
@@ -217,8 +222,8 @@ Figures Fields(const Grid& grid, const std::vector<Scenario>& goals, SearchScrat
         if (spm.ok()) f.expansions[3] += (*spm)->last_stats().expansions;
       } else if (variant == 0) {
         f.expansions[0] +=
-            textbook.Run(static_cast<int32_t>(grid.Index(goal.x, goal.y)), -1, true, true);
-        textbook_field = textbook.TakeField();
+            textbook.Run(static_cast<int32_t>(grid.Index(goal.x, goal.y)), -1, true, fresh);
+        if (fresh) textbook_field = textbook.TakeField();
       } else if (variant == 1) {
         fields[1] = internal::DijkstraCostToGoOn<internal::OpenList>(
             grid, goal, cost, StopCondition::None(), scratch);
@@ -228,11 +233,12 @@ Figures Fields(const Grid& grid, const std::vector<Scenario>& goals, SearchScrat
       }
       f.seconds[variant] += CpuNow() - t0;
     }
+    const std::vector<double>& textbook_values = fresh ? textbook_field : textbook.field();
     f.expansions[1] += fields[1].expansions;
     f.expansions[2] += fields[2].expansions;
     for (size_t i = 0; i < grid.size(); ++i) {
       f.old_new_mismatch += !Same(fields[1].values[i], fields[2].values[i]);
-      f.textbook_mismatch += !Same(textbook_field[i], fields[2].values[i]);
+      f.textbook_mismatch += !Same(textbook_values[i], fields[2].values[i]);
     }
   }
   return f;
