@@ -82,7 +82,8 @@ class RadixHeap {
   // Bytes held, for metrics.
   size_t MemoryBytes() const {
     size_t bytes = below_.capacity() * sizeof(Entry);
-    for (const std::vector<Entry>& b : buckets_) bytes += b.capacity() * sizeof(Entry);
+    for (const std::vector<Entry>& b : buckets_)
+      bytes += b.capacity() * sizeof(Entry);
     return bytes;
   }
 
@@ -143,9 +144,9 @@ class MonotoneOpenList {
   bool empty() const { return open_nodes_ == 0; }
   size_t size() const { return open_nodes_; }
 
-  // Inserts `index` or lowers its g. Precondition: f == g, lower than any g
-  // pushed for `index` before, and not below the g last popped by more than
-  // a key bucket.
+  // Inserts `index` or lowers its g. Precondition: f == g >= 0, lower than
+  // any g pushed for `index` before. (A key below the last pop, which only
+  // g past 2^32 gives, goes to the heap's side list: right, but linear.)
   void Push(uint32_t index, [[maybe_unused]] double f, double g) {
     SearchScratch::Node& node = scratch_.Raw(index);
     if (node.open_pos == SearchScratch::kNotInOpen) {
@@ -173,8 +174,12 @@ class MonotoneOpenList {
   }
 
   static constexpr uint64_t kTieMask = (uint64_t{1} << OpenList::kTieBits) - 1;
-  static uint64_t KeyOf(double g) { return std::bit_cast<uint64_t>(g) ^ kTieMask; }
-  static double GOf(uint64_t key) { return std::bit_cast<double>(key ^ kTieMask); }
+  static uint64_t KeyOf(double g) {
+    return std::bit_cast<uint64_t>(g) ^ kTieMask;
+  }
+  static double GOf(uint64_t key) {
+    return std::bit_cast<double>(key ^ kTieMask);
+  }
 
  private:
   // Drops entries whose node was popped already or has a lower g since.
@@ -182,7 +187,8 @@ class MonotoneOpenList {
     while (true) {
       const auto& e = heap_.Top();
       const SearchScratch::Node& node = scratch_.Raw(e.value);
-      if (node.open_pos != SearchScratch::kClosed && node.g == GOf(e.key)) return;
+      if (node.open_pos != SearchScratch::kClosed && node.g == GOf(e.key))
+        return;
       heap_.Pop();
     }
   }

@@ -38,7 +38,8 @@ int Cases(int fallback) {
 }
 
 using Ref = std::priority_queue<std::pair<uint64_t, uint32_t>,
-                                std::vector<std::pair<uint64_t, uint32_t>>, std::greater<>>;
+                                std::vector<std::pair<uint64_t, uint32_t>>,
+                                std::greater<>>;
 
 // A key at or above `last`: equal, a little above, a power of two above, or
 // anywhere up to the largest key.
@@ -83,7 +84,8 @@ void RunSequence(std::mt19937_64& rng, int ops, int below) {
       pop();
     } else {
       uint64_t key = NextKey(rng, last);
-      if (last > 0 && static_cast<int>(rng() % 1000) < below) key = rng() % last;
+      if (last > 0 && static_cast<int>(rng() % 1000) < below)
+        key = rng() % last;
       heap.Push(key, next_value);
       ref.emplace(key, next_value);
       pushed.emplace_back(key, next_value++);
@@ -152,15 +154,18 @@ TEST(MonotoneOpenList, KeyOrdersLikeTheBinaryHeap) {
                            std::numeric_limits<double>::max()};
   std::mt19937_64 rng(3);
   for (int i = 0; i < 2000; ++i) {
-    const double base = std::ldexp(1.0 + static_cast<double>(rng() % 1000) / 1000.0,
-                                   static_cast<int>(rng() % 80) - 20);
+    const double base =
+        std::ldexp(1.0 + static_cast<double>(rng() % 1000) / 1000.0,
+                   static_cast<int>(rng() % 80) - 20);
     g.push_back(base);
-    g.push_back(std::bit_cast<double>(std::bit_cast<uint64_t>(base) + rng() % 4096));
+    g.push_back(
+        std::bit_cast<double>(std::bit_cast<uint64_t>(base) + rng() % 4096));
   }
   for (double a : g) {
     EXPECT_EQ(MonotoneOpenList::GOf(MonotoneOpenList::KeyOf(a)), a);
     for (double b : g) {
-      ASSERT_EQ(MonotoneOpenList::KeyOf(a) < MonotoneOpenList::KeyOf(b), OpenListBefore(a, b))
+      ASSERT_EQ(MonotoneOpenList::KeyOf(a) < MonotoneOpenList::KeyOf(b),
+                OpenListBefore(a, b))
           << a << " vs " << b;
     }
   }
@@ -185,15 +190,16 @@ Grid RandomGrid(std::mt19937& rng) {
 // Dijkstra from `goal` over reversed moves as a textbook writes it
 // (std::priority_queue, lazy deletion), with its own move rule: a move
 // u -> v costs its length times v's factor; diagonals need both side cells.
-std::vector<double> TextbookField(const Grid& grid, Cell goal, const CostParams& cost) {
+std::vector<double> TextbookField(const Grid& grid, Cell goal,
+                                  const CostParams& cost) {
   const int w = grid.width(), h = grid.height();
   auto open = [&](int x, int y) {
     return x >= 0 && y >= 0 && x < w && y < h &&
            Traversable(grid.cost(x, y), cost.unknown_is_free);
   };
   std::vector<double> dist(grid.size(), kInf);
-  std::priority_queue<std::pair<double, int>, std::vector<std::pair<double, int>>,
-                      std::greater<>>
+  std::priority_queue<std::pair<double, int>,
+                      std::vector<std::pair<double, int>>, std::greater<>>
       queue;
   dist[goal.y * w + goal.x] = 0.0;
   queue.emplace(0.0, goal.y * w + goal.x);
@@ -234,7 +240,8 @@ TEST(MonotoneOpenList, SettlesLikeTheBinaryHeap) {
   for (int round = 0; round < Cases(300); ++round) {
     const Grid grid = RandomGrid(rng);
     CostParams cost;
-    cost.connectivity = rng() % 4 == 0 ? Connectivity::kFour : Connectivity::kEight;
+    cost.connectivity =
+        rng() % 4 == 0 ? Connectivity::kFour : Connectivity::kEight;
     const double weights[] = {0.0, 1.0, 3.7, 1e9};
     cost.cost_weight = weights[rng() % 4];
     const Cell goal{static_cast<int32_t>(rng() % grid.width()),
@@ -256,16 +263,19 @@ TEST(MonotoneOpenList, SettlesLikeTheBinaryHeap) {
     // Past 2^32 a move can stay inside a key bucket, so the keys are no
     // longer monotone and cells of exactly equal g, which either heap pops
     // in its own order, change what is found next: only the fields agree.
-    for (size_t i = 0; cost.cost_weight < 1e9 && i < new_order.cells().size(); ++i) {
+    for (size_t i = 0; cost.cost_weight < 1e9 && i < new_order.cells().size();
+         ++i) {
       const Cell a = old_order.cells()[i], b = new_order.cells()[i];
-      ASSERT_EQ(old_field.values[grid.Index(a.x, a.y)], new_field.values[grid.Index(b.x, b.y)])
+      ASSERT_EQ(old_field.values[grid.Index(a.x, a.y)],
+                new_field.values[grid.Index(b.x, b.y)])
           << "round " << round << " pop " << i;
     }
     const std::vector<double> textbook = TextbookField(grid, goal, cost);
     for (size_t i = 0; i < grid.size(); ++i) {
-      ASSERT_EQ(std::bit_cast<uint64_t>(new_field.values[i]), std::bit_cast<uint64_t>(textbook[i]))
-          << "round " << round << " cell " << i << ": " << new_field.values[i] << " vs "
-          << textbook[i];
+      ASSERT_EQ(std::bit_cast<uint64_t>(new_field.values[i]),
+                std::bit_cast<uint64_t>(textbook[i]))
+          << "round " << round << " cell " << i << ": " << new_field.values[i]
+          << " vs " << textbook[i];
     }
   }
 }
@@ -296,7 +306,8 @@ TEST(MonotoneOpenList, DijkstraCostsMatchTheBinaryHeap) {
     const PlanResult new_result = GridBestFirstSearch<MonotoneOpenList>(
         grid, request, StopCondition::None(), new_scratch, dijkstra);
     ASSERT_EQ(new_result.outcome, old_result.outcome) << "round " << round;
-    EXPECT_EQ(std::bit_cast<uint64_t>(new_result.cost), std::bit_cast<uint64_t>(old_result.cost))
+    EXPECT_EQ(std::bit_cast<uint64_t>(new_result.cost),
+              std::bit_cast<uint64_t>(old_result.cost))
         << "round " << round;
     if (new_result.found()) {
       ASSERT_FALSE(new_result.path.empty());
