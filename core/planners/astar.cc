@@ -36,7 +36,9 @@ class BestFirstPlanner final : public GridPlanner {
             grid, request, stop, scratch,
             internal::AStarPriority<GridDistanceHeuristic>{h});
       case Order::kDijkstra:
-        return internal::GridBestFirstSearch(
+        // f = g never decreases along the search: the radix heap, which
+        // pops in the binary heap's order (same costs, same paths).
+        return internal::GridBestFirstSearch<internal::MonotoneOpenList>(
             grid, request, stop, scratch,
             internal::AStarPriority<ZeroHeuristic>{});
       case Order::kWeighted:

@@ -266,29 +266,66 @@ CostToGoField RasterDistanceTransform(const Grid& grid, Cell goal, const CostPar
 CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& cost,
                                const StopCondition& stop, SearchScratch& scratch,
                                ExpansionRecorder* recorder) {
+  return internal::DijkstraCostToGoOn<internal::MonotoneOpenList>(grid, goal, cost, stop,
+                                                                  scratch, recorder);
+}
+
+namespace internal {
+namespace {
+
+// Writes each cell's cost-to-go into the field when the sweep expands it
+// (its g is final then, and its record in cache), then tells `inner`.
+// Expanded cells are exactly those the sweep reached, as it runs until OPEN
+// is empty; a pass over every record afterwards cost more than the sweep on
+// maps that are mostly unreachable (dao/brc202d).
+template <typename Inner>
+struct FieldWriter {
+  double* values;
+  const SearchScratch& scratch;
+  Inner inner;
+  void OnExpand(uint32_t id) {
+    values[id] = scratch.Raw(id).g;
+    inner.OnExpand(id);
+  }
+};
+
+}  // namespace
+
+template <typename Open>
+CostToGoField DijkstraCostToGoOn(const Grid& grid, Cell goal, const CostParams& cost,
+                                 const StopCondition& stop, SearchScratch& scratch,
+                                 ExpansionRecorder* recorder) {
   const GridView view(grid, cost);
   const internal::ReverseGridExpansion expansion(view);
   const internal::AStarPriority<internal::ZeroHeuristic> priority{};
   scratch.BeginSearch(grid.size());
-  internal::OpenList open(scratch);
+  Open open(scratch);
   internal::PushRoot(scratch, open, expansion.Id(goal), goal, priority);
   CostToGoField field;
+  field.values.assign(grid.size(), kInf);
   const PlanOutcome outcome = internal::WithExpansionListener(
       recorder, expansion, [&](auto listener) {
+        FieldWriter<decltype(listener)> writer{field.values.data(), scratch, listener};
         return internal::BestFirstSearch(scratch, open, internal::kNoNode, stop,
                                          field.expansions, priority, expansion,
-                                         internal::PlainParentUpdate(), listener);
+                                         internal::PlainParentUpdate(), writer);
       });
   // Without a goal the search ends when OPEN empties: the field is complete.
   field.outcome = outcome == PlanOutcome::kNoPath ? PlanOutcome::kFound : outcome;
-  if (field.outcome == PlanOutcome::kFound) {
-    field.values.assign(grid.size(), kInf);
-    for (size_t i = 0; i < grid.size(); ++i) {
-      if (scratch.Seen(i)) field.values[i] = scratch.Raw(i).g;
-    }
-  }
+  if (field.outcome != PlanOutcome::kFound) field.values = {};
   return field;
 }
+
+template CostToGoField DijkstraCostToGoOn<OpenList>(const Grid&, Cell, const CostParams&,
+                                                    const StopCondition&, SearchScratch&,
+                                                    ExpansionRecorder*);
+template CostToGoField DijkstraCostToGoOn<MonotoneOpenList>(const Grid&, Cell,
+                                                            const CostParams&,
+                                                            const StopCondition&,
+                                                            SearchScratch&,
+                                                            ExpansionRecorder*);
+
+}  // namespace internal
 
 std::vector<Cell> DescendCostToGo(const Grid& grid, const CostParams& cost,
                                   const std::vector<double>& field, Cell start) {

@@ -12,7 +12,9 @@
 #include "core/search/endpoints.h"
 #include "core/map/cost_model.h"
 #include "core/map/grid.h"
+#include "core/search/open_list.h"
 #include "core/search/planner.h"
+#include "core/search/radix_heap.h"
 #include "core/search/search_scratch.h"
 
 namespace pathd {
@@ -50,11 +52,28 @@ CostToGoField RasterDistanceTransform(const Grid& grid, Cell goal, const CostPar
                                       const StopCondition& stop);
 
 // The same field by Dijkstra's algorithm from the goal over reversed moves, in
-// O(n log n) whatever the map's shape. Polls `stop` every settled cell. Same
-// precondition. Settled cells go to `recorder` unless it is null.
+// O(n log n) whatever the map's shape (a radix heap: keys never decrease).
+// Polls `stop` every settled cell. Same precondition. Settled cells go to
+// `recorder` unless it is null.
 CostToGoField DijkstraCostToGo(const Grid& grid, Cell goal, const CostParams& cost,
                                const StopCondition& stop, SearchScratch& scratch,
                                ExpansionRecorder* recorder = nullptr);
+
+namespace internal {
+// DijkstraCostToGo on a chosen open list: MonotoneOpenList (what it uses) or
+// the binary heap OpenList (what it used before), both instantiated, so a
+// benchmark can compare the two in one binary. The fields are bit-identical.
+template <typename Open>
+CostToGoField DijkstraCostToGoOn(const Grid& grid, Cell goal, const CostParams& cost,
+                                 const StopCondition& stop, SearchScratch& scratch,
+                                 ExpansionRecorder* recorder = nullptr);
+extern template CostToGoField DijkstraCostToGoOn<OpenList>(
+    const Grid&, Cell, const CostParams&, const StopCondition&, SearchScratch&,
+    ExpansionRecorder*);
+extern template CostToGoField DijkstraCostToGoOn<MonotoneOpenList>(
+    const Grid&, Cell, const CostParams&, const StopCondition&, SearchScratch&,
+    ExpansionRecorder*);
+}  // namespace internal
 
 // Follows a complete field from `start` to the cell where it is 0 (the goal),
 // each step to the neighbour v minimising move length * CellFactor(v) +

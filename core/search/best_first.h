@@ -1,10 +1,11 @@
 // The one best-first search loop of the grid planners, parameterised by
 // policies after warthog's unidirectional_search<H, E, Q, L>: a priority (the
-// open-list key), an expansion policy (node ids and successors: grid cells,
-// reversed grid moves, JPS jump points), a parent-update policy (plain, or
-// Theta*'s any-angle parents with Lazy Theta*'s on-pop check), a listener (one
-// call per expansion, compiled away when unused) and a halt predicate (the
-// real-time look-ahead's budget). A*, Dijkstra, weighted A*, greedy, Theta*,
+// open-list key), the open list (the binary heap, or a radix heap where the
+// priority is f = g and keys never decrease), an expansion policy (node ids
+// and successors: grid cells, reversed grid moves, JPS jump points), a
+// parent-update policy (plain, or Theta*'s any-angle parents with Lazy
+// Theta*'s on-pop check), a listener (one call per expansion, compiled away
+// when unused) and a halt predicate (the real-time look-ahead's budget). A*, Dijkstra, weighted A*, greedy, Theta*,
 // Lazy Theta*, JPS, the RTAA*/LRTA* look-ahead and the backward cost-to-go
 // sweep all run on it.
 #ifndef PATHD_CORE_SEARCH_BEST_FIRST_H_
@@ -17,6 +18,7 @@
 #include "core/search/heuristics.h"
 #include "core/search/open_list.h"
 #include "core/search/planner.h"
+#include "core/search/radix_heap.h"
 #include "core/search/search_scratch.h"
 
 namespace pathd::internal {
@@ -120,7 +122,10 @@ struct Offer {
 
 // The expanded node is every successor's parent (A* and friends, JPS).
 struct PlainParentUpdate {
-  bool OnPop(SearchScratch::OpenEntry&, OpenList&) { return true; }
+  template <typename Open>
+  bool OnPop(SearchScratch::OpenEntry&, Open&) {
+    return true;
+  }
   void Prepare(uint32_t) {}
   Offer OfferTo(uint32_t id, uint32_t, int32_t, int32_t, double next_g,
                 const SearchScratch::Node&) {
@@ -133,13 +138,16 @@ struct PlainParentUpdate {
 // the search with kFound when true.
 
 struct NeverHalt {
-  bool operator()(const OpenList&, int64_t) const { return false; }
+  template <typename Open>
+  bool operator()(const Open&, int64_t) const {
+    return false;
+  }
 };
 
 // Seeds the search with its root node at g = 0. The caller has called
 // scratch.BeginSearch().
-template <typename Priority>
-void PushRoot(SearchScratch& scratch, OpenList& open, uint32_t id, Cell cell,
+template <typename Open, typename Priority>
+void PushRoot(SearchScratch& scratch, Open& open, uint32_t id, Cell cell,
               const Priority& priority) {
   scratch.At(id).g = 0.0;
   open.Push(id, priority(0.0, id, cell.x, cell.y), 0.0);
@@ -151,12 +159,14 @@ void PushRoot(SearchScratch& scratch, OpenList& open, uint32_t id, Cell cell,
 // priority (ties to the larger g) and never reopened, so with the plain
 // parent update the path is optimal only for a priority g + h with h
 // consistent. `expansions` is read as the count so far (stop is polled on the
-// running total) and advanced by the nodes expanded here. Precondition: the
-// expansion policy's ids index the records of `scratch`.
-template <typename Priority, typename Expansion,
+// running total) and advanced by the nodes expanded here. `open` is an
+// OpenList, or a MonotoneOpenList (core/search/radix_heap.h) when the
+// priority is f = g. Precondition: the expansion policy's ids index the
+// records of `scratch`.
+template <typename Open, typename Priority, typename Expansion,
           typename ParentUpdate = PlainParentUpdate,
           typename Listener = NullListener, typename Halt = NeverHalt>
-PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open,
+PlanOutcome BestFirstSearch(SearchScratch& scratch, Open& open,
                             uint32_t goal, const StopCondition& stop,
                             int64_t& expansions, const Priority& priority,
                             const Expansion& expansion,
@@ -207,9 +217,10 @@ PlanOutcome BestFirstSearch(SearchScratch& scratch, OpenList& open,
 // the plain parent update: A*, Dijkstra, weighted A* and greedy, which differ
 // only in `priority`. Records expansions when the request asks. Sets the
 // result's outcome, expansions, path, cost and length (not planning_time).
+// `Open` is the open list's type: OpenList, or MonotoneOpenList for f = g.
 // Precondition: ValidateEndpoints passed and the grid has fewer than
 // 2^32 - 1 cells.
-template <typename Priority>
+template <typename Open = OpenList, typename Priority>
 PlanResult GridBestFirstSearch(const Grid& grid, const PlanRequest& request,
                                const StopCondition& stop,
                                SearchScratch& scratch,
@@ -217,7 +228,7 @@ PlanResult GridBestFirstSearch(const Grid& grid, const PlanRequest& request,
   const GridView view(grid, request.cost);
   const GridExpansion expansion(view);
   scratch.BeginSearch(grid.size());
-  OpenList open(scratch);
+  Open open(scratch);
   const uint32_t goal = expansion.Id(request.goal);
   PushRoot(scratch, open, expansion.Id(request.start), request.start, priority);
   PlanResult result;

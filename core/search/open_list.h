@@ -1,7 +1,9 @@
-// The open list of every best-first search in core/search/best_first.h: a
+// The open list of the best-first searches in core/search/best_first.h: a
 // binary min-heap over SearchScratch records with O(log n) decrease-key,
 // ordered by (f, larger g first). Node ids are whatever the search's expansion
-// policy numbers its nodes by (cells, or JPS jump-point ids).
+// policy numbers its nodes by (cells, or JPS jump-point ids). Searches by
+// f = g (Dijkstra, the cost-to-go sweep) use MonotoneOpenList
+// (radix_heap.h), which pops in this order.
 #ifndef PATHD_CORE_SEARCH_OPEN_LIST_H_
 #define PATHD_CORE_SEARCH_OPEN_LIST_H_
 
