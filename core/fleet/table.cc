@@ -1,12 +1,13 @@
 // Cost tables: forward Dijkstra searches or backward cost-to-go fields.
 #include "core/fleet/table.h"
 
+#include <bit>
 #include <cmath>
 #include <limits>
-#include <queue>
 #include <utility>
 
 #include "absl/strings/str_format.h"
+#include "core/search/radix_heap.h"
 #include "core/status_macros.h"
 
 namespace pathd {
@@ -68,18 +69,21 @@ PlanOutcome ForwardDijkstra::Run(Cell source, absl::Span<const Cell> targets,
       ++targets_left;
     }
   }
-  using Entry = std::pair<double, uint32_t>;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+  // Keys never decrease (every move costs at least 1), so a radix heap over
+  // the bits of the non-negative double costs, which order like the values
+  // (core/search/radix_heap.h): 0.7-0.8x a binary heap's time in Dijkstra.
+  internal::RadixHeap<uint32_t> open;
   const size_t start = Padded(source);
   dist_[start] = 0.0;
   length_[start] = 0.0;
   touched_.push_back(static_cast<uint32_t>(start));
-  open.push({0.0, static_cast<uint32_t>(start)});
+  open.Push(std::bit_cast<uint64_t>(0.0), static_cast<uint32_t>(start));
   int64_t settled = 0;
   PlanOutcome outcome = PlanOutcome::kFound;
   while (!open.empty()) {
-    const auto [g, u] = open.top();
-    open.pop();
+    const auto entry = open.Pop();
+    const double g = std::bit_cast<double>(entry.key);
+    const uint32_t u = entry.value;
     if (g > dist_[u]) continue;  // a stale entry: u was reached cheaper
     if (g > max_cost) break;
     settled_[u] = 1;
@@ -101,7 +105,7 @@ PlanOutcome ForwardDijkstra::Run(Cell source, absl::Span<const Cell> targets,
         if (dist_[v] == kInf) touched_.push_back(static_cast<uint32_t>(v));
         dist_[v] = nv;
         length_[v] = length_[u] + step_[k];
-        open.push({nv, static_cast<uint32_t>(v)});
+        open.Push(std::bit_cast<uint64_t>(nv), static_cast<uint32_t>(v));
       }
     }
   }

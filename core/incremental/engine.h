@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -30,6 +31,7 @@
 #include "core/incremental/move_model.h"
 #include "core/search/grid_view.h"
 #include "core/search/planner.h"
+#include "core/search/radix_heap.h"
 
 namespace pathd::internal {
 
@@ -325,6 +327,53 @@ class IncrementalSearch {
     return {PlanOutcome::kFound, expansions};
   }
 
+  // Compute right after Reset() for the shortest path map (no target, no
+  // heuristic): every key is then a settled cell's float(W + g) >= g, so keys
+  // never decrease and the open list can be a radix heap over the floats'
+  // bits (core/search/radix_heap.h), a third cheaper than the binary heap
+  // (docs/performance.md, "Dijkstra and the cost-to-go on a radix heap").
+  // Every cell is overconsistent when it surfaces (g still infinite) and
+  // settles once, so this is Compute's overconsistent branch alone and the
+  // field is the same fixed point, bit for bit. A stop hands the entries left
+  // to the binary heap, so a later Compute continues.
+  ComputeEnd ComputeFromReset(const StopCondition& stop)
+    requires(!Config::kFocused)
+  {
+    RadixHeap<uint32_t> open;
+    for (const Entry& e : heap_) open.Push(KeyBits(e.key), e.index);
+    heap_.clear();
+    int64_t expansions = 0;
+    while (!open.empty()) {
+      const auto top = open.Pop();
+      const uint32_t u = top.value;
+      const Value gu = store_.g(u);
+      const Value ru = store_.rhs(u);
+      // Settled already, or a duplicate from before rhs fell further.
+      if (gu == ru || KeyBits(ru) != top.key) continue;
+      if (const PlanOutcome why = stop.Check(expansions, ru); why != PlanOutcome::kFound) {
+        Push(u, ru);
+        while (!open.empty()) {
+          const auto e = open.Pop();
+          Push(e.value, std::bit_cast<float>(static_cast<uint32_t>(e.key)));
+        }
+        return {why, expansions};
+      }
+      ++expansions;
+      store_.set_g(u, ru);
+      model_.ForEachMove(u, [&](uint32_t p, bool diagonal) {
+        if (p == root_) return;
+        const Value candidate = Add(Weight(p, u, diagonal), ru);
+        if (candidate < store_.rhs(p)) {
+          store_.set_rhs(p, candidate);
+          open.Push(KeyBits(candidate), p);
+        }
+      });
+    }
+    std::vector<Entry>().swap(heap_);
+    compact_at_ = kMinCompact;
+    return {PlanOutcome::kFound, expansions};
+  }
+
   // The next cell on the way from u to the root: the neighbour p minimising
   // W(u, p) + g(p) (ties to the first in move order), and that sum. nullopt
   // when no neighbour has a finite g.
@@ -382,6 +431,9 @@ class IncrementalSearch {
   struct Later {
     bool operator()(const Entry& a, const Entry& b) const { return b.key < a.key; }
   };
+
+  // A non-negative float key as an integer of the same order.
+  static uint64_t KeyBits(float key) { return std::bit_cast<uint32_t>(key); }
 
   static Value Add(double w, Value g) {
     return static_cast<Value>(w + static_cast<double>(g));

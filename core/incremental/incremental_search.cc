@@ -406,11 +406,11 @@ namespace {
 
 // Builds the field from scratch on the search's current grid: the
 // incremental search from its initial state, which is Dijkstra's algorithm
-// with rhs as the tentative distance.
+// with rhs as the tentative distance (on a radix heap: ComputeFromReset).
 absl::Status BuildField(FieldSearch& search, const StopCondition& stop,
                         RepairStats* stats, int64_t* build_expansions) {
   search.Reset();
-  const FieldSearch::ComputeEnd end = search.Compute(stop);
+  const FieldSearch::ComputeEnd end = search.ComputeFromReset(stop);
   stats->expansions += end.expansions;
   *build_expansions = end.expansions;
   if (end.outcome != PlanOutcome::kFound) return StopStatus(end.outcome, end.expansions);

@@ -43,6 +43,7 @@
 #include <string_view>
 #include <vector>
 
+#include "absl/strings/str_format.h"
 #include "core/planners/jps/bit_grid.h"
 #include "core/planners/jps/jump_table.h"
 #include "core/planners/planners.h"
@@ -52,6 +53,7 @@
 #include "core/search/grid_planner.h"
 #include "core/search/heuristics.h"
 #include "core/search/path_measure.h"
+#include "core/status_macros.h"
 
 namespace pathd {
 namespace {
@@ -787,6 +789,21 @@ class JpsPlusPlanner final : public JumpPlannerBase {
                         "and answers as jps; expansions count jump points") {}
 
  protected:
+  // The table is 32 bytes a cell whatever the query: a bound on the map, so
+  // a client cannot make a worker allocate gigabytes (a 16384 x 16384 map's
+  // table would be 8 GiB; jps needs about a bit per cell there).
+  absl::Status Validate(const Grid& grid,
+                        const PlanRequest& request) const override {
+    PATHD_RETURN_IF_ERROR(JumpPlannerBase::Validate(grid, request));
+    if (static_cast<int64_t>(grid.size()) > internal::kJumpTableMaxCells) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "planner jps_plus supports maps of up to %d cells (its jump table "
+          "holds 32 bytes per cell); this map has %d x %d: use jps or hpa_star",
+          internal::kJumpTableMaxCells, grid.width(), grid.height()));
+    }
+    return absl::OkStatus();
+  }
+
   absl::StatusOr<PlanResult> Search(const GridQuery& q) const override {
     const Grid& grid = q.grid;
     const PlanRequest& request = q.request;

@@ -18,6 +18,10 @@
 
 namespace pathd::internal {
 
+// The largest map jps_plus plans on: 2^23 cells (2896 x 2896, 4096 x 2048)
+// make a 256 MiB table, half the default --derived_cache_bytes.
+inline constexpr int64_t kJumpTableMaxCells = int64_t{1} << 23;
+
 // Jump distances of one map under JPS's rules on pathd's grids (8-connected,
 // no corner cutting; core/planners/jps/jps.cc states the pruning rules).
 // Entry(x, y, dx, dy) describes the jump from (x, y) in direction (dx, dy):

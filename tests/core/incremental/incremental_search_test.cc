@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -365,6 +366,52 @@ TEST(IncrementalEquivalence, RandomChangesAndMovesMatchDijkstra) {
   EXPECT_GT(found, checks / 3);
   EXPECT_GT(repaired, 1000);
   EXPECT_GT(rebuilt, 100);
+}
+
+// A field built on the radix heap (ComputeFromReset) is the binary heap's
+// (Compute) bit for bit with the same expansions, and a build stopped half
+// way and finished by Compute is too.
+TEST(ShortestPathMapBuild, RadixHeapBuildEqualsTheGeneralLoop) {
+  using FieldSearch = internal::IncrementalSearch<internal::FieldConfig>;
+  std::mt19937 rng(90210);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int w = 1 + static_cast<int>(rng() % 60);
+    const int h = 1 + static_cast<int>(rng() % 60);
+    Grid grid = Grid::Create(w, h).value();
+    for (uint8_t& v : grid.mutable_cells()) v = RandomCellValue(rng, trial % 3 != 0);
+    CostParams cost;
+    cost.connectivity = trial % 2 ? Connectivity::kFour : Connectivity::kEight;
+    cost.cost_weight = trial % 5 == 0 ? 0.0 : static_cast<double>(rng() % 1000) / 10.0;
+    cost.unknown_is_free = trial % 7 == 0;
+    const Cell goal = RandomCell(rng, grid);
+    grid.set_cost(goal, kFreeCost);
+    const auto shared = Share(grid);
+    FieldSearch general(shared, cost, internal::MoveRules(), goal);
+    FieldSearch radix(shared, cost, internal::MoveRules(), goal);
+    FieldSearch resumed(shared, cost, internal::MoveRules(), goal);
+    general.Reset();
+    radix.Reset();
+    resumed.Reset();
+    const auto g = general.Compute(StopCondition::None());
+    const auto r = radix.ComputeFromReset(StopCondition::None());
+    const int64_t half = std::max<int64_t>(1, g.expansions / 2);
+    const auto first = resumed.ComputeFromReset(StopCondition(absl::InfiniteFuture(), nullptr, half));
+    const auto rest = resumed.Compute(StopCondition::None());
+    ASSERT_EQ(g.outcome, PlanOutcome::kFound);
+    ASSERT_EQ(r.outcome, PlanOutcome::kFound);
+    EXPECT_EQ(r.expansions, g.expansions) << "trial " << trial;
+    ASSERT_EQ(rest.outcome, PlanOutcome::kFound);
+    if (g.expansions > half) {
+      EXPECT_EQ(first.outcome, PlanOutcome::kExpansionLimit) << "trial " << trial;
+    }
+    for (size_t i = 0; i < grid.size(); ++i) {
+      const auto c = static_cast<uint32_t>(i);
+      ASSERT_EQ(std::bit_cast<uint32_t>(radix.g(c)), std::bit_cast<uint32_t>(general.g(c)))
+          << "trial " << trial << " cell " << i;
+      ASSERT_EQ(std::bit_cast<uint32_t>(resumed.g(c)), std::bit_cast<uint32_t>(general.g(c)))
+          << "trial " << trial << " cell " << i << " (stopped, then Compute)";
+    }
+  }
 }
 
 // The float field's descent is optimal to 1e-9 (what the Moving AI conformance

@@ -22,6 +22,7 @@
 #include "core/search/path_measure.h"
 #include "core/search/planner.h"
 #include "core/search/registry.h"
+#include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/testing/advancing_store.h"
 #include "tests/testing/test_grids.h"
@@ -319,6 +320,25 @@ TEST_F(JpsPlusTest, RefusesWhatJpsRefuses) {
   // A blocked goal, an off-map start.
   ExpectAsJps(grid, PlanRequest::Between({0, 0}, {1, 1}), "blocked goal");
   ExpectAsJps(grid, PlanRequest::Between({-1, 0}, {3, 2}), "off-map start");
+}
+
+// The table's 32 bytes a cell bound the map; jps (a bit a cell) still plans.
+TEST_F(JpsPlusTest, RefusesMapsPastTheTableBound) {
+  const int32_t w = 4097;
+  const int32_t h = static_cast<int32_t>(internal::kJumpTableMaxCells / 4096);
+  absl::StatusOr<Grid> made = Grid::Create(w, h, kFreeCost);
+  ASSERT_TRUE(made.ok()) << made.status();
+  const Grid& grid = *made;
+  ASSERT_GT(static_cast<int64_t>(grid.size()), internal::kJumpTableMaxCells);
+  const PlanRequest request = PlanRequest::Between({0, 0}, {w - 1, h - 1});
+  auto r = Get("jps_plus").Plan(grid, request, StopCondition::None(), scratch_);
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kFailedPrecondition) << r.status();
+  EXPECT_THAT(std::string(r.status().message()),
+              ::testing::HasSubstr("jps_plus supports maps of up to 8388608 cells"));
+  EXPECT_THAT(std::string(r.status().message()), ::testing::HasSubstr("4097 x 2048"));
+  auto j = Get("jps").Plan(grid, request, StopCondition::None(), scratch_);
+  ASSERT_TRUE(j.ok()) << j.status();
+  EXPECT_TRUE(j->found());
 }
 
 TEST_F(JpsPlusTest, StartEqualsGoalUnreachableAndBorders) {
