@@ -83,7 +83,7 @@ check-thread-safety: setup-test configure
 # labelled tsan (tests/*/CMakeLists.txt), which ctest runs with the
 # TSAN_OPTIONS set in CMakeLists.txt (halt_on_error, tests/tsan/tsan.supp).
 TSAN_BUILD_DIR ?= build-tsan
-TSAN_TARGETS ?= concurrency_test navigate_control_test
+TSAN_TARGETS ?= concurrency_test navigate_control_test navigate_fleet_test
 
 test-tsan: setup-test
 	@$(CMAKE_CONFIGURE) -B $(TSAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPATHD_TSAN=ON >/dev/null
@@ -109,7 +109,7 @@ ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   PATHD_CONFORMANCE_STRIDE=$(ASAN_CONFORMANCE_STRIDE) \
   PATHD_GEOMETRIC_SCENARIOS=10 PATHD_GEOMETRIC_PLANNERS=navmesh,minimal_construct \
-  PATHD_FLEET_CASES=8 PATHD_LOCAL_CASES=100 PATHD_MAPF_CASES=100 PATHD_HPA_CASES=6 PATHD_SIM_CASES=10 \
+  PATHD_FLEET_CASES=8 PATHD_LOCAL_CASES=100 PATHD_MAPF_CASES=100 PATHD_EXECUTION_CASES=40 PATHD_HPA_CASES=6 PATHD_SIM_CASES=10 \
   PATHD_NATURE_CASES=20 PATHD_JPS_PLUS_CASES=3 PATHD_RADIX_CASES=50 \
   PATHD_CRASH_KILLS=6 PATHD_CRASH_CHECKPOINT_KILLS=20
 

@@ -55,6 +55,11 @@ ABSL_FLAG(int32_t, batch_queue_depth, 1024,
           "PlanBatch requests that may wait for a worker (always behind the "
           "interactive ones) before RESOURCE_EXHAUSTED with a retry-after-ms "
           "hint");
+ABSL_FLAG(absl::Duration, inline_max_job_time, absl::Milliseconds(1),
+          "Plan and IsPathValid calls run on the gRPC thread that received "
+          "them (no hand-off to a worker) while a worker is free, none waits "
+          "and such calls took at most this long on average recently; 0 = "
+          "always on a worker");
 ABSL_FLAG(int64_t, max_path_points, int64_t{1} << 20,
           "most points a plan may return (RESOURCE_EXHAUSTED beyond) and most "
           "poses an IsPathValid request may hold (INVALID_ARGUMENT beyond)");
@@ -349,6 +354,10 @@ pathd::server::ServerOptions OptionsFromFlags() {
   }
   options.batch_queue_depth =
       static_cast<size_t>(absl::GetFlag(FLAGS_batch_queue_depth));
+  options.inline_max_job_time = absl::GetFlag(FLAGS_inline_max_job_time);
+  if (options.inline_max_job_time < absl::ZeroDuration()) {
+    FlagError("inline_max_job_time", "must be >= 0");
+  }
   options.max_path_points = absl::GetFlag(FLAGS_max_path_points);
   if (options.max_path_points < 1) FlagError("max_path_points", "must be >= 1");
   options.max_cost_to_go_cells = absl::GetFlag(FLAGS_max_cost_to_go_cells);

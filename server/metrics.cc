@@ -94,6 +94,12 @@ class ServerMetrics::StateCollectable final : public prometheus::Collectable {
         "Jobs that threw (e.g. out of memory); each answered its call with "
         "RESOURCE_EXHAUSTED or INTERNAL.",
         kCounter, static_cast<double>(s_.pool->job_failures())));
+    families.push_back(Single(
+        "pathd_worker_inline_runs_total",
+        "Plan and IsPathValid calls run on the gRPC thread that received them "
+        "(a worker was free, none waited, recent ones were short: "
+        "--inline_max_job_time); they count in the busy figures too.",
+        kCounter, static_cast<double>(s_.pool->inline_runs())));
     // One series per priority queue (interactive: Plan, CostToGo, Navigate,
     // cache repairs; batch: PlanBatch items).
     std::vector<prometheus::ClientMetric> queued;

@@ -154,7 +154,8 @@ absl::Status PathdServer::Start() {
   }
 
   pool_ = std::make_unique<WorkerPool>(WorkerPool::Options{
-      options_.threads, options_.queue_depth, options_.batch_queue_depth});
+      options_.threads, options_.queue_depth, options_.batch_queue_depth,
+      options_.inline_max_job_time});
   MemoryBudget::Options budget;
   budget.total_bytes = options_.memory_budget_bytes;
   budget.session_bytes = options_.session_memory_bytes;

@@ -40,6 +40,10 @@ struct ServerOptions {
   size_t queue_depth = 256;
   // PlanBatch jobs that may wait for a worker before RESOURCE_EXHAUSTED.
   size_t batch_queue_depth = 1024;
+  // Plan and IsPathValid calls run on the gRPC thread that received them
+  // while the recent ones took at most this on average and a worker is free
+  // (WorkerPool::SubmitShort); zero: always on a worker.
+  absl::Duration inline_max_job_time = absl::Milliseconds(1);
   // Largest map accepted, in cells.
   int64_t max_map_cells = int64_t{64} << 20;
   // Per-request expansion cap; 0 = unlimited.

@@ -1,5 +1,6 @@
-// WorkerPool: fixed threads, a bounded FIFO queue per priority, per-worker
-// scratch, and the retry hint for refused jobs.
+// WorkerPool: fixed threads, a bounded FIFO queue per priority, one scratch
+// per thread shared by the workers and SubmitShort's callers, and the retry
+// hint for refused jobs.
 #include "server/worker_pool.h"
 
 #include <algorithm>
@@ -62,6 +63,11 @@ int ThreadCount(int requested) {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
+// The mean of recent run times, the newest weighted 1/8; `mean` zero: none yet.
+void UpdateMean(absl::Duration ran_for, absl::Duration& mean) {
+  mean = mean == absl::ZeroDuration() ? ran_for : mean + (ran_for - mean) / 8;
+}
+
 }  // namespace
 
 void Job::Fail(const absl::Status& /*status*/) { Drop(); }
@@ -75,8 +81,13 @@ std::unique_ptr<Job> MakeJob(std::function<void(SearchScratch&)> run,
 
 WorkerPool::WorkerPool(const Options& options)
     : queue_depth_(std::max<size_t>(1, options.queue_depth)),
-      batch_queue_depth_(std::max<size_t>(1, options.batch_queue_depth)) {
+      batch_queue_depth_(std::max<size_t>(1, options.batch_queue_depth)),
+      inline_max_job_time_(options.inline_max_job_time) {
   const int n = ThreadCount(options.threads);
+  {
+    absl::MutexLock lock(&mu_);
+    for (int i = 0; i < n; ++i) free_scratch_.push_back(std::make_unique<SearchScratch>());
+  }
   threads_.reserve(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) threads_.emplace_back([this] { WorkerLoop(); });
 }
@@ -85,9 +96,14 @@ WorkerPool::~WorkerPool() { Shutdown(ShutdownMode::kDrop); }
 
 absl::Status WorkerPool::Submit(std::unique_ptr<Job> job, Priority priority) {
   absl::MutexLock lock(&mu_);
+  return EnqueueLocked(std::move(job), priority, /*short_job=*/false);
+}
+
+absl::Status WorkerPool::EnqueueLocked(std::unique_ptr<Job> job, Priority priority,
+                                       bool short_job) {
   if (stopping_) return absl::UnavailableError("server is shutting down");
   const bool interactive = priority == Priority::kInteractive;
-  std::deque<std::unique_ptr<Job>>& queue = interactive ? queue_ : batch_queue_;
+  std::deque<Queued>& queue = interactive ? queue_ : batch_queue_;
   if (queue.size() >= queue_depth(priority)) {
     const absl::Duration after = EstimateRetryAfterLocked(priority);
     return WithRetryAfter(
@@ -99,7 +115,32 @@ absl::Status WorkerPool::Submit(std::unique_ptr<Job> job, Priority priority) {
             absl::ToInt64Milliseconds(after), kRetryAfterMsKey)),
         after);
   }
-  queue.push_back(std::move(job));
+  queue.push_back(Queued{std::move(job), short_job});
+  return absl::OkStatus();
+}
+
+absl::Status WorkerPool::SubmitShort(std::unique_ptr<Job> job, absl::Duration time_left) {
+  std::unique_ptr<SearchScratch> scratch;
+  {
+    absl::MutexLock lock(&mu_);
+    const bool run_here = !stopping_ && inline_max_job_time_ > absl::ZeroDuration() &&
+                          mean_short_job_time_ <= inline_max_job_time_ &&
+                          time_left > inline_max_job_time_ &&
+                          queue_.empty() && batch_queue_.empty() &&
+                          !free_scratch_.empty();
+    if (!run_here) {
+      return EnqueueLocked(std::move(job), Priority::kInteractive, /*short_job=*/true);
+    }
+    scratch = std::move(free_scratch_.back());
+    free_scratch_.pop_back();
+  }
+  inline_runs_.fetch_add(1, std::memory_order_relaxed);
+  const bool was_on_worker = on_worker_thread;
+  on_worker_thread = true;
+  const absl::Duration ran_for = RunJob(*job, *scratch);
+  on_worker_thread = was_on_worker;
+  job.reset();
+  JobEnded(std::move(scratch), ran_for, /*short_job=*/true);
   return absl::OkStatus();
 }
 
@@ -123,18 +164,18 @@ absl::Duration WorkerPool::EstimateRetryAfterLocked(Priority priority) const {
 void WorkerPool::Shutdown(ShutdownMode mode) {
   absl::MutexLock join_lock(&join_mu_);
   if (joined_) return;
-  std::deque<std::unique_ptr<Job>> dropped;
+  std::deque<Queued> dropped;
   {
     absl::MutexLock lock(&mu_);
     stopping_ = true;
     if (mode == ShutdownMode::kDrop) {
       dropped.swap(queue_);
-      for (auto& job : batch_queue_) dropped.push_back(std::move(job));
+      for (Queued& queued : batch_queue_) dropped.push_back(std::move(queued));
       batch_queue_.clear();
     }
   }
   // Outside mu_: a Drop() answers an RPC, which must not hold the pool lock.
-  for (auto& job : dropped) job->Drop();
+  for (Queued& queued : dropped) queued.job->Drop();
   for (std::thread& t : threads_) t.join();
   joined_ = true;
 }
@@ -153,56 +194,66 @@ bool WorkerPool::OnWorkerThread() { return on_worker_thread; }
 
 void WorkerPool::WorkerLoop() {
   on_worker_thread = true;
-  // Per-worker: search memory grows to the largest map this thread has
-  // planned on and is then reused without clearing (SearchScratch ids).
-  SearchScratch scratch;
   for (;;) {
-    std::unique_ptr<Job> job;
+    Queued queued;
+    std::unique_ptr<SearchScratch> scratch;
     {
-      absl::MutexLock lock(&mu_,
-                           absl::Condition(this, &WorkerPool::HasWorkOrStopping));
-      std::deque<std::unique_ptr<Job>>& queue =
-          queue_.empty() ? batch_queue_ : queue_;
+      absl::MutexLock lock(&mu_, absl::Condition(this, &WorkerPool::CanStartOrDone));
+      std::deque<Queued>& queue = queue_.empty() ? batch_queue_ : queue_;
       if (queue.empty()) return;  // stopping, nothing left to drain
-      job = std::move(queue.front());
+      queued = std::move(queue.front());
       queue.pop_front();
+      scratch = std::move(free_scratch_.back());
+      free_scratch_.pop_back();
     }
-    busy_.fetch_add(1, std::memory_order_relaxed);
-    const auto started = std::chrono::steady_clock::now();
-    std::exception_ptr thrown;
-    try {
-      if (fail_next_jobs_.load(std::memory_order_relaxed) > 0 &&
-          fail_next_jobs_.fetch_sub(1, std::memory_order_relaxed) > 0) {
-        throw std::bad_alloc();
-      }
-      job->Run(scratch);
-    } catch (...) {
-      thrown = std::current_exception();
-    }
-    if (thrown != nullptr) {
-      // Jobs answer their own errors; one that escaped still has to answer
-      // its call and release what it holds (Job::Fail), or the client waits
-      // forever and the server's shutdown waits for that call.
-      const absl::Status status = FailureStatus(thrown);
-      job_failures_.fetch_add(1, std::memory_order_relaxed);
-      spdlog::error("worker job threw; answering its call with {}", status.ToString());
-      try {
-        job->Fail(status);
-      } catch (...) {
-        spdlog::error("worker job threw again while failing; its call may be unanswered");
-      }
-    }
-    const auto ran_for_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                std::chrono::steady_clock::now() - started)
-                                .count();
-    busy_ns_.fetch_add(ran_for_ns, std::memory_order_relaxed);
-    busy_.fetch_sub(1, std::memory_order_relaxed);
-    const absl::Duration ran_for = absl::Nanoseconds(ran_for_ns);
-    absl::MutexLock lock(&mu_);
-    mean_job_time_ = mean_job_time_ == absl::ZeroDuration()
-                         ? ran_for
-                         : mean_job_time_ + (ran_for - mean_job_time_) / 8;
+    const absl::Duration ran_for = RunJob(*queued.job, *scratch);
+    // The job's destructor may release what it holds (a call, a session):
+    // before the scratch is given back, as on the inline path.
+    queued.job.reset();
+    JobEnded(std::move(scratch), ran_for, queued.short_job);
   }
+}
+
+absl::Duration WorkerPool::RunJob(Job& job, SearchScratch& scratch) {
+  busy_.fetch_add(1, std::memory_order_relaxed);
+  const auto started = std::chrono::steady_clock::now();
+  std::exception_ptr thrown;
+  try {
+    if (fail_next_jobs_.load(std::memory_order_relaxed) > 0 &&
+        fail_next_jobs_.fetch_sub(1, std::memory_order_relaxed) > 0) {
+      throw std::bad_alloc();
+    }
+    job.Run(scratch);
+  } catch (...) {
+    thrown = std::current_exception();
+  }
+  if (thrown != nullptr) {
+    // Jobs answer their own errors; one that escaped still has to answer
+    // its call and release what it holds (Job::Fail), or the client waits
+    // forever and the server's shutdown waits for that call.
+    const absl::Status status = FailureStatus(thrown);
+    job_failures_.fetch_add(1, std::memory_order_relaxed);
+    spdlog::error("worker job threw; answering its call with {}", status.ToString());
+    try {
+      job.Fail(status);
+    } catch (...) {
+      spdlog::error("worker job threw again while failing; its call may be unanswered");
+    }
+  }
+  const auto ran_for_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                              std::chrono::steady_clock::now() - started)
+                              .count();
+  busy_ns_.fetch_add(ran_for_ns, std::memory_order_relaxed);
+  busy_.fetch_sub(1, std::memory_order_relaxed);
+  return absl::Nanoseconds(ran_for_ns);
+}
+
+void WorkerPool::JobEnded(std::unique_ptr<SearchScratch> scratch, absl::Duration ran_for,
+                          bool short_job) {
+  absl::MutexLock lock(&mu_);
+  free_scratch_.push_back(std::move(scratch));
+  UpdateMean(ran_for, mean_job_time_);
+  if (short_job) UpdateMean(ran_for, mean_short_job_time_);
 }
 
 }  // namespace pathd::server

@@ -1,7 +1,10 @@
 // The fixed pool of planning threads behind one bounded queue per priority.
-// Planning never runs on gRPC's threads; each worker owns the SearchScratch its
-// jobs reuse, interactive jobs always start before batch ones, and a full
-// queue fails fast (with a retry hint) instead of piling up latency.
+// At most threads() jobs run at once, each with a SearchScratch of the pool's
+// own (reused from job to job); interactive jobs always start before batch
+// ones, and a full queue fails fast (with a retry hint) instead of piling up
+// latency. Jobs run on the pool's threads, except short ones a gRPC thread
+// may run itself when a worker is free and nothing waits (SubmitShort): the
+// hand-off to a worker and back would cost more than such a job.
 #ifndef PATHD_SERVER_WORKER_POOL_H_
 #define PATHD_SERVER_WORKER_POOL_H_
 
@@ -57,6 +60,10 @@ class WorkerPool {
     size_t queue_depth = 256;
     // Batch jobs that may wait for a worker; at least 1.
     size_t batch_queue_depth = 1024;
+    // SubmitShort runs a job on the calling thread while the recent mean run
+    // time of the jobs submitted that way is at most this; zero: never
+    // (--inline_max_job_time).
+    absl::Duration inline_max_job_time = absl::Milliseconds(1);
   };
   // Which queue a job waits in. A free worker always takes the oldest
   // interactive job first and a batch job only when none waits, so a batch
@@ -90,6 +97,19 @@ class WorkerPool {
   absl::Status Submit(std::unique_ptr<Job> job,
                       Priority priority = Priority::kInteractive);
 
+  // An interactive job that is usually short (a Plan, an IsPathValid). Runs
+  // it on the calling thread before returning, as a worker would (the
+  // scratch, the failure handling, the busy count), when all of these hold:
+  // fewer than threads() jobs are running, none waits, the pool is not
+  // shutting down, and the mean run time of the recent jobs given to this
+  // function (wherever they ran) is at most Options::inline_max_job_time,
+  // and `time_left` (until the call's deadline) is more than that: a call
+  // about to time out goes to the queue, where it is dropped if it did.
+  // Otherwise queues it as Submit does. The caller must not hold locks its
+  // job takes.
+  absl::Status SubmitShort(std::unique_ptr<Job> job,
+                           absl::Duration time_left = absl::InfiniteDuration());
+
   // Stops accepting jobs, handles queued ones per `mode`, and joins the
   // threads (so every running job has returned). Idempotent; must not be
   // called from a pool thread.
@@ -113,6 +133,8 @@ class WorkerPool {
   }
   // Jobs of `priority` waiting for a worker right now.
   size_t queued(Priority priority) const;
+  // Jobs SubmitShort ran on the calling thread, since start (for metrics).
+  int64_t inline_runs() const { return inline_runs_.load(std::memory_order_relaxed); }
 
   // How long a job of `priority` refused now should wait before it is sent
   // again: the time the workers need to start every job queued ahead of it
@@ -137,26 +159,52 @@ class WorkerPool {
     fail_next_jobs_.store(count, std::memory_order_relaxed);
   }
 
-  // True on a thread of any WorkerPool (lets tests and asserts check that
-  // work is where it should be).
+  // True while a thread runs a job of any WorkerPool: a worker, or a caller
+  // of SubmitShort running one (lets tests and asserts check that work is
+  // where it should be).
   static bool OnWorkerThread();
 
  private:
+  struct Queued {
+    std::unique_ptr<Job> job;
+    // Given to SubmitShort: its run time feeds mean_short_job_time_.
+    bool short_job = false;
+  };
   void WorkerLoop();
-  bool HasWorkOrStopping() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-    return stopping_ || !queue_.empty() || !batch_queue_.empty();
+  // Submit's queueing and refusals.
+  absl::Status EnqueueLocked(std::unique_ptr<Job> job, Priority priority, bool short_job)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // A job may start (one waits and a scratch is free), or the pool stopped
+  // and nothing is left to drain: the workers' wake-up condition.
+  bool CanStartOrDone() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    const bool waiting = !queue_.empty() || !batch_queue_.empty();
+    return waiting ? !free_scratch_.empty() : stopping_;
   }
+  // Runs `job` with `scratch` on this thread: the busy count and time, the
+  // test hook, failures answered through Job::Fail. Returns the run time.
+  absl::Duration RunJob(Job& job, SearchScratch& scratch);
+  // Gives back a scratch taken from free_scratch_ and counts `ran_for`.
+  void JobEnded(std::unique_ptr<SearchScratch> scratch, absl::Duration ran_for,
+                bool short_job) ABSL_LOCKS_EXCLUDED(mu_);
   absl::Duration EstimateRetryAfterLocked(Priority priority) const
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const size_t queue_depth_;
   const size_t batch_queue_depth_;
+  const absl::Duration inline_max_job_time_;
   mutable absl::Mutex mu_;
-  std::deque<std::unique_ptr<Job>> queue_ ABSL_GUARDED_BY(mu_);
-  std::deque<std::unique_ptr<Job>> batch_queue_ ABSL_GUARDED_BY(mu_);
-  // Exponentially weighted mean of recent jobs' run times (weight 1/8 for
-  // the newest), for EstimateRetryAfter; zero until a job has run.
+  std::deque<Queued> queue_ ABSL_GUARDED_BY(mu_);
+  std::deque<Queued> batch_queue_ ABSL_GUARDED_BY(mu_);
+  // One scratch per thread: a job takes one when it starts and gives it back
+  // when it ends, so at most threads() jobs run at once wherever they run.
+  // Search memory grows to the largest map a scratch has served and is then
+  // reused without clearing (SearchScratch ids).
+  std::vector<std::unique_ptr<SearchScratch>> free_scratch_ ABSL_GUARDED_BY(mu_);
+  // Exponentially weighted means of recent run times (weight 1/8 for the
+  // newest), zero until a job has run: of every job, for EstimateRetryAfter;
+  // of SubmitShort's jobs, for its choice.
   absl::Duration mean_job_time_ ABSL_GUARDED_BY(mu_);
+  absl::Duration mean_short_job_time_ ABSL_GUARDED_BY(mu_);
   // Workers leave once this is set and both queues are empty; kDrop empties
   // the queues itself, so both modes share one exit rule.
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
@@ -169,6 +217,7 @@ class WorkerPool {
   std::atomic<int> busy_{0};
   std::atomic<int64_t> busy_ns_{0};
   std::atomic<int64_t> job_failures_{0};
+  std::atomic<int64_t> inline_runs_{0};
   std::atomic<int> fail_next_jobs_{0};
 };
 

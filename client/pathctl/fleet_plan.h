@@ -17,6 +17,10 @@ namespace pathd::pathctl {
 absl::StatusOr<v1::PlanFleetRequest> FleetPlanRequest(const Options& options,
                                                       const std::string& map);
 
+// --solver's value: lacam (also empty), pibt, prioritized or cbs;
+// INVALID_ARGUMENT naming the flag otherwise.
+absl::StatusOr<v1::FleetSolver> SolverFromName(const std::string& name);
+
 // "fleet plan (lacam): 12 robots, makespan 40, sum of costs 310 (lower
 // bound 298)" or "no fleet plan: <reason>".
 std::string FleetPlanSummary(const v1::PlanFleetResponse& response);

@@ -67,15 +67,6 @@ absl::StatusOr<std::vector<v1::FleetRobot>> ParseRobots(const std::string& text,
   return robots;
 }
 
-absl::StatusOr<v1::FleetSolver> SolverFromName(const std::string& name) {
-  if (name.empty() || name == "lacam") return v1::FLEET_SOLVER_LACAM;
-  if (name == "pibt") return v1::FLEET_SOLVER_PIBT;
-  if (name == "prioritized") return v1::FLEET_SOLVER_PRIORITIZED;
-  if (name == "cbs") return v1::FLEET_SOLVER_CBS;
-  return absl::InvalidArgumentError(
-      absl::StrCat("--solver must be lacam, pibt, prioritized or cbs, not '", name, "'"));
-}
-
 std::string SolverName(v1::FleetSolver solver) {
   switch (solver) {
     case v1::FLEET_SOLVER_PRIORITIZED:
@@ -90,6 +81,15 @@ std::string SolverName(v1::FleetSolver solver) {
 }
 
 }  // namespace
+
+absl::StatusOr<v1::FleetSolver> SolverFromName(const std::string& name) {
+  if (name.empty() || name == "lacam") return v1::FLEET_SOLVER_LACAM;
+  if (name == "pibt") return v1::FLEET_SOLVER_PIBT;
+  if (name == "prioritized") return v1::FLEET_SOLVER_PRIORITIZED;
+  if (name == "cbs") return v1::FLEET_SOLVER_CBS;
+  return absl::InvalidArgumentError(
+      absl::StrCat("--solver must be lacam, pibt, prioritized or cbs, not '", name, "'"));
+}
 
 absl::StatusOr<v1::PlanFleetRequest> FleetPlanRequest(const Options& options,
                                                       const std::string& map) {

@@ -143,6 +143,8 @@ ABSL_FLAG(std::string, reaction_diffusion, "",
           "plan: reaction_diffusion parameters KEY=VALUE[,KEY=VALUE...] "
           "(diffusion, reaction_rate, threshold, time_step, max_steps)");
 ABSL_FLAG(std::string, script, "", "navigate: the robot run to replay");
+ABSL_FLAG(std::string, fleet, "",
+          "navigate: join this fleet group of the map (robots planned together)");
 ABSL_FLAG(std::string, window, "", "cost-to-go: X,Y,W,H part of the field");
 ABSL_FLAG(std::string, sources, "", "table: source points X,Y[;X,Y...]");
 ABSL_FLAG(std::string, destinations, "", "table: destination points X,Y[;X,Y...]");
@@ -161,7 +163,8 @@ ABSL_FLAG(std::optional<double>, budget_cells, std::nullopt,
 ABSL_FLAG(std::string, robots, "",
           "fleet plan: file with one 'SX SY GX GY [RADIUS_M]' line per robot (cells; "
           "metres with --world)");
-ABSL_FLAG(std::string, solver, "", "fleet plan: lacam (default), pibt, prioritized or cbs");
+ABSL_FLAG(std::string, solver, "",
+          "fleet plan, navigate --fleet: lacam (default), pibt, prioritized or cbs");
 ABSL_FLAG(std::optional<double>, time_limit, std::nullopt,
           "fleet plan: the solver's time limit, seconds (then it answers with the best "
           "plan so far; default 10)");
@@ -358,6 +361,8 @@ int main(int argc, char** argv) {
   options.check.world = absl::GetFlag(FLAGS_world);
   options.check.path_file = absl::GetFlag(FLAGS_path_file);
   options.navigate.script = absl::GetFlag(FLAGS_script);
+  options.navigate.fleet = absl::GetFlag(FLAGS_fleet);
+  options.navigate.solver = absl::GetFlag(FLAGS_solver);
   options.cost_to_go.world = absl::GetFlag(FLAGS_world);
   options.cost_to_go.window = absl::GetFlag(FLAGS_window);
   options.cost_to_go.cost_to_go_file = absl::GetFlag(FLAGS_cost_to_go_file);

@@ -6,6 +6,7 @@
 
 #include "client/pathctl/command.h"
 #include "client/pathctl/files.h"
+#include "client/pathctl/fleet_plan.h"
 #include "client/pathctl/navigate_script.h"
 #include "client/pathctl/navigate_session.h"
 
@@ -61,6 +62,17 @@ int Navigate(CommandEnv& env, Args args) {
   // The cap of each D* Lite plan, and the budget of each kinematic replan.
   open.mutable_options()->set_max_expansions(plan.max_expansions);
   open.set_replan_max_expansions(plan.max_expansions);
+  const NavigateOptions& navigate = env.options().navigate;
+  if (!navigate.fleet.empty()) {
+    open.mutable_fleet()->set_group(navigate.fleet);
+    if (!navigate.solver.empty()) {
+      absl::StatusOr<v1::FleetSolver> solver = SolverFromName(navigate.solver);
+      if (!solver.ok()) return env.Usage(solver.status().message());
+      open.mutable_fleet()->set_solver(*solver);
+    }
+  } else if (!navigate.solver.empty()) {
+    return env.Usage("--solver: navigate takes it with --fleet GROUP");
+  }
   std::vector<ScriptStep> script;
   const std::string& script_file = env.options().navigate.script;
   if (!script_file.empty()) {
@@ -89,7 +101,7 @@ constexpr absl::string_view kNavigateFlags[] = {
     "inflation_radius", "inflation_radius_cells", "cost_scaling_factor", "footprint",
     "footprint_cells", "min_turning_radius", "min_turning_radius_cells", "motion_model",
     "reverse_penalty", "change_penalty", "non_straight_penalty", "cost_penalty", "start_yaw",
-    "goal_yaw", "goal_yaw_tolerance", "lattice", "no_smooth"};
+    "goal_yaw", "goal_yaw_tolerance", "lattice", "no_smooth", "fleet", "solver"};
 
 }  // namespace
 
@@ -98,14 +110,20 @@ const Command kNavigateCommand = {
     .synopsis = "NAME SX SY GX GY [--world] [--script FILE] [cost options]\n"
                 " [--planner dstar_lite|hybrid_astar|state_lattice] [--max_expansions N]\n"
                 " [--footprint \"[[x,y],...]\"] [--min_turning_radius M]\n"
-                " [--motion_model dubins|reeds_shepp] [--start_yaw R] [--goal_yaw R]",
+                " [--motion_model dubins|reeds_shepp] [--start_yaw R] [--goal_yaw R]\n"
+                " [--fleet GROUP [--solver lacam|pibt|prioritized|cbs]]",
     .help = "Opens a Navigate session on map NAME from cell (SX, SY) to (GX, GY) and\n"
             "prints its path; --script replays a robot run through it (format in\n"
             "'pathctl --help'). D* Lite by default; --planner hybrid_astar or\n"
             "state_lattice (or --min_turning_radius / --motion_model) opens a\n"
             "kinematic session for the robot of --footprint, which answers poses\n"
             "and replans from each reported pose within --max_expansions (default\n"
-            "20000). --world: SX SY GX GY in metres, and poses printed in metres.\n"
+            "20000). --fleet GROUP opens a fleet session: the robots of the group's\n"
+            "sessions on the map are planned together (one cell per robot per time\n"
+            "step) and each is released along its timed path as the others pass;\n"
+            "a script's 'follow' drives only as far as released, waiting for the\n"
+            "pushes that release more. --world: SX SY GX GY in metres, and poses\n"
+            "printed in metres.\n"
             "--timeout bounds each wait for an answer, not the session.",
     .flags = kNavigateFlags,
     .run = Navigate,

@@ -28,7 +28,10 @@ are ignored; X Y are cells (x = column, y = row), COST as for maps set:
                        allowed) facing YAW radians: send a cell pose
   follow N             drive N steps along the last received path, one pose
                        per step (stops early at the goal); kinematic
-                       sessions step from pose to pose of the path
+                       sessions step from pose to pose of the path; fleet
+                       sessions (--fleet) step along the timed path only as
+                       far as released, waiting for the pushes that release
+                       more
   block X Y            the sensors saw an obstacle (cost 254) at (X, Y)
   free X Y             ... saw (X, Y) free (cost 0)
   cost X Y COST        ... saw (X, Y) at COST
@@ -38,9 +41,10 @@ are ignored; X Y are cells (x = column, y = row), COST as for maps set:
                        without 'private' the change also updates the shared
                        map, as 'maps set' would
   wait MS              sleep MS milliseconds, printing pushed paths meanwhile
-  expect-push [MS]     fail (exit 1) unless an unasked MAP_CHANGED path
-                       arrived since the previous expect-push or arrives
-                       within MS milliseconds (default 1000)
+  expect-push [MS]     fail (exit 1) unless an unasked MAP_CHANGED path (or a
+                       fleet session's FLEET push) arrived since the previous
+                       expect-push or arrives within MS milliseconds
+                       (default 1000)
 )";
 
 // One script command.

@@ -7,6 +7,7 @@
 #include <iterator>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -80,11 +81,16 @@ std::string FormatResponse(const v1::NavigateResponse& response, bool world) {
   const v1::PlanResponse& plan = response.plan();
   std::string text = absl::StrFormat(
       "[%s%s] seq %d, session %d, map version %d: ", EventName(response.event()),
-      response.event() == v1::NAVIGATE_EVENT_MAP_CHANGED ? ", unasked" : "",
+      response.event() == v1::NAVIGATE_EVENT_MAP_CHANGED ||
+              response.event() == v1::NAVIGATE_EVENT_FLEET
+          ? ", unasked"
+          : "",
       response.seq(), response.session_id(), plan.map_version());
   if (plan.found()) {
     absl::StrAppendFormat(&text, "found, cost %.6f, %d cells", plan.cost(),
                           plan.path_size());
+  } else if (response.has_fleet()) {
+    absl::StrAppend(&text, "waiting for the group's plan");
   } else if (response.kept_previous_path()) {
     absl::string_view outcome = v1::PlanOutcome_Name(plan.outcome());
     absl::ConsumePrefix(&outcome, "PLAN_OUTCOME_");
@@ -114,6 +120,24 @@ std::string FormatResponse(const v1::NavigateResponse& response, bool world) {
     }
   }
   text.push_back('\n');
+  if (response.has_fleet()) {
+    const v1::FleetSessionPlan& fleet = response.fleet();
+    absl::StrAppendFormat(&text, "  fleet plan %d, %d robot(s): ", fleet.epoch(),
+                          fleet.robots());
+    if (fleet.path().cells_size() > 0) {
+      absl::StrAppendFormat(&text, "at step %d of %d, released to step %d",
+                            fleet.progress(), fleet.path().cells_size() - 1, fleet.release());
+    }
+    if (!fleet.planned()) {
+      absl::StrAppend(&text, fleet.path().cells_size() > 0 ? "; " : "",
+                      "not planned: ", fleet.reason());
+    }
+    text.push_back('\n');
+    if (fleet.path().cells_size() > 0) {
+      absl::StrAppend(&text, "  timed path (", fleet.path().cells_size(),
+                      " steps): ", FormatPath(fleet.path().cells()), "\n");
+    }
+  }
   if (plan.found()) {
     absl::StrAppend(&text, "  path (", plan.path_size(),
                     " cells): ", FormatPath(plan.path()), "\n");
@@ -241,7 +265,7 @@ class Session {
         }
         if (ended_) return Lost();
         return absl::DeadlineExceededError(absl::StrCat(
-            step.where, ": expect-push: no unasked MAP_CHANGED path within ",
+            step.where, ": expect-push: no unasked MAP_CHANGED path or FLEET push within ",
             absl::FormatDuration(step.duration)));
       }
     }
@@ -285,6 +309,55 @@ class Session {
     return absl::OkStatus();
   }
 
+  bool FleetSession() {
+    absl::MutexLock lock(&mu_);
+    return last_fleet_.has_value();
+  }
+
+  // A fleet session's step: the next cell of its timed path up to its
+  // release, waiting (up to the client timeout) for a push that releases
+  // it; OutOfRange at the goal.
+  absl::Status FollowFleet(const ScriptStep& step, int32_t i) {
+    std::optional<v1::Cell> next;
+    int64_t timed_step = 0;
+    {
+      absl::MutexLock lock(&mu_);
+      for (;;) {
+        const v1::FleetSessionPlan& fleet = *last_fleet_;
+        const auto& cells = fleet.path().cells();
+        if (fleet.planned() && fleet.progress() + 1 >= cells.size()) break;
+        // Released cells are driven also while the group waits for a new
+        // plan (planned false): it waits for the robots to finish them.
+        for (int64_t t = fleet.progress() + 1; t <= fleet.release() && !next; ++t) {
+          const v1::Cell& c = cells[static_cast<int>(t)];
+          if (c.x() == robot_.x() && c.y() == robot_.y()) continue;
+          next = c;
+          timed_step = t;
+        }
+        if (next.has_value()) break;
+        // Nothing released (or no plan yet): wait for the group's next push.
+        const int64_t seen = fleet_updates_;
+        auto pushed_or_ended = [this, seen]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+          return fleet_updates_ > seen || ended_;
+        };
+        if (!mu_.AwaitWithTimeout(absl::Condition(&pushed_or_ended), timeout_)) {
+          return absl::DeadlineExceededError(
+              absl::StrCat(step.where, ": follow: the fleet group released nothing within ",
+                           absl::FormatDuration(timeout_)));
+        }
+        if (ended_) return Lost();
+      }
+    }
+    if (!next.has_value()) {
+      Log(absl::StrFormat("  at the goal %s after %d of %d steps\n", FormatCell(robot_), i,
+                          step.steps));
+      return absl::OutOfRangeError("at the goal");
+    }
+    Log(absl::StrFormat("> step %d/%d: pose %s (timed step %d)\n", i + 1, step.steps,
+                        FormatCell(*next), timed_step));
+    return Move(*next, step.where);
+  }
+
   // Each step takes the cell after the robot's on the latest path, which may
   // be one the server pushed since the previous step.
   absl::Status Follow(const ScriptStep& step) {
@@ -295,6 +368,12 @@ class Session {
         absl::MutexLock lock(&mu_);
         plan = last_plan_;
         last_kinematic = last_kinematic_;
+      }
+      if (FleetSession()) {
+        const absl::Status s = FollowFleet(step, i);
+        if (absl::IsOutOfRange(s)) return absl::OkStatus();
+        if (!s.ok()) return s;
+        continue;
       }
       if (last_kinematic && plan.poses_size() > 0) {
         const absl::Status s = FollowPoses(step, i, plan);
@@ -371,7 +450,8 @@ class Session {
     while (stream_->Read(&response)) {
       absl::MutexLock lock(&mu_);
       PrintLocked(response);
-      if (response.event() == v1::NAVIGATE_EVENT_MAP_CHANGED) {
+      if (response.event() == v1::NAVIGATE_EVENT_MAP_CHANGED ||
+          response.event() == v1::NAVIGATE_EVENT_FLEET) {
         ++unclaimed_pushes_;
         ++pushes_total_;
       } else {
@@ -379,6 +459,10 @@ class Session {
         answered_seq_ = std::max(answered_seq_, response.seq());
       }
       last_plan_ = response.plan();
+      if (response.has_fleet()) {
+        last_fleet_ = response.fleet();
+        ++fleet_updates_;
+      }
       last_kinematic_ = IsKinematicAnswer(response);
       if (last_kinematic_) last_robot_pose_ = response.robot_pose();
     }
@@ -434,6 +518,9 @@ class Session {
   bool last_kinematic_ ABSL_GUARDED_BY(mu_) = false;
   // The pose a kinematic answer planned from (cell coordinates).
   v1::CellPose last_robot_pose_ ABSL_GUARDED_BY(mu_);
+  // Fleet sessions: the latest fleet state, and how many have arrived.
+  std::optional<v1::FleetSessionPlan> last_fleet_ ABSL_GUARDED_BY(mu_);
+  int64_t fleet_updates_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
 }  // namespace

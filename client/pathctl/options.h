@@ -146,6 +146,10 @@ struct CheckOptions {
 struct NavigateOptions {
   // The script to replay; empty: open, print the path, close.
   std::string script;
+  // --fleet: the fleet group to join; empty: not a fleet session. --solver:
+  // the group's solver (empty: the group's, lacam for a new group).
+  std::string fleet;
+  std::string solver;
 };
 
 struct CostToGoOptions {

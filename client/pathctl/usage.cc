@@ -171,6 +171,10 @@ a usage error naming the flag (e.g. plan ... -o x.png):
                        starts a comment line)
   --script FILE        navigate: replay this robot run (format below); without
                        it navigate prints the first path and closes
+  --fleet GROUP        navigate: open a fleet session in GROUP: the group's
+                       robots on the map are planned together and each is
+                       released along its timed path as the others pass
+                       (--solver picks the group's solver when it is new)
   --metrics_address A  metrics: pathd's --metrics_address (default
                        127.0.0.1:9464)
   --progress           plan: use PlanStream and show the search's progress

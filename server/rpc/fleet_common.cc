@@ -70,4 +70,31 @@ absl::Status StoppedStatus(PlanOutcome outcome, const char* what, int64_t budget
   }
 }
 
+FleetSolver FleetSolverFromProto(v1::FleetSolver solver) {
+  switch (solver) {
+    case v1::FLEET_SOLVER_PRIORITIZED:
+      return FleetSolver::kPrioritized;
+    case v1::FLEET_SOLVER_CBS:
+      return FleetSolver::kCbs;
+    case v1::FLEET_SOLVER_PIBT:
+      return FleetSolver::kPibt;
+    default:
+      return FleetSolver::kLacam;
+  }
+}
+
+v1::FleetSolver FleetSolverToProto(FleetSolver solver) {
+  switch (solver) {
+    case FleetSolver::kPrioritized:
+      return v1::FLEET_SOLVER_PRIORITIZED;
+    case FleetSolver::kCbs:
+      return v1::FLEET_SOLVER_CBS;
+    case FleetSolver::kPibt:
+      return v1::FLEET_SOLVER_PIBT;
+    case FleetSolver::kLacam:
+      break;
+  }
+  return v1::FLEET_SOLVER_LACAM;
+}
+
 }  // namespace pathd::server

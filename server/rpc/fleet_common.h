@@ -16,6 +16,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/str_format.h"
+#include "core/fleet/mapf.h"
 #include "core/map/grid.h"
 #include "core/search/plan_types.h"
 #include "server/convert.h"
@@ -33,6 +34,10 @@ struct FleetQuery {
   const Grid& stored() const { return *decoded.snapshot->grid; }
   const PlanQuery& query() const { return decoded.query; }
 };
+
+// The solver of a request (UNSPECIFIED: LaCAM), and back.
+FleetSolver FleetSolverFromProto(v1::FleetSolver solver);
+v1::FleetSolver FleetSolverToProto(FleetSolver solver);
 
 // The map snapshot and the cost options of `map` and `options` (with an
 // expansion budget), refusing cost shaping a fleet query cannot use.

@@ -30,33 +30,6 @@ constexpr int64_t kDefaultTimeLimitMs = 10'000;
 // (the rest builds and sends the answer).
 constexpr double kDeadlineShare = 0.9;
 
-FleetSolver SolverFromProto(v1::FleetSolver solver) {
-  switch (solver) {
-    case v1::FLEET_SOLVER_PRIORITIZED:
-      return FleetSolver::kPrioritized;
-    case v1::FLEET_SOLVER_CBS:
-      return FleetSolver::kCbs;
-    case v1::FLEET_SOLVER_PIBT:
-      return FleetSolver::kPibt;
-    default:
-      return FleetSolver::kLacam;
-  }
-}
-
-v1::FleetSolver SolverToProto(FleetSolver solver) {
-  switch (solver) {
-    case FleetSolver::kPrioritized:
-      return v1::FLEET_SOLVER_PRIORITIZED;
-    case FleetSolver::kCbs:
-      return v1::FLEET_SOLVER_CBS;
-    case FleetSolver::kPibt:
-      return v1::FLEET_SOLVER_PIBT;
-    case FleetSolver::kLacam:
-      break;
-  }
-  return v1::FLEET_SOLVER_LACAM;
-}
-
 // "robots[3]" or "robots[3] ('forklift-2')".
 std::string RobotName(const v1::PlanFleetRequest& r, int i) {
   const std::string& name = r.robots(i).name();
@@ -126,7 +99,7 @@ absl::Status PrepareFleet(const PlanDeps& deps, FleetCall& call) {
   PATHD_RETURN_IF_ERROR(CheckDistinct(r, call.goals, "goal"));
 
   FleetOptions& o = call.options;
-  o.solver = SolverFromProto(r.solver());
+  o.solver = FleetSolverFromProto(r.solver());
   if (r.restarts() < 0) {
     return absl::InvalidArgumentError(
         absl::StrFormat("restarts %d must be >= 0", r.restarts()));
@@ -226,7 +199,7 @@ absl::Status AnswerFleet(FleetCall& call, InflationCache& inflation,
   const Grid& stored = call.q->stored();
   const double res = stored.resolution();
   out.set_map_version(call.q->decoded.snapshot->version);
-  out.set_solver(SolverToProto(call.options.solver));
+  out.set_solver(FleetSolverToProto(call.options.solver));
   out.set_solver_time_us(solver_us);
   out.set_expansions(plan.expansions);
   out.set_iterations(plan.iterations);

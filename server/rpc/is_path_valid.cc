@@ -274,7 +274,7 @@ grpc::ServerUnaryReactor* ServeIsPathValid(const PlanDeps& deps,
       call, std::move(work), &FinishPathCheck,
       JobFailureText{"out of memory while inflating the map", "path check failed"});
   return AdmitUnaryCall(deps.pool, std::move(call), prepared, std::move(job),
-                        &FinishPathCheck);
+                        &FinishPathCheck, JobLength::kUsuallyShort);
 }
 
 }  // namespace pathd::server

@@ -53,7 +53,11 @@ class NavigationSession final : public NavigateReactor {
         search_(NavigationSearch::Deps{owner.store_, owner.inflation_,
                                        owner.options_.budget,
                                        owner.options_.max_expansions,
-                                       owner.options_.derived, &owner.robots_, id},
+                                       owner.options_.derived, &owner.robots_, id,
+                                       &owner.fleets_,
+                                       [this](v1::NavigateResponse push) {
+                                         PushFleet(std::move(push));
+                                       }},
                 std::move(caller), std::move(shared_observations), &cancelled_,
                 &bytes_, [this](const std::string& map_name) {
                   absl::MutexLock lock(&mu_);
@@ -109,6 +113,15 @@ class NavigationSession final : public NavigateReactor {
     // repairs anyway.
     SubmitBackgroundLocked(&push_pending_,
                            [this](SearchScratch& scratch) { RunPush(scratch); });
+  }
+
+  // A fleet session's push from its group (FleetGroups holds the group's
+  // lock: queue only).
+  void PushFleet(v1::NavigateResponse push) {
+    absl::MutexLock lock(&mu_);
+    if (finish_requested_ || done_) return;
+    ++pushes_;
+    EnqueueLocked(std::move(push));
   }
 
   // Ends the session with `status` as soon as no message is being handled.
@@ -307,6 +320,9 @@ class NavigationSession final : public NavigateReactor {
       // certainly alive (the owner waits for Remove below).
       if (control_ != nullptr) owner_.robots_.Remove(map_name_, id_);
     }
+    // A fleet session's robot leaves its group (no lock held: the group may
+    // push to other sessions while it replans).
+    owner_.fleets_.Remove(id_);
     if (registered) owner_.Remove(this);
     bool destroy;
     {
@@ -487,7 +503,11 @@ class NavigationSession final : public NavigateReactor {
 
 NavigationSessions::NavigationSessions(MapStore& store, WorkerPool& pool,
                                        InflationCache& inflation, Options options)
-    : store_(store), pool_(pool), inflation_(inflation), options_(options) {
+    : store_(store),
+      pool_(pool),
+      inflation_(inflation),
+      options_(options),
+      fleets_(store, inflation, pool) {
   store_.AddListener(
       [this](std::string_view name, const std::shared_ptr<const MapSnapshot>& snapshot) {
         OnMapChanged(name, snapshot);

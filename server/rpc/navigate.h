@@ -21,6 +21,7 @@
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
+#include "server/rpc/fleet_sessions.h"
 #include "server/rpc/navigate_control.h"
 #include "server/rpc/robot_registry.h"
 #include "server/worker_pool.h"
@@ -116,6 +117,8 @@ class NavigationSessions {
   const Options options_;
   RobotRegistry robots_;
   CycleHistogram control_cycles_;
+  // Fleet sessions' groups (registers its own map listener).
+  FleetGroups fleets_;
 
   mutable absl::Mutex mu_;
   uint64_t next_id_ ABSL_GUARDED_BY(mu_) = 1;

@@ -14,6 +14,7 @@
 #include "core/status_macros.h"
 #include "server/convert.h"
 #include "server/incremental_cache.h"
+#include "server/rpc/fleet_common.h"
 #include "server/rpc/navigate.h"
 
 namespace pathd::server {
@@ -40,10 +41,12 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
             "message seq %d: the session is already open", message.seq()));
       }
       response->set_event(v1::NAVIGATE_EVENT_OPENED);
+      if (message.open().has_fleet()) return OpenFleet(message.open(), response);
       PATHD_RETURN_IF_ERROR(Open(message.open()));
       break;
     case v1::NavigateRequest::kPose: {
       PATHD_RETURN_IF_ERROR(RequireOpen(message));
+      if (fleet_) return HandleFleet(message, response);
       response->set_event(v1::NAVIGATE_EVENT_MOVED);
       if (kinematic_ != nullptr) {
         PATHD_ASSIGN_OR_RETURN(const PositionPose pose,
@@ -70,6 +73,7 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
     }
     case v1::NavigateRequest::kObserve: {
       PATHD_RETURN_IF_ERROR(RequireOpen(message));
+      if (fleet_) return HandleFleet(message, response);
       response->set_event(v1::NAVIGATE_EVENT_OBSERVED);
       PATHD_ASSIGN_OR_RETURN(uint64_t applied, Observe(message.observe()));
       response->set_applied_version(applied);
@@ -96,6 +100,91 @@ absl::Status NavigationSearch::Handle(const v1::NavigateRequest& message,
   PATHD_RETURN_IF_ERROR(PlanInto(response->mutable_plan(), /*changed=*/nullptr));
   if (control_ != nullptr) PublishPath(response->plan());
   return absl::OkStatus();
+}
+
+absl::Status NavigationSearch::OpenFleet(const v1::NavigateOpen& open,
+                                         v1::NavigateResponse* response) {
+  if (deps_.fleets == nullptr) {
+    return absl::UnimplementedError("this server runs no fleet sessions");
+  }
+  if (open.has_control()) {
+    return absl::InvalidArgumentError(
+        "open.fleet: a fleet session's robot follows its timed path; it cannot also be a "
+        "control session (open.control)");
+  }
+  if (open.planner() != v1::PLANNER_UNSPECIFIED && open.planner() != v1::PLANNER_DSTAR_LITE) {
+    return absl::InvalidArgumentError(
+        "open.planner: a fleet session is planned by its group's multi-robot solver "
+        "(open.fleet.solver); leave open.planner unset");
+  }
+  const v1::FleetSessionOptions& fleet = open.fleet();
+  const int64_t max_ms = absl::ToInt64Milliseconds(FleetGroups::kMaxTimeLimit);
+  if (fleet.time_limit_ms() < 0 || fleet.time_limit_ms() > max_ms) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "open.fleet.time_limit_ms %d must be in [0, %d] (0: the group's, else %d)",
+        fleet.time_limit_ms(), max_ms,
+        absl::ToInt64Milliseconds(FleetGroups::kDefaultTimeLimit)));
+  }
+  PATHD_ASSIGN_OR_RETURN(
+      DecodedQuery decoded,
+      DecodePlanQuery(WireQueryOf(open), deps_.store,
+                      QueryLimits{.max_expansions = deps_.max_expansions}));
+  PATHD_RETURN_IF_ERROR(
+      CheckPlanQuery(*decoded.snapshot->grid, /*stateful=*/true, &decoded.query));
+  snapshot_ = decoded.snapshot;
+  start_ = decoded.query.request.start;
+  goal_ = decoded.query.request.goal;
+  cost_ = decoded.query.request.cost;
+  shape_ = PlanningShape(decoded.query);
+  FleetGroups::Join join;
+  join.session_id = deps_.session_id;
+  join.snapshot = snapshot_;
+  join.group = fleet.group();
+  join.start = start_;
+  join.goal = goal_;
+  join.shape = shape_;
+  join.cost = cost_;
+  if (fleet.solver() != v1::FLEET_SOLVER_UNSPECIFIED) {
+    join.solver = FleetSolverFromProto(fleet.solver());
+  }
+  if (fleet.time_limit_ms() > 0) join.time_limit = absl::Milliseconds(fleet.time_limit_ms());
+  join.push = deps_.push;
+  PATHD_RETURN_IF_ERROR(deps_.fleets->Add(std::move(join), response));
+  fleet_ = true;
+  on_open_(snapshot_->name);
+  return absl::OkStatus();
+}
+
+absl::Status NavigationSearch::HandleFleet(const v1::NavigateRequest& message,
+                                           v1::NavigateResponse* response) {
+  if (message.kind_case() == v1::NavigateRequest::kObserve) {
+    response->set_event(v1::NAVIGATE_EVENT_OBSERVED);
+    if (message.observe().session_only()) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "message seq %d: a fleet session's observations update the shared map (the "
+          "group plans on it); session_only is not for fleet sessions",
+          message.seq()));
+    }
+    PATHD_ASSIGN_OR_RETURN(const std::vector<MapChange> changes,
+                           MapChangesFromProto(message.observe().changes()));
+    if (changes.empty()) return absl::InvalidArgumentError("observation has no changes");
+    PATHD_RETURN_IF_ERROR(shared_observations_);
+    PATHD_ASSIGN_OR_RETURN(const MapUpdateResult result,
+                           deps_.store.Update(snapshot_->name, changes, std::nullopt));
+    snapshot_ = result.snapshot;
+    response->set_applied_version(result.snapshot->version);
+    deps_.fleets->Describe(deps_.session_id, response);
+    return absl::OkStatus();
+  }
+  response->set_event(v1::NAVIGATE_EVENT_MOVED);
+  PATHD_ASSIGN_OR_RETURN(const Cell cell,
+                         CellFromPosition(message.pose(), *snapshot_->grid, "pose"));
+  if (!snapshot_->grid->InBounds(cell)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "pose %s is outside the %d x %d map", CellToString(cell), snapshot_->grid->width(),
+        snapshot_->grid->height()));
+  }
+  return deps_.fleets->Report(deps_.session_id, cell, response);
 }
 
 absl::Status NavigationSearch::RequireOpen(const v1::NavigateRequest& message) {
@@ -347,6 +436,8 @@ absl::Status NavigationSearch::Refresh(bool overlay_changed) {
 
 absl::Status NavigationSearch::Push(SearchScratch& scratch, v1::NavigateResponse* response,
                                     bool* changed) {
+  // A fleet session's group follows the map itself (FleetGroups).
+  if (fleet_) return absl::OkStatus();
   const uint64_t version = snapshot_->version;
   PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
   if (snapshot_->version == version) return absl::OkStatus();

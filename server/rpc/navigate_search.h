@@ -30,6 +30,7 @@
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
 #include "server/memory_budget.h"
+#include "server/rpc/fleet_sessions.h"
 #include "server/rpc/navigate_control.h"
 #include "server/rpc/navigate_kinematic.h"
 #include "server/rpc/robot_registry.h"
@@ -53,6 +54,11 @@ class NavigationSearch {
     // and this session's robot id there.
     RobotRegistry* robots = nullptr;
     uint64_t session_id = 0;
+    // Fleet sessions: the server's groups (null: fleet sessions refused),
+    // and how this session's stream queues a push (with no lock of the
+    // caller's held).
+    FleetGroups* fleets = nullptr;
+    FleetGroups::Push push;
   };
 
   // `caller`: whose share of the budget the session counts against.
@@ -66,7 +72,7 @@ class NavigationSearch {
                    std::atomic<int64_t>* bytes,
                    std::function<void(const std::string&)> on_open);
 
-  bool is_open() const { return search_ != nullptr || kinematic_ != nullptr; }
+  bool is_open() const { return search_ != nullptr || kinematic_ != nullptr || fleet_; }
 
   // Answers one client message (open, pose or observe) into `response`, with
   // the new plan. An error ends the session. `scratch` is the worker's.
@@ -94,6 +100,11 @@ class NavigationSearch {
   absl::Status Open(const v1::NavigateOpen& open);
   // The kinematic part of Open, for a query naming a kinematic planner.
   absl::Status OpenKinematic(const v1::NavigateOpen& open, DecodedQuery decoded);
+  // A fleet session's open (open.fleet set): joins its group, whose plan
+  // `response` then carries.
+  absl::Status OpenFleet(const v1::NavigateOpen& open, v1::NavigateResponse* response);
+  // A fleet session's pose and observe messages.
+  absl::Status HandleFleet(const v1::NavigateRequest& message, v1::NavigateResponse* response);
   // The kinematic session's view of the map for a replan.
   KinematicView ViewForKinematic();
   absl::Status ReserveMemory(const Grid& grid);
@@ -127,6 +138,9 @@ class NavigationSearch {
   std::unique_ptr<KinematicNavigation> kinematic_;
   // Control sessions (with search_): the control half.
   std::shared_ptr<ControlSession> control_;
+  // A fleet session (neither search_ nor kinematic_): its robot is in a
+  // group of deps_.fleets.
+  bool fleet_ = false;
   // Kinematic sessions: the server's derived store for snapshot_ (when the
   // session plans on the version's own grid) and the version it is for.
   std::unique_ptr<DerivedStore> shared_derived_;

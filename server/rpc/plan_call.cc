@@ -3,6 +3,7 @@
 #include "server/rpc/plan_call.h"
 
 #include <algorithm>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -83,14 +84,35 @@ class CachedSearch final : public StatefulSearch {
   const PlanCall& call_;
 };
 
+// Sees the client's cancel (or the server's, at shutdown) at every poll of
+// the search. A Plan run on the gRPC thread that received it
+// (WorkerPool::SubmitShort) has no reactor bound yet, so gRPC cannot tell it
+// through OnCancel; the context can. Near the deadline a cancel is the
+// deadline's, as CancellableReactor::OnCancel decides, and the search's own
+// deadline check reports it.
+class CancelWatch final : public ProgressSink {
+ public:
+  explicit CancelWatch(PlanCall& call) : ProgressSink(absl::ZeroDuration()), call_(call) {}
+
+ private:
+  void Report(int64_t, double, absl::Time now) override {
+    if (call_.context->IsCancelled() && now + kDeadlineSlack < call_.deadline) {
+      call_.cancelled.store(true, std::memory_order_relaxed);
+    }
+  }
+  PlanCall& call_;
+};
+
 // The job's work: the façade plans, the one builder fills the response.
 Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
                          InflationCache& inflation, IncrementalCache& cache,
                          DerivedCache* derived, int64_t max_path_points,
                          int64_t max_message_bytes) {
   const PlanQuery& query = call.decoded.query;
-  const StopCondition stop(call.deadline, &call.cancelled, query.max_expansions,
-                           call.progress);
+  std::optional<CancelWatch> watch;
+  ProgressSink* progress = call.progress;
+  if (progress == nullptr && call.context != nullptr) progress = &watch.emplace(call);
+  const StopCondition stop(call.deadline, &call.cancelled, query.max_expansions, progress);
   std::optional<CachedSearch> cached;
   if (call.cached.has_value()) cached.emplace(cache, *call.cached, call);
   const std::shared_ptr<const MapSnapshot>& shared_snapshot = call.decoded.snapshot;
@@ -242,7 +264,7 @@ grpc::ServerUnaryReactor* ServePlan(const PlanDeps& deps,
   const absl::Status prepared = PreparePlan(deps, *call);
   std::unique_ptr<Job> job = prepared.ok() ? MakePlanJob(deps, call) : nullptr;
   return AdmitUnaryCall(deps.pool, std::move(call), prepared, std::move(job),
-                        &FinishPlanCall);
+                        &FinishPlanCall, JobLength::kUsuallyShort);
 }
 
 }  // namespace pathd::server

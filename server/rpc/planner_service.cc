@@ -42,7 +42,9 @@ PlannerServiceImpl::PlannerServiceImpl(const MapStore& store, WorkerPool& pool,
       inflation_(inflation),
       cache_(cache),
       sessions_(sessions),
-      options_(std::move(options)) {}
+      options_(std::move(options)) {
+  SetMessageAllocatorFor_Plan(&plan_allocator_);
+}
 
 PlanDeps PlannerServiceImpl::Deps() const {
   return PlanDeps{store_, pool_, inflation_, cache_, options_};

@@ -17,6 +17,7 @@
 #include "server/derived_cache.h"
 #include "server/inflation_cache.h"
 #include "server/map_store.h"
+#include "server/rpc/arena_allocator.h"
 #include "server/rpc/navigate.h"
 #include "server/worker_pool.h"
 
@@ -145,6 +146,8 @@ class PlannerServiceImpl final : public v1::PlannerService::CallbackService {
   IncrementalCache& cache_;
   NavigationSessions& sessions_;
   const Options options_;
+  // Plan's request and response, on one arena per call.
+  ArenaMessageAllocator<v1::PlanRequest, v1::PlanResponse> plan_allocator_;
 };
 
 }  // namespace pathd::server

@@ -160,23 +160,38 @@ class CallJob final : public Job {
   JobFailureText text_;
 };
 
+// How a call's job reaches the pool.
+enum class JobLength {
+  // Queued for a worker (WorkerPool::Submit).
+  kAny,
+  // Usually short (Plan, IsPathValid): may run on this gRPC thread at once
+  // (WorkerPool::SubmitShort).
+  kUsuallyShort,
+};
+
 // Admission of a prepared unary call: answers REJECTED with `prepared` when it
 // failed, else submits `job`, answering REJECTED with the
 // pool's refusal (and a retry-after trailer) when the queue is full or
 // closed. Once submitted the job owns the answer and may already have
-// finished the call on a worker, so the caller must not touch `call` after
-// this returns; it returns the reactor to hand back to gRPC.
+// finished the call (on a worker, or here for a short job), so the caller
+// must not touch `call` after this returns; it returns the reactor to hand
+// back to gRPC (a reactor may be finished before gRPC has it).
 template <typename Call>
 grpc::ServerUnaryReactor* AdmitUnaryCall(WorkerPool& pool, std::shared_ptr<Call> call,
                                          const absl::Status& prepared,
                                          std::unique_ptr<Job> job,
-                                         typename CallJob<Call>::Finish finish) {
+                                         typename CallJob<Call>::Finish finish,
+                                         JobLength length = JobLength::kAny) {
   grpc::ServerUnaryReactor* reactor = call->reactor;
   if (!prepared.ok()) {
     finish(*call, prepared, "REJECTED");
     return reactor;
   }
-  if (absl::Status s = pool.Submit(std::move(job)); !s.ok()) {
+  const absl::Status submitted =
+      length == JobLength::kUsuallyShort
+          ? pool.SubmitShort(std::move(job), call->deadline - absl::Now())
+          : pool.Submit(std::move(job));
+  if (absl::Status s = submitted; !s.ok()) {
     AddRetryAfterTrailer(s, *call->context);
     finish(*call, s, "REJECTED");
   }

@@ -9,6 +9,11 @@
 // other load on the machine disturbs far less than the wall clock. Figures,
 // not assertions: docs/performance.md records them with the command that produced
 // them.
+//
+// --baseline_flags starts a second pathd with those flags added (e.g.
+// --inline_max_job_time=0), --baseline_pathd a second binary (e.g. a build
+// of the previous commit), and each round's gRPC load goes to both, so a
+// change is compared with what it replaces in one run.
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -55,7 +60,15 @@ ABSL_FLAG(std::string, planner, "astar", "planner name (server and in-process)")
 ABSL_FLAG(int, threads, 2, "W: pathd's worker threads and the in-process threads");
 ABSL_FLAG(int, concurrency, 0, "gRPC requests in flight; 0 = 2W");
 ABSL_FLAG(int, channels, 1, "gRPC connections the load shares");
-ABSL_FLAG(int, limit, 1000, "the first N scenarios of each map (0 = all)");
+ABSL_FLAG(int, sample, 1000,
+          "scenarios per map, spread evenly over the scenario file (which is "
+          "sorted by length); 0 = all");
+ABSL_FLAG(std::string, baseline_flags, "",
+          "comma-separated flags for a second pathd measured in the same rounds "
+          "(e.g. --inline_max_job_time=0); empty = none");
+ABSL_FLAG(std::string, baseline_pathd, "",
+          "the second pathd's binary (e.g. a build of an older commit); empty "
+          "= --pathd. Either this or --baseline_flags starts the second one");
 ABSL_FLAG(int, passes, 1, "each measured run sends every query this many times");
 ABSL_FLAG(int, rounds, 3,
           "alternating in-process / gRPC runs per map; each side's fastest is "
@@ -98,16 +111,22 @@ double OwnCpuSeconds() {
   return seconds(usage.ru_utime) + seconds(usage.ru_stime);
 }
 
+// The gRPC side against one daemon.
+struct RemoteFigures {
+  pathd::client::LoadReport load;
+  double server_cpu_us = 0;
+  double client_cpu_us = 0;
+};
+
 struct MapFigures {
   int queries = 0;
   pathd::client::LoadReport in_process;
-  pathd::client::LoadReport grpc;
   // CPU microseconds per query, the least over the rounds: in-process, and
   // for gRPC the daemon's and the client's (this process). Other processes
   // slow the wall clock down far more than they change these.
   double in_process_cpu_us = 0;
-  double server_cpu_us = 0;
-  double client_cpu_us = 0;
+  // The daemon under test, then the baseline daemon when there is one.
+  std::vector<RemoteFigures> remote;
 };
 
 // Keeps the smaller of `*best` (0: none yet) and `value`.
@@ -115,15 +134,21 @@ void KeepLeast(double value, double* best) {
   if (*best == 0 || value < *best) *best = value;
 }
 
-absl::StatusOr<MapFigures> MeasureMap(const pathd::testing::PathdProcess& daemon, const fs::path& map_path,
-                                      const std::string& name,
-                                      const pathd::Grid& grid) {
+absl::StatusOr<MapFigures> MeasureMap(
+    const std::vector<std::unique_ptr<pathd::testing::PathdProcess>>& daemons,
+    const fs::path& map_path, const std::string& name, const pathd::Grid& grid) {
   const int threads = absl::GetFlag(FLAGS_threads);
-  const int limit = absl::GetFlag(FLAGS_limit);
-  auto scenarios = pathd::ReadMovingAiScenarioFile(map_path.string() + ".scen");
-  if (!scenarios.ok()) return scenarios.status();
-  if (limit > 0 && static_cast<int>(scenarios->size()) > limit) scenarios->resize(limit);
-  if (scenarios->empty()) return absl::NotFoundError("no scenarios");
+  auto all_scenarios = pathd::ReadMovingAiScenarioFile(map_path.string() + ".scen");
+  if (!all_scenarios.ok()) return all_scenarios.status();
+  // Spread over the whole file: it is sorted by path length.
+  const size_t total = all_scenarios->size();
+  const size_t wanted = absl::GetFlag(FLAGS_sample) > 0
+                            ? std::min(total, static_cast<size_t>(absl::GetFlag(FLAGS_sample)))
+                            : total;
+  std::vector<pathd::Scenario> scenarios_kept;
+  for (size_t i = 0; i < wanted; ++i) scenarios_kept.push_back((*all_scenarios)[i * total / wanted]);
+  if (scenarios_kept.empty()) return absl::NotFoundError("no scenarios");
+  const std::vector<pathd::Scenario>* scenarios = &scenarios_kept;
 
   // The wire requests, and the core requests the server turns them into (the
   // same conversion), so both sides plan exactly the same queries.
@@ -154,7 +179,6 @@ absl::StatusOr<MapFigures> MeasureMap(const pathd::testing::PathdProcess& daemon
   figures.queries = static_cast<int>(core.size());
   const int64_t measured = int64_t{absl::GetFlag(FLAGS_passes)} * figures.queries;
 
-  pathd::client::PathdClient client(daemon.address(), absl::Seconds(60));
   pathd::v1::CreateMapRequest create;
   create.set_name(name);
   create.set_replace(true);
@@ -162,7 +186,11 @@ absl::StatusOr<MapFigures> MeasureMap(const pathd::testing::PathdProcess& daemon
       !s.ok()) {
     return s;
   }
-  if (auto created = client.CreateMap(create); !created.ok()) return created.status();
+  for (const auto& daemon : daemons) {
+    pathd::client::PathdClient client(daemon->address(), absl::Seconds(60));
+    if (auto created = client.CreateMap(create); !created.ok()) return created.status();
+  }
+  figures.remote.resize(daemons.size());
 
   pathd::client::LoadOptions in_process;
   in_process.concurrency = threads;
@@ -205,22 +233,27 @@ absl::StatusOr<MapFigures> MeasureMap(const pathd::testing::PathdProcess& daemon
     if (local->requests_per_second > figures.in_process.requests_per_second) {
       figures.in_process = *local;
     }
-    cpu = OwnCpuSeconds();
-    const double server_cpu = ProcessCpuSeconds(daemon.pid());
-    absl::StatusOr<pathd::client::LoadReport> grpc = pathd::client::RunPlanLoad(
-        daemon.address(), absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_timeout),
-        wire, remote);
-    if (!grpc.ok()) return grpc.status();
-    const int64_t sent = grpc->requests + grpc->warmup_requests;
-    KeepLeast(per_query(ProcessCpuSeconds(daemon.pid()) - server_cpu, sent),
-              &figures.server_cpu_us);
-    KeepLeast(per_query(OwnCpuSeconds() - cpu, sent), &figures.client_cpu_us);
-    if (grpc->requests_per_second > figures.grpc.requests_per_second) {
-      figures.grpc = *grpc;
+    for (size_t d = 0; d < daemons.size(); ++d) {
+      const pathd::testing::PathdProcess& daemon = *daemons[d];
+      RemoteFigures& out = figures.remote[d];
+      cpu = OwnCpuSeconds();
+      const double server_cpu = ProcessCpuSeconds(daemon.pid());
+      absl::StatusOr<pathd::client::LoadReport> grpc = pathd::client::RunPlanLoad(
+          daemon.address(), absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_timeout),
+          wire, remote);
+      if (!grpc.ok()) return grpc.status();
+      const int64_t sent = grpc->requests + grpc->warmup_requests;
+      KeepLeast(per_query(ProcessCpuSeconds(daemon.pid()) - server_cpu, sent),
+                &out.server_cpu_us);
+      KeepLeast(per_query(OwnCpuSeconds() - cpu, sent), &out.client_cpu_us);
+      if (grpc->requests_per_second > out.load.requests_per_second) out.load = *grpc;
     }
   }
-  // Keeps the daemon's memory flat across maps.
-  if (auto deleted = client.DeleteMap(name); !deleted.ok()) return deleted.status();
+  // Keeps the daemons' memory flat across maps.
+  for (const auto& daemon : daemons) {
+    pathd::client::PathdClient client(daemon->address(), absl::Seconds(60));
+    if (auto deleted = client.DeleteMap(name); !deleted.ok()) return deleted.status();
+  }
   return figures;
 }
 
@@ -232,7 +265,8 @@ int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "load_bench [--pathd BIN] [--movingai_dir DIR] [--maps a.map,...] "
       "[--planner astar] [--threads W] [--concurrency C] [--channels K] "
-      "[--limit N] [--passes P] [--rounds R]\n"
+      "[--sample N] [--passes P] [--rounds R] [--baseline_flags F,...] "
+      "[--baseline_pathd BIN]\n"
       "Starts pathd --threads=W and prints per map: in-process throughput on W "
       "threads, gRPC Plan throughput at 2W concurrency on the same queries, "
       "their ratio, and the gRPC latency p50/p99.");
@@ -251,29 +285,54 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--threads, --passes and --rounds must be at least 1\n");
     return 2;
   }
-  // The daemon under test, its log (warnings only) on our stderr.
-  pathd::testing::PathdProcess daemon(pathd::testing::PathdProcessOptions{
-      .binary = absl::GetFlag(FLAGS_pathd),
-      .flags = {absl::StrCat("--threads=", threads), "--log_level=warn"}});
-  if (!daemon.listening()) {
-    std::fprintf(stderr, "%s\n", daemon.status().ToString().c_str());
-    return 1;
+  // The daemon under test, and the baseline; their logs (warnings only) on
+  // our stderr.
+  std::vector<std::unique_ptr<pathd::testing::PathdProcess>> daemons;
+  const std::vector<std::string> baseline_flags =
+      absl::StrSplit(absl::GetFlag(FLAGS_baseline_flags), ',', absl::SkipEmpty());
+  const std::string baseline_pathd = absl::GetFlag(FLAGS_baseline_pathd);
+  const bool baseline = !baseline_flags.empty() || !baseline_pathd.empty();
+  for (int d = 0; d < (baseline ? 2 : 1); ++d) {
+    std::vector<std::string> flags = {absl::StrCat("--threads=", threads),
+                                      "--log_level=warn"};
+    if (d == 1) flags.insert(flags.end(), baseline_flags.begin(), baseline_flags.end());
+    pathd::testing::PathdProcessOptions options;
+    options.binary = d == 1 && !baseline_pathd.empty() ? baseline_pathd
+                                                       : absl::GetFlag(FLAGS_pathd);
+    options.flags = std::move(flags);
+    daemons.push_back(std::make_unique<pathd::testing::PathdProcess>(options));
+    if (!daemons.back()->listening()) {
+      std::fprintf(stderr, "%s\n", daemons.back()->status().ToString().c_str());
+      return 1;
+    }
   }
+  const pathd::testing::PathdProcess& daemon = *daemons.front();
   const int concurrency = absl::GetFlag(FLAGS_concurrency) > 0
                               ? absl::GetFlag(FLAGS_concurrency)
                               : 2 * threads;
   std::printf(
       "load_bench: %u hardware threads; pathd --threads=%d on %s; planner %s; "
-      "in-process %d threads vs gRPC concurrency %d over %d channel(s); first %d "
-      "scenarios x %d passes, best of %d rounds\n",
+      "in-process %d threads vs gRPC concurrency %d over %d channel(s); %d "
+      "scenarios spread over each file x %d passes, best of %d rounds%s%s\n",
       std::thread::hardware_concurrency(), threads, daemon.address().c_str(),
       absl::GetFlag(FLAGS_planner).c_str(), threads, concurrency,
-      absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_limit),
-      absl::GetFlag(FLAGS_passes), absl::GetFlag(FLAGS_rounds));
-  std::printf("%-28s %7s %9s %9s %8s %9s %9s %9s %9s %8s %8s %8s %8s %8s %6s\n",
+      absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_sample),
+      absl::GetFlag(FLAGS_passes), absl::GetFlag(FLAGS_rounds),
+      baseline ? "; baseline: " : "",
+      baseline ? absl::StrCat(baseline_pathd.empty() ? absl::GetFlag(FLAGS_pathd)
+                                                     : baseline_pathd,
+                              " ", absl::GetFlag(FLAGS_baseline_flags))
+                     .c_str()
+               : "");
+  std::printf("%-28s %7s %9s %9s %8s %9s %9s %9s %9s %8s %8s %8s %8s %8s %6s",
               "map", "queries", "local_q/s", "grpc_q/s", "grpc/loc", "local_p99",
               "grpc_p50", "grpc_p95", "grpc_p99", "loc_cpu", "srv_cpu", "cli_cpu",
               "loc/srv", "loc/all", "errors");
+  if (daemons.size() > 1) {
+    std::printf(" %9s %8s %8s %9s %8s", "base_q/s", "base/loc", "base_srv", "base_p50",
+                "grpc/base");
+  }
+  std::printf("\n");
   const bool all = absl::GetFlag(FLAGS_maps).empty();
   int failures = 0;
   for (const std::string& relative :
@@ -286,34 +345,43 @@ int main(int argc, char** argv) {
     }
     if (all && (grid->width() != 512 || grid->height() != 512)) continue;
     const std::string name = map_path.stem().string();
-    absl::StatusOr<MapFigures> f = MeasureMap(daemon, map_path, name, *grid);
+    absl::StatusOr<MapFigures> f = MeasureMap(daemons, map_path, name, *grid);
     if (!f.ok()) {
       std::fprintf(stderr, "%s: %s\n", relative.c_str(), f.status().ToString().c_str());
       ++failures;
       continue;
     }
-    const double ratio = f->in_process.requests_per_second > 0
-                             ? f->grpc.requests_per_second /
-                                   f->in_process.requests_per_second
-                             : 0.0;
     const auto fraction = [](double numerator, double denominator) {
       return denominator > 0 ? numerator / denominator : 0.0;
     };
+    const RemoteFigures& g = f->remote.front();
+    const double ratio =
+        fraction(g.load.requests_per_second, f->in_process.requests_per_second);
     std::printf(
         "%-28s %7d %9.1f %9.1f %8.3f %9.2f %9.2f %9.2f %9.2f %8.0f %8.0f %8.0f %8.3f "
-        "%8.3f %6lld\n",
+        "%8.3f %6lld",
         relative.c_str(), f->queries, f->in_process.requests_per_second,
-        f->grpc.requests_per_second, ratio, Ms(f->in_process.latency.p99),
-        Ms(f->grpc.latency.p50), Ms(f->grpc.latency.p95), Ms(f->grpc.latency.p99),
-        f->in_process_cpu_us, f->server_cpu_us, f->client_cpu_us,
-        fraction(f->in_process_cpu_us, f->server_cpu_us),
-        fraction(f->in_process_cpu_us, f->server_cpu_us + f->client_cpu_us),
-        static_cast<long long>(f->grpc.errors() + f->in_process.errors()));
+        g.load.requests_per_second, ratio, Ms(f->in_process.latency.p99),
+        Ms(g.load.latency.p50), Ms(g.load.latency.p95), Ms(g.load.latency.p99),
+        f->in_process_cpu_us, g.server_cpu_us, g.client_cpu_us,
+        fraction(f->in_process_cpu_us, g.server_cpu_us),
+        fraction(f->in_process_cpu_us, g.server_cpu_us + g.client_cpu_us),
+        static_cast<long long>(g.load.errors() + f->in_process.errors()));
+    if (f->remote.size() > 1) {
+      const RemoteFigures& b = f->remote[1];
+      std::printf(" %9.1f %8.3f %8.0f %9.2f %8.3f", b.load.requests_per_second,
+                  fraction(b.load.requests_per_second, f->in_process.requests_per_second),
+                  b.server_cpu_us, Ms(b.load.latency.p50),
+                  fraction(g.load.requests_per_second, b.load.requests_per_second));
+    }
+    std::printf("\n");
     std::fflush(stdout);
   }
-  if (const int code = daemon.Stop(); code != 0) {
-    std::fprintf(stderr, "pathd exited with %d on SIGTERM\n", code);
-    ++failures;
+  for (const auto& d : daemons) {
+    if (const int code = d->Stop(); code != 0) {
+      std::fprintf(stderr, "pathd exited with %d on SIGTERM\n", code);
+      ++failures;
+    }
   }
   return failures == 0 ? 0 : 1;
 }

@@ -535,6 +535,50 @@ class RealServerTest(unittest.TestCase, PathChecks):
             self.client.navigate("ctl", (2, 4), (12, 4), control={})
         self.assertIn("open.options.robot_radius", bad.exception.details)
 
+    def test_fleet_sessions_drive_released_cells_to_their_goals(self):
+        # Two robots swapping the ends of an open hall, each a fleet session
+        # of one group, driven in turns only through their released cells.
+        self.client.create_map("fleet_hall", ["." * 12] * 4, replace=True)
+        self.addCleanup(self._delete_quietly, "fleet_hall")
+        ends = [((0, 1), (11, 2)), ((11, 2), (0, 1))]
+        with self.client.navigate("fleet_hall", ends[0][0], ends[0][1], fleet="py",
+                                  fleet_solver="lacam") as first, \
+                self.client.navigate("fleet_hall", ends[1][0], ends[1][1],
+                                     fleet="py") as second:
+            robots = [first, second]
+            self.assertEqual(first.opened.fleet.robots, 1)
+            self.assertEqual(second.opened.fleet.robots, 2)
+            states = [first.opened.fleet, second.opened.fleet]
+            at = [ends[0][0], ends[1][0]]
+            for _ in range(200):
+                moved = False
+                for r, nav in enumerate(robots):
+                    pushed = nav.poll_pushes()
+                    if pushed and pushed[-1].fleet is not None:
+                        states[r] = pushed[-1].fleet
+                    for cell in states[r].released_cells:
+                        if cell == at[r]:
+                            continue
+                        other = at[1 - r]
+                        self.assertGreater(max(abs(cell[0] - other[0]),
+                                               abs(cell[1] - other[1])), 0)
+                        answer = nav.move(cell)
+                        self.assertEqual(answer.event, "MOVED")
+                        states[r] = answer.fleet
+                        at[r] = cell
+                        moved = True
+                        break
+                if all(state.arrived for state in states):
+                    break
+                if not moved:
+                    # Both wait: a push releases one of them.
+                    for r, nav in enumerate(robots):
+                        push = nav.wait_push(0.2)
+                        if push is not None and push.fleet is not None:
+                            states[r] = push.fleet
+            self.assertEqual(at, [ends[0][1], ends[1][1]])
+            self.assertTrue(all(state.planned for state in states))
+
     def test_bad_navigate_message_ends_the_session(self):
         self.make_map("nav_bad")
         with self.client.navigate("nav_bad", (0, 0), (13, 7)) as nav:

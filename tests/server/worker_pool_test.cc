@@ -1,7 +1,8 @@
-// WorkerPool: jobs run on pool threads with per-worker scratch, interactive
+// WorkerPool: jobs run on pool threads with a scratch of their own (or, for
+// SubmitShort, on the caller's thread when a worker is free), interactive
 // jobs before batch ones, a full queue fails fast with a retry hint, and
 // shutdown drains or drops queued jobs. Synchronised with notifications only;
-// nothing here depends on timing (the one sleep only sets a lower bound).
+// nothing here depends on timing (the sleeps only set lower bounds).
 #include "server/worker_pool.h"
 
 #include <atomic>
@@ -50,7 +51,7 @@ class Blockers {
   std::atomic<int> ran_{0};
 };
 
-TEST(WorkerPoolTest, RunsJobsOnPoolThreadsWithPerWorkerScratch) {
+TEST(WorkerPoolTest, RunsJobsOnPoolThreadsEachWithAScratchOfItsOwn) {
   constexpr int kThreads = 3;
   constexpr int kJobs = 200;
   WorkerPool pool({kThreads, kJobs});
@@ -60,8 +61,9 @@ TEST(WorkerPoolTest, RunsJobsOnPoolThreadsWithPerWorkerScratch) {
   absl::Mutex mu;
   std::set<std::thread::id> thread_ids;
   std::set<const SearchScratch*> scratches;
-  std::set<std::pair<std::thread::id, const SearchScratch*>> pairs;
+  std::set<const SearchScratch*> in_use;
   std::atomic<int> off_pool{0};
+  std::atomic<int> shared{0};
   absl::BlockingCounter done(kJobs);
   for (int i = 0; i < kJobs; ++i) {
     ASSERT_TRUE(pool.Submit(MakeJob([&](SearchScratch& scratch) {
@@ -70,7 +72,11 @@ TEST(WorkerPoolTest, RunsJobsOnPoolThreadsWithPerWorkerScratch) {
                         absl::MutexLock lock(&mu);
                         thread_ids.insert(std::this_thread::get_id());
                         scratches.insert(&scratch);
-                        pairs.insert({std::this_thread::get_id(), &scratch});
+                        if (!in_use.insert(&scratch).second) ++shared;
+                      }
+                      {
+                        absl::MutexLock lock(&mu);
+                        in_use.erase(&scratch);
                       }
                       done.DecrementCount();
                     }))
@@ -78,12 +84,124 @@ TEST(WorkerPoolTest, RunsJobsOnPoolThreadsWithPerWorkerScratch) {
   }
   done.Wait();
   EXPECT_EQ(off_pool.load(), 0);
+  EXPECT_EQ(shared.load(), 0);  // no two running jobs ever had one scratch
   absl::MutexLock lock(&mu);
   EXPECT_EQ(thread_ids.count(std::this_thread::get_id()), 0u);
   EXPECT_LE(thread_ids.size(), static_cast<size_t>(kThreads));
-  // Each thread always got the same scratch, and no two threads shared one.
-  EXPECT_EQ(pairs.size(), thread_ids.size());
-  EXPECT_EQ(scratches.size(), thread_ids.size());
+  EXPECT_LE(scratches.size(), static_cast<size_t>(kThreads));
+}
+
+TEST(WorkerPoolTest, SubmitShortRunsOnTheCallingThreadWhenAWorkerIsFree) {
+  WorkerPool pool({2, 4});
+  std::thread::id ran_on;
+  bool on_worker = false;
+  ASSERT_TRUE(pool.SubmitShort(MakeJob([&](SearchScratch&) {
+                    ran_on = std::this_thread::get_id();
+                    on_worker = WorkerPool::OnWorkerThread();
+                  }))
+                  .ok());
+  // It ran before SubmitShort returned, here, counted as a worker would be.
+  EXPECT_EQ(ran_on, std::this_thread::get_id());
+  EXPECT_TRUE(on_worker);
+  EXPECT_FALSE(WorkerPool::OnWorkerThread());
+  EXPECT_EQ(pool.inline_runs(), 1);
+  EXPECT_GT(pool.busy_time(), absl::ZeroDuration());
+}
+
+TEST(WorkerPoolTest, SubmitShortQueuesWhenEveryWorkerIsBusy) {
+  WorkerPool pool({2, 4});
+  Blockers blockers(pool, 2);
+  absl::Notification ran;
+  std::thread::id ran_on;
+  ASSERT_TRUE(pool.SubmitShort(MakeJob([&](SearchScratch&) {
+                    ran_on = std::this_thread::get_id();
+                    ran.Notify();
+                  }))
+                  .ok());
+  EXPECT_FALSE(ran.HasBeenNotified());  // queued behind the blockers
+  EXPECT_EQ(pool.queued(), 1u);
+  blockers.Release();
+  ran.WaitForNotification();
+  EXPECT_NE(ran_on, std::this_thread::get_id());
+  EXPECT_EQ(pool.inline_runs(), 0);
+}
+
+TEST(WorkerPoolTest, SubmitShortStopsRunningInlineOnceShortJobsRanLong) {
+  WorkerPool::Options options{2, 4};
+  options.inline_max_job_time = absl::Microseconds(100);
+  WorkerPool pool(options);
+  // The first runs here (no history yet) and takes at least 20 ms ...
+  ASSERT_TRUE(pool.SubmitShort(MakeJob([](SearchScratch&) {
+                    absl::SleepFor(absl::Milliseconds(20));
+                  }))
+                  .ok());
+  EXPECT_EQ(pool.inline_runs(), 1);
+  // ... so the recent mean is over the limit and the next goes to a worker.
+  absl::Notification ran;
+  std::thread::id ran_on;
+  ASSERT_TRUE(pool.SubmitShort(MakeJob([&](SearchScratch&) {
+                    ran_on = std::this_thread::get_id();
+                    ran.Notify();
+                  }))
+                  .ok());
+  ran.WaitForNotification();
+  EXPECT_NE(ran_on, std::this_thread::get_id());
+  EXPECT_EQ(pool.inline_runs(), 1);
+}
+
+TEST(WorkerPoolTest, SubmitShortNeverRunsInlineWhenTheLimitIsZero) {
+  WorkerPool::Options options{2, 4};
+  options.inline_max_job_time = absl::ZeroDuration();
+  WorkerPool pool(options);
+  absl::Notification ran;
+  std::thread::id ran_on;
+  ASSERT_TRUE(pool.SubmitShort(MakeJob([&](SearchScratch&) {
+                    ran_on = std::this_thread::get_id();
+                    ran.Notify();
+                  }))
+                  .ok());
+  ran.WaitForNotification();
+  EXPECT_NE(ran_on, std::this_thread::get_id());
+  EXPECT_EQ(pool.inline_runs(), 0);
+}
+
+TEST(WorkerPoolTest, AnInlineJobHoldsAWorkersPlace) {
+  // One thread: while a caller runs a short job itself, no worker starts
+  // another (at most threads() jobs run at once, wherever they run).
+  WorkerPool pool({1, 4});
+  absl::Notification inline_started, release;
+  std::atomic<bool> inline_running{false};
+  std::thread caller([&] {
+    EXPECT_TRUE(pool.SubmitShort(MakeJob([&](SearchScratch&) {
+                      inline_running.store(true);
+                      inline_started.Notify();
+                      release.WaitForNotification();
+                      inline_running.store(false);
+                    }))
+                    .ok());
+  });
+  inline_started.WaitForNotification();
+  absl::Notification queued_ran;
+  std::atomic<bool> overlapped{false};
+  ASSERT_TRUE(pool.Submit(MakeJob([&](SearchScratch&) {
+                    overlapped.store(inline_running.load());
+                    queued_ran.Notify();
+                  }))
+                  .ok());
+  // Time for a wrong pool to start the queued job (a lower bound only).
+  absl::SleepFor(absl::Milliseconds(50));
+  EXPECT_FALSE(queued_ran.HasBeenNotified());
+  release.Notify();
+  caller.join();
+  queued_ran.WaitForNotification();
+  EXPECT_FALSE(overlapped.load());
+  EXPECT_EQ(pool.inline_runs(), 1);
+}
+
+TEST(WorkerPoolTest, SubmitShortAfterShutdownIsUnavailable) {
+  WorkerPool pool({1, 4});
+  pool.Shutdown(WorkerPool::ShutdownMode::kDrain);
+  EXPECT_TRUE(absl::IsUnavailable(pool.SubmitShort(MakeJob([](SearchScratch&) {}))));
 }
 
 TEST(WorkerPoolTest, FullQueueFailsFastWithResourceExhausted) {

@@ -412,6 +412,7 @@ class PathdClient:
                  planner: str | None = None,
                  replan_max_expansions: int = 0,
                  control: planner_service_pb2.ControlOptions | dict | None = None,
+                 fleet: str | None = None, fleet_solver: str | None = None,
                  timeout: float | None = None, **option_keywords) -> NavigationSession:
         """Opens a Navigate session and waits for its first path.
 
@@ -430,6 +431,14 @@ class PathdClient:
         each robot state with a velocity command (docs/service.md, "Control
         sessions"). The robot needs a size: robot_radius_m or a footprint.
 
+        With `fleet` (a group name) it is a fleet session: the robots of the
+        group's sessions on the map are planned together (`fleet_solver`:
+        "lacam", "pibt", "prioritized" or "cbs"; the group's when None) and
+        each answer and push carries `update.fleet`, the robot's timed path
+        and how far it may drive now (`released_cells`); move() to each of
+        those cells in turn and wait_push() when none is left
+        (docs/service.md, "Fleet sessions").
+
         `timeout` bounds each wait for an answer, not the session, which
         lasts until closed (the server ends it after --session_idle_timeout
         without a message).
@@ -440,6 +449,11 @@ class PathdClient:
             replan_max_expansions=replan_max_expansions)
         if control is not None:
             open_request.control.CopyFrom(_control_options(control))
+        if fleet is not None:
+            open_request.fleet.group = fleet
+            if fleet_solver is not None:
+                open_request.fleet.solver = planner_service_pb2.FleetSolver.Value(
+                    "FLEET_SOLVER_" + fleet_solver.upper())
         return NavigationSession(self._planner, map_name, open_request,
                                  self.timeout if timeout is None else timeout)
 

@@ -520,7 +520,7 @@ class NavigateUpdate:
     """One message of a Navigate session's server side.
 
     `event` is "OPENED", "MOVED", "OBSERVED" or "CONTROL" (the answer to
-    request `seq`) or "MAP_CHANGED" (pushed unasked, seq 0).
+    request `seq`), or "MAP_CHANGED" or "FLEET" (pushed unasked, seq 0).
     """
 
     event: str
@@ -540,10 +540,12 @@ class NavigateUpdate:
     # then set only when the global path changed; has_plan says so).
     command: VelocityCommand | None = None
     has_plan: bool = True
+    # Fleet sessions: the robot's timed path, progress and release.
+    fleet: FleetSessionState | None = None
 
     @property
     def pushed(self) -> bool:
-        return self.event == "MAP_CHANGED"
+        return self.event in ("MAP_CHANGED", "FLEET")
 
     @classmethod
     def from_proto(cls, response: planner_service_pb2.NavigateResponse
@@ -563,7 +565,45 @@ class NavigateUpdate:
                              if response.HasField("robot_pose") else None),
             command=(VelocityCommand.from_proto(response.command)
                      if response.HasField("command") else None),
-            has_plan=response.HasField("plan"))
+            has_plan=response.HasField("plan"),
+            fleet=(FleetSessionState.from_proto(response.fleet)
+                   if response.HasField("fleet") else None))
+
+
+@dataclasses.dataclass(frozen=True)
+class FleetSessionState:
+    """A fleet session's robot in its group's plan (docs/service.md, "Fleet
+    sessions"): `path[t]` is its cell at step t of plan `epoch` (`world` the
+    cells' centres, metres), `progress` the index where it last reported
+    standing, `release` the furthest index it may drive to now (report each
+    cell as it arrives); `planned` is False while the group waits for a
+    joint plan (`reason` says why), when the release does not grow."""
+
+    epoch: int
+    path: list[Cell]
+    world: list[WorldPoint]
+    progress: int
+    release: int
+    robots: int
+    planned: bool
+    reason: str
+
+    @property
+    def released_cells(self) -> list[Cell]:
+        """The cells the robot may drive through now, in order."""
+        return self.path[self.progress + 1:self.release + 1]
+
+    @property
+    def arrived(self) -> bool:
+        return self.planned and self.progress + 1 == len(self.path)
+
+    @classmethod
+    def from_proto(cls, fleet: planner_service_pb2.FleetSessionPlan) -> FleetSessionState:
+        return cls(epoch=fleet.epoch,
+                   path=[Cell(c.x, c.y) for c in fleet.path.cells],
+                   world=[WorldPoint(w.x, w.y) for w in fleet.path.world],
+                   progress=fleet.progress, release=fleet.release, robots=fleet.robots,
+                   planned=fleet.planned, reason=fleet.reason)
 
 
 @dataclasses.dataclass(frozen=True)
