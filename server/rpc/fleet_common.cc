@@ -70,6 +70,13 @@ absl::Status StoppedStatus(PlanOutcome outcome, const char* what, int64_t budget
   }
 }
 
+absl::Status CheckFleetSolver(v1::FleetSolver solver, std::string_view field) {
+  if (v1::FleetSolver_IsValid(solver)) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s %d is not a FleetSolver value (lacam, pibt, prioritized or cbs)", field,
+      static_cast<int>(solver)));
+}
+
 FleetSolver FleetSolverFromProto(v1::FleetSolver solver) {
   switch (solver) {
     case v1::FLEET_SOLVER_PRIORITIZED:

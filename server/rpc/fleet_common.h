@@ -35,7 +35,10 @@ struct FleetQuery {
   const PlanQuery& query() const { return decoded.query; }
 };
 
-// The solver of a request (UNSPECIFIED: LaCAM), and back.
+// The solver of a request (UNSPECIFIED: LaCAM), and back. CheckFleetSolver
+// names `field` when the value is none of the enum's (the wire carries any
+// number).
+absl::Status CheckFleetSolver(v1::FleetSolver solver, std::string_view field);
 FleetSolver FleetSolverFromProto(v1::FleetSolver solver);
 v1::FleetSolver FleetSolverToProto(FleetSolver solver);
 

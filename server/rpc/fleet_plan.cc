@@ -99,6 +99,7 @@ absl::Status PrepareFleet(const PlanDeps& deps, FleetCall& call) {
   PATHD_RETURN_IF_ERROR(CheckDistinct(r, call.goals, "goal"));
 
   FleetOptions& o = call.options;
+  PATHD_RETURN_IF_ERROR(CheckFleetSolver(r.solver(), "solver"));
   o.solver = FleetSolverFromProto(r.solver());
   if (r.restarts() < 0) {
     return absl::InvalidArgumentError(

@@ -118,6 +118,7 @@ absl::Status NavigationSearch::OpenFleet(const v1::NavigateOpen& open,
         "(open.fleet.solver); leave open.planner unset");
   }
   const v1::FleetSessionOptions& fleet = open.fleet();
+  PATHD_RETURN_IF_ERROR(CheckFleetSolver(fleet.solver(), "open.fleet.solver"));
   const int64_t max_ms = absl::ToInt64Milliseconds(FleetGroups::kMaxTimeLimit);
   if (fleet.time_limit_ms() < 0 || fleet.time_limit_ms() > max_ms) {
     return absl::InvalidArgumentError(absl::StrFormat(

@@ -1,7 +1,7 @@
 // bad_input_test's rows for the fleet map queries: Table, Nearest, Trip and
-// Isochrone, Plan's snap_start options, and PlanFleet. pathd runs with
-// --max_table_entries=kMaxTableEntries, --max_trip_stops=kMaxTripStops and
-// --max_fleet_robots=kMaxFleetRobots.
+// Isochrone, Plan's snap_start options, PlanFleet and fleet sessions. pathd
+// runs with --max_table_entries=kMaxTableEntries, --max_trip_stops=
+// kMaxTripStops and --max_fleet_robots=kMaxFleetRobots.
 #include <utility>
 
 #include "tests/e2e/bad_input_fixture.h"
@@ -246,6 +246,51 @@ void BadInputTest::AddFleetCases(std::vector<Case>& cases) {
              StatusCode::INVALID_ARGUMENT, "max_steps -1 must be >= 0");
   fleet_case("unknown map", [](F& r) { r.set_map("nowhere"); }, StatusCode::NOT_FOUND,
              "nowhere");
+  fleet_case("unknown solver", [](F& r) { r.set_solver(static_cast<v1::FleetSolver>(9)); },
+             StatusCode::INVALID_ARGUMENT, "solver 9 is not a FleetSolver value");
+
+  // ---- fleet sessions (Navigate with open.fleet) ----
+  const auto session_case = [&](const std::string& what,
+                                std::function<void(v1::NavigateRequest&)> change,
+                                const std::string& message,
+                                std::vector<v1::NavigateRequest> then = {}) {
+    v1::NavigateRequest open;
+    open.set_seq(1);
+    open.mutable_open()->set_map("room");
+    *open.mutable_open()->mutable_start() = CellPos(1, 1);
+    *open.mutable_open()->mutable_goal() = CellPos(14, 14);
+    open.mutable_open()->mutable_fleet()->set_group("bad");
+    change(open);
+    std::vector<v1::NavigateRequest> messages = {open};
+    messages.insert(messages.end(), then.begin(), then.end());
+    cases.push_back({"Navigate", "fleet: " + what,
+                     [messages, this] { return Navigate(messages); },
+                     StatusCode::INVALID_ARGUMENT, message});
+  };
+  using Nav = v1::NavigateRequest;
+  const auto fleet_options = [](Nav& r) { return r.mutable_open()->mutable_fleet(); };
+  session_case("unknown solver",
+               [&](Nav& r) { fleet_options(r)->set_solver(static_cast<v1::FleetSolver>(7)); },
+               "open.fleet.solver 7 is not a FleetSolver value");
+  session_case("negative time limit", [&](Nav& r) { fleet_options(r)->set_time_limit_ms(-1); },
+               "open.fleet.time_limit_ms -1 must be in [0, 60000]");
+  session_case("time limit over a minute",
+               [&](Nav& r) { fleet_options(r)->set_time_limit_ms(60001); },
+               "open.fleet.time_limit_ms 60001 must be in [0, 60000]");
+  session_case("with control", [](Nav& r) { r.mutable_open()->mutable_control(); },
+               "open.fleet: a fleet session's robot follows its timed path");
+  session_case("with a planner", [](Nav& r) { r.mutable_open()->set_planner(v1::PLANNER_ASTAR); },
+               "open.planner: a fleet session is planned by its group's multi-robot solver");
+  session_case("goal on a blocked cell",
+               [](Nav& r) { *r.mutable_open()->mutable_goal() = CellPos(5, 5); }, "(5, 5)");
+  v1::NavigateRequest private_observation;
+  private_observation.set_seq(2);
+  private_observation.mutable_observe()->set_session_only(true);
+  v1::CellChange* change = private_observation.mutable_observe()->add_changes();
+  *change->mutable_cell() = CellPos(2, 2).cell();
+  change->set_cost(254);
+  session_case("session_only observation", [](Nav&) {}, "session_only is not for fleet sessions",
+               {private_observation});
 }
 
 }  // namespace pathd::bad_input_test
