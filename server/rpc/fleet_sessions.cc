@@ -64,12 +64,21 @@ struct FleetGroups::Group {
                       [](const Member& m) { return !m.gone; }));
   }
   // Robots still driving towards the end of a stretch they were released for.
+  // A robot whose released stretch past its progress only waits where it
+  // stands has nothing left to drive: it counts as settled.
   int Unsettled() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     if (!schedule.has_value()) return 0;
     int n = 0;
     for (const Member& m : members) {
-      if (!m.gone && m.robot >= 0 && schedule->progress(m.robot) < m.granted)
-        ++n;
+      if (m.gone || m.robot < 0) continue;
+      const std::vector<Cell>& path = schedule->path(m.robot);
+      const int64_t progress = schedule->progress(m.robot);
+      for (int64_t t = progress + 1; t <= m.granted; ++t) {
+        if (path[t] != path[progress]) {
+          ++n;
+          break;
+        }
+      }
     }
     return n;
   }
@@ -178,6 +187,18 @@ void PushTo(const Group& g, const Member& m)
   m.push(std::move(push));
 }
 
+// The member's release now: as far as the schedule allows, at most
+// kReleaseHorizon steps past its progress. Waits where it stands count as
+// done first (the robot need not report its own cell again to pass them,
+// and a wait ends no visit, so no other robot's release changes).
+int64_t ReleaseOf(Group& g, const Member& m)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(g.mu) {
+  FleetSchedule& schedule = *g.schedule;
+  schedule.Report(m.robot, schedule.path(m.robot)[schedule.progress(m.robot)]);
+  return std::min(schedule.Release(m.robot),
+                  schedule.progress(m.robot) + FleetGroups::kReleaseHorizon);
+}
+
 // Raises every release the schedule allows (not while frozen); the members
 // whose release grew, except `quiet`, are pushed.
 void GrantAndPush(Group& g, uint64_t quiet)
@@ -185,9 +206,7 @@ void GrantAndPush(Group& g, uint64_t quiet)
   if (!g.schedule.has_value() || g.replan_wanted) return;
   for (Member& m : g.members) {
     if (m.gone || m.robot < 0) continue;
-    const int64_t release =
-        std::min(g.schedule->Release(m.robot),
-                 g.schedule->progress(m.robot) + FleetGroups::kReleaseHorizon);
+    const int64_t release = ReleaseOf(g, m);
     if (release <= m.granted) continue;
     m.granted = release;
     if (m.id != quiet) PushTo(g, m);
@@ -250,9 +269,7 @@ void PlanGroup(Group& g, uint64_t quiet) ABSL_EXCLUSIVE_LOCKS_REQUIRED(g.mu) {
       g.schedule.emplace(plan->paths, g.snapshot->grid->width());
       for (size_t i = 0; i < g.members.size(); ++i) {
         g.members[i].robot = static_cast<int>(i);
-        g.members[i].granted =
-            std::min(g.schedule->Release(static_cast<int>(i)),
-                     FleetGroups::kReleaseHorizon);
+        g.members[i].granted = ReleaseOf(g, g.members[i]);
       }
     }
   }
@@ -332,8 +349,17 @@ absl::Status FleetGroups::AddLocked(Join& join, const std::string& group_name,
     bool in_the_way = m.at == join.start;
     if (g->schedule.has_value() && m.robot >= 0) {
       const std::vector<Cell>& path = g->schedule->path(m.robot);
+      // Every cell its released moves sweep: both ends and, diagonally,
+      // the two side cells.
       for (int64_t t = g->schedule->progress(m.robot); t <= m.granted; ++t) {
         in_the_way = in_the_way || path[t] == join.start;
+        if (t == m.granted) break;
+        const Cell a = path[t];
+        const Cell b = path[t + 1];
+        if (a.x != b.x && a.y != b.y) {
+          in_the_way = in_the_way || Cell{a.x, b.y} == join.start ||
+                       Cell{b.x, a.y} == join.start;
+        }
       }
     }
     if (in_the_way) {
@@ -363,7 +389,9 @@ absl::Status FleetGroups::AddLocked(Join& join, const std::string& group_name,
   g->members.push_back(std::move(member));
   Freeze(*g, join.session_id);
   answer->set_event(v1::NAVIGATE_EVENT_OPENED);
-  Fill(*g, *g->Find(join.session_id), answer);
+  const Member& joined = *g->Find(join.session_id);
+  Fill(*g, joined, answer);
+  joined.push(*answer);
   return absl::OkStatus();
 }
 
@@ -442,19 +470,24 @@ absl::Status FleetGroups::Report(uint64_t id, Cell cell,
   GrantAndPush(*g, id);
   m = g->Find(id);
   Fill(*g, *m, answer);
+  m->push(*answer);
   return absl::OkStatus();
 }
 
-void FleetGroups::Describe(uint64_t id, v1::NavigateResponse* answer) {
+bool FleetGroups::Describe(uint64_t id, v1::NavigateResponse* answer) {
   std::shared_ptr<Group> g;
   {
     absl::MutexLock lock(&mu_);
     auto it = by_session_.find(id);
-    if (it == by_session_.end()) return;
+    if (it == by_session_.end()) return false;
     g = it->second;
   }
   absl::MutexLock lock(&g->mu);
-  if (const Member* m = g->Find(id); m != nullptr) Fill(*g, *m, answer);
+  const Member* m = g->Find(id);
+  if (m == nullptr) return false;
+  Fill(*g, *m, answer);
+  m->push(*answer);
+  return true;
 }
 
 void FleetGroups::Remove(uint64_t id) {

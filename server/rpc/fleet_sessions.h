@@ -46,8 +46,11 @@ namespace pathd::server {
 
 class FleetGroups {
  public:
-  // Queues a message to the member's client, unasked. Called with the
-  // group's lock held: it must only queue.
+  // Queues a message to the member's client: a push, or the answer to its
+  // own message. Called with the group's lock held: it must only queue. The
+  // group queues a member's answers itself, under that lock, so a push made
+  // after an answer never reaches the client before it (a client keeps the
+  // newest state it received).
   using Push = std::function<void(v1::NavigateResponse)>;
 
   struct Join {
@@ -72,23 +75,26 @@ class FleetGroups {
   FleetGroups(const FleetGroups&) = delete;
   FleetGroups& operator=(const FleetGroups&) = delete;
 
-  // Adds a robot to its group (created on first use) and fills `answer`
-  // (its fleet part and plan). The group is planned again once every robot
-  // has finished the moves it was released for (at once when they have).
-  // INVALID_ARGUMENT when the start is where another robot of the group
-  // stands or may drive now, the goal is another robot's goal, or the
-  // solver or time limit differ from the group's; errors of the shaping.
+  // Adds a robot to its group (created on first use), and fills and queues
+  // `answer` (its fleet part and plan; the caller set its seq). The group is
+  // planned again once every robot has finished the moves it was released for
+  // (at once when they have). INVALID_ARGUMENT when the start is where another
+  // robot of the group stands or may drive now, the goal is another robot's
+  // goal, or the solver or time limit differ from the group's; errors of the
+  // shaping.
   absl::Status Add(Join join, v1::NavigateResponse* answer)
       ABSL_LOCKS_EXCLUDED(mu_);
 
-  // The robot of session `id` stands in `cell`; fills `answer`. Other
+  // The robot of session `id` stands in `cell`; fills and queues `answer`
+  // (the caller set its seq and event). Other
   // robots whose release grew are pushed. A cell off the robot's released
   // stretch plans the group again from where the robots stand.
   absl::Status Report(uint64_t id, Cell cell, v1::NavigateResponse* answer)
       ABSL_LOCKS_EXCLUDED(mu_);
 
-  // Fills `answer` with the session's current fleet state (observations).
-  void Describe(uint64_t id, v1::NavigateResponse* answer)
+  // Fills and queues `answer` with the session's current fleet state
+  // (observations); false (nothing queued) when the session is in no group.
+  bool Describe(uint64_t id, v1::NavigateResponse* answer)
       ABSL_LOCKS_EXCLUDED(mu_);
 
   // The session ended: its robot leaves its group.

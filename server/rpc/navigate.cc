@@ -115,12 +115,12 @@ class NavigationSession final : public NavigateReactor {
                            [this](SearchScratch& scratch) { RunPush(scratch); });
   }
 
-  // A fleet session's push from its group (FleetGroups holds the group's
-  // lock: queue only).
+  // A fleet session's push, or its answer to a message, from its group
+  // (FleetGroups holds the group's lock: queue only).
   void PushFleet(v1::NavigateResponse push) {
     absl::MutexLock lock(&mu_);
     if (finish_requested_ || done_) return;
-    ++pushes_;
+    if (push.event() == v1::NAVIGATE_EVENT_FLEET) ++pushes_;
     EnqueueLocked(std::move(push));
   }
 
@@ -397,10 +397,12 @@ class NavigationSession final : public NavigateReactor {
     v1::NavigateResponse response;
     absl::Status status;
     std::shared_ptr<ControlSession> control;
+    bool queued;
     {
       absl::MutexLock plan_lock(&plan_mu_);
       status = search_.Handle(message, scratch, &response);
       control = search_.control();
+      queued = search_.TakeAnswerQueued();
     }
     {
       absl::MutexLock lock(&mu_);
@@ -410,7 +412,7 @@ class NavigationSession final : public NavigateReactor {
       if (!status.ok()) {
         FinishLocked(status);
       } else {
-        EnqueueLocked(std::move(response));
+        if (!queued) EnqueueLocked(std::move(response));
         if (pending_end_.has_value()) {
           FinishLocked(*pending_end_);
         } else if (!finish_requested_) {

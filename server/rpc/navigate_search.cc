@@ -151,6 +151,7 @@ absl::Status NavigationSearch::OpenFleet(const v1::NavigateOpen& open,
   if (fleet.time_limit_ms() > 0) join.time_limit = absl::Milliseconds(fleet.time_limit_ms());
   join.push = deps_.push;
   PATHD_RETURN_IF_ERROR(deps_.fleets->Add(std::move(join), response));
+  answer_queued_ = true;
   fleet_ = true;
   on_open_(snapshot_->name);
   return absl::OkStatus();
@@ -174,7 +175,7 @@ absl::Status NavigationSearch::HandleFleet(const v1::NavigateRequest& message,
                            deps_.store.Update(snapshot_->name, changes, std::nullopt));
     snapshot_ = result.snapshot;
     response->set_applied_version(result.snapshot->version);
-    deps_.fleets->Describe(deps_.session_id, response);
+    answer_queued_ = deps_.fleets->Describe(deps_.session_id, response);
     return absl::OkStatus();
   }
   response->set_event(v1::NAVIGATE_EVENT_MOVED);
@@ -185,7 +186,9 @@ absl::Status NavigationSearch::HandleFleet(const v1::NavigateRequest& message,
         "pose %s is outside the %d x %d map", CellToString(cell), snapshot_->grid->width(),
         snapshot_->grid->height()));
   }
-  return deps_.fleets->Report(deps_.session_id, cell, response);
+  PATHD_RETURN_IF_ERROR(deps_.fleets->Report(deps_.session_id, cell, response));
+  answer_queued_ = true;
+  return absl::OkStatus();
 }
 
 absl::Status NavigationSearch::RequireOpen(const v1::NavigateRequest& message) {

@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -73,6 +74,11 @@ class NavigationSearch {
                    std::function<void(const std::string&)> on_open);
 
   bool is_open() const { return search_ != nullptr || kinematic_ != nullptr || fleet_; }
+
+  // True once after Handle when the answer was already queued to the stream
+  // (fleet sessions: their group queues answers in order with its pushes);
+  // the stream half must then not queue it again.
+  bool TakeAnswerQueued() { return std::exchange(answer_queued_, false); }
 
   // Answers one client message (open, pose or observe) into `response`, with
   // the new plan. An error ends the session. `scratch` is the worker's.
@@ -141,6 +147,7 @@ class NavigationSearch {
   // A fleet session (neither search_ nor kinematic_): its robot is in a
   // group of deps_.fleets.
   bool fleet_ = false;
+  bool answer_queued_ = false;
   // Kinematic sessions: the server's derived store for snapshot_ (when the
   // session plans on the version's own grid) and the version it is for.
   std::unique_ptr<DerivedStore> shared_derived_;
