@@ -104,4 +104,30 @@ v1::FleetSolver FleetSolverToProto(FleetSolver solver) {
   return v1::FLEET_SOLVER_LACAM;
 }
 
+double StepsLength(const std::vector<Cell>& cells) {
+  double length = 0.0;
+  for (size_t t = 1; t < cells.size(); ++t) {
+    const bool diagonal = cells[t].x != cells[t - 1].x && cells[t].y != cells[t - 1].y;
+    const bool moved = cells[t].x != cells[t - 1].x || cells[t].y != cells[t - 1].y;
+    length += diagonal ? kSqrt2 : (moved ? 1.0 : 0.0);
+  }
+  return length;
+}
+
+void FillFleetPath(const std::vector<Cell>& cells, const Grid& stored, v1::FleetPath* path) {
+  for (const Cell c : cells) {
+    *path->add_cells() = ToProto(c);
+    const WorldPoint w = stored.CellCenter(c);
+    v1::WorldPoint* p = path->add_world();
+    p->set_x(w.x);
+    p->set_y(w.y);
+  }
+  int64_t cost = static_cast<int64_t>(cells.size()) - 1;
+  while (cost > 0 && cells[cost - 1] == cells.back()) --cost;
+  path->set_cost(cost);
+  const double length = StepsLength(cells);
+  path->set_length(length);
+  path->set_length_m(length * stored.resolution());
+}
+
 }  // namespace pathd::server

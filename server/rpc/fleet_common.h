@@ -35,6 +35,15 @@ struct FleetQuery {
   const PlanQuery& query() const { return decoded.query; }
 };
 
+// Distance along timed cells: a straight move 1, a diagonal sqrt(2), a
+// wait 0 (cells).
+double StepsLength(const std::vector<Cell>& cells);
+
+// A robot's timed path in a response: its cells and their world centres on
+// `stored`, its cost (the step of its last arrival at its goal) and length
+// in cells and metres.
+void FillFleetPath(const std::vector<Cell>& cells, const Grid& stored, v1::FleetPath* path);
+
 // The solver of a request (UNSPECIFIED: LaCAM), and back. CheckFleetSolver
 // names `field` when the value is none of the enum's (the wire carries any
 // number).

@@ -170,16 +170,6 @@ absl::StatusOr<FleetProblem> BuildProblem(
   return problem;
 }
 
-double PathLength(const std::vector<Cell>& cells) {
-  double length = 0.0;
-  for (size_t t = 1; t < cells.size(); ++t) {
-    const bool diagonal = cells[t].x != cells[t - 1].x && cells[t].y != cells[t - 1].y;
-    const bool moved = cells[t].x != cells[t - 1].x || cells[t].y != cells[t - 1].y;
-    length += diagonal ? kSqrt2 : (moved ? 1.0 : 0.0);
-  }
-  return length;
-}
-
 absl::Status AnswerFleet(FleetCall& call, InflationCache& inflation,
                          int64_t max_message_bytes) {
   const absl::Time started = absl::Now();
@@ -243,19 +233,7 @@ absl::Status AnswerFleet(FleetCall& call, InflationCache& inflation,
   for (size_t i = 0; i < plan.paths.size(); ++i) {
     const std::vector<Cell>& cells = plan.paths[i];
     v1::FleetPath* path = out.add_paths();
-    for (const Cell c : cells) {
-      *path->add_cells() = ToProto(c);
-      const WorldPoint w = stored.CellCenter(c);
-      v1::WorldPoint* p = path->add_world();
-      p->set_x(w.x);
-      p->set_y(w.y);
-    }
-    int64_t cost = static_cast<int64_t>(cells.size()) - 1;
-    while (cost > 0 && cells[cost - 1] == cells.back()) --cost;
-    path->set_cost(cost);
-    const double length = PathLength(cells);
-    path->set_length(length);
-    path->set_length_m(length * res);
+    FillFleetPath(cells, stored, path);
     path->set_name(r.robots(static_cast<int>(i)).name());
     path->set_radius_m(call.radii[i] * res);
   }

@@ -13,6 +13,7 @@
 #include "core/search/stop_condition.h"
 #include "core/status_macros.h"
 #include "server/convert.h"
+#include "server/rpc/fleet_common.h"
 
 namespace pathd::server {
 
@@ -95,16 +96,6 @@ std::pair<std::string, std::string> KeyOf(std::string_view map,
   return {std::string(map), std::string(group)};
 }
 
-double StepsLength(const std::vector<Cell>& cells) {
-  double length = 0.0;
-  for (size_t t = 1; t < cells.size(); ++t) {
-    const bool diagonal =
-        cells[t].x != cells[t - 1].x && cells[t].y != cells[t - 1].y;
-    const bool moved = cells[t] != cells[t - 1];
-    length += diagonal ? kSqrt2 : (moved ? 1.0 : 0.0);
-  }
-  return length;
-}
 
 // The member's part of an answer or push: the fleet state and, in plan,
 // found, the version and the rest of its path (waits folded).
@@ -141,19 +132,7 @@ void Fill(const Group& g, const Member& m, v1::NavigateResponse* out)
   if (!g.schedule.has_value() || m.robot < 0) return;
   const std::vector<Cell>& cells = g.schedule->path(m.robot);
   v1::FleetPath& path = *fleet.mutable_path();
-  for (const Cell c : cells) {
-    *path.add_cells() = ToProto(c);
-    const WorldPoint w = stored.CellCenter(c);
-    v1::WorldPoint* p = path.add_world();
-    p->set_x(w.x);
-    p->set_y(w.y);
-  }
-  int64_t cost = static_cast<int64_t>(cells.size()) - 1;
-  while (cost > 0 && cells[cost - 1] == cells.back()) --cost;
-  path.set_cost(cost);
-  const double length = StepsLength(cells);
-  path.set_length(length);
-  path.set_length_m(length * stored.resolution());
+  FillFleetPath(cells, stored, &path);
   path.set_radius_m(m.shape.robot_radius_cells * stored.resolution());
   const int64_t progress = g.schedule->progress(m.robot);
   fleet.set_progress(progress);
