@@ -156,8 +156,8 @@ void FollowVelocityDiffDrive(CellPoint desired, double yaw, double turn_gain,
                   std::max(limits.max_v, 0.0));
 }
 
-double RecordProgress(ProgressWindow& window, double remaining, double period,
-                      double window_seconds) {
+std::optional<double> RecordProgress(ProgressWindow& window, double remaining,
+                                     double period, double window_seconds) {
   if (!window.remaining.empty() && remaining > window.remaining.back() + 1.0) {
     window.remaining.clear();
   }
@@ -165,7 +165,7 @@ double RecordProgress(ProgressWindow& window, double remaining, double period,
       std::clamp(std::ceil(window_seconds / period), 1.0, 10000.0));
   window.remaining.push_back(remaining);
   while (window.remaining.size() > cycles + 1) window.remaining.pop_front();
-  if (window.remaining.size() < cycles + 1) return -1.0;
+  if (window.remaining.size() < cycles + 1) return std::nullopt;
   return window.remaining.front() - window.remaining.back();
 }
 
@@ -173,15 +173,16 @@ void ReportStall(ProgressWindow* window, const PathTarget& target,
                  double period, double window_seconds, double min_progress,
                  LocalPlan* plan) {
   if (window == nullptr) return;
-  const double progress =
+  const std::optional<double> progress =
       RecordProgress(*window, target.remaining, period, window_seconds);
-  if (progress >= 0 && progress < min_progress &&
+  plan->progress = progress;
+  if (progress.has_value() && *progress < min_progress &&
       plan->status == LocalStatus::kOk) {
     plan->status = LocalStatus::kLocalMinimum;
     plan->reason = absl::StrFormat(
         "%.3g cells of progress along the path in the last %g s (stalled, "
         "oscillating or circling)",
-        progress, window_seconds);
+        *progress, window_seconds);
   }
 }
 

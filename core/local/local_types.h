@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <deque>
 #include <initializer_list>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,10 @@ struct LocalPlan {
   // force terms summed (FIRAS).
   int64_t samples = 0;
   int64_t constraints = 0;
+  // Progress along the path over the stall window (cells), as ReportStall
+  // measured it; nullopt before the window is full or when nothing
+  // measured it.
+  std::optional<double> progress;
 };
 
 // The pose reached from `pose` after `seconds` at the constant body-frame
@@ -140,9 +145,10 @@ struct ProgressWindow {
 };
 
 // Records this cycle's remaining path length and returns the progress over
-// the window (cells) once it holds window_seconds of cycles; -1 before.
-// A new path (remaining grew by more than a cell) starts the window again.
-double RecordProgress(ProgressWindow& window, double remaining, double period,
+// the window (cells; negative when the robot lost ground) once it holds
+// window_seconds of cycles; nullopt before. A new path (remaining grew by
+// more than a cell) starts the window again.
+std::optional<double> RecordProgress(ProgressWindow& window, double remaining, double period,
                       double window_seconds);
 
 // When `window` is not null: records target.remaining, and when the plan's

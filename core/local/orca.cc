@@ -309,6 +309,63 @@ std::vector<ObstacleSegment> ObstacleSegmentsNear(
   return out;
 }
 
+namespace {
+
+// The distance from point p to segment ab.
+double PointSegmentDistance(Vec p, Vec a, Vec b) {
+  const Vec ab = b - a;
+  const double len2 = Norm2(ab);
+  const double t =
+      len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  return Norm(p - (a + t * ab));
+}
+
+// The distance between segments ab and cd (0 when they cross).
+double SegmentDistance(Vec a, Vec b, Vec c, Vec d) {
+  const double d1 = Det(b - a, c - a), d2 = Det(b - a, d - a);
+  const double d3 = Det(d - c, a - c), d4 = Det(d - c, b - c);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) &&
+      ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) {
+    return 0.0;
+  }
+  return std::min({PointSegmentDistance(a, c, d), PointSegmentDistance(b, c, d),
+                   PointSegmentDistance(c, a, b),
+                   PointSegmentDistance(d, a, b)});
+}
+
+}  // namespace
+
+PathTarget VisibleTarget(absl::Span<const CellPoint> path, CellPoint position,
+                         double radius,
+                         absl::Span<const ObstacleSegment> segments,
+                         double lookahead) {
+  const Vec p = V(position);
+  // The robot may already be closer to a segment than `radius` (it slid
+  // along a wall): the sight line must not get closer than it is now.
+  double now = std::numeric_limits<double>::infinity();
+  for (const ObstacleSegment& s : segments) {
+    now = std::min(now, PointSegmentDistance(p, V(s.a), V(s.b)));
+  }
+  const double need = std::min(radius, now) - 1e-6;
+  constexpr int kTries = 8;
+  PathTarget target;
+  for (int i = 0; i < kTries; ++i) {
+    // lookahead, then shorter by equal steps down to an eighth of it.
+    const double reach = lookahead * (kTries - i) / kTries;
+    target = FindPathTarget(path, position, reach);
+    const Vec t = V(target.point);
+    bool clear = true;
+    for (const ObstacleSegment& s : segments) {
+      if (SegmentDistance(p, t, V(s.a), V(s.b)) < need) {
+        clear = false;
+        break;
+      }
+    }
+    if (clear) return target;
+  }
+  return target;
+}
+
 OrcaSolution SolveOrcaLines(absl::Span<const OrcaLine> lines, size_t hard_lines,
                             double max_speed, CellPoint preferred) {
   std::vector<Line> ls;
@@ -397,8 +454,11 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
   const double r = radius + options.safety_margin;
   const double max_speed = std::max(limits.max_v, 0.0);
 
-  // Preferred velocity: toward the lookahead point, slowing to stop at the end.
-  const PathTarget target = FindPathTarget(path, position, options.lookahead);
+  // Preferred velocity: toward the lookahead point, slowing to stop at the
+  // end; the lookahead shortened until the robot sees it past the static
+  // obstacles (a point round a corner would pull it into the corner).
+  const PathTarget target =
+      VisibleTarget(path, position, r, segments, options.lookahead);
   Vec preferred;
   const bool at_goal = target.distance_to_goal <= options.goal_tolerance;
   if (!at_goal) {

@@ -76,6 +76,18 @@ OrcaLine OrcaLineForSegment(CellPoint position, double radius,
                             const ObstacleSegment& segment, double horizon,
                             double period);
 
+// Where a robot of `radius` (cells) at `position` should head on `path`:
+// FindPathTarget's lookahead point, or the first of shorter ones (7/8, 3/4,
+// ... 1/8 of `lookahead`) that it sees past `segments` with the clearance
+// it has (the sight line keeps `radius` from every segment, or as much as
+// the robot keeps now when it is closer). A point round a corner would pull
+// the robot into the corner. The shortest when none is clear.
+// Precondition: path not empty.
+PathTarget VisibleTarget(absl::Span<const CellPoint> path, CellPoint position,
+                         double radius,
+                         absl::Span<const ObstacleSegment> segments,
+                         double lookahead);
+
 // The answer of the linear programs.
 struct OrcaSolution {
   CellPoint velocity;

@@ -208,7 +208,8 @@ class NavigationSession final : public NavigateReactor {
     v1::NavigateResponse response;
     response.set_seq(message.seq());
     Cell cell;
-    const absl::Status status = control.Cycle(message.state(), &response, &cell);
+    std::optional<DetourRequest> detour;
+    const absl::Status status = control.Cycle(message.state(), &response, &cell, &detour);
     owner_.control_cycles_.Observe(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - arrived).count());
     {
@@ -219,6 +220,11 @@ class NavigationSession final : public NavigateReactor {
         FinishLocked(status);
       } else {
         EnqueueLocked(std::move(response));
+        if (detour.has_value()) {
+          // Planned from wherever the robot stands, even its last cell.
+          detour_ = std::move(detour);
+          planned_cell_.reset();
+        }
         ScheduleReplanLocked(cell);
         if (pending_end_.has_value()) {
           FinishLocked(*pending_end_);
@@ -273,17 +279,19 @@ class NavigationSession final : public NavigateReactor {
 
   void RunControlReplan() {
     std::optional<Cell> robot;
+    std::optional<DetourRequest> detour;
     {
       absl::MutexLock lock(&mu_);
       replan_pending_ = false;
       robot = replan_cell_;
       planned_cell_ = replan_cell_;
+      detour = std::exchange(detour_, std::nullopt);
     }
     bool incomplete = false;
     absl::Status status;
     {
       absl::MutexLock plan_lock(&plan_mu_);
-      status = search_.ReplanControl(robot, &incomplete);
+      status = search_.ReplanControl(robot, &incomplete, std::move(detour));
     }
     {
       absl::MutexLock lock(&mu_);
@@ -479,6 +487,8 @@ class NavigationSession final : public NavigateReactor {
   std::optional<Cell> replan_cell_ ABSL_GUARDED_BY(mu_);
   std::optional<Cell> planned_cell_ ABSL_GUARDED_BY(mu_);
   bool replan_incomplete_ ABSL_GUARDED_BY(mu_) = false;
+  // A stalled robot's detour, for the next control replan.
+  std::optional<DetourRequest> detour_ ABSL_GUARDED_BY(mu_);
   std::optional<absl::Status> pending_end_ ABSL_GUARDED_BY(mu_);
   std::deque<v1::NavigateResponse> writes_ ABSL_GUARDED_BY(mu_);
   // The last answer or push queued, for ListSessions.

@@ -119,6 +119,81 @@ std::vector<OptionSpec> FirasSpecs() {
   };
 }
 
+// Options every local planner has: the session's, not the planner's.
+void AddSessionSpecs(std::vector<OptionSpec>& specs) {
+  specs.push_back({"detour_range", Unit::kMetres, true,
+                   [](ControlConfig& c, double v) { c.detour_range = v; }});
+}
+
+// The stall rule of the session's local planner: its window (s) and the
+// least progress along the path over it (cells).
+std::pair<double, double> StallRule(const ControlConfig& c) {
+  switch (c.planner) {
+    case LocalPlannerKind::kDwa:
+      return {c.dwa.window_seconds, c.dwa.min_progress};
+    case LocalPlannerKind::kOrca:
+      return {c.orca.window_seconds, c.orca.min_progress};
+    case LocalPlannerKind::kFiras:
+      return {c.firas.window_seconds, c.firas.min_progress};
+  }
+  return {c.orca.window_seconds, c.orca.min_progress};
+}
+
+// What the local planner keeps between the robot's disc and the map, cells.
+double SafetyMargin(const ControlConfig& c) {
+  return c.planner == LocalPlannerKind::kOrca ? c.orca.safety_margin : 0.0;
+}
+
+// The distance from the centre of `cell` to the nearest blocked cell's area
+// (lethal or unknown, or outside the map), looking `limit` cells around it;
+// `limit` + 1 when nothing is that near.
+double AreaClearance(const Grid& grid, Cell cell, double limit) {
+  const int32_t reach = static_cast<int32_t>(std::ceil(limit + 0.5));
+  double best = limit + 1.0;
+  for (int32_t dy = -reach; dy <= reach; ++dy) {
+    for (int32_t dx = -reach; dx <= reach; ++dx) {
+      const Cell c{cell.x + dx, cell.y + dy};
+      if (grid.InBounds(c) && grid.cost(c) < kLethalCost) continue;
+      const double ex = std::max(std::abs(dx) - 0.5, 0.0);
+      const double ey = std::max(std::abs(dy) - 0.5, 0.0);
+      best = std::min(best, std::hypot(ex, ey));
+    }
+  }
+  return best;
+}
+
+// The cells within `need` + 1 of the path points ahead of `robot` (up to
+// `ahead` + 2 `need` cells along the path) whose area clearance is below
+// `need`: the gaps the robot's disc does not fit through.
+std::vector<Cell> TightCells(const Grid& grid, const std::vector<CellPoint>& path,
+                             CellPoint robot, double need, double ahead) {
+  std::vector<Cell> tight;
+  if (path.empty()) return tight;
+  const PathTarget at = FindPathTarget(path, robot, 0.0);
+  const double stretch = ahead + 2.0 * need;
+  const int32_t reach = static_cast<int32_t>(std::ceil(need + 1.0));
+  double walked = 0.0;
+  for (size_t i = at.nearest_segment; i < path.size() && walked <= stretch; ++i) {
+    if (i > at.nearest_segment) {
+      walked += std::hypot(path[i].x - path[i - 1].x, path[i].y - path[i - 1].y);
+    }
+    const Cell centre{static_cast<int32_t>(std::floor(path[i].x)),
+                      static_cast<int32_t>(std::floor(path[i].y))};
+    for (int32_t dy = -reach; dy <= reach; ++dy) {
+      for (int32_t dx = -reach; dx <= reach; ++dx) {
+        const Cell c{centre.x + dx, centre.y + dy};
+        if (!grid.InBounds(c) || grid.cost(c) >= kLethalCost) continue;
+        if (AreaClearance(grid, c, need) < need) tight.push_back(c);
+      }
+    }
+  }
+  std::sort(tight.begin(), tight.end(), [](const Cell& a, const Cell& b) {
+    return a.y != b.y ? a.y < b.y : a.x < b.x;
+  });
+  tight.erase(std::unique(tight.begin(), tight.end()), tight.end());
+  return tight;
+}
+
 // Distance defaults in metres (core's defaults are in cells, which depend on
 // the map's resolution): what a robot of about half a metre needs.
 void SetMetreDefaults(double resolution, ControlConfig& c) {
@@ -127,13 +202,14 @@ void SetMetreDefaults(double resolution, ControlConfig& c) {
   c.dwa.goal_tolerance = 0.1 / resolution;
   c.orca.neighbour_range = 3.0 / resolution;
   c.orca.obstacle_range = 1.0 / resolution;
-  c.orca.safety_margin = 0.02 / resolution;
+  c.orca.safety_margin = 0.05 / resolution;
   c.orca.lookahead = 1.0 / resolution;
   c.orca.goal_tolerance = 0.1 / resolution;
   c.firas.attraction_distance = 0.5 / resolution;
   c.firas.influence = 0.5 / resolution;
   c.firas.lookahead = 1.0 / resolution;
   c.firas.goal_tolerance = 0.1 / resolution;
+  c.detour_range = 0.5 / resolution;
 }
 
 const char* PlannerName(LocalPlannerKind kind) {
@@ -162,6 +238,7 @@ absl::Status ApplyLocalOptions(const v1::ControlOptions& control, double resolut
       specs = FirasSpecs();
       break;
   }
+  AddSessionSpecs(specs);
   // Sorted, so the first bad name reported does not depend on hashing.
   std::map<std::string, double> sorted(control.local_options().begin(),
                                        control.local_options().end());
@@ -431,7 +508,8 @@ absl::Status ControlSession::RefreshStatics() {
 }
 
 absl::Status ControlSession::Cycle(const v1::RobotState& state,
-                                   v1::NavigateResponse* response, Cell* robot_cell) {
+                                   v1::NavigateResponse* response, Cell* robot_cell,
+                                   std::optional<DetourRequest>* detour) {
   const SteadyTime received = std::chrono::steady_clock::now();
   std::shared_ptr<const GlobalPath> path;
   {
@@ -587,6 +665,7 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
   if (!plan.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("state: ", plan.status().message()));
   }
+  if (detour != nullptr) *detour = DetourFor(robot, *plan, obstacles, path->points);
   command->set_v(plan->v * res);
   command->set_vy(plan->vy * res);
   command->set_w(plan->w);
@@ -595,6 +674,67 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
   for (const Pose& p : plan->trajectory) AddWorldPose(grid, p, command);
   if (plan->trajectory.empty()) AddWorldPose(grid, robot.pose, command);
   return absl::OkStatus();
+}
+
+std::optional<DetourRequest> ControlSession::DetourFor(
+    const RobotState& robot, const LocalPlan& plan,
+    const std::vector<MovingObstacle>& obstacles, const std::vector<CellPoint>& path) {
+  ++cycles_since_detour_;
+  if (config_.detour_range <= 0) return std::nullopt;
+  const CellPoint at = robot.pose.point();
+  if (!blockers_.empty() &&
+      std::hypot(at.x - detour_origin_.x, at.y - detour_origin_.y) >= detour_clear_) {
+    const bool still_there = std::any_of(
+        blockers_.begin(), blockers_.end(), [&](const DetourRequest::Disc& d) {
+          return std::any_of(obstacles.begin(), obstacles.end(), [&](const MovingObstacle& o) {
+            return std::hypot(o.position.x - d.centre.x, o.position.y - d.centre.y) < d.radius;
+          });
+        });
+    if (!still_there) {
+      blockers_.clear();
+      DetourRequest lift;
+      lift.robot = at;
+      lift.robot_radius = config_.radius;
+      return lift;
+    }
+  }
+  if (plan.status == LocalStatus::kGoalReached) return std::nullopt;
+  const auto [window_seconds, min_progress] = StallRule(config_);
+  const double window_cycles = std::ceil(window_seconds / config_.period);
+  if (!plan.progress.has_value() || *plan.progress >= min_progress ||
+      static_cast<double>(cycles_since_detour_) < window_cycles) {
+    return std::nullopt;
+  }
+  // What stands in the way: slow discs near the robot's (a neighbour that
+  // moves on is ORCA's business, not a detour's).
+  DetourRequest request;
+  request.robot = at;
+  request.robot_radius = config_.radius;
+  const double slow = 0.3 * std::max(config_.limits.max_v, config_.limits.max_vy);
+  for (const MovingObstacle& o : obstacles) {
+    const double gap = std::hypot(o.position.x - request.robot.x, o.position.y - request.robot.y) -
+                       o.radius - config_.radius;
+    if (gap > config_.detour_range) continue;
+    if (std::hypot(o.velocity.x, o.velocity.y) > slow) continue;
+    request.blockers.push_back(DetourRequest::Disc{o.position, o.radius});
+  }
+  // Gaps too tight for the robot, when it stalled against the map.
+  const double need = config_.radius + SafetyMargin(config_);
+  const Grid& grid = *snapshot_->grid;
+  if (AreaClearance(grid, robot.pose.cell(), need + 1.5) < need + 1.5) {
+    request.tight = TightCells(grid, path, request.robot, need, config_.detour_range);
+  }
+  if (request.blockers.empty() && request.tight.empty()) return std::nullopt;
+  cycles_since_detour_ = 0;
+  blockers_ = request.blockers;
+  detour_origin_ = request.robot;
+  double farthest = 0.0;
+  for (const DetourRequest::Disc& d : request.blockers) {
+    farthest = std::max(farthest, std::hypot(d.centre.x - at.x, d.centre.y - at.y) + d.radius);
+  }
+  // Past the farthest blocker by the robot's own size.
+  detour_clear_ = farthest + 2.0 * config_.radius;
+  return request;
 }
 
 }  // namespace pathd::server

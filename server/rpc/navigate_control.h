@@ -57,6 +57,27 @@ struct ControlConfig {
   // What DWA checks rollouts with: options.footprint, else the disc (set
   // by DecodeControlOptions).
   std::optional<Footprint> footprint;
+  // Detours (local_options "detour_range"): a stalled robot asks for a
+  // global path around the slow robots and obstacles whose discs come
+  // within this many cells of its own; 0 turns detours off.
+  double detour_range = 0.0;
+};
+
+// A stalled robot's request for a global path around what stands in its
+// way (docs/service.md, "Detours"): the robot and the discs to plan around,
+// cells in the grid frame. A request without blockers lifts the last ones.
+struct DetourRequest {
+  struct Disc {
+    CellPoint centre;
+    double radius = 0.0;
+  };
+  CellPoint robot;
+  double robot_radius = 0.0;
+  std::vector<Disc> blockers;
+  // Cells near the path ahead whose centres are closer to a blocked cell's
+  // area than the robot's radius and safety margin: a gap the grid's
+  // centre-to-centre inflation lets through but the robot's disc does not.
+  std::vector<Cell> tight;
 };
 
 // NavigateOpen.control (with the open's robot: `options` and `grid` for the
@@ -125,10 +146,13 @@ class ControlSession {
 
   // Answers one RobotState into `response` (event CONTROL, the command, and
   // the plan when the path is new to the client). `robot_cell` receives the
-  // robot's cell. INVALID_ARGUMENT naming a bad state field (the session
-  // ends, as for any bad message).
+  // robot's cell. `detour` (optional) receives a request when the robot has
+  // stalled over the local planner's window with slow robots or obstacles
+  // next to it (at most one per window). INVALID_ARGUMENT naming a bad state
+  // field (the session ends, as for any bad message).
   absl::Status Cycle(const v1::RobotState& state, v1::NavigateResponse* response,
-                     Cell* robot_cell) ABSL_LOCKS_EXCLUDED(mu_, path_mu_);
+                     Cell* robot_cell, std::optional<DetourRequest>* detour = nullptr)
+      ABSL_LOCKS_EXCLUDED(mu_, path_mu_);
 
   // Bytes the session keeps besides its D* Lite state: the path, its plan,
   // the progress window.
@@ -138,6 +162,16 @@ class ControlSession {
   // The map version's static obstacles, built or taken from the cache when
   // the version changed.
   absl::Status RefreshStatics() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+
+  // A detour request when `plan` says the robot stalled next to slow
+  // `obstacles` or a gap too tight for it and no request went out within
+  // the stall window; or one lifting the last blockers once the robot is
+  // clear of where it stalled and none of `obstacles` stands in their
+  // discs any more.
+  std::optional<DetourRequest> DetourFor(const RobotState& robot, const LocalPlan& plan,
+                                         const std::vector<MovingObstacle>& obstacles,
+                                         const std::vector<CellPoint>& path)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const Deps deps_;
   const ControlConfig config_;
@@ -152,6 +186,13 @@ class ControlSession {
 
   mutable absl::Mutex mu_;
   ProgressWindow progress_ ABSL_GUARDED_BY(mu_);
+  // Cycles since the last detour request (or since the session began).
+  int64_t cycles_since_detour_ ABSL_GUARDED_BY(mu_) = 0;
+  // The blockers of the last detour, where the robot stood then, and how
+  // far from there it must be before they may be lifted (cells).
+  std::vector<DetourRequest::Disc> blockers_ ABSL_GUARDED_BY(mu_);
+  CellPoint detour_origin_ ABSL_GUARDED_BY(mu_);
+  double detour_clear_ ABSL_GUARDED_BY(mu_) = 0.0;
   double last_yaw_ ABSL_GUARDED_BY(mu_) = 0.0;
   uint64_t sent_generation_ ABSL_GUARDED_BY(mu_) = 0;
   // The points of the path last carried to the client.

@@ -2,6 +2,8 @@
 #include "server/rpc/navigate_search.h"
 
 #include <algorithm>
+#include <cmath>
+#include <iterator>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -18,6 +20,62 @@
 #include "server/rpc/navigate.h"
 
 namespace pathd::server {
+namespace {
+
+// The cells a detour blocks around its blockers: those whose centres lie in
+// a blocker's disc, except within the robot's radius and a cell and a half
+// of its centre, so that once the planning grid is inflated by the robot's
+// radius the robot's own cell stays free and the path leaves it around the
+// blockers. Sorted indices.
+std::vector<size_t> BlockerCells(const DetourRequest& detour, const Grid& grid) {
+  std::vector<size_t> cells;
+  const double keep_free = detour.robot_radius + 1.5;
+  for (const DetourRequest::Disc& disc : detour.blockers) {
+    const int32_t x0 = std::max(0, static_cast<int32_t>(std::floor(disc.centre.x - disc.radius)));
+    const int32_t x1 = std::min(grid.width() - 1,
+                                static_cast<int32_t>(std::floor(disc.centre.x + disc.radius)));
+    const int32_t y0 = std::max(0, static_cast<int32_t>(std::floor(disc.centre.y - disc.radius)));
+    const int32_t y1 = std::min(grid.height() - 1,
+                                static_cast<int32_t>(std::floor(disc.centre.y + disc.radius)));
+    for (int32_t y = y0; y <= y1; ++y) {
+      for (int32_t x = x0; x <= x1; ++x) {
+        const double cx = x + 0.5, cy = y + 0.5;
+        if (std::hypot(cx - disc.centre.x, cy - disc.centre.y) > disc.radius) continue;
+        if (std::hypot(cx - detour.robot.x, cy - detour.robot.y) < keep_free) continue;
+        cells.push_back(grid.Index(x, y));
+      }
+    }
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
+}
+
+// The detour's tight cells, merged into `tight` (sorted indices), except
+// near the robot (as for blockers) and near the goal (whose own clearance is
+// the user's choice). True when `tight` grew.
+bool MergeTightCells(const DetourRequest& detour, const Grid& grid, Cell goal,
+                     std::vector<size_t>* tight) {
+  const double keep_free = detour.robot_radius + 1.5;
+  std::vector<size_t> cells;
+  for (const Cell& c : detour.tight) {
+    if (!grid.InBounds(c)) continue;
+    if (std::hypot(c.x + 0.5 - detour.robot.x, c.y + 0.5 - detour.robot.y) < keep_free) continue;
+    if (std::hypot(c.x - goal.x, c.y - goal.y) < keep_free) continue;
+    cells.push_back(grid.Index(c));
+  }
+  std::sort(cells.begin(), cells.end());
+  std::vector<size_t> merged;
+  merged.reserve(tight->size() + cells.size());
+  std::set_union(tight->begin(), tight->end(), cells.begin(), cells.end(),
+                 std::back_inserter(merged));
+  merged.erase(std::unique(merged.begin(), merged.end()), merged.end());
+  const bool grew = merged.size() != tight->size();
+  *tight = std::move(merged);
+  return grew;
+}
+
+}  // namespace
 
 NavigationSearch::NavigationSearch(
     Deps deps, std::string caller, absl::Status shared_observations,
@@ -319,8 +377,12 @@ KinematicView NavigationSearch::ViewForKinematic() {
 
 void NavigationSearch::AccountBytes(int64_t state_bytes) {
   // A private grid (overlay) is a copy of the map; map nodes ~48 bytes.
+  const bool private_grid =
+      !overlay_.empty() || !detour_cells_.empty() || !tight_cells_.empty();
   const int64_t bytes = state_bytes + static_cast<int64_t>(overlay_.size()) * 48 +
-                        (overlay_.empty() ? 0 : static_cast<int64_t>(grid_->size())) +
+                        static_cast<int64_t>((detour_cells_.capacity() + tight_cells_.capacity()) *
+                                             sizeof(size_t)) +
+                        (private_grid ? static_cast<int64_t>(grid_->size()) : 0) +
                         (control_ != nullptr ? control_->bytes() : 0);
   bytes_->store(bytes, std::memory_order_relaxed);
   reservation_.Update(bytes);
@@ -378,13 +440,19 @@ absl::StatusOr<uint64_t> NavigationSearch::Observe(
 absl::StatusOr<std::shared_ptr<const Grid>> NavigationSearch::EffectiveGrid(
     const MapSnapshot& snapshot) {
   const GridShape& shape = shape_;
-  if (overlay_.empty()) {
+  if (overlay_.empty() && detour_cells_.empty() && tight_cells_.empty()) {
     if (!shape.shaped()) return snapshot.grid;
     return deps_.inflation.Get(snapshot, shape);
   }
   Grid merged = *snapshot.grid;
   for (const auto& [index, cost] : overlay_) {
     merged.mutable_cells()[index] = cost;
+  }
+  for (const std::vector<size_t>* cells : {&detour_cells_, &tight_cells_}) {
+    for (const size_t index : *cells) {
+      uint8_t& cost = merged.mutable_cells()[index];
+      cost = std::max(cost, kLethalCost);
+    }
   }
   if (shape.shaped()) {
     PATHD_ASSIGN_OR_RETURN(merged, ShapeGrid(merged, shape));
@@ -511,9 +579,21 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed,
   return absl::OkStatus();
 }
 
-absl::Status NavigationSearch::ReplanControl(std::optional<Cell> robot, bool* incomplete) {
+absl::Status NavigationSearch::ReplanControl(std::optional<Cell> robot, bool* incomplete,
+                                             std::optional<DetourRequest> detour) {
   *incomplete = false;
-  PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/false));
+  bool detour_changed = false;
+  if (detour.has_value()) {
+    // The request's blockers replace the last ones (none: they are lifted);
+    // its tight cells join those found before.
+    std::vector<size_t> blockers = BlockerCells(*detour, *snapshot_->grid);
+    if (blockers != detour_cells_) {
+      detour_cells_ = std::move(blockers);
+      detour_changed = true;
+    }
+    if (MergeTightCells(*detour, *snapshot_->grid, goal_, &tight_cells_)) detour_changed = true;
+  }
+  PATHD_RETURN_IF_ERROR(Refresh(detour_changed));
   // A robot whose centre strays onto a cell the planning grid blocks (it
   // slid along a wall the grid inflates by its radius) keeps following the
   // path from the old start; a start there would have no path at all.
@@ -526,6 +606,14 @@ absl::Status NavigationSearch::ReplanControl(std::optional<Cell> robot, bool* in
   bool changed = false;
   PlanOutcome outcome = PlanOutcome::kNoPath;
   PATHD_RETURN_IF_ERROR(PlanInto(&plan, &changed, &outcome));
+  if (detour.has_value() && (!detour_cells_.empty() || !tight_cells_.empty()) &&
+      outcome != PlanOutcome::kFound && outcome != PlanOutcome::kExpansionLimit) {
+    // No way around the blockers: the path through them (they may move).
+    detour_cells_.clear();
+    tight_cells_.clear();
+    PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/true));
+    PATHD_RETURN_IF_ERROR(PlanInto(&plan, &changed, &outcome));
+  }
   if (outcome == PlanOutcome::kExpansionLimit) {
     *incomplete = true;
     return absl::OkStatus();

@@ -99,7 +99,12 @@ class NavigationSearch {
   // start stays), repairs D* Lite within the replan budget and publishes the
   // path to control() when it changed. `incomplete` is set when the budget
   // ran out (the previous path stays; the next replan continues).
-  absl::Status ReplanControl(std::optional<Cell> robot, bool* incomplete);
+  // `detour`: plan around its blockers (session-only blocked cells, in
+  // place of the last detour's; none lifts them) and never again through
+  // its tight cells; when there is no path without them all are dropped and
+  // the path planned through them.
+  absl::Status ReplanControl(std::optional<Cell> robot, bool* incomplete,
+                             std::optional<DetourRequest> detour = std::nullopt);
 
  private:
   absl::Status RequireOpen(const v1::NavigateRequest& message);
@@ -154,6 +159,11 @@ class NavigationSearch {
   uint64_t shared_derived_version_ = 0;
   // Session-only cell costs (cell index -> cost), laid over every version.
   std::map<size_t, uint8_t> overlay_;
+  // Control sessions: the blocked cells around the last detour's blockers
+  // (sorted indices, laid over the overlay), and the gaps found too tight
+  // for the robot, kept while there is a path without them (sorted indices).
+  std::vector<size_t> detour_cells_;
+  std::vector<size_t> tight_cells_;
   Cell start_;
   Cell goal_;
   CostParams cost_;

@@ -9,13 +9,12 @@ planners and the robots' reciprocity, judged by an independent referee.
   maps of boxes, each robot's start and goal in one free region.
 
 For every run tests/testing/sim_checker.py re-integrates the logged commands
-and checks that no robot overlaps a blocked cell and where two robots came
-closer than the sum of their radii: never in the corridor and the circle,
-and in clutter (warehouse, random maps) only where the simulator reported
-it too. Every robot that does not arrive must be reported with why
-(deadlock, unreachable, timed out); all arrive in the corridor and the
-circle, at least 40% in the warehouse and 80% over the random scenarios
-(the issue's 95% is not met yet: docs/performance.md).
+and checks that no robot overlaps a blocked cell and that no two robots
+come closer than the sum of their radii, and the simulator must have
+reported no contact either. Every robot that does not arrive must be
+reported with why (deadlock, unreachable, timed out); all arrive in the
+corridor and the circle, at least 60% in the warehouse (measured 80-100%,
+docs/performance.md) and 95% over the random scenarios (measured 99%).
 
     tests/e2e/simulate_test.py build/server/pathd build/client/pathctl
 """
@@ -96,15 +95,12 @@ class SimulateTest(unittest.TestCase):
         cls.tmp.cleanup()
         assert code == 0, f"pathd exited {code}"
 
-    def judge(self, scenario_path, grid, min_arrival=1.0, picture=None, strict=True):
-        """Runs a scenario and checks it. `strict`: no two robots may touch
-        (ORCA's promise, which holds in open rooms and corridors). Otherwise
-        robot-robot contacts are allowed but must be exactly the ones the
-        independent referee finds (in clutter ORCA's answer is the least
-        violating one when its program is infeasible: docs/performance.md
-        has the measured rates). Never allowed: a robot over an obstacle
-        cell, a command beyond the robot's limits, a non-arrival without a
-        reason, or a log that does not integrate to itself."""
+    def judge(self, scenario_path, grid, min_arrival=1.0, picture=None):
+        """Runs a scenario and checks it. Never allowed: two robots closer
+        than the sum of their radii (by the independent referee or by the
+        simulator), a robot over an obstacle cell, a command beyond the
+        robot's limits, a non-arrival without a reason, or a log that does
+        not integrate to itself."""
         with open(scenario_path) as f:
             radii, doc = scenario_radii(f.read())
         code, summary, trajectory, stderr = simulate(self.daemon, scenario_path, self.tmp.name,
@@ -120,16 +116,9 @@ class SimulateTest(unittest.TestCase):
                            for c in summary["contacts"] if " collide at " in c})
         self.assertEqual([c for c in summary["contacts"] if " collide at " not in c], [],
                          "a robot touched the map or a moving obstacle")
-        if strict:
-            self.assertEqual(robot_pairs, [], f"{scenario_path}: robots touched: {problems[:5]}")
-            self.assertEqual(summary["collisions"], 0, summary["contacts"])
-        else:
-            # The checker samples within each period; the simulator every
-            # step: a graze under a millimetre may be seen by one only.
-            deep = sorted({tuple(sorted(p.split(" overlap")[0].split(" and "))) for p in problems
-                           if " overlap by " in p and float(p.split("overlap by ")[1].split(" ")[0]) > 0.002})
-            self.assertTrue(set(deep) <= set(reported),
-                            f"the simulator missed contacts the checker found: {deep} vs {reported}")
+        self.assertEqual(robot_pairs, [], f"{scenario_path}: robots touched: {problems[:5]}")
+        self.assertEqual(reported, [], summary["contacts"])
+        self.assertEqual(summary["collisions"], 0, summary["contacts"])
         self.assertEqual(code == 0, summary["arrived"] == len(radii) and summary["collisions"] == 0,
                          (code, summary["arrived"], summary["collisions"]))
         ends = [r["end"] for r in summary["robots"]]
@@ -169,11 +158,11 @@ class SimulateTest(unittest.TestCase):
         with open(os.path.join(ROOT, "maps", "depot.pgm"), "rb") as f:
             grid = sim_checker.Grid.from_pgm(f.read(), 0.05, (-10.0, -7.5))
         picture = os.path.join(ARTEFACTS, "warehouse20.png") if ARTEFACTS else None
-        # Measured: 12-18 of 20 arrive (the rest deadlocked in the cross
-        # aisle), a contact in about one run of four (docs/performance.md);
-        # the floor is 8.
+        # Measured: 16-20 of 20 arrive within the scenario's 120 s (the rest
+        # jammed in the staging area or still on their way), no contact in
+        # 37 runs (docs/performance.md); the floor is 12.
         self.judge(os.path.join(EXAMPLES, "warehouse20.yaml"), grid, picture=picture,
-                   min_arrival=0.4, strict=False)
+                   min_arrival=0.6)
 
     def test_random_scenarios(self):
         rng = random.Random(20261202)
@@ -189,16 +178,15 @@ class SimulateTest(unittest.TestCase):
                 f.write(scenario)
             with open(os.path.join(self.tmp.name, f"random{case}.map"), "w") as f:
                 f.write(grid_text(grid))
-            summary, _ = self.judge(path, grid, min_arrival=0.0, strict=False)
+            summary, _ = self.judge(path, grid, min_arrival=0.0)
             total += n
             arrived += summary["arrived"]
             for r in summary["robots"]:
                 # Starts and goals share one region of the inflated map:
                 # nothing may be unreachable.
                 self.assertNotEqual(r["end"], "unreachable", (case, r))
-        # The issue asks for 95%; measured 88-91% (deadlocks of
-        # differential-drive ORCA robots in clutter, docs/performance.md).
-        self.assertGreaterEqual(arrived, 0.80 * total, f"{arrived}/{total} robots arrived")
+        # The issue asks for 95%; measured 98.9-99.4% (docs/performance.md).
+        self.assertGreaterEqual(arrived, 0.95 * total, f"{arrived}/{total} robots arrived")
         print(f"random scenarios: {arrived}/{total} robots arrived", file=sys.stderr)
 
 

@@ -363,6 +363,66 @@ TEST(LocalTypes, PathTargetIsTheLookaheadPoint) {
   }
 }
 
+// The sight line from a robot beside a box to its lookahead point round
+// the box's corner cuts the corner; VisibleTarget's point keeps the disc
+// clear along the whole line (checked by sampling it against the box as a
+// rectangle, apart from the segments the function reads), is on the path,
+// and is the plain lookahead point wherever that one is in sight.
+TEST(OrcaVisibleTarget, ShortensTheLookaheadUntilTheCornerIsClear) {
+  // A box [10, 20] x [10, 14] cells; the path runs under it, then up its
+  // left side: the robot at the bottom right corner heads left.
+  const double x0 = 10, x1 = 20, y0 = 10, y1 = 14;
+  const std::vector<ObstacleSegment> box = {{{x0, y0}, {x1, y0}},
+                                            {{x1, y0}, {x1, y1}},
+                                            {{x1, y1}, {x0, y1}},
+                                            {{x0, y1}, {x0, y0}}};
+  const auto box_distance = [&](double x, double y) {
+    const double dx = std::max({x0 - x, 0.0, x - x1});
+    const double dy = std::max({y0 - y, 0.0, y - y1});
+    return std::hypot(dx, dy);
+  };
+  const double radius = 1.7;
+  const std::vector<CellPoint> path = {
+      {24, 8}, {8, 8}, {8, 20}, {8, 30}};
+  std::mt19937 rng(5);
+  int shortened = 0;
+  for (int c = 0; c < 200; ++c) {
+    // Robots on or near the lower leg, right of the box's corner and
+    // clear of the box by at least the radius.
+    const CellPoint at{8.5 + 15.0 * (rng() % 1000) / 1000.0,
+                       7.3 + 1.4 * (rng() % 1000) / 1000.0};
+    if (box_distance(at.x, at.y) < radius) continue;
+    const double lookahead = 10.0;
+    const PathTarget plain = FindPathTarget(path, at, lookahead);
+    const PathTarget seen = VisibleTarget(path, at, radius, box, lookahead);
+    const auto clearance = [&](CellPoint t) {
+      double worst = 1e9;
+      for (int i = 0; i <= 400; ++i) {
+        const double f = i / 400.0;
+        worst = std::min(worst, box_distance(at.x + f * (t.x - at.x),
+                                             at.y + f * (t.y - at.y)));
+      }
+      return worst;
+    };
+    // Sampling may miss the exact minimum by a little.
+    EXPECT_GE(clearance(seen.point), radius - 0.05) << "case " << c;
+    // On the path: its distance to the nearest segment is zero.
+    const PathTarget on = FindPathTarget(path, seen.point, 0.0);
+    EXPECT_LT(on.distance_to_path, 1e-9) << "case " << c;
+    if (clearance(plain.point) >= radius + 0.05) {
+      EXPECT_NEAR(seen.point.x, plain.point.x, 1e-9) << "case " << c;
+      EXPECT_NEAR(seen.point.y, plain.point.y, 1e-9) << "case " << c;
+    } else if (clearance(plain.point) < radius - 0.05) {
+      ++shortened;
+      // Nearer along the path: more of it left after the point.
+      EXPECT_GT(on.remaining, FindPathTarget(path, plain.point, 0.0).remaining)
+          << "case " << c;
+    }
+  }
+  // The cases did include corners cut.
+  EXPECT_GT(shortened, 20);
+}
+
 // Where constant (v, vy, w) takes `p` after t seconds, in closed form.
 Pose ExactMotion(const Pose& p, double v, double vy, double w, double t) {
   if (std::fabs(w) < 1e-12) {

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -82,7 +83,10 @@ class ControlClient {
     open->mutable_options()->set_robot_radius_m(radius);
     // Nav2-style inflation costs keep the global path off the corners, where
     // DWA's checker (radius + margins) would refuse to follow it.
-    open->mutable_options()->set_inflation_radius_m(radius + 0.3);
+    if (inflation_costs) open->mutable_options()->set_inflation_radius_m(radius + 0.3);
+    for (const auto& [name, value] : local_options) {
+      (*open->mutable_control()->mutable_local_options())[name] = value;
+    }
     v1::ControlOptions* control = open->mutable_control();
     control->set_local_planner(planner);
     control->mutable_limits()->set_max_v(limits.max_v);
@@ -124,6 +128,11 @@ class ControlClient {
     EXPECT_TRUE(stream_->Read(&response)) << stream_->Finish().error_message();
     return response;
   }
+
+  // Set before Open: options of the local planner, and whether the path
+  // keeps off the walls by inflation costs.
+  std::map<std::string, double> local_options;
+  bool inflation_costs = true;
 
   grpc::Status Close() {
     stream_->WritesDone();
@@ -353,6 +362,114 @@ TEST_F(ControlTest, ReportedObstaclesCountForOneMessage) {
   EXPECT_EQ(client.Send(sim, 0.1).command().neighbours(), 0);
   EXPECT_EQ(client.Send(sim, 0.2, {person}).command().neighbours(), 1);
   EXPECT_TRUE(client.Close().ok());
+}
+
+// 60 x 30 cells (6 x 3 m) with walls round the edge and a block across the
+// middle from x = 1.5 to 4.5 m: a lower passage rows 1..`lower_top`, an
+// upper one rows 20..28.
+std::vector<std::string> TwoPassages(int lower_top) {
+  std::vector<std::string> rows(30, std::string(60, '.'));
+  for (int c = 0; c < 60; ++c) rows[0][c] = rows[29][c] = '#';
+  for (int r = 0; r < 30; ++r) rows[r][0] = rows[r][59] = '#';
+  for (int r = lower_top + 1; r < 20; ++r) {
+    for (int c = 15; c < 45; ++c) rows[r][c] = '#';
+  }
+  return rows;
+}
+
+struct DetourRun {
+  bool reached = false;
+  v1::LocalOutcome last = v1::LOCAL_OUTCOME_UNSPECIFIED;
+  bool took_upper = false;  // a carried path went through the upper passage
+};
+
+// One robot (radius `radius`, no inflation costs) from (0.55, 0.55) to
+// (5.45, 0.55), `blocker` (if any) reported still in the lower passage with
+// every state, for at most `steps` periods; never touching a wall or the
+// blocker (checked here, apart from the server).
+DetourRun RunDetour(v1::PlannerService::Stub& stub, const std::string& map,
+                    const std::vector<std::string>& rows, double radius,
+                    const std::optional<v1::MovingObstacleReport>& blocker,
+                    std::optional<double> detour_range, int steps) {
+  DetourRun run;
+  ControlClient client(stub);
+  client.inflation_costs = false;
+  if (detour_range.has_value()) client.local_options["detour_range"] = *detour_range;
+  const Limits limits;
+  const v1::NavigateResponse opened =
+      client.Open(map, 0.55, 0.55, 5.45, 0.55, v1::LOCAL_PLANNER_ORCA, limits, radius);
+  EXPECT_TRUE(opened.plan().found()) << opened.plan().reason();
+  const auto upper = [](const v1::PlanResponse& plan) {
+    return std::any_of(plan.path().begin(), plan.path().end(),
+                       [](const v1::Cell& c) { return c.y() >= 20; });
+  };
+  // The premise: the first path takes the lower passage.
+  EXPECT_FALSE(upper(opened.plan()));
+  Sim sim{0.55, 0.55, 0.0};
+  std::vector<v1::MovingObstacleReport> reports;
+  if (blocker.has_value()) reports.push_back(*blocker);
+  for (int step = 0; step < steps && !run.reached; ++step) {
+    const v1::NavigateResponse answer = client.Send(sim, step * 0.1, reports);
+    const v1::VelocityCommand& c = answer.command();
+    ExpectAdmissible(c, sim, limits);
+    if (answer.has_plan() && upper(answer.plan())) run.took_upper = true;
+    run.last = c.outcome();
+    if (c.outcome() == v1::LOCAL_OUTCOME_GOAL_REACHED) {
+      run.reached = true;
+      break;
+    }
+    sim.Step(c.v(), c.vy(), c.w(), 0.1);
+    EXPECT_GT(Clearance(rows, sim.x, sim.y), radius) << "step " << step;
+    if (blocker.has_value()) {
+      const double gap = std::hypot(sim.x - blocker->position().world().x(),
+                                    sim.y - blocker->position().world().y()) -
+                         radius - blocker->radius();
+      EXPECT_GT(gap, 0.0) << "step " << step;
+    }
+  }
+  EXPECT_TRUE(client.Close().ok());
+  return run;
+}
+
+TEST_F(ControlTest, AStalledRobotDetoursAroundWhatStandsInItsWay) {
+  // A cart 0.6 m across stands in the middle of the 0.9 m lower passage:
+  // no way past for a robot 0.3 m across. The map does not know the cart,
+  // so the global path goes through it.
+  const std::vector<std::string> rows = TwoPassages(9);
+  ASSERT_TRUE(server_->CreateMapFromRows("passages", rows, kRes).ok());
+  v1::MovingObstacleReport cart;
+  cart.mutable_position()->mutable_world()->set_x(3.0);
+  cart.mutable_position()->mutable_world()->set_y(0.55);
+  cart.set_radius(0.3);
+  // Without detours the robot stops in front of the cart for good.
+  const DetourRun stuck = RunDetour(server_->planner(), "passages", rows, 0.15, cart,
+                                    /*detour_range=*/0.0, 600);
+  EXPECT_FALSE(stuck.reached);
+  EXPECT_FALSE(stuck.took_upper);
+  EXPECT_EQ(stuck.last, v1::LOCAL_OUTCOME_LOCAL_MINIMUM);
+  // With them (the default) it stalls, asks for a path around the cart,
+  // and arrives by the upper passage.
+  const DetourRun detoured = RunDetour(server_->planner(), "passages", rows, 0.15, cart,
+                                       std::nullopt, 1500);
+  EXPECT_TRUE(detoured.took_upper);
+  EXPECT_TRUE(detoured.reached);
+}
+
+TEST_F(ControlTest, AGapTheDiscDoesNotFitIsLeftForAnotherWay) {
+  // The lower passage is 3 cells (0.3 m) high. The planning grid blocks
+  // cells whose centres are within the robot's radius (1.7 cells) of a
+  // wall cell's centre, so its middle row stays open: the global path goes
+  // through a gap the robot's disc (0.34 m) cannot enter.
+  const std::vector<std::string> rows = TwoPassages(3);
+  ASSERT_TRUE(server_->CreateMapFromRows("slot", rows, kRes).ok());
+  const DetourRun stuck =
+      RunDetour(server_->planner(), "slot", rows, 0.17, std::nullopt, 0.0, 600);
+  EXPECT_FALSE(stuck.reached);
+  EXPECT_EQ(stuck.last, v1::LOCAL_OUTCOME_LOCAL_MINIMUM);
+  const DetourRun detoured =
+      RunDetour(server_->planner(), "slot", rows, 0.17, std::nullopt, std::nullopt, 1500);
+  EXPECT_TRUE(detoured.took_upper);
+  EXPECT_TRUE(detoured.reached);
 }
 
 TEST_F(ControlTest, StaleRobotsStayThenGoAndClosedSessionsGoAtOnce) {
