@@ -209,7 +209,9 @@ void SetMetreDefaults(double resolution, ControlConfig& c) {
   c.firas.influence = 0.5 / resolution;
   c.firas.lookahead = 1.0 / resolution;
   c.firas.goal_tolerance = 0.1 / resolution;
-  c.detour_range = 0.5 / resolution;
+  // Detours for ORCA only: DWA's and FIRAS's robots, steered sideways by a
+  // detour, ran into each other more often (docs/performance.md).
+  c.detour_range = c.planner == LocalPlannerKind::kOrca ? 0.5 / resolution : 0.0;
 }
 
 const char* PlannerName(LocalPlannerKind kind) {
