@@ -37,7 +37,8 @@ namespace {
 // client half-closes after the last row. The grid is allocated only after
 // the header passed every check and the budget admitted it, so a refused
 // upload costs nothing but its header.
-class UploadReactor final : public grpc::ServerReadReactor<v1::UploadMapRequest> {
+class UploadReactor final
+    : public grpc::ServerReadReactor<v1::UploadMapRequest> {
  public:
   UploadReactor(MapStore& store, UploadBudget& budget,
                 v1::CreateMapResponse* response)
@@ -74,7 +75,8 @@ class UploadReactor final : public grpc::ServerReadReactor<v1::UploadMapRequest>
     const v1::UploadMapHeader& header = message_.header();
     name_ = header.name();
     if (absl::Status s = MapStore::ValidateName(header.name()); !s.ok()) {
-      return absl::InvalidArgumentError(absl::StrCat("header.name: ", s.message()));
+      return absl::InvalidArgumentError(
+          absl::StrCat("header.name: ", s.message()));
     }
     if (header.width() < 1 || header.width() > kMaxGridDimension ||
         header.height() < 1 || header.height() > kMaxGridDimension) {
@@ -83,7 +85,8 @@ class UploadReactor final : public grpc::ServerReadReactor<v1::UploadMapRequest>
           header.width(), header.height(), kMaxGridDimension));
     }
     PATHD_RETURN_IF_ERROR(store_.CheckSize(header.width(), header.height()));
-    absl::StatusOr<double> resolution = ResolutionFromProto(header.resolution());
+    absl::StatusOr<double> resolution =
+        ResolutionFromProto(header.resolution());
     if (!resolution.ok()) {
       return absl::InvalidArgumentError(
           absl::StrCat("header.", resolution.status().message()));
@@ -96,7 +99,8 @@ class UploadReactor final : public grpc::ServerReadReactor<v1::UploadMapRequest>
     const int64_t cells = int64_t{header.width()} * header.height();
     PATHD_RETURN_IF_ERROR(budget_.Reserve(cells));
     reserved_ = cells;
-    PATHD_ASSIGN_OR_RETURN(Grid grid, Grid::Create(header.width(), header.height()));
+    PATHD_ASSIGN_OR_RETURN(Grid grid,
+                           Grid::Create(header.width(), header.height()));
     grid.set_resolution(*resolution);
     grid.set_origin(*origin);
     grid_ = std::move(grid);
@@ -243,9 +247,8 @@ class DownloadReactor final
 
  private:
   void End(const absl::Status& status) {
-    LogRequest("DownloadMap", name_,
-               absl::StrFormat("rows=%d", next_row_), status, received_,
-               RequestLabels{.planner = {}, .stream = true});
+    LogRequest("DownloadMap", name_, absl::StrFormat("rows=%d", next_row_),
+               status, received_, RequestLabels{.planner = {}, .stream = true});
     snapshot_.reset();
     Finish(ToGrpcStatus(status));
   }

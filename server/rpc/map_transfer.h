@@ -4,10 +4,10 @@
 #ifndef PATHD_SERVER_RPC_MAP_TRANSFER_H_
 #define PATHD_SERVER_RPC_MAP_TRANSFER_H_
 
+#include <grpcpp/support/server_callback.h>
+
 #include <atomic>
 #include <cstdint>
-
-#include <grpcpp/support/server_callback.h>
 
 #include "absl/status/status.h"
 #include "pathd/v1/map_service.grpc.pb.h"

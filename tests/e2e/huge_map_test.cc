@@ -65,7 +65,8 @@ constexpr int32_t kClosedY1 = 1023;
 
 // A field of /proc/PID/status ("VmRSS", "VmHWM") in bytes; 0 when unreadable.
 int64_t StatusBytes(pid_t pid, std::string_view field) {
-  std::istringstream status(e2e::ReadFile(absl::StrCat("/proc/", pid, "/status")));
+  std::istringstream status(
+      e2e::ReadFile(absl::StrCat("/proc/", pid, "/status")));
   const std::string prefix = std::string(field) + ":";
   for (std::string line; std::getline(status, line);) {
     absl::string_view rest = line;
@@ -151,8 +152,9 @@ void ExpectValidPath(const v1::PlanResponse& plan, const std::string& cells,
   for (int i = 0; i < plan.path_size(); ++i) {
     const v1::Cell& c = plan.path(i);
     ASSERT_TRUE(c.x() >= 0 && c.y() >= 0 && c.x() < kSide && c.y() < kSide);
-    ASSERT_NE(static_cast<uint8_t>(cells[static_cast<size_t>(c.y()) * kSide + c.x()]),
-              kLethal)
+    ASSERT_NE(
+        static_cast<uint8_t>(cells[static_cast<size_t>(c.y()) * kSide + c.x()]),
+        kLethal)
         << "path cell " << i << " (" << c.x() << ", " << c.y() << ") is lethal";
     if (i > 0) {
       const v1::Cell& p = plan.path(i - 1);
@@ -173,8 +175,9 @@ TEST_F(HugeMapTest, CreatedUpdatedPlannedDownloadedAndDeletedInBoundedMemory) {
   // third grid (a leak, or a copy per band) cannot fit, nor can A*'s old
   // 24 bytes of scratch per map cell.
   const int64_t peak_bound = baseline + 2 * kMapBytes + kMapBytes / 2;
-  std::cout << "side " << kSide << ", map " << MiB(kMapBytes) << ", baseline RSS "
-            << MiB(baseline) << ", peak bound " << MiB(peak_bound) << std::endl;
+  std::cout << "side " << kSide << ", map " << MiB(kMapBytes)
+            << ", baseline RSS " << MiB(baseline) << ", peak bound "
+            << MiB(peak_bound) << std::endl;
 
   std::string cells = MakeCells();
   v1::UploadMapHeader header;
@@ -183,7 +186,8 @@ TEST_F(HugeMapTest, CreatedUpdatedPlannedDownloadedAndDeletedInBoundedMemory) {
   header.set_height(kSide);
   header.set_resolution(0.05);
   absl::Time start = absl::Now();
-  absl::StatusOr<v1::CreateMapResponse> created = client_->UploadMap(header, cells);
+  absl::StatusOr<v1::CreateMapResponse> created =
+      client_->UploadMap(header, cells);
   ASSERT_TRUE(created.ok()) << created.status();
   std::cout << "UploadMap: " << absl::ToDoubleSeconds(absl::Now() - start)
             << " s, RSS " << MiB(Rss()) << std::endl;
@@ -229,14 +233,17 @@ TEST_F(HugeMapTest, CreatedUpdatedPlannedDownloadedAndDeletedInBoundedMemory) {
   absl::StatusOr<v1::PlanResponse> plan = client_->Plan(request);
   ASSERT_TRUE(plan.ok()) << plan.status();
   std::cout << "Plan (astar): " << absl::ToDoubleSeconds(absl::Now() - start)
-            << " s, " << plan->path_size() << " cells, RSS " << MiB(Rss()) << std::endl;
+            << " s, " << plan->path_size() << " cells, RSS " << MiB(Rss())
+            << std::endl;
   EXPECT_EQ(plan->map_version(), 2u);
   ExpectValidPath(*plan, cells, 10, 10, 900, 300);
   bool through_open_half = false;
   for (const v1::Cell& c : plan->path()) {
-    if (c.x() == kWallX) through_open_half = c.y() > kClosedY1 && c.y() <= kGapY1;
+    if (c.x() == kWallX)
+      through_open_half = c.y() > kClosedY1 && c.y() <= kGapY1;
   }
-  EXPECT_TRUE(through_open_half) << "the path must cross the wall below the closed rows";
+  EXPECT_TRUE(through_open_half)
+      << "the path must cross the wall below the closed rows";
 
   start = absl::Now();
   absl::StatusOr<v1::GetMapResponse> downloaded = client_->DownloadMap("huge");
@@ -251,8 +258,8 @@ TEST_F(HugeMapTest, CreatedUpdatedPlannedDownloadedAndDeletedInBoundedMemory) {
   const int64_t peak = Peak();
   std::cout << "peak (VmHWM) " << MiB(peak) << std::endl;
   if (kCheckRss) {
-    EXPECT_LE(peak, peak_bound) << "VmHWM " << MiB(peak) << " over the bound "
-                                << MiB(peak_bound);
+    EXPECT_LE(peak, peak_bound)
+        << "VmHWM " << MiB(peak) << " over the bound " << MiB(peak_bound);
   }
 
   ASSERT_TRUE(client_->DeleteMap("huge").ok());
@@ -262,14 +269,14 @@ TEST_F(HugeMapTest, CreatedUpdatedPlannedDownloadedAndDeletedInBoundedMemory) {
   const int64_t after_bound = baseline + kMapBytes / 4;
   int64_t after = Rss();
   for (const absl::Time guard = absl::Now() + absl::Seconds(60);
-       kCheckRss && after > after_bound && absl::Now() < guard;
-       after = Rss()) {
+       kCheckRss && after > after_bound && absl::Now() < guard; after = Rss()) {
     absl::SleepFor(absl::Milliseconds(100));
   }
   std::cout << "RSS after DeleteMap " << MiB(after) << std::endl;
   if (kCheckRss) {
-    EXPECT_LE(after, after_bound) << "RSS " << MiB(after) << " after the delete, over "
-                                  << MiB(after_bound);
+    EXPECT_LE(after, after_bound)
+        << "RSS " << MiB(after) << " after the delete, over "
+        << MiB(after_bound);
   }
   EXPECT_EQ(daemon_->Stop(), 0);
 }
@@ -282,7 +289,8 @@ TEST_F(HugeMapTest, StreamedMapSurvivesRestart) {
   ASSERT_NO_FATAL_FAILURE(Start({"--data_dir=" + data_dir}));
   constexpr int32_t kW = 700, kH = 300;
   std::string cells(size_t{kW} * kH, '\0');
-  for (size_t i = 0; i < cells.size(); i += 7) cells[i] = static_cast<char>(i % 256);
+  for (size_t i = 0; i < cells.size(); i += 7)
+    cells[i] = static_cast<char>(i % 256);
   v1::UploadMapHeader header;
   header.set_name("streamed");
   header.set_width(kW);
@@ -298,8 +306,10 @@ TEST_F(HugeMapTest, StreamedMapSurvivesRestart) {
   absl::StatusOr<v1::CreateMapResponse> short_upload = client_->UploadMap(
       header, std::string_view(cells).substr(0, cells.size() - kW), 4 * kW);
   ASSERT_FALSE(short_upload.ok());
-  EXPECT_THAT(short_upload.status().message(),
-              HasSubstr("ended after 299 of header.height 300 rows; nothing was created"));
+  EXPECT_THAT(
+      short_upload.status().message(),
+      HasSubstr(
+          "ended after 299 of header.height 300 rows; nothing was created"));
 
   // SIGKILL: nothing gets flushed at exit.
   daemon_->Kill();

@@ -38,10 +38,14 @@
 ABSL_FLAG(std::string, source, "maps/arena2.map",
           "source map: a Moving AI .map or a ROS map_server .yaml (e.g. a "
           "shared Moving AI map)");
-ABSL_FLAG(int32_t, side, 16384, "width and height of the output, cells (1..65536)");
-ABSL_FLAG(int32_t, scale, 1, "each source cell becomes scale x scale cells (1..64)");
-ABSL_FLAG(double, resolution, 0.05, "metres per output cell (written to the YAML)");
-ABSL_FLAG(std::string, out, "", "output file: NAME.yaml (+ NAME.pgm) or NAME.map");
+ABSL_FLAG(int32_t, side, 16384,
+          "width and height of the output, cells (1..65536)");
+ABSL_FLAG(int32_t, scale, 1,
+          "each source cell becomes scale x scale cells (1..64)");
+ABSL_FLAG(double, resolution, 0.05,
+          "metres per output cell (written to the YAML)");
+ABSL_FLAG(std::string, out, "",
+          "output file: NAME.yaml (+ NAME.pgm) or NAME.map");
 
 namespace {
 
@@ -100,8 +104,8 @@ absl::Status WriteFile(const std::string& path, const std::string& head,
 // flips them back (the OccupancyGrid convention, core/map_io).
 absl::Status WriteRosMap(const pathd::Grid& grid, const std::string& yaml_path,
                          double resolution) {
-  const bool trinary = std::all_of(
-      grid.cells().begin(), grid.cells().end(), [](uint8_t c) {
+  const bool trinary =
+      std::all_of(grid.cells().begin(), grid.cells().end(), [](uint8_t c) {
         return c == pathd::kFreeCost || c == pathd::kLethalCost ||
                c == pathd::kUnknownCost;
       });
@@ -122,8 +126,10 @@ absl::Status WriteRosMap(const pathd::Grid& grid, const std::string& yaml_path,
     }
   }
   const std::filesystem::path yaml(yaml_path);
-  const std::filesystem::path pgm = std::filesystem::path(yaml).replace_extension(".pgm");
-  const std::string header = absl::StrFormat("P5\n%d %d\n255\n", grid.width(), grid.height());
+  const std::filesystem::path pgm =
+      std::filesystem::path(yaml).replace_extension(".pgm");
+  const std::string header =
+      absl::StrFormat("P5\n%d %d\n255\n", grid.width(), grid.height());
   if (absl::Status s = WriteFile(pgm.string(), header,
                                  reinterpret_cast<const char*>(pixels.data()),
                                  pixels.size());
@@ -180,7 +186,8 @@ int main(int argc, char** argv) {
   }
   const bool yaml = absl::EndsWith(out, ".yaml") || absl::EndsWith(out, ".yml");
   if (!yaml && !absl::EndsWith(out, ".map")) {
-    std::cerr << "--out must name a .yaml (ROS map_server + PGM) or .map file\n";
+    std::cerr
+        << "--out must name a .yaml (ROS map_server + PGM) or .map file\n";
     return 2;
   }
   const absl::Time start = absl::Now();
