@@ -226,6 +226,39 @@ class RealServerTest(unittest.TestCase, PathChecks):
         with self.assertRaises(pathd_client.NotFoundError):
             self.client.get_map("short")
 
+    def test_large_map_files_are_parsed_here_like_the_server_parses_them(self):
+        # Over 4 MiB: create_map(from_file=...) parses the file here and
+        # streams it; the server parses the same file from --map_dir. Both
+        # must give the same cells, resolution and origin.
+        side = 2100
+        folder = pathlib.Path(self.map_dir.name)
+        rows = ["".join("@" if (x * 5 + y * 3) % 13 == 0 else "." for x in range(side))
+                for y in range(side)]
+        (folder / "bigtext.map").write_text(
+            f"type octile\nheight {side}\nwidth {side}\nmap\n" + "\n".join(rows) + "\n")
+        pixels = bytes((x * 7 + y * 11) % 256 for y in range(side) for x in range(side))
+        (folder / "bigimage.pgm").write_bytes(f"P5\n{side} {side}\n255\n".encode() + pixels)
+        for mode in ("trinary", "scale", "raw"):
+            (folder / f"big_{mode}.yaml").write_text(
+                "image: bigimage.pgm\nresolution: 0.05\norigin: [1.5, -2.0, 0.0]\n"
+                f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: {mode}\n")
+        for file in ["bigtext.map"] + [f"big_{m}.yaml" for m in ("trinary", "scale", "raw")]:
+            with self.subTest(file=file):
+                mine = self.client.create_map("mine", from_file=folder / file, replace=True)
+                self.addCleanup(self._delete_quietly, "mine")
+                theirs = self.client.create_map("theirs", map_dir_file=file, replace=True)
+                self.addCleanup(self._delete_quietly, "theirs")
+                self.assertEqual((mine.width, mine.height, mine.resolution, mine.origin),
+                                 (theirs.width, theirs.height, theirs.resolution, theirs.origin))
+                self.assertEqual(self.client.get_cells("mine").cells,
+                                 self.client.get_cells("theirs").cells)
+        # Rows over 4 MiB are streamed the same way.
+        info = self.client.create_map("mine", rows, replace=True)
+        self.assertEqual((info.width, info.height), (side, side))
+        self.client.create_map("theirs", map_dir_file="bigtext.map", replace=True)
+        self.assertEqual(self.client.get_cells("mine").cells,
+                         self.client.get_cells("theirs").cells)
+
     def test_plan_is_valid_and_optimal(self):
         self.make_map("plan")
         start, goal = Cell(1, 3), Cell(12, 4)

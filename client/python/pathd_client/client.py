@@ -23,7 +23,7 @@ from pathd.v1 import planner_service_pb2_grpc
 from pathd_client import health
 from pathd_client.channel import PemSource, make_channel
 from pathd_client.errors import PathdError, _from_rpc_error
-from pathd_client.map_files import set_source_from_file
+from pathd_client.map_files import cells_from_file, parse_movingai, set_source_from_file
 from pathd_client.streams import MapWatch, NavigationSession, PlanBatch, PlanStream
 from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CacheStatsResult, Change,
                                  CostToGoResult, FleetPlanResult, IsochroneResult,
@@ -160,12 +160,23 @@ class PathdClient:
                                        origin=origin, replace=replace, timeout=timeout)
             request.raw.CopyFrom(map_service_pb2.RawCells(
                 width=width, height=height, cells=bytes(cells)))
+        if request.ByteSize() > UNARY_CREATE_MAP_BYTES and from_file is not None:
+            # As pathctl: parsed here by the server's rules and streamed.
+            width, height, cells, file_resolution, file_origin = cells_from_file(from_file)
+            return self.upload_map(
+                name, cells, width, height,
+                resolution=resolution if file_resolution is None else file_resolution,
+                origin=origin if file_origin is None else file_origin,
+                replace=replace, timeout=timeout)
+        if request.ByteSize() > UNARY_CREATE_MAP_BYTES and rows is not None:
+            width, height, cells = parse_movingai(request.movingai_text.encode(), "rows")
+            return self.upload_map(name, cells, width, height, resolution=resolution,
+                                   origin=origin, replace=replace, timeout=timeout)
         if request.ByteSize() > UNARY_CREATE_MAP_BYTES:
             raise ValueError(
                 f"map {name!r}: a {request.ByteSize()}-byte CreateMap request is over "
                 f"{UNARY_CREATE_MAP_BYTES} bytes; pass its cost bytes as cells= "
-                "(streamed through UploadMap), or use pathctl maps create, which "
-                "parses large files and streams them")
+                "(streamed through UploadMap)")
         response = self._call(self._maps.CreateMap, request, name, timeout)
         return MapInfo.from_proto(response.info)
 
