@@ -57,7 +57,8 @@ build-serve: configure
 # tools/map_tile; docs/performance.md, "Huge maps"), from
 # $(SERVE_MAP_DIR): the bundled maps are copied there (a --map_dir file
 # must lie inside the directory), the huge one is written once and kept.
-# HUGE_SIDE= (empty) serves the bundled maps alone.
+# HUGE_SIDE= (empty) serves the bundled maps alone (a huge map of another
+# side written earlier is deleted from $(SERVE_MAP_DIR)).
 HUGE_SIDE ?= 16384
 SERVE_MAP_DIR ?= $(BUILD_DIR)/serve_maps
 
@@ -67,6 +68,7 @@ $(SERVE_MAP_DIR)/huge$(HUGE_SIDE).yaml: | build-serve
 
 serve-maps: build-serve $(if $(HUGE_SIDE),$(SERVE_MAP_DIR)/huge$(HUGE_SIDE).yaml)
 	@mkdir -p $(SERVE_MAP_DIR)
+	@find $(SERVE_MAP_DIR) -maxdepth 1 -name 'huge*' ! -name 'huge$(HUGE_SIDE).*' -delete
 	@cp -p maps/*.map maps/*.yaml maps/*.pgm $(SERVE_MAP_DIR)/
 
 serve: serve-maps
