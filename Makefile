@@ -1,7 +1,8 @@
 # The commands of the README's quick start, plus a few conveniences
 # (docs/testing.md, "Builds", says what each builds and installs).
 #   make serve  - install what serving needs (scripts/setup.sh serve), build
-#                 pathd and pathctl only, run pathd on 127.0.0.1:50051
+#                 pathd and pathctl only, write the 16384^2 map once
+#                 (HUGE_SIDE), run pathd on 127.0.0.1:50051
 #   make build-serve - the same without running pathd
 #   make test   - install what the tests need too (scripts/setup.sh test),
 #                 build everything, run every test with ctest
@@ -29,7 +30,7 @@ ADDRESS ?= 127.0.0.1:50051
 HTTP_ADDRESS ?= 127.0.0.1:8080
 CMAKE_CONFIGURE = cmake -S . -G Ninja
 
-.PHONY: setup-serve setup-test configure configure-test build-serve serve \
+.PHONY: setup-serve setup-test configure configure-test build-serve serve serve-maps \
         build test bench clean format test-tsan test-asan fuzz check-thread-safety \
         setup-package install deb deb-check
 
@@ -49,10 +50,29 @@ configure-test: setup-test
 	@$(CMAKE_CONFIGURE) -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPATHD_BUILD_TESTS=ON >/dev/null
 
 build-serve: configure
-	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd pathctl
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target pathd pathctl map_tile
 
-serve: build-serve
-	exec $(BUILD_DIR)/server/pathd --address=$(ADDRESS) --map_dir=maps --http_address=$(HTTP_ADDRESS)
+# `make serve` serves the bundled maps plus one huge map, huge$(HUGE_SIDE)
+# (HUGE_SIDE x HUGE_SIDE cells mirror-tiled from maps/arena2.map by
+# tools/map_tile; docs/performance.md, "Huge maps"), from
+# $(SERVE_MAP_DIR): the bundled maps are copied there (a --map_dir file
+# must lie inside the directory), the huge one is written once and kept.
+# HUGE_SIDE= (empty) serves the bundled maps alone (a huge map of another
+# side written earlier is deleted from $(SERVE_MAP_DIR)).
+HUGE_SIDE ?= 16384
+SERVE_MAP_DIR ?= $(BUILD_DIR)/serve_maps
+
+$(SERVE_MAP_DIR)/huge$(HUGE_SIDE).yaml: | build-serve
+	@mkdir -p $(SERVE_MAP_DIR)
+	$(BUILD_DIR)/tools/map_tile --source=maps/arena2.map --side=$(HUGE_SIDE) --out=$@
+
+serve-maps: build-serve $(if $(HUGE_SIDE),$(SERVE_MAP_DIR)/huge$(HUGE_SIDE).yaml)
+	@mkdir -p $(SERVE_MAP_DIR)
+	@find $(SERVE_MAP_DIR) -maxdepth 1 -name 'huge*' ! -name 'huge$(HUGE_SIDE).*' -delete
+	@cp -p maps/*.map maps/*.yaml maps/*.pgm $(SERVE_MAP_DIR)/
+
+serve: serve-maps
+	exec $(BUILD_DIR)/server/pathd --address=$(ADDRESS) --map_dir=$(SERVE_MAP_DIR) --http_address=$(HTTP_ADDRESS)
 
 build: configure-test
 	@cmake --build $(BUILD_DIR) -j $(JOBS)

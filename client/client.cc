@@ -285,6 +285,95 @@ absl::StatusOr<v1::GetMapResponse> PathdClient::GetMap(
       });
 }
 
+namespace {
+
+// A streamed transfer of `bytes` cells gets the client's timeout plus the
+// time the bytes take at kTransferBytesPerSecond.
+absl::Duration TransferTimeout(absl::Duration timeout, int64_t bytes) {
+  return timeout + absl::Seconds(static_cast<double>(bytes) /
+                                 PathdClient::kTransferBytesPerSecond);
+}
+
+}  // namespace
+
+absl::StatusOr<v1::CreateMapResponse> PathdClient::UploadMap(
+    const v1::UploadMapHeader& header, std::string_view cells,
+    int64_t band_bytes) const {
+  std::unique_ptr<grpc::ClientContext> context = MakeContext(
+      TransferTimeout(timeout_, static_cast<int64_t>(cells.size())), header.name());
+  v1::CreateMapResponse response;
+  std::unique_ptr<grpc::ClientWriterInterface<v1::UploadMapRequest>> writer =
+      maps_->UploadMap(context.get(), &response);
+  v1::UploadMapRequest message;
+  *message.mutable_header() = header;
+  // A failed write means the server has finished the call (with the error
+  // Finish reports): stop sending.
+  bool open = writer->Write(message);
+  const size_t width = header.width() > 0 ? static_cast<size_t>(header.width()) : 1;
+  const size_t rows_per_band =
+      std::max<size_t>(1, static_cast<size_t>(std::max<int64_t>(band_bytes, 1)) / width);
+  for (size_t offset = 0; open && offset < cells.size();) {
+    const size_t length = std::min(rows_per_band * width, cells.size() - offset);
+    message.Clear();
+    v1::CellBand* band = message.mutable_band();
+    band->set_first_row(static_cast<int32_t>(offset / width));
+    band->set_cells(cells.data() + offset, length);
+    open = writer->Write(message);
+    offset += length;
+  }
+  if (open) writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  if (!status.ok()) return FromGrpcStatus(status);
+  return response;
+}
+
+absl::StatusOr<v1::GetMapResponse> PathdClient::DownloadMap(
+    const std::string& name) const {
+  v1::GetMapRequest info_request;
+  info_request.set_name(name);
+  absl::StatusOr<v1::GetMapResponse> info = GetMap(info_request);
+  if (!info.ok()) return info.status();
+  const int64_t size = int64_t{info->info().width()} * info->info().height();
+  std::unique_ptr<grpc::ClientContext> context =
+      MakeContext(TransferTimeout(timeout_, size), name);
+  v1::DownloadMapRequest request;
+  request.set_name(name);
+  std::unique_ptr<grpc::ClientReaderInterface<v1::DownloadMapResponse>> reader =
+      maps_->DownloadMap(context.get(), request);
+  v1::GetMapResponse assembled;
+  v1::DownloadMapResponse message;
+  std::string* cells = assembled.mutable_cells();
+  int64_t expected = -1;
+  absl::Status shape;
+  while (reader->Read(&message)) {
+    if (message.has_info()) {
+      *assembled.mutable_info() = message.info();
+      expected = int64_t{message.info().width()} * message.info().height();
+      cells->reserve(static_cast<size_t>(expected));
+      continue;
+    }
+    const v1::CellBand& band = message.band();
+    const int64_t width = assembled.info().width();
+    if (shape.ok() && (expected < 0 || width <= 0 ||
+                       int64_t{band.first_row()} * width !=
+                           static_cast<int64_t>(cells->size()))) {
+      shape = absl::InternalError(absl::StrCat(
+          "DownloadMap of '", name, "': band at row ", band.first_row(),
+          " does not continue the ", cells->size(), " bytes received"));
+    }
+    if (shape.ok()) cells->append(band.cells());
+  }
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) return FromGrpcStatus(status);
+  if (!shape.ok()) return shape;
+  if (static_cast<int64_t>(cells->size()) != expected) {
+    return absl::InternalError(absl::StrCat("DownloadMap of '", name, "': got ",
+                                            cells->size(), " cell bytes, expected ",
+                                            expected));
+  }
+  return assembled;
+}
+
 absl::StatusOr<v1::ListMapsResponse> PathdClient::ListMaps() const {
   return Invoke<v1::ListMapsResponse>(
       timeout_,

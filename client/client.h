@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -131,6 +132,28 @@ class PathdClient {
       const std::string& name) const;
   absl::StatusOr<v1::UpdateMapResponse> UpdateMap(
       const v1::UpdateMapRequest& request) const;
+
+  // UploadMap: `header`, then `cells` (width * height row-major cost bytes)
+  // in bands of whole rows of at most `band_bytes` (at least one row each).
+  // For maps too large for one CreateMap message; the server's errors as in
+  // map_service.proto (INVALID_ARGUMENT when `cells` does not match the
+  // header). The deadline is the client's timeout plus one second per
+  // kTransferBytesPerSecond of cells.
+  absl::StatusOr<v1::CreateMapResponse> UploadMap(
+      const v1::UploadMapHeader& header, std::string_view cells,
+      int64_t band_bytes = kUploadBandBytes) const;
+  // DownloadMap: the metadata and every band, assembled into one
+  // GetMapResponse with its cells (any size, no message over 1 MiB of
+  // cells). Asks GetMap for the size first to set the deadline as UploadMap
+  // does. NOT_FOUND for an unknown map; INTERNAL when the bands do not tile
+  // the map.
+  absl::StatusOr<v1::GetMapResponse> DownloadMap(const std::string& name) const;
+  // Band size UploadMap uses by default: under gRPC's default 4 MiB limit,
+  // so any pathd accepts it.
+  static constexpr int64_t kUploadBandBytes = int64_t{1} << 20;
+  // Transfer rate the streamed calls' deadlines allow for (slow links wait
+  // longer through a larger --timeout).
+  static constexpr int64_t kTransferBytesPerSecond = int64_t{16} << 20;
 
   // PlannerService. "No path" is an OK response with found = false.
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) const;

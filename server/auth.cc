@@ -41,6 +41,8 @@ constexpr MethodRole kMethodRoles[] = {
     {kMethodDeleteMap, Role::kWrite},
     {kMethodUpdateMap, Role::kWrite},
     {kMethodWatchMap, Role::kRead},
+    {kMethodUploadMap, Role::kWrite},
+    {kMethodDownloadMap, Role::kRead},
     {kMethodPlan, Role::kRead},
     {kMethodCostToGo, Role::kRead},
     // Opening a session and session_only observations change nothing shared.

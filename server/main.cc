@@ -47,8 +47,10 @@ ABSL_FLAG(int32_t, queue_depth, 256,
           "interactive requests (Plan, CostToGo, Navigate messages) that may "
           "wait for a worker before RESOURCE_EXHAUSTED with a retry-after-ms "
           "hint");
-ABSL_FLAG(int64_t, max_map_cells, int64_t{64} << 20,
-          "largest map accepted, in cells (width * height)");
+ABSL_FLAG(int64_t, max_map_cells, int64_t{1} << 28,
+          "largest map accepted, in cells (width * height; the default is one "
+          "16384 x 16384 map, 256 MiB); also bounds the cells UploadMap "
+          "calls in progress hold together");
 ABSL_FLAG(int64_t, max_expansions, 0,
           "cap on search expansions per plan request; 0 = unlimited");
 ABSL_FLAG(int32_t, batch_queue_depth, 1024,
@@ -76,8 +78,9 @@ ABSL_FLAG(int64_t, max_fleet_robots, 1000,
           "most robots a PlanFleet call may plan (RESOURCE_EXHAUSTED beyond)");
 ABSL_FLAG(int64_t, max_message_bytes, 0,
           "largest gRPC message received or sent (gRPC answers "
-          "RESOURCE_EXHAUSTED beyond); 0 = max_map_cells + 1 MiB, so a "
-          "CreateMap of the largest map fits");
+          "RESOURCE_EXHAUSTED beyond); 0 = min(max_map_cells, 64 Mi) + 1 "
+          "MiB, so a CreateMap of a map up to 64 Mi cells fits (larger maps "
+          "stream through UploadMap and DownloadMap)");
 ABSL_FLAG(int64_t, max_returned_expansions, 1'000'000,
           "most expanded cells one Plan response returns for "
           "options.return_expansions (the response says when it was "

@@ -31,6 +31,8 @@ namespace {
 
 // Room for the non-cell fields of a CreateMap request (name, YAML text).
 constexpr int64_t kMessageOverheadBytes = int64_t{1} << 20;
+// Map cells the default --max_message_bytes makes room for.
+constexpr int64_t kMaxDefaultMessageCells = int64_t{64} << 20;
 
 // Response metadata naming the replica (client/client.h kReplicaHeader).
 constexpr char kReplicaHeader[] = "pathd-replica";
@@ -346,11 +348,15 @@ void PathdServer::Shutdown() {
 }
 
 int PathdServer::max_message_bytes() const {
-  // By default a raw CreateMap of the largest allowed map must fit in one
-  // message; gRPC's own default (4 MiB) would refuse maps over ~2000 x 2000.
-  const int64_t bytes = options_.max_message_bytes > 0
-                            ? options_.max_message_bytes
-                            : options_.max_map_cells + kMessageOverheadBytes;
+  // By default a raw CreateMap of a map up to 64 Mi cells fits in one
+  // message (gRPC's own default, 4 MiB, would refuse maps over ~2000 x
+  // 2000); larger maps stream through UploadMap and DownloadMap in bands of
+  // rows, so no message needs to hold a whole 268 MB map.
+  const int64_t bytes =
+      options_.max_message_bytes > 0
+          ? options_.max_message_bytes
+          : std::min(options_.max_map_cells, kMaxDefaultMessageCells) +
+                kMessageOverheadBytes;
   return static_cast<int>(std::min<int64_t>(INT_MAX, bytes));
 }
 

@@ -44,8 +44,8 @@ struct ServerOptions {
   // while the recent ones took at most this on average and a worker is free
   // (WorkerPool::SubmitShort); zero: always on a worker.
   absl::Duration inline_max_job_time = absl::Milliseconds(1);
-  // Largest map accepted, in cells.
-  int64_t max_map_cells = int64_t{64} << 20;
+  // Largest map accepted, in cells: by default one 16384 x 16384 map.
+  int64_t max_map_cells = int64_t{1} << 28;
   // Per-request expansion cap; 0 = unlimited.
   int64_t max_expansions = 0;
   // Most points in a returned path / poses in a checked one.
@@ -58,8 +58,9 @@ struct ServerOptions {
   int64_t max_trip_stops = 256;
   // PlanFleet: most robots per call.
   int64_t max_fleet_robots = 1000;
-  // Largest gRPC message received or sent; 0 = max_map_cells + 1 MiB, so a
-  // raw CreateMap of the largest map fits.
+  // Largest gRPC message received or sent; 0 = min(max_map_cells, 64 MiB)
+  // + 1 MiB, so a raw CreateMap of a map up to 64 Mi cells fits (larger
+  // ones stream through UploadMap).
   int64_t max_message_bytes = 0;
   // Most expanded cells one Plan response returns (options.return_expansions).
   int64_t max_returned_expansions = 1'000'000;

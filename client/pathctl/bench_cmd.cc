@@ -91,10 +91,7 @@ absl::StatusOr<std::vector<std::pair<v1::Cell, v1::Cell>>> MovingAiEndpoints(
   const std::string scen = options.movingai + ".scen";
   absl::StatusOr<std::string> text = ReadTextFile(scen);
   if (!text.ok()) {
-    v1::GetMapRequest get;
-    get.set_name(name);
-    get.set_include_cells(true);
-    PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse map, env.client().GetMap(get));
+    PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse map, env.client().DownloadMap(name));
     *source = absl::StrCat(kRandomQueries, " random pairs of free cells (no ", scen, ")");
     return RandomEndpoints(map, env.options().cost.unknown_is_free, options.seed, kRandomQueries);
   }
@@ -141,10 +138,8 @@ absl::StatusOr<BenchQueries> MakeBenchQueries(CommandEnv& env, const v1::PlanReq
   if (!options.movingai.empty()) {
     PATHD_ASSIGN_OR_RETURN(pairs, MovingAiEndpoints(env, name, &queries.source));
   } else {
-    v1::GetMapRequest get;
-    get.set_name(name);
-    get.set_include_cells(true);
-    PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse map, env.client().GetMap(get));
+    // Through the stream, so a map of any size can be benchmarked.
+    PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse map, env.client().DownloadMap(name));
     PATHD_ASSIGN_OR_RETURN(pairs, RandomEndpoints(map, env.options().cost.unknown_is_free,
                                                   options.seed, kRandomQueries));
     queries.source = absl::StrCat(kRandomQueries, " random pairs of free cells");

@@ -318,12 +318,11 @@ absl::Status AddViaPoints(const std::string& via, bool world, v1::PlanRequest* r
 }
 
 absl::StatusOr<Grid> FetchGrid(CommandEnv& env, const std::string& name) {
-  v1::GetMapRequest request;
-  request.set_name(name);
-  request.set_include_cells(true);
-  PATHD_ASSIGN_OR_RETURN(const v1::GetMapResponse response, env.client().GetMap(request));
+  // Always the stream: one path for every size, and no message holds more
+  // than 1 MiB of cells, whatever the server's --max_message_bytes.
+  PATHD_ASSIGN_OR_RETURN(v1::GetMapResponse response, env.client().DownloadMap(name));
   const v1::MapInfo& info = response.info();
-  const std::string& cells = response.cells();
+  std::string& cells = *response.mutable_cells();
   absl::StatusOr<Grid> grid = Grid::FromCells(
       info.width(), info.height(), std::vector<uint8_t>(cells.begin(), cells.end()));
   if (!grid.ok()) {

@@ -62,4 +62,51 @@ absl::Status SetMapSourceFromFile(const std::string& path,
                    ".yaml/.yml (ROS map_server)"));
 }
 
+absl::Status UploadFromCreateRequest(const v1::CreateMapRequest& request,
+                                     v1::UploadMapHeader* header,
+                                     std::string* cells) {
+  // The server enforces its own --max_map_cells at the header; here the
+  // readers' default bound (16384 x 16384) keeps a hostile file from making
+  // pathctl allocate gigabytes.
+  constexpr int64_t kAnySize = kDefaultMaxReaderCells;
+  header->set_name(request.name());
+  header->set_replace(request.replace());
+  Grid grid;
+  switch (request.source_case()) {
+    case v1::CreateMapRequest::kRaw:
+      header->set_width(request.raw().width());
+      header->set_height(request.raw().height());
+      header->set_resolution(request.resolution());
+      *header->mutable_origin() = request.origin();
+      *cells = request.raw().cells();
+      return absl::OkStatus();
+    case v1::CreateMapRequest::kMovingaiText: {
+      PATHD_ASSIGN_OR_RETURN(
+          grid, ParseMovingAiMap(request.movingai_text(), "movingai_text", kAnySize));
+      header->set_resolution(request.resolution());
+      *header->mutable_origin() = request.origin();
+      break;
+    }
+    case v1::CreateMapRequest::kRosMap: {
+      PATHD_ASSIGN_OR_RETURN(
+          const RosMapMetadata metadata,
+          ParseRosMapYaml(request.ros_map().yaml(), "ros_map.yaml"));
+      PATHD_ASSIGN_OR_RETURN(grid, ParseRosMap(metadata, request.ros_map().image(),
+                                               "ros_map.image", kAnySize));
+      header->set_resolution(grid.resolution());
+      header->mutable_origin()->set_x(grid.origin().x);
+      header->mutable_origin()->set_y(grid.origin().y);
+      header->mutable_origin()->set_yaw(grid.origin().yaw);
+      break;
+    }
+    default:
+      return absl::InvalidArgumentError(
+          "only raw, movingai_text and ros_map sources can be uploaded");
+  }
+  header->set_width(grid.width());
+  header->set_height(grid.height());
+  cells->assign(grid.cells().begin(), grid.cells().end());
+  return absl::OkStatus();
+}
+
 }  // namespace pathd::pathctl

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <future>
 #include <span>
 #include <string>
@@ -15,6 +16,7 @@
 #include "client/pathctl/map_source.h"
 #include "client/pathctl/command.h"
 #include "client/pathctl/progress.h"
+#include "core/status_macros.h"
 
 namespace pathd::pathctl {
 namespace {
@@ -250,15 +252,27 @@ Table MapInfoCsv(std::span<const v1::MapInfo* const> maps) {
 // shows what is being sent and for how long, not a fraction. `file` names it.
 absl::StatusOr<v1::CreateMapResponse> CreateMapWithProgress(
     CommandEnv& env, const v1::CreateMapRequest& request, const std::string& file) {
-  if (!env.global().progress_bars) return env.client().CreateMap(request);
-  const double bytes = static_cast<double>(request.ByteSizeLong());
+  const size_t request_bytes = request.ByteSizeLong();
+  // A map over one default-sized message is parsed here and streamed in
+  // bands of rows (UploadMap), so no message comes near any server's limit.
+  std::function<absl::StatusOr<v1::CreateMapResponse>()> call;
+  v1::UploadMapHeader header;
+  std::string cells;
+  if (request_bytes > kUnaryCreateMapBytes &&
+      request.source_case() != v1::CreateMapRequest::kMapDirFile) {
+    PATHD_RETURN_IF_ERROR(UploadFromCreateRequest(request, &header, &cells));
+    call = [&env, &header, &cells] { return env.client().UploadMap(header, cells); };
+  } else {
+    call = [&env, &request] { return env.client().CreateMap(request); };
+  }
+  if (!env.global().progress_bars) return call();
+  const double bytes = static_cast<double>(request_bytes);
   ProgressBar bar(env.err(),
                   absl::StrFormat("maps create %s: sending %s (%.1f MiB)",
                                   request.name(), file, bytes / (1024 * 1024)),
                   0, ProgressBar::Unit::kSeconds, true);
   std::future<absl::StatusOr<v1::CreateMapResponse>> response =
-      std::async(std::launch::async,
-                 [&env, &request] { return env.client().CreateMap(request); });
+      std::async(std::launch::async, call);
   const absl::Time started = absl::Now();
   while (response.wait_for(absl::ToChronoMilliseconds(
              ProgressBar::kRedrawInterval)) != std::future_status::ready) {

@@ -23,6 +23,8 @@ Table MapInfoCsv(std::span<const v1::MapInfo* const> maps);
 // CreateMap, with a progress line on stderr while the server receives and
 // parses `request` (progress bars only): the call is unary, so the line
 // shows what is being sent and for how long, not a fraction. `file` names it.
+// A request over kUnaryCreateMapBytes (map_source.h) is parsed here and
+// sent through UploadMap in 1 MiB bands instead.
 absl::StatusOr<v1::CreateMapResponse> CreateMapWithProgress(
     CommandEnv& env, const v1::CreateMapRequest& request, const std::string& file);
 

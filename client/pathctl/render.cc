@@ -131,8 +131,91 @@ int DefaultScale(int32_t width, int32_t height) {
   return std::clamp(kTargetImageSide / side, 1, 16);
 }
 
+namespace {
+
+// How strongly a cost blocks, for DownsampleGrid: higher wins a block.
+int BlockRank(uint8_t cost) {
+  switch (cost) {
+    case kLethalCost:
+      return 1000;
+    case kInscribedCost:
+      return 999;
+    case kUnknownCost:
+      return 998;
+    default:
+      return cost;  // weighted by cost, free (0) last
+  }
+}
+
+}  // namespace
+
+Grid DownsampleGrid(const Grid& grid, int k) {
+  const int32_t width = (grid.width() + k - 1) / k;
+  const int32_t height = (grid.height() + k - 1) / k;
+  Grid small = *Grid::Create(width, height);
+  std::vector<uint8_t>& out = small.mutable_cells();
+  // Row by row, so the source is read in order: each source row folds into
+  // its output row.
+  for (int32_t y = 0; y < grid.height(); ++y) {
+    uint8_t* dst = out.data() + small.Index(0, y / k);
+    const uint8_t* src = grid.cells().data() + grid.Index(0, y);
+    for (int32_t x = 0; x < grid.width(); ++x) {
+      uint8_t& cell = dst[x / k];
+      if (BlockRank(src[x]) > BlockRank(cell)) cell = src[x];
+    }
+  }
+  small.set_resolution(grid.resolution() * k);
+  small.set_origin(grid.origin());
+  small.set_honour_origin_yaw(grid.honour_origin_yaw());
+  return small;
+}
+
+PlanOverlay DownsampleOverlay(const PlanOverlay& overlay, int k) {
+  const auto cell = [k](const Cell& c) { return Cell{c.x / k, c.y / k}; };
+  const auto point = [k](const CellPoint& p) { return CellPoint{p.x / k, p.y / k}; };
+  const auto cells = [&](const std::vector<Cell>& in) {
+    std::vector<Cell> out;
+    out.reserve(in.size());
+    for (const Cell& c : in) {
+      // Consecutive cells of one block draw nothing new.
+      if (out.empty() || !(out.back() == cell(c))) out.push_back(cell(c));
+    }
+    return out;
+  };
+  const auto points = [&](const std::vector<CellPoint>& in) {
+    std::vector<CellPoint> out;
+    out.reserve(in.size());
+    for (const CellPoint& p : in) out.push_back(point(p));
+    return out;
+  };
+  PlanOverlay small;
+  small.path = cells(overlay.path);
+  small.polyline = points(overlay.polyline);
+  small.expanded = cells(overlay.expanded);
+  for (const auto& s : overlay.structure_segments) {
+    small.structure_segments.push_back({point(s[0]), point(s[1])});
+  }
+  small.structure_points = points(overlay.structure_points);
+  for (const auto& outline : overlay.outlines) small.outlines.push_back(points(outline));
+  if (overlay.start.has_value()) small.start = cell(*overlay.start);
+  if (overlay.goal.has_value()) small.goal = cell(*overlay.goal);
+  for (const auto& path : overlay.fleet_paths) small.fleet_paths.push_back(cells(path));
+  for (const SimTrail& trail : overlay.trails) {
+    small.trails.push_back(
+        SimTrail{points(trail.points), trail.radius / k, point(trail.goal)});
+  }
+  return small;
+}
+
 absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
                                   const RenderOptions& options) {
+  if (options.scale == 0 &&
+      std::max(grid.width(), grid.height()) > kMaxImageSide) {
+    const int k = (std::max(grid.width(), grid.height()) + kMaxImageSide - 1) /
+                  kMaxImageSide;
+    return RenderImage(DownsampleGrid(grid, k), DownsampleOverlay(overlay, k),
+                       options);
+  }
   if (options.scale < 0 || options.scale > kMaxScale) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "--scale must be 1..%d pixels per cell (0: automatic), not %d",
@@ -148,7 +231,8 @@ absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
         "a %dx%d map at %d pixels per cell is a %dx%d picture, above the "
         "limit of %d pixels%s",
         grid.width(), grid.height(), scale, width, height, kMaxImagePixels,
-        scale > 1 ? "; use a smaller --scale" : ""));
+        scale > 1 ? "; use a smaller --scale"
+                  : "; leave out --scale to draw it downsampled"));
   }
   Canvas canvas(static_cast<int32_t>(width), static_cast<int32_t>(height));
   std::vector<bool> expanded(grid.size(), false);

@@ -55,6 +55,10 @@ inline constexpr int64_t kMaxImagePixels = int64_t{1} << 25;
 // for.
 inline constexpr int kMaxScale = 64;
 inline constexpr int32_t kTargetImageSide = 1024;
+// Longest side of a picture of a map drawn at the default scale: a larger
+// map (a 16384² one) is drawn at one pixel per block of k x k cells, the
+// smallest k that fits (DownsampleGrid).
+inline constexpr int32_t kMaxImageSide = 4096;
 
 // A simulated robot's run (pathctl simulate): where it drove, in cell
 // coordinates, its disc's radius in cells and its goal.
@@ -114,6 +118,15 @@ Rgb CostColour(uint8_t cost);
 // pixels: 16 for tiny maps, 1 for maps of 1024 cells or more.
 int DefaultScale(int32_t width, int32_t height);
 
+// One cell per block of k x k cells of `grid` (the last blocks of a row or
+// column may be partial), with the block's most blocking cost: lethal, then
+// inscribed, then unknown, then the highest weighted cost, then free. So a
+// one-cell wall never disappears from a downsampled picture. Resolution
+// times k, same origin. Precondition: k >= 1.
+Grid DownsampleGrid(const Grid& grid, int k);
+// The same for an overlay: cells and points divided by k.
+PlanOverlay DownsampleOverlay(const PlanOverlay& overlay, int k);
+
 // Draws the grid, the expanded cells (tinted), the structure (one-pixel
 // lines and dots), the path (lines through cell
 // centres, about a third of a cell wide and at least 3 pixels from 3 pixels
@@ -121,7 +134,8 @@ int DefaultScale(int32_t width, int32_t height);
 // cell across and never less than 9 pixels). Overlay cells
 // outside the grid are skipped. INVALID_ARGUMENT for a scale outside
 // 0..kMaxScale or a picture above kMaxImagePixels (the message suggests a
-// smaller --scale). Returns an RGB Image.
+// smaller --scale). With scale 0, a map longer than kMaxImageSide on a side
+// is drawn downsampled (DownsampleGrid). Returns an RGB Image.
 absl::StatusOr<Image> RenderImage(const Grid& grid, const PlanOverlay& overlay,
                                   const RenderOptions& options);
 

@@ -348,9 +348,18 @@ int Render(CommandEnv& env, Args args) {
     if (!image.ok()) return env.Usage(image.status().message());
     if (absl::Status s = WritePngFile(*image, options.out); !s.ok())
       return env.Fail(s);
-    env.out() << absl::StrFormat("wrote %s (%dx%d pixels, %d per cell)\n",
-                                 options.out, image->width, image->height,
-                                 image->width / grid->width());
+    if (image->width >= grid->width()) {
+      env.out() << absl::StrFormat("wrote %s (%dx%d pixels, %d per cell)\n",
+                                   options.out, image->width, image->height,
+                                   image->width / grid->width());
+    } else {
+      // Downsampled: one pixel per block of k x k cells.
+      const int k = (grid->width() + image->width - 1) / image->width;
+      env.out() << absl::StrFormat(
+          "wrote %s (%dx%d pixels, one per %dx%d cells, the most blocking "
+          "cost of each block)\n",
+          options.out, image->width, image->height, k, k);
+    }
   }
   if (!summary.empty()) env.out() << summary << "\n";
   return code;
@@ -390,6 +399,10 @@ const Command kRenderCommand = {
             "--robots FILE plans the robots of FILE with PlanFleet (as 'pathctl fleet\n"
             "plan') and draws each robot's path in its own colour, its start as a disc\n"
             "and its goal as a ring (text: letters a, b, ... and capitals).\n"
+            "A map longer than 4096 cells on a side is drawn at one pixel per\n"
+            "block of k x k cells (the smallest k that fits 4096 pixels), each\n"
+            "pixel the block's most blocking cost (lethal wins), unless --scale is\n"
+            "given.\n"
             "Exit code 3 when the plan found no path (the map is still drawn).",
     .flags = kRenderFlags,
     .run = Render,

@@ -479,17 +479,24 @@ absl::StatusOr<Grid> ParseRosMap(const RosMapMetadata& metadata,
     // one file and some writers append a newline.
     const auto* bytes = reinterpret_cast<const unsigned char*>(raster.data());
     costs.resize(static_cast<size_t>(cells));
-    for (int64_t i = 0; i < cells; ++i) {
-      const int32_t value =
-          bytes_per_sample == 1
-              ? bytes[i]
-              : (int32_t{bytes[2 * i]} << 8) | bytes[2 * i + 1];  // big-endian
-      if (value > maxval) {
-        return absl::InvalidArgumentError(
-            absl::StrCat(source, ": pixel (", i % width, ", ", i / width,
-                         ") value ", value, " exceeds maxval ", maxval));
+    // Row by row, without a division per pixel: a 16384² image is 268 M
+    // pixels (docs/performance.md, "Huge maps").
+    for (int32_t row = 0; row < height; ++row) {
+      const int64_t first = int64_t{row} * width;
+      uint8_t* out = costs.data() + static_cast<size_t>(height - 1 - row) * width;
+      for (int32_t col = 0; col < width; ++col) {
+        const int64_t i = first + col;
+        const int32_t value =
+            bytes_per_sample == 1
+                ? bytes[i]
+                : (int32_t{bytes[2 * i]} << 8) | bytes[2 * i + 1];  // big-endian
+        if (value > maxval) {
+          return absl::InvalidArgumentError(
+              absl::StrCat(source, ": pixel (", col, ", ", row, ") value ", value,
+                           " exceeds maxval ", maxval));
+        }
+        out[col] = cost_of[static_cast<size_t>(value)];
       }
-      put(i, value);
     }
   }
 

@@ -1,18 +1,67 @@
 // Per-thread search memory reused across queries. Each cell's record carries
 // the id of the search that last wrote it, so starting a new search costs O(1)
 // instead of clearing O(map) memory; memory grows only for a larger map.
+// The records live in pages the kernel commits only when a search writes
+// them, so a short search on a huge map costs the pages it touched, not 24
+// bytes per map cell (docs/performance.md, "Huge maps").
 #ifndef PATHD_CORE_SEARCH_SEARCH_SCRATCH_H_
 #define PATHD_CORE_SEARCH_SEARCH_SCRATCH_H_
+
+#include <sys/mman.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <new>
 #include <memory>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 namespace pathd {
+
+// An array of trivially copyable T, all bytes zero, in its own anonymous
+// mapping: a page is committed when first written, and Zero() hands every
+// page back to the kernel (reads see zeros again). Not thread-safe.
+template <typename T>
+class ZeroPageArray {
+  static_assert(std::is_trivially_copyable_v<T>);
+
+ public:
+  ZeroPageArray() = default;
+  ZeroPageArray(const ZeroPageArray&) = delete;
+  ZeroPageArray& operator=(const ZeroPageArray&) = delete;
+  ~ZeroPageArray() { Unmap(); }
+
+  size_t size() const { return size_; }
+  T& operator[](size_t i) { return data_[i]; }
+  const T& operator[](size_t i) const { return data_[i]; }
+
+  // n zero elements; the old contents are dropped. Throws std::bad_alloc
+  // when the mapping fails, as a vector would.
+  void Reallocate(size_t n) {
+    Unmap();
+    if (n == 0) return;
+    void* p = mmap(nullptr, n * sizeof(T), PROT_READ | PROT_WRITE,
+                   MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    if (p == MAP_FAILED) throw std::bad_alloc();
+    data_ = static_cast<T*>(p);
+    size_ = n;
+  }
+  // Every element back to zero, and every page back to the kernel.
+  void Zero() {
+    if (data_ != nullptr) madvise(data_, size_ * sizeof(T), MADV_DONTNEED);
+  }
+
+ private:
+  void Unmap() {
+    if (data_ != nullptr) munmap(data_, size_ * sizeof(T));
+    data_ = nullptr;
+    size_ = 0;
+  }
+  T* data_ = nullptr;
+  size_t size_ = 0;
+};
 
 // Not thread-safe: one per worker thread (or per caller).
 class SearchScratch {
@@ -54,12 +103,24 @@ class SearchScratch {
   // Starts a new search over `cells` cells. O(1) unless the grid is larger
   // than any seen before or the 32-bit search id wraps (every 4 billion
   // searches), in which case the records are reset.
+  //
+  // Records are zero until a search writes them (search id 0 is never
+  // current). Above kReleaseScratchBytes the pages the previous search
+  // wrote go back to the kernel first, so a worker that once searched far on
+  // a huge map does not keep gigabytes resident: the resident size is what
+  // the current search touched. Below it they stay, and reused pages cost no
+  // fault.
+  static constexpr size_t kReleaseScratchBytes = size_t{256} << 20;
   void BeginSearch(size_t cells) {
     if (cells > nodes_.size()) {
-      nodes_.resize(cells, Node{0.0, 0, kNoParent, kNotInOpen});
+      nodes_.Reallocate(cells);
+      search_id_ = 0;
+    } else if (nodes_.size() * sizeof(Node) > kReleaseScratchBytes) {
+      nodes_.Zero();
+      search_id_ = 0;
     }
     if (++search_id_ == 0) {
-      for (Node& n : nodes_) n.search_id = 0;
+      nodes_.Zero();
       search_id_ = 1;
     }
     open_.clear();
@@ -133,7 +194,8 @@ class SearchScratch {
 
   // Bytes held, for metrics.
   size_t MemoryBytes() const {
-    size_t bytes = nodes_.capacity() * sizeof(Node) +
+    // The nodes' mapping, whether its pages are resident or not.
+    size_t bytes = nodes_.size() * sizeof(Node) +
                    open_.capacity() * sizeof(OpenEntry) +
                    fifo_.capacity() * sizeof(uint32_t) +
                    learned_.capacity() * sizeof(Learned);
@@ -143,7 +205,7 @@ class SearchScratch {
   uint32_t search_id() const { return search_id_; }
 
  private:
-  std::vector<Node> nodes_;
+  ZeroPageArray<Node> nodes_;
   std::vector<OpenEntry> open_;
   std::vector<uint32_t> fifo_;
   uint32_t search_id_ = 0;

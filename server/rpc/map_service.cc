@@ -44,6 +44,7 @@ MapServiceImpl::MapServiceImpl(MapStore& store, std::string map_dir,
     : store_(store),
       map_dir_(std::move(map_dir)),
       watchers_(store, watch_options),
+      uploads_(store.max_cells()),
       max_message_bytes_(max_message_bytes),
       authenticator_(authenticator) {}
 
@@ -132,7 +133,8 @@ absl::Status MapServiceImpl::DoGetMap(const v1::GetMapRequest& request,
     if (max_message_bytes_ > 0 && bytes > static_cast<size_t>(max_message_bytes_)) {
       return absl::ResourceExhaustedError(absl::StrFormat(
           "the cells of map '%s' (%d x %d) make a %d-byte response, more than "
-          "the limit of %d bytes (--max_message_bytes)",
+          "the limit of %d bytes (--max_message_bytes); DownloadMap streams it "
+          "in bands",
           snapshot->name, snapshot->grid->width(), snapshot->grid->height(), bytes,
           max_message_bytes_));
     }
@@ -222,6 +224,26 @@ grpc::ServerWriteReactor<v1::MapEvent>* MapServiceImpl::WatchMap(
     return refused;
   }
   return watchers_.Start(context, *request);
+}
+
+grpc::ServerReadReactor<v1::UploadMapRequest>* MapServiceImpl::UploadMap(
+    grpc::CallbackServerContext* context, v1::CreateMapResponse* response) {
+  if (auto* refused =
+          RefuseUnauthorized<grpc::ServerReadReactor<v1::UploadMapRequest>>(
+              authenticator_, context, kMethodUploadMap)) {
+    return refused;
+  }
+  return StartUploadMap(store_, uploads_, response);
+}
+
+grpc::ServerWriteReactor<v1::DownloadMapResponse>* MapServiceImpl::DownloadMap(
+    grpc::CallbackServerContext* context, const v1::DownloadMapRequest* request) {
+  if (auto* refused =
+          RefuseUnauthorized<grpc::ServerWriteReactor<v1::DownloadMapResponse>>(
+              authenticator_, context, kMethodDownloadMap)) {
+    return refused;
+  }
+  return StartDownloadMap(store_, *request);
 }
 
 }  // namespace pathd::server

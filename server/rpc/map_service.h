@@ -12,6 +12,7 @@
 #include "pathd/v1/map_service.grpc.pb.h"
 #include "server/auth.h"
 #include "server/map_store.h"
+#include "server/rpc/map_transfer.h"
 #include "server/rpc/watch_map.h"
 
 namespace pathd::server {
@@ -48,6 +49,12 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
   grpc::ServerWriteReactor<v1::MapEvent>* WatchMap(
       grpc::CallbackServerContext* context,
       const v1::WatchMapRequest* request) override;
+  grpc::ServerReadReactor<v1::UploadMapRequest>* UploadMap(
+      grpc::CallbackServerContext* context,
+      v1::CreateMapResponse* response) override;
+  grpc::ServerWriteReactor<v1::DownloadMapResponse>* DownloadMap(
+      grpc::CallbackServerContext* context,
+      const v1::DownloadMapRequest* request) override;
 
   // Ends every WatchMap stream with UNAVAILABLE and refuses new ones.
   void ShutdownWatchers() { watchers_.Shutdown(); }
@@ -64,6 +71,8 @@ class MapServiceImpl final : public v1::MapService::CallbackService {
   MapStore& store_;
   const std::string map_dir_;
   MapWatchers watchers_;
+  // Cells of the UploadMap calls in progress (at most --max_map_cells).
+  UploadBudget uploads_;
   const int64_t max_message_bytes_;
   const TokenAuthenticator* const authenticator_;
 };

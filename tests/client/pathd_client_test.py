@@ -27,6 +27,7 @@ import grpc
 import pathd_client
 from pathd_client import (LETHAL, Cell, PathdClient, PathdError, SetCell,
                           SetRect)
+from pathd.v1 import common_pb2
 from pathd.v1 import map_service_pb2
 from pathd.v1 import map_service_pb2_grpc
 from pathd.v1 import planner_service_pb2
@@ -201,6 +202,62 @@ class RealServerTest(unittest.TestCase, PathChecks):
         self.assertEqual(self.client.delete_map("maps"), 2)
         with self.assertRaises(pathd_client.NotFoundError):
             self.client.get_map("maps")
+
+    def test_maps_over_one_message_are_streamed(self):
+        # 3000 x 2000 cells (5.7 MiB): create_map streams them (UploadMap,
+        # bands of 1 MiB), get_cells reads them back through DownloadMap.
+        width, height = 3000, 2000
+        cells = bytes((x * 7 + y) % 256 for y in range(height) for x in range(0, width, 1000)
+                      for _ in range(1000))
+        info = self.client.create_map("streamed", cells=cells, width=width, height=height,
+                                      resolution=0.05, origin=(1.0, -2.0, 0.0))
+        self.addCleanup(self._delete_quietly, "streamed")
+        self.assertEqual((info.width, info.height, info.version), (width, height, 1))
+        back = self.client.get_cells("streamed")
+        self.assertEqual(back.info.resolution, 0.05)
+        self.assertEqual(back.cells, cells)
+        # Small bands, a header that does not match the cells.
+        self.client.upload_map("streamed", cells[:width * 10], width, 10, replace=True,
+                               band_bytes=width * 3)
+        self.assertEqual(self.client.get_cells("streamed").cells, cells[:width * 10])
+        with self.assertRaises(pathd_client.InvalidArgumentError) as raised:
+            self.client.upload_map("short", cells[:width * 9], width, 10)
+        self.assertIn("ended after 9 of header.height 10 rows", raised.exception.details)
+        with self.assertRaises(pathd_client.NotFoundError):
+            self.client.get_map("short")
+
+    def test_large_map_files_are_parsed_here_like_the_server_parses_them(self):
+        # Over 4 MiB: create_map(from_file=...) parses the file here and
+        # streams it; the server parses the same file from --map_dir. Both
+        # must give the same cells, resolution and origin.
+        side = 2100
+        folder = pathlib.Path(self.map_dir.name)
+        rows = ["".join("@" if (x * 5 + y * 3) % 13 == 0 else "." for x in range(side))
+                for y in range(side)]
+        (folder / "bigtext.map").write_text(
+            f"type octile\nheight {side}\nwidth {side}\nmap\n" + "\n".join(rows) + "\n")
+        pixels = bytes((x * 7 + y * 11) % 256 for y in range(side) for x in range(side))
+        (folder / "bigimage.pgm").write_bytes(f"P5\n{side} {side}\n255\n".encode() + pixels)
+        for mode in ("trinary", "scale", "raw"):
+            (folder / f"big_{mode}.yaml").write_text(
+                "image: bigimage.pgm\nresolution: 0.05\norigin: [1.5, -2.0, 0.0]\n"
+                f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: {mode}\n")
+        for file in ["bigtext.map"] + [f"big_{m}.yaml" for m in ("trinary", "scale", "raw")]:
+            with self.subTest(file=file):
+                mine = self.client.create_map("mine", from_file=folder / file, replace=True)
+                self.addCleanup(self._delete_quietly, "mine")
+                theirs = self.client.create_map("theirs", map_dir_file=file, replace=True)
+                self.addCleanup(self._delete_quietly, "theirs")
+                self.assertEqual((mine.width, mine.height, mine.resolution, mine.origin),
+                                 (theirs.width, theirs.height, theirs.resolution, theirs.origin))
+                self.assertEqual(self.client.get_cells("mine").cells,
+                                 self.client.get_cells("theirs").cells)
+        # Rows over 4 MiB are streamed the same way.
+        info = self.client.create_map("mine", rows, replace=True)
+        self.assertEqual((info.width, info.height), (side, side))
+        self.client.create_map("theirs", map_dir_file="bigtext.map", replace=True)
+        self.assertEqual(self.client.get_cells("mine").cells,
+                         self.client.get_cells("theirs").cells)
 
     def test_plan_is_valid_and_optimal(self):
         self.make_map("plan")
@@ -610,7 +667,8 @@ class RealServerTest(unittest.TestCase, PathChecks):
         methods = {
             "MapService": {"CreateMap": "create_map", "GetMap": "get_map",
                            "ListMaps": "list_maps", "DeleteMap": "delete_map",
-                           "UpdateMap": "update_map", "WatchMap": "watch_map"},
+                           "UpdateMap": "update_map", "WatchMap": "watch_map",
+                           "UploadMap": "upload_map", "DownloadMap": "get_cells"},
             "PlannerService": {"Plan": "plan", "CostToGo": "cost_to_go",
                                "Navigate": "navigate", "GetCacheStats": "get_cache_stats",
                                "IsPathValid": "is_path_valid", "PlanStream": "plan_stream",
@@ -1054,6 +1112,15 @@ class _Recorder(map_service_pb2_grpc.MapServiceServicer,
         self._note("DeleteMap", context)
         return map_service_pb2.DeleteMapResponse()
 
+    def DownloadMap(self, request, context):
+        self._note("DownloadMap", context)
+        yield map_service_pb2.DownloadMapResponse(info=common_pb2.MapInfo(name=request.name))
+
+    def UploadMap(self, request_iterator, context):
+        self._note("UploadMap", context)
+        rows = sum(1 for m in request_iterator if m.HasField("band"))
+        return map_service_pb2.CreateMapResponse(info=common_pb2.MapInfo(height=rows))
+
     def WatchMap(self, request, context):
         self._note("WatchMap", context)
         yield map_service_pb2.MapEvent(kind=map_service_pb2.MAP_EVENT_KIND_DELETED)
@@ -1122,18 +1189,22 @@ class WireTest(unittest.TestCase):
         self.assertEqual([event.kind for event in c.watch_map("m8")], ["DELETED"])
         with c.navigate("m9", (0, 0), (1, 0)):
             pass
+        # One band per row: 3 bands of 2 bytes.
+        self.assertEqual(c.upload_map("m10", bytes(6), 2, 3, band_bytes=2).height, 3)
         calls = self.recorder.calls
         self.assertEqual([(m, h) for m, h, _ in calls], [
-            ("CreateMap", "m1"), ("GetMap", "m2"), ("GetMap", "m3"), ("UpdateMap", "m4"),
+            ("CreateMap", "m1"), ("GetMap", "m2"),
+            ("GetMap", "m3"), ("DownloadMap", "m3"),  # the size, then the stream
+            ("UpdateMap", "m4"),
             ("DeleteMap", "m5"), ("Plan", "m6"), ("Plan", "m7"),
             ("ListMaps", None),  # no map to name
-            ("WatchMap", "m8"), ("Navigate", "m9")])
+            ("WatchMap", "m8"), ("Navigate", "m9"), ("UploadMap", "m10")])
         # The server sees the deadline rounded (a few ms past the timeout):
         # upper bounds that tell 7.5 s from the 10 s default and from none.
-        for method, _, remaining in calls[:6] + calls[7:8]:
+        for method, _, remaining in calls[:7] + calls[8:9] + calls[11:12]:
             self.assertIsNotNone(remaining, method)
             self.assertTrue(0 < remaining < 8.0, f"{method}: {remaining}")
-        self.assertTrue(0 < calls[6][2] < 2.6, calls[6])
+        self.assertTrue(0 < calls[7][2] < 2.6, calls[7])
 
     def test_streams_and_new_calls_have_deadlines_headers_and_the_token(self):
         c = PathdClient(f"127.0.0.1:{self.port}", timeout=7.5, token="t0ken-" * 4)

@@ -306,6 +306,30 @@ class BadInputTest : public ::testing::Test {
     v1::UpdateMapResponse response;
     return map_->UpdateMap(Context().get(), request, &response);
   }
+  // The status UploadMap ends with after `messages` and a half-close (or
+  // after the first write the server refused).
+  grpc::Status UploadMap(const std::vector<v1::UploadMapRequest>& messages) {
+    auto context = Context();
+    v1::CreateMapResponse response;
+    auto writer = map_->UploadMap(context.get(), &response);
+    bool open = true;
+    for (const v1::UploadMapRequest& message : messages) {
+      if (!(open = writer->Write(message))) break;
+    }
+    if (open) writer->WritesDone();
+    return writer->Finish();
+  }
+  // The status DownloadMap ends with, every message read.
+  grpc::Status DownloadMap(const std::string& name) {
+    v1::DownloadMapRequest request;
+    request.set_name(name);
+    auto context = Context();
+    auto reader = map_->DownloadMap(context.get(), request);
+    v1::DownloadMapResponse message;
+    while (reader->Read(&message)) {
+    }
+    return reader->Finish();
+  }
   // The status WatchMap ends with, or OK once the first event arrived (the
   // stream is then cancelled).
   grpc::Status WatchMap(const std::string& name, uint64_t from_version = 0) {

@@ -223,6 +223,87 @@ void BadInputTest::AddMapCases(std::vector<Case>& cases) {
                    [this] { return WatchMap("big"); },
                    StatusCode::RESOURCE_EXHAUSTED, "--max_message_bytes"});
 
+  // ---- UploadMap: header, bands, an early end ----
+  const auto header = [](const std::string& name, int32_t width,
+                         int32_t height) {
+    v1::UploadMapRequest m;
+    m.mutable_header()->set_name(name);
+    m.mutable_header()->set_width(width);
+    m.mutable_header()->set_height(height);
+    return m;
+  };
+  const auto band = [](int32_t first_row, size_t bytes) {
+    v1::UploadMapRequest m;
+    m.mutable_band()->set_first_row(first_row);
+    m.mutable_band()->set_cells(std::string(bytes, '\0'));
+    return m;
+  };
+  const auto upload = [&](const std::string& what,
+                          std::vector<v1::UploadMapRequest> messages,
+                          StatusCode code, const std::string& message) {
+    cases.push_back({"UploadMap", what,
+                     [=, this] { return UploadMap(messages); }, code, message});
+  };
+  upload("empty stream", {}, StatusCode::INVALID_ARGUMENT,
+         "the stream ended before its header; nothing was created");
+  upload("band before the header", {band(0, 4)}, StatusCode::INVALID_ARGUMENT,
+         "band before the header");
+  upload("empty first message", {v1::UploadMapRequest()},
+         StatusCode::INVALID_ARGUMENT, "message 1 has neither header nor band");
+  upload("second header", {header("m", 4, 4), header("m", 4, 4)},
+         StatusCode::INVALID_ARGUMENT, "header: a second header");
+  upload("bad name", {header("a b", 4, 4)}, StatusCode::INVALID_ARGUMENT,
+         "header.name");
+  upload("zero width", {header("m", 0, 4)}, StatusCode::INVALID_ARGUMENT,
+         "header.width 0 and header.height 4 must be in 1..65536");
+  upload("height over the grid limit", {header("m", 1, 65537)},
+         StatusCode::INVALID_ARGUMENT, "header.height 65537");
+  upload("INT32_MIN dimensions", {header("m", kIntMin, kIntMin)},
+         StatusCode::INVALID_ARGUMENT, "must be in 1..65536");
+  upload("over --max_map_cells, refused at the header",
+         {header("m", 65536, 65536)}, StatusCode::RESOURCE_EXHAUSTED,
+         "exceeds the server's limit of 2097152 cells (--max_map_cells)");
+  {
+    v1::UploadMapRequest nan = header("m", 4, 4);
+    nan.mutable_header()->set_resolution(kNaN);
+    upload("NaN resolution", {nan}, StatusCode::INVALID_ARGUMENT,
+           "header.resolution");
+    v1::UploadMapRequest inf = header("m", 4, 4);
+    inf.mutable_header()->mutable_origin()->set_y(-kInf);
+    upload("infinite origin", {inf}, StatusCode::INVALID_ARGUMENT,
+           "header.origin");
+  }
+  upload("band out of order", {header("m", 4, 4), band(1, 4)},
+         StatusCode::INVALID_ARGUMENT, "band.first_row 1: expected 0");
+  upload("band repeated", {header("m", 4, 4), band(0, 8), band(0, 8)},
+         StatusCode::INVALID_ARGUMENT, "band.first_row 0: expected 2");
+  upload("band not whole rows", {header("m", 4, 4), band(0, 6)},
+         StatusCode::INVALID_ARGUMENT,
+         "band.cells at row 0: 6 bytes is not a positive whole number of rows "
+         "of 4 cells");
+  upload("empty band", {header("m", 4, 4), band(0, 0)},
+         StatusCode::INVALID_ARGUMENT, "0 bytes is not a positive whole number");
+  upload("rows past the height", {header("m", 4, 4), band(0, 8), band(2, 12)},
+         StatusCode::INVALID_ARGUMENT,
+         "band.cells at row 2: 3 rows pass the header.height of 4");
+  upload("header only", {header("m", 4, 4)}, StatusCode::INVALID_ARGUMENT,
+         "the stream ended after 0 of header.height 4 rows; nothing was created");
+  upload("stream ending early", {header("m", 4, 4), band(0, 12)},
+         StatusCode::INVALID_ARGUMENT,
+         "the stream ended after 3 of header.height 4 rows; nothing was created");
+  upload("name taken without replace", {header("room", 2, 2), band(0, 4)},
+         StatusCode::ALREADY_EXISTS, "room");
+  upload("band over --max_message_bytes",
+         {header("m", 1024, 2048), band(0, 1024 * 2048)},
+         StatusCode::RESOURCE_EXHAUSTED, "larger than max");
+  // ---- DownloadMap ----
+  cases.push_back({"DownloadMap", "unknown map",
+                   [this] { return DownloadMap("nope"); },
+                   StatusCode::NOT_FOUND, "map 'nope' not found"});
+  cases.push_back({"DownloadMap", "bad name",
+                   [this] { return DownloadMap("../x"); },
+                   StatusCode::INVALID_ARGUMENT, "name"});
+
   // ---- UpdateMap ----
   const auto update = [&](const std::string& what,
                           std::function<void(v1::UpdateMapRequest&)> fill,

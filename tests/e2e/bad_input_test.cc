@@ -128,7 +128,8 @@ void BadInputTest::AddNameCases(std::vector<Case>& cases) {
     for (const std::string method :
          {"/pathd.v1.MapService/ListMaps",
           "/pathd.v1.PlannerService/GetCacheStats",
-          "/pathd.v1.MapService/GetMap", "/pathd.v1.MapService/WatchMap"}) {
+          "/pathd.v1.MapService/GetMap", "/pathd.v1.MapService/WatchMap",
+          "/pathd.v1.MapService/DownloadMap"}) {
       cases.push_back(
           {method, "unparsable bytes", [=, this] { return Raw(method, junk); },
            StatusCode::INVALID_ARGUMENT,

@@ -280,6 +280,37 @@ TEST_F(E2eTest, MapsImportAndExportRoundTrip) {
   ExpectRpcError({"maps", "export", "nope", yaml}, "NOT_FOUND", {"nope"});
 }
 
+// A map file over one default-sized message (4 MiB) is parsed by pathctl
+// and streamed (UploadMap); export reads it back through DownloadMap, and a
+// map longer than 4096 cells renders downsampled.
+TEST_F(E2eTest, MapsOverOneMessageAreStreamedBothWays) {
+  constexpr int kW = 5000, kH = 900;  // 4.5 MB of Moving AI text
+  std::string text = absl::StrCat("type octile\nheight ", kH, "\nwidth ", kW, "\nmap\n");
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) text.push_back((x * 7 + y * 3) % 11 == 0 ? '@' : '.');
+    text.push_back('\n');
+  }
+  fs::create_directories(temp_dir_ / "out");
+  const std::string file = (temp_dir_ / "big.map").string();
+  e2e::WriteFile(file, text);
+  const ProcessResult imported = Ctl({"maps", "import", "big", file});
+  ASSERT_EQ(imported.exit_code, 0) << imported;
+  EXPECT_TRUE(absl::StartsWith(imported.out, "created map big from ")) << imported;
+  const ProcessResult created = Ctl({"maps", "create", "big2", "--from", file});
+  ASSERT_EQ(created.exit_code, 0) << created;
+
+  const std::string exported = (temp_dir_ / "out" / "big.map").string();
+  const ProcessResult out = Ctl({"maps", "export", "big2", exported});
+  ASSERT_EQ(out.exit_code, 0) << out;
+  EXPECT_TRUE(e2e::ReadFile(exported) == text) << "the exported map differs";
+
+  const std::string png = (temp_dir_ / "out" / "big.png").string();
+  const ProcessResult drawn = Ctl({"render", "big", "-o", png});
+  ASSERT_EQ(drawn.exit_code, 0) << drawn;
+  EXPECT_TRUE(absl::StrContains(drawn.out, "(2500x450 pixels, one per 2x2 cells"))
+      << drawn;
+}
+
 // pathd with TLS and --auth_tokens, driven by pathctl with --tls_ca and
 // --token_file / $PATHD_TOKEN; the daemon's whole log (trace level) is
 // captured and must not contain a token.

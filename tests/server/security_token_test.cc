@@ -9,9 +9,9 @@ TEST_F(SecurityTest, EveryPathdRpcChecksTheTokenAndTheRole) {
   const std::shared_ptr<grpc::Channel> channel = client::MakeChannel(
       server_->listen_address(), client::ClientCredentials{});
   const std::vector<std::string> methods = ServedMethods(/*pathd_only=*/true);
-  // MapService's 6, PlannerService's 13 (with Table, Nearest, Trip,
-  // Isochrone, PlanFleet and ListSessions).
-  ASSERT_EQ(methods.size(), 19u);
+  // MapService's 8 (with UploadMap and DownloadMap), PlannerService's 13
+  // (with Table, Nearest, Trip, Isochrone, PlanFleet and ListSessions).
+  ASSERT_EQ(methods.size(), 21u);
   int writes = 0;
   for (const std::string& method : methods) {
     SCOPED_TRACE(method);
@@ -40,7 +40,7 @@ TEST_F(SecurityTest, EveryPathdRpcChecksTheTokenAndTheRole) {
           << allowed.error_message();
     }
   }
-  EXPECT_EQ(writes, 3);  // CreateMap, DeleteMap, UpdateMap
+  EXPECT_EQ(writes, 4);  // CreateMap, DeleteMap, UpdateMap, UploadMap
 }
 
 TEST_F(SecurityTest, RolesGovernTypedCallsAndHealthNeedsNoToken) {

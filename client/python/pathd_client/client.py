@@ -22,8 +22,8 @@ from pathd.v1 import planner_service_pb2_grpc
 
 from pathd_client import health
 from pathd_client.channel import PemSource, make_channel
-from pathd_client.errors import _from_rpc_error
-from pathd_client.map_files import set_source_from_file
+from pathd_client.errors import PathdError, _from_rpc_error
+from pathd_client.map_files import cells_from_file, parse_movingai, set_source_from_file
 from pathd_client.streams import MapWatch, NavigationSession, PlanBatch, PlanStream
 from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CacheStatsResult, Change,
                                  CostToGoResult, FleetPlanResult, IsochroneResult,
@@ -31,6 +31,14 @@ from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CacheStatsResult, 
                                  PlanResult, PositionLike, SessionInfo, TableResult, TripResult,
                                  UpdateResult, _change_proto, _options, _planner,
                                  _position, plan_request)
+
+# A CreateMap request over this goes through UploadMap instead: gRPC's
+# default message limit, which any pathd accepts.
+UNARY_CREATE_MAP_BYTES = 4 << 20
+# Band size upload_map sends by default.
+UPLOAD_BAND_BYTES = 1 << 20
+# Transfer rate the streamed calls' deadlines allow for.
+TRANSFER_BYTES_PER_SECOND = 16 << 20
 
 
 class PathdClient:
@@ -147,10 +155,62 @@ class PathdClient:
         else:
             if width is None or height is None:
                 raise ValueError("cells needs width and height")
+            if len(cells) > UNARY_CREATE_MAP_BYTES:
+                return self.upload_map(name, cells, width, height, resolution=resolution,
+                                       origin=origin, replace=replace, timeout=timeout)
             request.raw.CopyFrom(map_service_pb2.RawCells(
                 width=width, height=height, cells=bytes(cells)))
+        if request.ByteSize() > UNARY_CREATE_MAP_BYTES and from_file is not None:
+            # As pathctl: parsed here by the server's rules and streamed.
+            width, height, cells, file_resolution, file_origin = cells_from_file(from_file)
+            return self.upload_map(
+                name, cells, width, height,
+                resolution=resolution if file_resolution is None else file_resolution,
+                origin=origin if file_origin is None else file_origin,
+                replace=replace, timeout=timeout)
+        if request.ByteSize() > UNARY_CREATE_MAP_BYTES and rows is not None:
+            width, height, cells = parse_movingai(request.movingai_text.encode(), "rows")
+            return self.upload_map(name, cells, width, height, resolution=resolution,
+                                   origin=origin, replace=replace, timeout=timeout)
+        if request.ByteSize() > UNARY_CREATE_MAP_BYTES:
+            raise ValueError(
+                f"map {name!r}: a {request.ByteSize()}-byte CreateMap request is over "
+                f"{UNARY_CREATE_MAP_BYTES} bytes; pass its cost bytes as cells= "
+                "(streamed through UploadMap)")
         response = self._call(self._maps.CreateMap, request, name, timeout)
         return MapInfo.from_proto(response.info)
+
+    def upload_map(self, name: str, cells: bytes, width: int, height: int, *,
+                   resolution: float = 1.0,
+                   origin: tuple[float, float, float] | None = None,
+                   replace: bool = False, band_bytes: int = UPLOAD_BAND_BYTES,
+                   timeout: float | None = None) -> MapInfo:
+        """Creates a map of any size through UploadMap: a header, then the
+        width * height row-major cost bytes in bands of whole rows of at most
+        `band_bytes` (at least one row). create_map calls it for cells over
+        4 MiB. The deadline is `timeout` plus a second per 16 MiB."""
+        header = map_service_pb2.UploadMapHeader(
+            name=name, width=width, height=height, resolution=resolution,
+            replace=replace)
+        if origin is not None:
+            x, y, *yaw = origin
+            header.origin.CopyFrom(common_pb2.Origin(x=x, y=y, yaw=yaw[0] if yaw else 0.0))
+        data = memoryview(bytes(cells))
+        row_bytes = max(width, 1)
+        band = max(1, band_bytes // row_bytes) * row_bytes
+
+        def messages():
+            yield map_service_pb2.UploadMapRequest(header=header)
+            for offset in range(0, len(data), band):
+                yield map_service_pb2.UploadMapRequest(band=map_service_pb2.CellBand(
+                    first_row=offset // row_bytes, cells=bytes(data[offset:offset + band])))
+
+        response = self._call(self._maps.UploadMap, messages(), name,
+                              self._transfer_timeout(timeout, len(data)))
+        return MapInfo.from_proto(response.info)
+
+    def _transfer_timeout(self, timeout: float | None, size: int) -> float:
+        return self._timeout(timeout) + size / TRANSFER_BYTES_PER_SECOND
 
     def get_map(self, name: str, *, timeout: float | None = None) -> MapInfo:
         response = self._call(self._maps.GetMap,
@@ -158,11 +218,33 @@ class PathdClient:
         return MapInfo.from_proto(response.info)
 
     def get_cells(self, name: str, *, timeout: float | None = None) -> MapCells:
-        """The current version with its cost bytes."""
-        response = self._call(
-            self._maps.GetMap,
-            map_service_pb2.GetMapRequest(name=name, include_cells=True), name, timeout)
-        return MapCells(MapInfo.from_proto(response.info), response.cells)
+        """The current version with its cost bytes, of any size: streamed
+        through DownloadMap (metadata, then bands of rows of at most 1 MiB),
+        with GetMap's size setting the deadline as upload_map does."""
+        info = self.get_map(name, timeout=timeout)
+        call_timeout = self._transfer_timeout(timeout, info.width * info.height)
+        parts: list[bytes] = []
+        first = None
+        received = 0
+        try:
+            for message in self._maps.DownloadMap(
+                    map_service_pb2.DownloadMapRequest(name=name), timeout=call_timeout,
+                    metadata=self._metadata(name)):
+                if message.HasField("info"):
+                    first = message.info
+                    continue
+                if first is None or message.band.first_row * first.width != received:
+                    raise PathdError(
+                        grpc.StatusCode.INTERNAL, f"DownloadMap of {name!r}: band at row {message.band.first_row} "
+                        f"does not continue the {received} bytes received")
+                parts.append(message.band.cells)
+                received += len(message.band.cells)
+        except grpc.RpcError as error:
+            raise _from_rpc_error(error) from None
+        if first is None or received != first.width * first.height:
+            raise PathdError(grpc.StatusCode.INTERNAL,
+                             f"DownloadMap of {name!r}: got {received} cell bytes")
+        return MapCells(MapInfo.from_proto(first), b"".join(parts))
 
     def list_maps(self, *, timeout: float | None = None) -> list[MapInfo]:
         response = self._call(self._maps.ListMaps, map_service_pb2.ListMapsRequest(),

@@ -89,6 +89,48 @@ TEST(RenderImageTest, CellsHaveTheirCostColourAtTheScale) {
   EXPECT_EQ(CountPixels(*image, kFreeColour), 20 * 100);
 }
 
+TEST(DownsampleGridTest, EachBlockKeepsItsMostBlockingCost) {
+  // 5 x 3 cells in blocks of 2 x 2: 3 x 2 blocks, the last ones partial.
+  Grid grid = *Grid::Create(5, 3);
+  grid.set_resolution(0.05);
+  grid.set_cost(1, 1, kLethalCost);      // block (0, 0): lethal beats
+  grid.set_cost(0, 0, kUnknownCost);     // unknown and
+  grid.set_cost(1, 0, 200);              // a weighted cost
+  grid.set_cost(2, 0, 7);                // block (1, 0): the higher weight
+  grid.set_cost(3, 1, 90);
+  grid.set_cost(4, 2, kInscribedCost);   // block (2, 1), partial
+  const Grid small = DownsampleGrid(grid, 2);
+  ASSERT_EQ(small.width(), 3);
+  ASSERT_EQ(small.height(), 2);
+  EXPECT_DOUBLE_EQ(small.resolution(), 0.1);
+  EXPECT_EQ(small.cost(0, 0), kLethalCost);
+  EXPECT_EQ(small.cost(1, 0), 90);
+  EXPECT_EQ(small.cost(2, 0), kFreeCost);
+  EXPECT_EQ(small.cost(0, 1), kFreeCost);
+  EXPECT_EQ(small.cost(2, 1), kInscribedCost);
+}
+
+TEST(RenderImageTest, MapsOverTheLargestSideAreDrawnDownsampled) {
+  // 9000 cells wide: blocks of 3 x 3 make a 3000-pixel picture; a one-cell
+  // wall at x = 8000 stays drawn, and so does the path's start.
+  Grid grid = *Grid::Create(9000, 4);
+  for (int32_t y = 0; y < 4; ++y) grid.set_cost(8000, y, kLethalCost);
+  PlanOverlay overlay;
+  overlay.start = Cell{30, 1};
+  const absl::StatusOr<Image> image = RenderImage(grid, overlay, RenderOptions{});
+  ASSERT_TRUE(image.ok()) << image.status();
+  EXPECT_EQ(image->width, 3000);
+  EXPECT_EQ(image->height, 2);
+  EXPECT_EQ(PixelAt(*image, 8000 / 3, 0), kLethalColour);
+  EXPECT_EQ(PixelAt(*image, 8000 / 3, 1), kLethalColour);
+  EXPECT_EQ(PixelAt(*image, 100, 0), kFreeColour);
+  EXPECT_EQ(PixelAt(*image, 10, 0), kStartColour);
+  // An explicit scale is not downsampled: 9000 x 4 at 1 pixel per cell.
+  RenderOptions one;
+  one.scale = 1;
+  EXPECT_EQ(RenderImage(grid, PlanOverlay{}, one)->width, 9000);
+}
+
 TEST(RenderImageTest, YUpDrawsRowZeroAtTheBottom) {
   Grid grid = *Grid::Create(3, 2);
   grid.set_cost(0, 0, kLethalCost);

@@ -3,6 +3,9 @@
 // and update.
 #include "tests/server/rpc/service_fixture.h"
 
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+
 namespace pathd::server::service_test {
 
 testing::TempDir* ServiceTest::scratch_ = nullptr;
@@ -315,6 +318,111 @@ TEST_F(ServiceTest, UpdateBumpsVersionAndRejectsStaleExpectedVersion) {
     EXPECT_EQ(maps_->UpdateMap(&context, unknown, &response).error_code(),
               grpc::StatusCode::NOT_FOUND);
   }
+}
+
+// UploadMap's budget: the uploads in progress hold at most --max_map_cells
+// (65536 here) together, reserved at the header; a finished or cancelled
+// upload gives its cells back. DownloadMap sends what UploadMap took.
+TEST_F(ServiceTest, UploadsInProgressShareOneBudget) {
+  const auto header = [](const std::string& name, int32_t w, int32_t h) {
+    v1::UploadMapRequest m;
+    m.mutable_header()->set_name(name);
+    m.mutable_header()->set_width(w);
+    m.mutable_header()->set_height(h);
+    return m;
+  };
+  const auto band = [](int32_t first_row, const std::string& cells) {
+    v1::UploadMapRequest m;
+    m.mutable_band()->set_first_row(first_row);
+    m.mutable_band()->set_cells(cells);
+    return m;
+  };
+  // Upload "a" (200 x 300 = 60000 cells): the header and its first 100 rows.
+  std::string cells(200 * 300, '\0');
+  for (size_t i = 0; i < cells.size(); i += 13) cells[i] = static_cast<char>(i % 255);
+  grpc::ClientContext a_context;
+  Prepare(a_context);
+  v1::CreateMapResponse a_response;
+  auto a = maps_->UploadMap(&a_context, &a_response);
+  ASSERT_TRUE(a->Write(header("up-a", 200, 300)));
+  ASSERT_TRUE(a->Write(band(0, cells.substr(0, 200 * 100))));
+
+  // "b" (100 x 100) would take the uploads past 65536 cells: refused at its
+  // header. Once "a" is done, the same upload goes through.
+  const auto upload_b = [&] {
+    grpc::ClientContext context;
+    Prepare(context);
+    v1::CreateMapResponse response;
+    auto b = maps_->UploadMap(&context, &response);
+    if (b->Write(header("up-b", 100, 100)) && b->Write(band(0, std::string(10000, '\0')))) {
+      b->WritesDone();
+    }
+    return b->Finish();
+  };
+  grpc::Status refused = upload_b();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_THAT(refused.error_message(),
+              HasSubstr("uploads in progress hold 60000 cells; this upload's 10000 would "
+                        "pass the server's limit of 65536 cells (--max_map_cells)"));
+
+  ASSERT_TRUE(a->Write(band(100, cells.substr(200 * 100))));
+  ASSERT_TRUE(a->WritesDone());
+  const grpc::Status a_status = a->Finish();
+  ASSERT_TRUE(a_status.ok()) << a_status.error_message();
+  EXPECT_EQ(a_response.info().width(), 200);
+  EXPECT_EQ(a_response.info().version(), 1u);
+  const grpc::Status b_status = upload_b();
+  ASSERT_TRUE(b_status.ok()) << b_status.error_message();
+
+  // A cancelled upload creates nothing and gives its cells back (polled: the
+  // server sees the cancellation after the client returns; a hang guard).
+  {
+    grpc::ClientContext context;
+    Prepare(context);
+    v1::CreateMapResponse response;
+    auto c = maps_->UploadMap(&context, &response);
+    ASSERT_TRUE(c->Write(header("up-c", 200, 300)));
+    ASSERT_TRUE(c->Write(band(0, cells.substr(0, 200 * 10))));
+    context.TryCancel();
+    EXPECT_EQ(c->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  }
+  grpc::Status again;
+  for (const absl::Time guard = absl::Now() + absl::Seconds(30); absl::Now() < guard;
+       absl::SleepFor(absl::Milliseconds(10))) {
+    v1::DeleteMapRequest del;
+    del.set_name("up-b");
+    v1::DeleteMapResponse deleted;
+    grpc::ClientContext context;
+    Prepare(context);
+    maps_->DeleteMap(&context, del, &deleted);
+    if ((again = upload_b()).ok()) break;
+  }
+  EXPECT_TRUE(again.ok()) << again.error_message();
+  v1::GetMapRequest get;
+  get.set_name("up-c");
+  v1::GetMapResponse got;
+  grpc::ClientContext get_context;
+  Prepare(get_context);
+  EXPECT_EQ(maps_->GetMap(&get_context, get, &got).error_code(), grpc::StatusCode::NOT_FOUND);
+
+  // DownloadMap: the metadata, then bands that tile the map.
+  grpc::ClientContext d_context;
+  Prepare(d_context);
+  v1::DownloadMapRequest request;
+  request.set_name("up-a");
+  auto d = maps_->DownloadMap(&d_context, request);
+  v1::DownloadMapResponse message;
+  ASSERT_TRUE(d->Read(&message));
+  ASSERT_TRUE(message.has_info());
+  EXPECT_EQ(message.info().height(), 300);
+  std::string back;
+  while (d->Read(&message)) {
+    ASSERT_TRUE(message.has_band());
+    EXPECT_EQ(int64_t{message.band().first_row()} * 200, static_cast<int64_t>(back.size()));
+    back += message.band().cells();
+  }
+  ASSERT_TRUE(d->Finish().ok());
+  EXPECT_EQ(back, cells);
 }
 
 }  // namespace pathd::server::service_test
