@@ -485,11 +485,22 @@ absl::StatusOr<LocalPlan> OrcaStep(const RobotState& state, double radius,
   std::partial_sort(near.begin(),
                     near.begin() + static_cast<std::ptrdiff_t>(keep),
                     near.end());
+  const double speed = Norm(velocity);
   for (size_t k = 0; k < keep; ++k) {
     const MovingObstacle& o = neighbours[near[k].second];
+    double share = o.reciprocal ? 0.5 : 1.0;
+    // Following: a robot ahead that goes our way is not expected to give
+    // way (it may be braking for its own reasons; with the acceleration
+    // clamp half the avoidance came too late, docs/decisions.md): the
+    // follower keeps the gap alone. More than half is always safe.
+    const Vec ahead = V(o.position) - V(position);
+    if (share < 1.0 && speed > 1e-6 && Norm(ahead) > 1e-9 &&
+        Dot(velocity, ahead) > 0.7 * speed * Norm(ahead) &&
+        Dot(velocity, V(o.velocity)) > 0) {
+      share = 1.0;
+    }
     lines.push_back(OrcaLineForNeighbour(position, P(velocity), r, o,
-                                         options.time_horizon, period,
-                                         o.reciprocal ? 0.5 : 1.0));
+                                         options.time_horizon, period, share));
   }
   plan.constraints = static_cast<int64_t>(lines.size());
   if (keep > 0 && options.keep_right != 0) {

@@ -33,7 +33,7 @@ def main():
     parser.add_argument("--planners", default="orca")
     parser.add_argument("--runs", type=int, default=1)
     parser.add_argument("--random", action="store_true", help="the 50 random scenarios")
-    parser.add_argument("--shipped", action="store_true", help="circle8 and warehouse20")
+    parser.add_argument("--shipped", action="store_true", help="corridor2, circle8 and warehouse20")
     args = parser.parse_args()
     if not (args.random or args.shipped):
         args.random = args.shipped = True
@@ -50,7 +50,7 @@ def main():
                 if args.random:
                     random_set(st, daemon, work.name, planner, run)
                 if args.shipped:
-                    for name in ("circle8", "warehouse20"):
+                    for name in ("corridor2", "circle8", "warehouse20"):
                         shipped(st, daemon, work.name, name, planner, args.options, run)
     finally:
         daemon.stop()
