@@ -148,8 +148,8 @@ struct ProgressWindow {
 // the window (cells; negative when the robot lost ground) once it holds
 // window_seconds of cycles; nullopt before. A new path (remaining grew by
 // more than a cell) starts the window again.
-std::optional<double> RecordProgress(ProgressWindow& window, double remaining, double period,
-                      double window_seconds);
+std::optional<double> RecordProgress(ProgressWindow& window, double remaining,
+                                     double period, double window_seconds);
 
 // When `window` is not null: records target.remaining, and when the plan's
 // status is kOk and the progress over a full window is below

@@ -46,8 +46,9 @@ double OrcaViolation(const OrcaLine& line, CellPoint v);
 // `radius` against `other` within time horizon `horizon` s (> 0). `share` is
 // the part of the avoidance this robot takes: 0.5 against a robot that
 // reacts too, 1 against one that does not (OrcaStep also takes all of it
-// behind a robot ahead that goes its way: the follower keeps the gap). When the two already overlap,
-// the half-plane pushes them apart within `period` (the control period, s).
+// behind a robot ahead that goes its way: the follower keeps the gap).
+// When the two already overlap, the half-plane pushes them apart within
+// `period` (the control period, s).
 OrcaLine OrcaLineForNeighbour(CellPoint position, CellPoint velocity,
                               double radius, const MovingObstacle& other,
                               double horizon, double period, double share);

@@ -144,56 +144,6 @@ double SafetyMargin(const ControlConfig& c) {
   return c.planner == LocalPlannerKind::kOrca ? c.orca.safety_margin : 0.0;
 }
 
-// The distance from the centre of `cell` to the nearest blocked cell's area
-// (lethal or unknown, or outside the map), looking `limit` cells around it;
-// `limit` + 1 when nothing is that near.
-double AreaClearance(const Grid& grid, Cell cell, double limit) {
-  const int32_t reach = static_cast<int32_t>(std::ceil(limit + 0.5));
-  double best = limit + 1.0;
-  for (int32_t dy = -reach; dy <= reach; ++dy) {
-    for (int32_t dx = -reach; dx <= reach; ++dx) {
-      const Cell c{cell.x + dx, cell.y + dy};
-      if (grid.InBounds(c) && grid.cost(c) < kLethalCost) continue;
-      const double ex = std::max(std::abs(dx) - 0.5, 0.0);
-      const double ey = std::max(std::abs(dy) - 0.5, 0.0);
-      best = std::min(best, std::hypot(ex, ey));
-    }
-  }
-  return best;
-}
-
-// The cells within `need` + 1 of the path points ahead of `robot` (up to
-// `ahead` + 2 `need` cells along the path) whose area clearance is below
-// `need`: the gaps the robot's disc does not fit through.
-std::vector<Cell> TightCells(const Grid& grid, const std::vector<CellPoint>& path,
-                             CellPoint robot, double need, double ahead) {
-  std::vector<Cell> tight;
-  if (path.empty()) return tight;
-  const PathTarget at = FindPathTarget(path, robot, 0.0);
-  const double stretch = ahead + 2.0 * need;
-  const int32_t reach = static_cast<int32_t>(std::ceil(need + 1.0));
-  double walked = 0.0;
-  for (size_t i = at.nearest_segment; i < path.size() && walked <= stretch; ++i) {
-    if (i > at.nearest_segment) {
-      walked += std::hypot(path[i].x - path[i - 1].x, path[i].y - path[i - 1].y);
-    }
-    const Cell centre{static_cast<int32_t>(std::floor(path[i].x)),
-                      static_cast<int32_t>(std::floor(path[i].y))};
-    for (int32_t dy = -reach; dy <= reach; ++dy) {
-      for (int32_t dx = -reach; dx <= reach; ++dx) {
-        const Cell c{centre.x + dx, centre.y + dy};
-        if (!grid.InBounds(c) || grid.cost(c) >= kLethalCost) continue;
-        if (AreaClearance(grid, c, need) < need) tight.push_back(c);
-      }
-    }
-  }
-  std::sort(tight.begin(), tight.end(), [](const Cell& a, const Cell& b) {
-    return a.y != b.y ? a.y < b.y : a.x < b.x;
-  });
-  tight.erase(std::unique(tight.begin(), tight.end()), tight.end());
-  return tight;
-}
-
 // Distance defaults in metres (core's defaults are in cells, which depend on
 // the map's resolution): what a robot of about half a metre needs.
 void SetMetreDefaults(double resolution, ControlConfig& c) {
@@ -667,7 +617,7 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
   if (!plan.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("state: ", plan.status().message()));
   }
-  if (detour != nullptr) *detour = DetourFor(robot, *plan, obstacles, path->points);
+  if (detour != nullptr) *detour = DetourFor(robot, *plan, obstacles);
   command->set_v(plan->v * res);
   command->set_vy(plan->vy * res);
   command->set_w(plan->w);
@@ -680,7 +630,7 @@ absl::Status ControlSession::Cycle(const v1::RobotState& state,
 
 std::optional<DetourRequest> ControlSession::DetourFor(
     const RobotState& robot, const LocalPlan& plan,
-    const std::vector<MovingObstacle>& obstacles, const std::vector<CellPoint>& path) {
+    const std::vector<MovingObstacle>& obstacles) {
   ++cycles_since_detour_;
   if (config_.detour_range <= 0) return std::nullopt;
   const CellPoint at = robot.pose.point();
@@ -697,6 +647,7 @@ std::optional<DetourRequest> ControlSession::DetourFor(
       DetourRequest lift;
       lift.robot = at;
       lift.robot_radius = config_.radius;
+      lift.lift = true;
       return lift;
     }
   }
@@ -720,22 +671,22 @@ std::optional<DetourRequest> ControlSession::DetourFor(
     if (std::hypot(o.velocity.x, o.velocity.y) > slow) continue;
     request.blockers.push_back(DetourRequest::Disc{o.position, o.radius});
   }
-  // Gaps too tight for the robot, when it stalled against the map.
-  const double need = config_.radius + SafetyMargin(config_);
-  const Grid& grid = *snapshot_->grid;
-  if (AreaClearance(grid, robot.pose.cell(), need + 1.5) < need + 1.5) {
-    request.tight = TightCells(grid, path, request.robot, need, config_.detour_range);
-  }
-  if (request.blockers.empty() && request.tight.empty()) return std::nullopt;
+  // Gaps too tight for the robot: looked for by the replan (worker pool),
+  // not here.
+  request.clearance = config_.radius + SafetyMargin(config_);
+  request.ahead = config_.detour_range;
   cycles_since_detour_ = 0;
-  blockers_ = request.blockers;
-  detour_origin_ = request.robot;
-  double farthest = 0.0;
-  for (const DetourRequest::Disc& d : request.blockers) {
-    farthest = std::max(farthest, std::hypot(d.centre.x - at.x, d.centre.y - at.y) + d.radius);
+  if (!request.blockers.empty()) {
+    // These replace the last blockers; a stall with none keeps them.
+    blockers_ = request.blockers;
+    detour_origin_ = request.robot;
+    double farthest = 0.0;
+    for (const DetourRequest::Disc& d : request.blockers) {
+      farthest = std::max(farthest, std::hypot(d.centre.x - at.x, d.centre.y - at.y) + d.radius);
+    }
+    // Past the farthest blocker by the robot's own size.
+    detour_clear_ = farthest + 2.0 * config_.radius;
   }
-  // Past the farthest blocker by the robot's own size.
-  detour_clear_ = farthest + 2.0 * config_.radius;
   return request;
 }
 

@@ -64,8 +64,9 @@ struct ControlConfig {
 };
 
 // A stalled robot's request for a global path around what stands in its
-// way (docs/service.md, "Detours"): the robot and the discs to plan around,
-// cells in the grid frame. A request without blockers lifts the last ones.
+// way (docs/service.md, "Detours"): the robot and the discs to plan around
+// (in place of the last ones; none keeps them), cells in the grid frame;
+// or, with `lift`, the word that the last ones are gone.
 struct DetourRequest {
   struct Disc {
     CellPoint centre;
@@ -74,10 +75,15 @@ struct DetourRequest {
   CellPoint robot;
   double robot_radius = 0.0;
   std::vector<Disc> blockers;
-  // Cells near the path ahead whose centres are closer to a blocked cell's
-  // area than the robot's radius and safety margin: a gap the grid's
-  // centre-to-centre inflation lets through but the robot's disc does not.
-  std::vector<Cell> tight;
+  // The clearance the local planner keeps from the map (radius and safety
+  // margin) and the detour range, cells: when the robot stalled within
+  // clearance + 1.5 of the map, the cells near the next ahead + 2 clearance
+  // of its path whose centres are closer than `clearance` to a blocked
+  // cell's area are gaps the grid's centre-to-centre inflation lets
+  // through but the robot's disc does not. 0: none looked for (a lift).
+  double clearance = 0.0;
+  double ahead = 0.0;
+  bool lift = false;
 };
 
 // NavigateOpen.control (with the open's robot: `options` and `grid` for the
@@ -147,8 +153,8 @@ class ControlSession {
   // Answers one RobotState into `response` (event CONTROL, the command, and
   // the plan when the path is new to the client). `robot_cell` receives the
   // robot's cell. `detour` (optional) receives a request when the robot has
-  // stalled over the local planner's window with slow robots or obstacles
-  // next to it (at most one per window). INVALID_ARGUMENT naming a bad state
+  // stalled over the local planner's window (at most one per window), or
+  // when the last one's blockers may be lifted. INVALID_ARGUMENT naming a bad state
   // field (the session ends, as for any bad message).
   absl::Status Cycle(const v1::RobotState& state, v1::NavigateResponse* response,
                      Cell* robot_cell, std::optional<DetourRequest>* detour = nullptr)
@@ -163,14 +169,12 @@ class ControlSession {
   // the version changed.
   absl::Status RefreshStatics() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
-  // A detour request when `plan` says the robot stalled next to slow
-  // `obstacles` or a gap too tight for it and no request went out within
-  // the stall window; or one lifting the last blockers once the robot is
-  // clear of where it stalled and none of `obstacles` stands in their
-  // discs any more.
+  // A detour request when `plan` says the robot stalled and no request went
+  // out within the stall window (its blockers: the slow `obstacles` near
+  // it); or one lifting the last blockers once the robot is clear of where
+  // it stalled and none of `obstacles` stands in their discs any more.
   std::optional<DetourRequest> DetourFor(const RobotState& robot, const LocalPlan& plan,
-                                         const std::vector<MovingObstacle>& obstacles,
-                                         const std::vector<CellPoint>& path)
+                                         const std::vector<MovingObstacle>& obstacles)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const Deps deps_;

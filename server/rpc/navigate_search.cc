@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/time.h"
+#include "core/local/local_types.h"
 #include "core/map/inflation.h"
 #include "core/planning/plan_query.h"
 #include "core/search/endpoints.h"
@@ -51,14 +52,74 @@ std::vector<size_t> BlockerCells(const DetourRequest& detour, const Grid& grid) 
   return cells;
 }
 
+// The distance from the centre of `cell` to the nearest blocked cell's area
+// (lethal or unknown, or outside the map), looking `limit` cells around it;
+// `limit` + 1 when nothing is that near.
+double AreaClearance(const Grid& grid, Cell cell, double limit) {
+  const int32_t reach = static_cast<int32_t>(std::ceil(limit + 0.5));
+  double best = limit + 1.0;
+  for (int32_t dy = -reach; dy <= reach; ++dy) {
+    for (int32_t dx = -reach; dx <= reach; ++dx) {
+      const Cell c{cell.x + dx, cell.y + dy};
+      if (grid.InBounds(c) && grid.cost(c) < kLethalCost) continue;
+      const double ex = std::max(std::abs(dx) - 0.5, 0.0);
+      const double ey = std::max(std::abs(dy) - 0.5, 0.0);
+      best = std::min(best, std::hypot(ex, ey));
+    }
+  }
+  return best;
+}
+
+// The detour's tight cells (DetourRequest::clearance) along `path`, the
+// path the robot follows: none unless the robot stands within the
+// clearance and 1.5 cells of the map. Each candidate cell is measured once.
+std::vector<Cell> TightCells(const Grid& grid, const std::vector<Cell>& path,
+                             const DetourRequest& detour) {
+  std::vector<Cell> tight;
+  const double need = detour.clearance;
+  const Cell robot{static_cast<int32_t>(std::floor(detour.robot.x)),
+                   static_cast<int32_t>(std::floor(detour.robot.y))};
+  if (need <= 0 || path.empty() || AreaClearance(grid, robot, need + 1.5) >= need + 1.5) {
+    return tight;
+  }
+  std::vector<CellPoint> points;
+  points.reserve(path.size());
+  for (const Cell& c : path) points.push_back(CellPoint{c.x + 0.5, c.y + 0.5});
+  const PathTarget at = FindPathTarget(points, detour.robot, 0.0);
+  const double stretch = detour.ahead + 2.0 * need;
+  const int32_t reach = static_cast<int32_t>(std::ceil(need + 1.0));
+  std::vector<Cell> candidates;
+  double walked = 0.0;
+  for (size_t i = at.nearest_segment; i < path.size() && walked <= stretch; ++i) {
+    if (i > at.nearest_segment) {
+      walked += std::hypot(path[i].x - path[i - 1].x, path[i].y - path[i - 1].y);
+    }
+    for (int32_t dy = -reach; dy <= reach; ++dy) {
+      for (int32_t dx = -reach; dx <= reach; ++dx) {
+        const Cell c{path[i].x + dx, path[i].y + dy};
+        if (grid.InBounds(c) && grid.cost(c) < kLethalCost) candidates.push_back(c);
+      }
+    }
+  }
+  const auto before = [](const Cell& a, const Cell& b) {
+    return a.y != b.y ? a.y < b.y : a.x < b.x;
+  };
+  std::sort(candidates.begin(), candidates.end(), before);
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  for (const Cell& c : candidates) {
+    if (AreaClearance(grid, c, need) < need) tight.push_back(c);
+  }
+  return tight;
+}
+
 // The detour's tight cells, merged into `tight` (sorted indices), except
 // near the robot (as for blockers) and near the goal (whose own clearance is
 // the user's choice). True when `tight` grew.
-bool MergeTightCells(const DetourRequest& detour, const Grid& grid, Cell goal,
-                     std::vector<size_t>* tight) {
+bool MergeTightCells(const DetourRequest& detour, const std::vector<Cell>& found,
+                     const Grid& grid, Cell goal, std::vector<size_t>* tight) {
   const double keep_free = detour.robot_radius + 1.5;
   std::vector<size_t> cells;
-  for (const Cell& c : detour.tight) {
+  for (const Cell& c : found) {
     if (!grid.InBounds(c)) continue;
     if (std::hypot(c.x + 0.5 - detour.robot.x, c.y + 0.5 - detour.robot.y) < keep_free) continue;
     if (std::hypot(c.x - goal.x, c.y - goal.y) < keep_free) continue;
@@ -584,14 +645,18 @@ absl::Status NavigationSearch::ReplanControl(std::optional<Cell> robot, bool* in
   *incomplete = false;
   bool detour_changed = false;
   if (detour.has_value()) {
-    // The request's blockers replace the last ones (none: they are lifted);
-    // its tight cells join those found before.
-    std::vector<size_t> blockers = BlockerCells(*detour, *snapshot_->grid);
-    if (blockers != detour_cells_) {
-      detour_cells_ = std::move(blockers);
-      detour_changed = true;
+    // The request's blockers replace the last ones (a lift removes them, a
+    // stall with none keeps them); its tight cells join those found before.
+    if (detour->lift || !detour->blockers.empty()) {
+      std::vector<size_t> blockers = BlockerCells(*detour, *snapshot_->grid);
+      if (blockers != detour_cells_) {
+        detour_cells_ = std::move(blockers);
+        detour_changed = true;
+      }
     }
-    if (MergeTightCells(*detour, *snapshot_->grid, goal_, &tight_cells_)) detour_changed = true;
+    const Grid& stored = *snapshot_->grid;
+    const std::vector<Cell> found = TightCells(stored, published_path_, *detour);
+    if (MergeTightCells(*detour, found, stored, goal_, &tight_cells_)) detour_changed = true;
   }
   PATHD_RETURN_IF_ERROR(Refresh(detour_changed));
   // A robot whose centre strays onto a cell the planning grid blocks (it

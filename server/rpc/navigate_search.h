@@ -100,9 +100,9 @@ class NavigationSearch {
   // path to control() when it changed. `incomplete` is set when the budget
   // ran out (the previous path stays; the next replan continues).
   // `detour`: plan around its blockers (session-only blocked cells, in
-  // place of the last detour's; none lifts them) and never again through
-  // its tight cells; when there is no path without them all are dropped and
-  // the path planned through them.
+  // place of the last detour's; a lift removes them) and never again
+  // through the tight cells found along the published path; when there is
+  // no path without them all are dropped and the path planned through them.
   absl::Status ReplanControl(std::optional<Cell> robot, bool* incomplete,
                              std::optional<DetourRequest> detour = std::nullopt);
 
