@@ -671,9 +671,10 @@ absl::Status NavigationSearch::ReplanControl(std::optional<Cell> robot, bool* in
   bool changed = false;
   PlanOutcome outcome = PlanOutcome::kNoPath;
   PATHD_RETURN_IF_ERROR(PlanInto(&plan, &changed, &outcome));
-  if (detour.has_value() && (!detour_cells_.empty() || !tight_cells_.empty()) &&
-      outcome != PlanOutcome::kFound && outcome != PlanOutcome::kExpansionLimit) {
-    // No way around the blockers: the path through them (they may move).
+  if ((!detour_cells_.empty() || !tight_cells_.empty()) && outcome != PlanOutcome::kFound &&
+      outcome != PlanOutcome::kExpansionLimit) {
+    // No way around the blockers or the tight gaps (after this detour, or
+    // after a map change): the path through them (blockers may move).
     detour_cells_.clear();
     tight_cells_.clear();
     PATHD_RETURN_IF_ERROR(Refresh(/*overlay_changed=*/true));

@@ -101,8 +101,9 @@ class NavigationSearch {
   // ran out (the previous path stays; the next replan continues).
   // `detour`: plan around its blockers (session-only blocked cells, in
   // place of the last detour's; a lift removes them) and never again
-  // through the tight cells found along the published path; when there is
-  // no path without them all are dropped and the path planned through them.
+  // through the tight cells found along the published path; whenever there
+  // is no path without them all are dropped and the path planned through
+  // them.
   absl::Status ReplanControl(std::optional<Cell> robot, bool* incomplete,
                              std::optional<DetourRequest> detour = std::nullopt);
 
