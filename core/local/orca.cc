@@ -200,6 +200,15 @@ Vec GridVelocity(const RobotState& s) {
   return Vec{s.v * c - s.vy * sn, s.v * sn + s.vy * c};
 }
 
+// The distance from point p to segment ab.
+double PointSegmentDistance(Vec p, Vec a, Vec b) {
+  const Vec ab = b - a;
+  const double len2 = Norm2(ab);
+  const double t =
+      len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  return Norm(p - (a + t * ab));
+}
+
 }  // namespace
 
 double OrcaViolation(const OrcaLine& line, CellPoint v) {
@@ -293,11 +302,7 @@ std::vector<ObstacleSegment> ObstacleSegmentsNear(
       const ObstacleSegment s{
           CellPoint{static_cast<double>(ga.x), static_cast<double>(ga.y)},
           CellPoint{static_cast<double>(gb.x), static_cast<double>(gb.y)}};
-      const Vec p = V(center), a = V(s.a), ab = V(s.b) - V(s.a);
-      const double len2 = Norm2(ab);
-      const double t =
-          len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-      const double d = Norm(p - (a + t * ab));
+      const double d = PointSegmentDistance(V(center), V(s.a), V(s.b));
       if (d <= range) found.emplace_back(d, s);
     }
   }
@@ -310,15 +315,6 @@ std::vector<ObstacleSegment> ObstacleSegmentsNear(
 }
 
 namespace {
-
-// The distance from point p to segment ab.
-double PointSegmentDistance(Vec p, Vec a, Vec b) {
-  const Vec ab = b - a;
-  const double len2 = Norm2(ab);
-  const double t =
-      len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-  return Norm(p - (a + t * ab));
-}
 
 // The distance between segments ab and cd (0 when they cross).
 double SegmentDistance(Vec a, Vec b, Vec c, Vec d) {

@@ -362,14 +362,17 @@ TEST_F(ServiceTest, UploadsInProgressShareOneBudget) {
   // The server reserves "a"'s cells when it reads a's header, which a
   // returned Write does not promise: a "b" that raced ahead of it went
   // through, and is deleted and tried again (polled; a hang guard bounds it).
-  grpc::Status refused = upload_b();
-  for (int attempt = 0; attempt < 500 && refused.ok(); ++attempt) {
+  const auto delete_b = [&] {
     v1::DeleteMapRequest del;
     del.set_name("up-b");
     v1::DeleteMapResponse deleted;
-    grpc::ClientContext del_context;
-    Prepare(del_context);
-    ASSERT_TRUE(maps_->DeleteMap(&del_context, del, &deleted).ok());
+    grpc::ClientContext context;
+    Prepare(context);
+    return maps_->DeleteMap(&context, del, &deleted);
+  };
+  grpc::Status refused = upload_b();
+  for (int attempt = 0; attempt < 500 && refused.ok(); ++attempt) {
+    ASSERT_TRUE(delete_b().ok());
     absl::SleepFor(absl::Milliseconds(10));
     refused = upload_b();
   }
@@ -402,12 +405,7 @@ TEST_F(ServiceTest, UploadsInProgressShareOneBudget) {
   grpc::Status again;
   for (const absl::Time guard = absl::Now() + absl::Seconds(30); absl::Now() < guard;
        absl::SleepFor(absl::Milliseconds(10))) {
-    v1::DeleteMapRequest del;
-    del.set_name("up-b");
-    v1::DeleteMapResponse deleted;
-    grpc::ClientContext context;
-    Prepare(context);
-    maps_->DeleteMap(&context, del, &deleted);
+    delete_b();
     if ((again = upload_b()).ok()) break;
   }
   EXPECT_TRUE(again.ok()) << again.error_message();
