@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <limits>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -89,8 +90,170 @@ void HpaGraph::Bounds(int32_t id, int32_t& x0, int32_t& y0, int32_t& x1,
   y1 = std::min(y0 + c, height_);
 }
 
-std::shared_ptr<const HpaCluster> HpaGraph::BuildCluster(const GridView& view,
-                                                         int32_t id) const {
+// The intra-cluster costs of BuildCluster: nodes.size()^2 costs between the
+// nodes (cells of the rectangle [x0, x1) x [y0, y1)), row = from, column =
+// to, under the moves MoveRule allows inside the rectangle. One Dijkstra per
+// node, all over one move graph of the rectangle built once (GridView's
+// neighbour rule run once per cell, not once per cell and node), each
+// stopped once every node it still has to price is settled. When every
+// traversable cell of the rectangle pays the same factor the costs are
+// symmetric (a diagonal's side cells are the same both ways), so node i
+// prices only the nodes after it and the mirror half is copied. Settled
+// Dijkstra costs are the minimum over relaxations from cells settled
+// before, so stopping early changes no cost: a repaired cluster equals a
+// rebuilt one bit for bit.
+class HpaGraph::IntraSearch {
+ public:
+  std::vector<float> Costs(const GridView& view, int32_t x0, int32_t y0, int32_t x1,
+                           int32_t y1, const std::vector<uint32_t>& nodes);
+
+ private:
+  // The move graph: moves out of local cell l are moves_[begin_[l] ..
+  // begin_[l + 1]), each with its cost (length times the entered cell's
+  // factor, as LocalSearch's forward run prices it).
+  struct Move {
+    int32_t to;
+    bool diagonal;
+    double cost;
+  };
+  std::vector<int32_t> begin_;
+  std::vector<Move> moves_;
+  // node_of_[l]: the position in `nodes` of local cell l, or -1.
+  std::vector<int32_t> node_of_;
+  std::vector<int32_t> local_;
+  std::vector<double> cost_;
+  std::vector<uint8_t> closed_;
+  // The open lists, reused: (cost, local cell) entries.
+  using Entry = std::pair<double, int32_t>;
+  std::vector<Entry> open_[2];
+
+  // A binary heap in open_[0].
+  struct Heap {};
+  // Two FIFO queues open_[0] (straight moves) and open_[1] (diagonal).
+  struct FifoPair {
+    size_t head[2] = {0, 0};
+  };
+  void Clear(Heap&) { open_[0].clear(); }
+  void Clear(FifoPair& q) {
+    open_[0].clear();
+    open_[1].clear();
+    q = FifoPair{};
+  }
+  void Push(Heap&, Entry e, bool /*diagonal*/) {
+    open_[0].push_back(e);
+    std::push_heap(open_[0].begin(), open_[0].end(), After);
+  }
+  void Push(FifoPair&, Entry e, bool diagonal) { open_[diagonal ? 1 : 0].push_back(e); }
+  bool Pop(Heap&, Entry& e) {
+    if (open_[0].empty()) return false;
+    std::pop_heap(open_[0].begin(), open_[0].end(), After);
+    e = open_[0].back();
+    open_[0].pop_back();
+    return true;
+  }
+  bool Pop(FifoPair& q, Entry& e) {
+    const bool has0 = q.head[0] < open_[0].size();
+    const bool has1 = q.head[1] < open_[1].size();
+    if (!has0 && !has1) return false;
+    const int from =
+        !has0 || (has1 && open_[1][q.head[1]].first < open_[0][q.head[0]].first) ? 1 : 0;
+    e = open_[from][q.head[from]++];
+    return true;
+  }
+  static bool After(const Entry& a, const Entry& b) { return a.first > b.first; }
+
+  // Dijkstra from node i until `left` nodes it prices are settled, writing
+  // their costs into intra (and the mirror entries when symmetric).
+  template <typename Queue>
+  void Dijkstra(size_t i, size_t k, size_t left, bool symmetric, Queue& queue,
+                std::vector<float>& intra) {
+    std::fill(cost_.begin(), cost_.end(), LocalSearch::kInfinity);
+    std::fill(closed_.begin(), closed_.end(), uint8_t{0});
+    Clear(queue);
+    cost_[local_[i]] = 0.0;
+    Push(queue, {0.0, local_[i]}, false);
+    Entry e;
+    while (left > 0 && Pop(queue, e)) {
+      const auto [g, l] = e;
+      if (closed_[l]) continue;
+      closed_[l] = 1;
+      const int32_t j = node_of_[l];
+      if (j >= 0 && static_cast<size_t>(j) != i && (!symmetric || static_cast<size_t>(j) > i)) {
+        intra[i * k + j] = static_cast<float>(g);
+        if (symmetric) intra[j * k + i] = static_cast<float>(g);
+        --left;
+      }
+      for (int32_t m = begin_[l]; m < begin_[l + 1]; ++m) {
+        const Move& move = moves_[m];
+        if (closed_[move.to]) continue;
+        const double next = g + move.cost;
+        if (next < cost_[move.to]) {
+          cost_[move.to] = next;
+          Push(queue, {next, move.to}, move.diagonal);
+        }
+      }
+    }
+  }
+};
+
+std::vector<float> HpaGraph::IntraSearch::Costs(const GridView& view, int32_t x0, int32_t y0,
+                                                int32_t x1, int32_t y1,
+                                                const std::vector<uint32_t>& nodes) {
+  const int32_t w = x1 - x0;
+  const int32_t n = w * (y1 - y0);
+  begin_.assign(static_cast<size_t>(n) + 1, 0);
+  moves_.clear();
+  bool uniform = true;
+  double factor = -1.0;
+  for (int32_t l = 0; l < n; ++l) {
+    begin_[l] = static_cast<int32_t>(moves_.size());
+    const int32_t x = x0 + l % w;
+    const int32_t y = y0 + l / w;
+    if (!view.Passable(x, y)) continue;
+    const double f = view.Factor(view.Index(x, y));
+    if (factor < 0.0) factor = f;
+    uniform = uniform && f == factor;
+    view.ForEachNeighbor(x, y, [&](uint32_t index, int32_t nx, int32_t ny, double length) {
+      if (nx < x0 || ny < y0 || nx >= x1 || ny >= y1) return;
+      moves_.push_back({(ny - y0) * w + (nx - x0), length != 1.0, length * view.Factor(index)});
+    });
+  }
+  begin_[n] = static_cast<int32_t>(moves_.size());
+  const size_t k = nodes.size();
+  node_of_.assign(static_cast<size_t>(n), -1);
+  local_.resize(k);
+  for (size_t i = 0; i < k; ++i) {
+    const Cell c = view.CellOf(nodes[i]);
+    local_[i] = (c.y - y0) * w + (c.x - x0);
+    node_of_[local_[i]] = static_cast<int32_t>(i);
+  }
+  std::vector<float> intra(k * k, std::numeric_limits<float>::infinity());
+  cost_.resize(static_cast<size_t>(n));
+  closed_.resize(static_cast<size_t>(n));
+  for (size_t i = 0; i < k; ++i) {
+    // Node i prices nodes j > i when symmetric, every other node else; the
+    // last node of a symmetric cluster has nothing left to price.
+    const size_t left = uniform ? k - 1 - i : k - 1;
+    intra[i * k + i] = 0.0f;
+    if (left == 0) continue;
+    // A uniform cluster's moves cost f or f * sqrt(2), so two FIFO queues,
+    // one per move length, are each in key order (keys pushed are the
+    // nondecreasing settled costs plus one constant) and their fronts'
+    // minimum is the open list's: Dijkstra without a heap.
+    if (uniform) {
+      FifoPair queue;
+      Dijkstra(i, k, left, true, queue, intra);
+    } else {
+      Heap queue;
+      Dijkstra(i, k, left, false, queue, intra);
+    }
+  }
+  return intra;
+}
+
+std::shared_ptr<const HpaCluster> HpaGraph::BuildCluster(const GridView& view, int32_t id,
+                                                         const HpaCluster* same_inside,
+                                                         IntraSearch& search) const {
   int32_t x0, y0, x1, y1;
   Bounds(id, x0, y0, x1, y1);
   const int32_t cx = id % clusters_x_;
@@ -131,25 +294,15 @@ std::shared_ptr<const HpaCluster> HpaGraph::BuildCluster(const GridView& view,
     cluster->inter.push_back({t.outside, static_cast<float>(view.Factor(t.outside))});
   }
   cluster->inter_begin.push_back(static_cast<uint32_t>(cluster->inter.size()));
-  const size_t k = cluster->nodes.size();
-  cluster->intra.assign(k * k, std::numeric_limits<float>::infinity());
-  LocalSearch search;
-  int64_t expansions = 0;
-  for (size_t i = 0; i < k; ++i) {
-    const Cell from = view.CellOf(cluster->nodes[i]);
-    search.Run(view, x0, y0, x1, y1, from, /*forward=*/true, nullptr, nullptr,
-               &expansions);
-    for (size_t j = 0; j < k; ++j) {
-      const double cost = search.Cost(view.CellOf(cluster->nodes[j]));
-      cluster->intra[i * k + j] = static_cast<float>(cost);
-    }
-  }
+  cluster->intra = same_inside != nullptr && same_inside->nodes == cluster->nodes
+                       ? same_inside->intra
+                       : search.Costs(view, x0, y0, x1, y1, cluster->nodes);
   return cluster;
 }
 
 namespace {
 // A shared_ptr's control block with make_shared's inline object, and the
-// row's pointer to it.
+// block's pointer to it.
 constexpr size_t kClusterOverhead = 16 + sizeof(std::shared_ptr<const HpaCluster>);
 }  // namespace
 
@@ -163,11 +316,16 @@ std::shared_ptr<const HpaGraph> HpaGraph::Build(const Grid& grid, const HpaParam
   graph->clusters_x_ = (grid.width() + c - 1) / c;
   graph->clusters_y_ = (grid.height() + c - 1) / c;
   const int32_t count = graph->clusters_x_ * graph->clusters_y_;
+  const int32_t blocks = (graph->clusters_x_ + kBlock - 1) / kBlock;
   graph->bytes_ = sizeof(HpaGraph) +
-                  graph->clusters_y_ * (sizeof(std::shared_ptr<const Row>) + sizeof(Row) + 16);
+                  graph->clusters_y_ * (sizeof(std::shared_ptr<const Row>) + sizeof(Row) + 16 +
+                                        blocks * (sizeof(std::shared_ptr<const Block>) +
+                                                  sizeof(Block) + 16));
   const GridView view(grid, params.cost);
+  IntraSearch search;
   for (int32_t cy = 0; cy < graph->clusters_y_; ++cy) {
-    auto row = std::make_shared<Row>(static_cast<size_t>(graph->clusters_x_));
+    auto row = std::make_shared<Row>(static_cast<size_t>(blocks));
+    std::shared_ptr<Block> block;
     for (int32_t cx = 0; cx < graph->clusters_x_; ++cx) {
       const int32_t id = cy * graph->clusters_x_ + cx;
       if (id % 16 == 0 && stop.Stopped()) {
@@ -176,11 +334,15 @@ std::shared_ptr<const HpaGraph> HpaGraph::Build(const Grid& grid, const HpaParam
                                   id, count));
         return nullptr;
       }
-      std::shared_ptr<const HpaCluster> cluster = graph->BuildCluster(view, id);
+      std::shared_ptr<const HpaCluster> cluster = graph->BuildCluster(view, id, nullptr, search);
       graph->node_count_ += cluster->nodes.size();
       graph->edge_count_ += cluster->intra.size() + cluster->inter.size();
       graph->bytes_ += cluster->MemoryBytes() + kClusterOverhead;
-      (*row)[cx] = std::move(cluster);
+      if (cx % kBlock == 0) {
+        block = std::make_shared<Block>();
+        (*row)[cx / kBlock] = block;
+      }
+      (*block)[cx % kBlock] = std::move(cluster);
     }
     graph->rows_.push_back(std::move(row));
   }
@@ -193,47 +355,70 @@ std::shared_ptr<const HpaGraph> HpaGraph::Advance(const Grid& grid,
   if (grid.width() != width_ || grid.height() != height_) return nullptr;
   const int32_t c = params_.cluster_size;
   // A cluster depends on its own cells and, through its transitions and the
-  // costs of its moves out, on the cells just across its borders.
-  std::vector<int32_t> order;
-  auto mark = [&](int32_t cx, int32_t cy) {
+  // costs of its moves out, on the cells just across its borders. Marked
+  // clusters in id order; `inside` says a changed cell lies in the cluster
+  // itself (else only across its border, and its costs between unchanged
+  // nodes are kept).
+  struct Marked {
+    int32_t id;
+    bool inside;
+  };
+  std::vector<Marked> order;
+  auto mark = [&](int32_t cx, int32_t cy, bool inside) {
     if (cx < 0 || cy < 0 || cx >= clusters_x_ || cy >= clusters_y_) return;
-    order.push_back(cy * clusters_x_ + cx);
+    order.push_back({cy * clusters_x_ + cx, inside});
   };
   for (const Cell& cell : changed) {
     if (!grid.InBounds(cell)) continue;
     const int32_t cx = cell.x / c;
     const int32_t cy = cell.y / c;
-    mark(cx, cy);
-    if (cell.x % c == 0) mark(cx - 1, cy);
-    if (cell.x % c == c - 1 || cell.x == width_ - 1) mark(cx + 1, cy);
-    if (cell.y % c == 0) mark(cx, cy - 1);
-    if (cell.y % c == c - 1 || cell.y == height_ - 1) mark(cx, cy + 1);
+    mark(cx, cy, true);
+    if (cell.x % c == 0) mark(cx - 1, cy, false);
+    if (cell.x % c == c - 1 || cell.x == width_ - 1) mark(cx + 1, cy, false);
+    if (cell.y % c == 0) mark(cx, cy - 1, false);
+    if (cell.y % c == c - 1 || cell.y == height_ - 1) mark(cx, cy + 1, false);
   }
-  std::sort(order.begin(), order.end());
-  order.erase(std::unique(order.begin(), order.end()), order.end());
+  // By id, those with a changed cell inside first; then one entry per id.
+  std::sort(order.begin(), order.end(), [](const Marked& a, const Marked& b) {
+    return a.id != b.id ? a.id < b.id : a.inside > b.inside;
+  });
+  order.erase(std::unique(order.begin(), order.end(),
+                          [](const Marked& a, const Marked& b) { return a.id == b.id; }),
+              order.end());
   std::shared_ptr<HpaGraph> next(new HpaGraph(*this));
   const GridView view(grid, params_.cost);
-  // The row being rebuilt, copied from this version's on first write.
+  IntraSearch search;
+  // The row and the block being rebuilt, copied from this version's on
+  // first write.
   std::shared_ptr<Row> row;
+  std::shared_ptr<Block> block;
   int32_t row_y = -1;
+  int32_t block_x = -1;
   for (size_t i = 0; i < order.size(); ++i) {
     if (i % 16 == 15 && stop.Stopped()) {
       stop.Note(absl::StrFormat("repairing the HPA* abstract graph (%d of %d clusters)",
                                 i, order.size()));
       return nullptr;
     }
-    const int32_t id = order[i];
+    const int32_t id = order[i].id;
     const int32_t cy = id / clusters_x_;
+    const int32_t cx = id % clusters_x_;
     if (cy != row_y) {
       row = std::make_shared<Row>(*rows_[cy]);
       next->rows_[cy] = row;
       row_y = cy;
+      block_x = -1;
     }
-    std::shared_ptr<const HpaCluster>& slot = (*row)[id % clusters_x_];
+    if (cx / kBlock != block_x) {
+      block_x = cx / kBlock;
+      block = std::make_shared<Block>(*(*row)[block_x]);
+      (*row)[block_x] = block;
+    }
+    std::shared_ptr<const HpaCluster>& slot = (*block)[cx % kBlock];
     next->node_count_ -= slot->nodes.size();
     next->edge_count_ -= slot->intra.size() + slot->inter.size();
     next->bytes_ -= slot->MemoryBytes();
-    slot = next->BuildCluster(view, id);
+    slot = next->BuildCluster(view, id, order[i].inside ? nullptr : slot.get(), search);
     next->node_count_ += slot->nodes.size();
     next->edge_count_ += slot->intra.size() + slot->inter.size();
     next->bytes_ += slot->MemoryBytes();

@@ -53,8 +53,9 @@ int Cases(int fallback) {
 }
 
 // Dijkstra from `s` with its own queue and move loop; fills `parent` so an
-// optimal path can be traced.
-std::vector<double> Reference(const Model& m, Cell s, std::vector<int>& parent) {
+// optimal path can be traced. With `inside`, only moves into its cells.
+std::vector<double> Reference(const Model& m, Cell s, std::vector<int>& parent,
+                              const CellRect* inside = nullptr) {
   const int w = m.grid.width();
   std::vector<double> dist(m.grid.size(), kInf);
   parent.assign(m.grid.size(), -1);
@@ -72,6 +73,10 @@ std::vector<double> Reference(const Model& m, Cell s, std::vector<int>& parent) 
         const Cell b{a.x + dx, a.y + dy};
         const double step = m.Step(a, b);
         if (step < 0) continue;
+        if (inside != nullptr &&
+            (b.x < inside->x0 || b.y < inside->y0 || b.x > inside->x1 || b.y > inside->y1)) {
+          continue;
+        }
         const int j = b.y * w + b.x;
         if (d + step < dist[j]) {
           dist[j] = d + step;
@@ -389,6 +394,57 @@ TEST(HpaStar, AdvancedGraphEqualsRebuiltOne) {
     }
     EXPECT_GT(store.stats().advances, 0);
   }
+}
+
+// Every cluster's costs between its nodes are the reference Dijkstra's
+// inside the cluster (the graph has its own move graph, FIFO queues on
+// clusters of one factor, early stops and mirrored halves), to float
+// precision; +infinity exactly where the reference finds no way.
+TEST(HpaStar, IntraClusterCostsAreTheReferencesInsideEachCluster) {
+  std::mt19937 rng(11);
+  const int trials = Cases(80);
+  int uniform_pairs = 0, weighted_pairs = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const int c = 3 + static_cast<int>(rng() % 14);
+    const int w = 8 + static_cast<int>(rng() % 40);
+    const int h = 8 + static_cast<int>(rng() % 40);
+    const Grid grid = RandomGrid(rng, w, h, static_cast<int>(rng() % 35), trial % 2 == 0);
+    HpaParams params;
+    params.cluster_size = c;
+    params.cost = RandomParams(rng, trial);
+    const Model m{grid, params.cost};
+    DerivedStop never;
+    const std::shared_ptr<const HpaGraph> graph = HpaGraph::Build(grid, params, never);
+    ASSERT_NE(graph, nullptr);
+    for (int32_t id = 0; id < graph->clusters_x() * graph->clusters_y(); ++id) {
+      CellRect rect;
+      graph->Bounds(id, rect.x0, rect.y0, rect.x1, rect.y1);
+      --rect.x1;  // Bounds is half-open, CellRect inclusive
+      --rect.y1;
+      const HpaCluster& cluster = graph->cluster(id);
+      const size_t k = cluster.nodes.size();
+      for (size_t i = 0; i < k; ++i) {
+        std::vector<int> parent;
+        const std::vector<double> dist =
+            Reference(m, grid.CellAt(cluster.nodes[i]), parent, &rect);
+        for (size_t j = 0; j < k; ++j) {
+          const double expected = dist[cluster.nodes[j]];
+          const double got = cluster.intra[i * k + j];
+          const std::string where =
+              absl::StrFormat("trial %d cluster %d node %d -> %d", trial, id, i, j);
+          if (std::isinf(expected)) {
+            ASSERT_TRUE(std::isinf(got)) << where << ": " << got;
+          } else {
+            ASSERT_NEAR(got, expected, 1e-6 * (1 + expected)) << where;
+          }
+          (params.cost.cost_weight == 0 || trial % 2 != 0 ? uniform_pairs : weighted_pairs) +=
+              i != j;
+        }
+      }
+    }
+  }
+  EXPECT_GT(uniform_pairs, 100);
+  EXPECT_GT(weighted_pairs, 100);
 }
 
 TEST(HpaStar, ExpiredDeadlineStopsTheBuild) {
