@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/search/endpoints.h"
 #include "core/map/grid.h"
+#include "core/search/endpoints.h"
 
 namespace pathd::internal {
 

@@ -319,7 +319,8 @@ struct JpsVersion {
   // the uniform-cost precondition in O(1).
   std::array<uint64_t, 4> costs{};
 
-  static std::shared_ptr<const JpsVersion> Build(const Grid& grid, bool unknown_is_free,
+  static std::shared_ptr<const JpsVersion> Build(const Grid& grid,
+                                                 bool unknown_is_free,
                                                  const JpsVersion* previous) {
     auto version = previous != nullptr ? std::make_shared<JpsVersion>(*previous)
                                        : std::make_shared<JpsVersion>();
@@ -328,7 +329,8 @@ struct JpsVersion {
     for (const uint8_t c : grid.cells()) seen[c] = true;
     version->costs = {};
     for (int c = 0; c < 256; ++c) {
-      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free)) continue;
+      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
+        continue;
       const int effective = c == kUnknownCost ? kFreeCost : c;
       version->costs[effective / 64] |= uint64_t{1} << (effective % 64);
     }
@@ -344,17 +346,22 @@ struct JpsVersion {
 };
 
 // The version's JpsVersion from the store under its key.
-std::shared_ptr<const JpsVersion> SharedJpsVersion(DerivedStore* store, const Grid& grid,
+std::shared_ptr<const JpsVersion> SharedJpsVersion(DerivedStore* store,
+                                                   const Grid& grid,
                                                    bool unknown_is_free) {
   return GetDerived<JpsVersion>(
-      store, grid, std::string("jps_map unknown_is_free=") + (unknown_is_free ? "1" : "0"),
+      store, grid,
+      std::string("jps_map unknown_is_free=") + (unknown_is_free ? "1" : "0"),
       [unknown_is_free](const Grid& g) {
         return JpsVersion::Build(g, unknown_is_free, nullptr);
       },
-      [unknown_is_free](const JpsVersion& previous, const Grid& g, absl::Span<const Cell>) {
+      [unknown_is_free](const JpsVersion& previous, const Grid& g,
+                        absl::Span<const Cell>) {
         return JpsVersion::Build(g, unknown_is_free, &previous);
       },
-      [](const JpsVersion& v) { return sizeof(JpsVersion) + v.map.MemoryBytes(); });
+      [](const JpsVersion& v) {
+        return sizeof(JpsVersion) + v.map.MemoryBytes();
+      });
 }
 
 // Scans of the online search: straight scans read the go maps 64 cells at a
@@ -362,14 +369,18 @@ std::shared_ptr<const JpsVersion> SharedJpsVersion(DerivedStore* store, const Gr
 // Successors reach `relax(x, y, g)`. Single use; not thread-safe.
 class BitScans {
  public:
-  BitScans(const JpsMap& map, Cell goal) : map_(map), rows_(map.rows()), goal_(goal) {}
+  BitScans(const JpsMap& map, Cell goal)
+      : map_(map), rows_(map.rows()), goal_(goal) {}
 
-  bool Free(int32_t x, int32_t y) const { return BitLines::Get(rows_.Line(y), x); }
+  bool Free(int32_t x, int32_t y) const {
+    return BitLines::Get(rows_.Line(y), x);
+  }
 
   // Scans from (x, y) in the straight direction (dx, dy) and offers the goal
   // or the jump point found; (x, y) is reached at cost g.
   template <typename Relax>
-  void Straight(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+  void Straight(int32_t x, int32_t y, int dx, int dy, double g,
+                Relax& relax) const {
     if (dx != 0) {
       const uint64_t* open = map_.rows().Line(y);
       const ScanStop stop = dx > 0 ? ScanForward(map_.east().Line(y), open, x)
@@ -398,7 +409,8 @@ class BitScans {
   // along both axes at every step; jump points found that way get the
   // expanded node as their parent.
   template <typename Relax>
-  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g,
+                Relax& relax) const {
     for (int32_t k = 1;; ++k) {
       if (!Free(x + dx, y) || !Free(x, y + dy) || !Free(x + dx, y + dy)) return;
       x += dx;
@@ -429,23 +441,27 @@ class BitScans {
 // step that reaches its row or column. Single use; not thread-safe.
 class TableScans {
  public:
-  TableScans(const internal::JumpTable& table, Cell goal) : table_(table), goal_(goal) {}
+  TableScans(const internal::JumpTable& table, Cell goal)
+      : table_(table), goal_(goal) {}
 
   bool Free(int32_t x, int32_t y) const { return table_.Free(x, y); }
 
   template <typename Relax>
-  void Straight(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+  void Straight(int32_t x, int32_t y, int dx, int dy, double g,
+                Relax& relax) const {
     const int32_t e = table_.Entry(x, y, dx, dy);
     // Cells up to `reach` along the direction are traversable (the goal is).
     const int32_t reach = e > 0 ? e : -e;
     if (dx != 0) {
-      if (goal_.y == y && (goal_.x - x) * dx > 0 && std::abs(goal_.x - x) <= reach) {
+      if (goal_.y == y && (goal_.x - x) * dx > 0 &&
+          std::abs(goal_.x - x) <= reach) {
         relax(goal_.x, y, g + std::abs(goal_.x - x));
       } else if (e > 0) {
         relax(x + e * dx, y, g + e);
       }
     } else {
-      if (goal_.x == x && (goal_.y - y) * dy > 0 && std::abs(goal_.y - y) <= reach) {
+      if (goal_.x == x && (goal_.y - y) * dy > 0 &&
+          std::abs(goal_.y - y) <= reach) {
         relax(x, goal_.y, g + std::abs(goal_.y - y));
       } else if (e > 0) {
         relax(x, y + e * dy, g + e);
@@ -454,7 +470,8 @@ class TableScans {
   }
 
   template <typename Relax>
-  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g, Relax& relax) const {
+  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g,
+                Relax& relax) const {
     // Steps taken from the expanded node, for its costs.
     int32_t k = 0;
     for (;;) {
@@ -464,7 +481,8 @@ class TableScans {
       // straight scans can only find the goal, at the one step that lands on
       // its row or column.
       if ((goal_.x - x) * dx > 0 && (goal_.y - y) * dy > 0) {
-        const int32_t to_goal = std::min(std::abs(goal_.x - x), std::abs(goal_.y - y));
+        const int32_t to_goal =
+            std::min(std::abs(goal_.x - x), std::abs(goal_.y - y));
         if (to_goal <= reach && to_goal != e) {
           const int32_t gx = x + to_goal * dx;
           const int32_t gy = y + to_goal * dy;
@@ -622,7 +640,8 @@ PlanResult SearchJumpPoints(const Scans& scans, const GridQuery& q,
   scratch.BeginSearch(grid.size());
   points.Clear();
   const JpsExpansion<Scans> expansion(scans, points, grid.width(), scratch);
-  const internal::AStarPriority<internal::OctileHeuristic> priority{{request.goal}};
+  const internal::AStarPriority<internal::OctileHeuristic> priority{
+      {request.goal}};
   internal::OpenList open(scratch);
   const uint32_t start = expansion.Id(request.start);
   const uint32_t goal = expansion.Id(request.goal);
@@ -630,9 +649,9 @@ PlanResult SearchJumpPoints(const Scans& scans, const GridQuery& q,
   PlanResult result;
   result.outcome = internal::WithExpansionListener(
       request.expansion_recorder, expansion, [&](auto listener) {
-        return internal::BestFirstSearch(scratch, open, goal, q.stop, result.expansions,
-                                         priority, expansion,
-                                         internal::PlainParentUpdate(), listener);
+        return internal::BestFirstSearch(
+            scratch, open, goal, q.stop, result.expansions, priority, expansion,
+            internal::PlainParentUpdate(), listener);
       });
   if (result.found()) {
     // Every traversable cell has the factor of the start cell.
@@ -707,8 +726,8 @@ class JpsPlanner final : public JumpPlannerBase {
 
 // Bit c of word c / 64: some traversable cell among `cells` has effective
 // cost c (unknown cells traversed as free count as kFreeCost).
-void AddCosts(const Grid& grid, absl::Span<const Cell> cells, bool unknown_is_free,
-              std::array<uint64_t, 4>& costs) {
+void AddCosts(const Grid& grid, absl::Span<const Cell> cells,
+              bool unknown_is_free, std::array<uint64_t, 4>& costs) {
   for (const Cell& cell : cells) {
     const uint8_t c = grid.cost(cell);
     if (!Traversable(c, unknown_is_free)) continue;
@@ -726,7 +745,8 @@ struct JpsPlusVersion {
   std::array<uint64_t, 4> costs{};
 
   // Null when `stop` fired.
-  static std::shared_ptr<const JpsPlusVersion> Build(const Grid& grid, bool unknown_is_free,
+  static std::shared_ptr<const JpsPlusVersion> Build(const Grid& grid,
+                                                     bool unknown_is_free,
                                                      DerivedStop& stop) {
     auto version = std::make_shared<JpsPlusVersion>();
     version->table = internal::JumpTable::Build(grid, unknown_is_free, &stop);
@@ -734,18 +754,20 @@ struct JpsPlusVersion {
     std::array<bool, 256> seen{};
     for (const uint8_t c : grid.cells()) seen[c] = true;
     for (int c = 0; c < 256; ++c) {
-      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free)) continue;
+      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
+        continue;
       const int effective = c == kUnknownCost ? kFreeCost : c;
       version->costs[effective / 64] |= uint64_t{1} << (effective % 64);
     }
     return version;
   }
 
-  static std::shared_ptr<const JpsPlusVersion> Advance(const JpsPlusVersion& previous,
-                                                       const Grid& grid,
-                                                       absl::Span<const Cell> changed) {
+  static std::shared_ptr<const JpsPlusVersion> Advance(
+      const JpsPlusVersion& previous, const Grid& grid,
+      absl::Span<const Cell> changed) {
     auto version = std::make_shared<JpsPlusVersion>();
-    version->table = internal::JumpTable::Advance(*previous.table, grid, changed);
+    version->table =
+        internal::JumpTable::Advance(*previous.table, grid, changed);
     version->costs = previous.costs;
     AddCosts(grid, changed, previous.table->unknown_is_free(), version->costs);
     return version;
@@ -815,18 +837,22 @@ class JpsPlusPlanner final : public JumpPlannerBase {
     DerivedStop derived_stop(q.stop);
     if (request.derived != nullptr) {
       const bool unknown_is_free = rule.unknown_is_free;
-      std::shared_ptr<const JpsPlusVersion> version = GetDerived<JpsPlusVersion>(
-          request.derived, grid,
-          std::string("jps_plus_table unknown_is_free=") + (unknown_is_free ? "1" : "0"),
-          "the jump table of this map version", derived_stop,
-          [unknown_is_free](const Grid& g, DerivedStop& s) {
-            return JpsPlusVersion::Build(g, unknown_is_free, s);
-          },
-          [](const JpsPlusVersion& previous, const Grid& g, absl::Span<const Cell> changed,
-             DerivedStop&) { return JpsPlusVersion::Advance(previous, g, changed); },
-          [](const JpsPlusVersion& v) {
-            return sizeof(JpsPlusVersion) + v.table->MemoryBytes();
-          });
+      std::shared_ptr<const JpsPlusVersion> version =
+          GetDerived<JpsPlusVersion>(
+              request.derived, grid,
+              std::string("jps_plus_table unknown_is_free=") +
+                  (unknown_is_free ? "1" : "0"),
+              "the jump table of this map version", derived_stop,
+              [unknown_is_free](const Grid& g, DerivedStop& s) {
+                return JpsPlusVersion::Build(g, unknown_is_free, s);
+              },
+              [](const JpsPlusVersion& previous, const Grid& g,
+                 absl::Span<const Cell> changed, DerivedStop&) {
+                return JpsPlusVersion::Advance(previous, g, changed);
+              },
+              [](const JpsPlusVersion& v) {
+                return sizeof(JpsPlusVersion) + v.table->MemoryBytes();
+              });
       if (version == nullptr) return StoppedWhileDeriving(derived_stop);
       if (rule.check_uniform && !version->OnlyCost(rule.uniform_cost)) {
         // The costs may be a stale superset: only the full check decides.
@@ -837,7 +863,8 @@ class JpsPlusPlanner final : public JumpPlannerBase {
     } else {
       // A Grid may be edited in place between queries: re-pack it, and
       // rebuild the table when any row changed.
-      const bool resized = grid.width() != state.width || grid.height() != state.height ||
+      const bool resized = grid.width() != state.width ||
+                           grid.height() != state.height ||
                            rule.unknown_is_free != state.unknown_is_free;
       if (resized) {
         state.width = grid.width();
@@ -857,8 +884,10 @@ class JpsPlusPlanner final : public JumpPlannerBase {
         return ValidateRequest(grid, request, name(), traits());
       }
       if (state.table == nullptr ||
-          std::find(state.dirty.begin(), state.dirty.end(), 1) != state.dirty.end()) {
-        state.table = internal::JumpTable::Build(grid, rule.unknown_is_free, &derived_stop);
+          std::find(state.dirty.begin(), state.dirty.end(), 1) !=
+              state.dirty.end()) {
+        state.table = internal::JumpTable::Build(grid, rule.unknown_is_free,
+                                                 &derived_stop);
         if (state.table == nullptr) return StoppedWhileDeriving(derived_stop);
       }
       table = state.table;
