@@ -43,6 +43,7 @@
 #include <string_view>
 #include <vector>
 
+#include "absl/base/attributes.h"
 #include "absl/strings/str_format.h"
 #include "core/planners/jps/bit_grid.h"
 #include "core/planners/jps/jump_table.h"
@@ -113,6 +114,48 @@ class JpsMap {
     return uniform;
   }
 
+  // Brings a copy of an older version's map up to `grid`, whose cells
+  // differ from those it was packed from only in `changed` (cells listed
+  // that did not change are harmless; same size and unknown rule): the bits
+  // of cells whose passability flipped, the columns of their 64 x 64 tiles
+  // and the go-map lines beside them. Bands of lines not written stay shared
+  // with the older version (BitLines). O(changed), not O(map).
+  void Advance(const Grid& grid, absl::Span<const Cell> changed) {
+    const int32_t tiles_x = (width_ + 63) / 64;
+    std::vector<uint32_t> tiles;
+    std::vector<int32_t> row_lines;
+    std::vector<int32_t> col_lines;
+    for (const Cell& c : changed) {
+      if (!grid.InBounds(c)) continue;
+      const bool open = Traversable(grid.cost(c), unknown_is_free_);
+      if (open == BitLines::Get(rows_.Line(c.y), c.x)) continue;
+      const auto p = static_cast<uint32_t>(c.x + 64);
+      rows_.MutableLine(c.y)[p >> 6] ^= uint64_t{1} << (p & 63);
+      tiles.push_back(static_cast<uint32_t>(c.y / 64 * tiles_x + c.x / 64));
+      for (int32_t d = -1; d <= 1; ++d) {
+        if (c.y + d >= 0 && c.y + d < height_) row_lines.push_back(c.y + d);
+        if (c.x + d >= 0 && c.x + d < width_) col_lines.push_back(c.x + d);
+      }
+    }
+    auto unique = [](auto& v) {
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+    };
+    unique(tiles);
+    unique(row_lines);
+    unique(col_lines);
+    for (const uint32_t t : tiles) {
+      TransposeTile(static_cast<int32_t>(t % tiles_x),
+                    static_cast<int32_t>(t / tiles_x));
+    }
+    for (const int32_t l : row_lines)
+      BuildGoLine(rows_, l, width_, east_, west_);
+    for (const int32_t l : col_lines)
+      BuildGoLine(cols_, l, height_, south_, north_);
+  }
+
+  int32_t width() const { return width_; }
+  int32_t height() const { return height_; }
   const BitLines& rows() const { return rows_; }
   const BitLines& cols() const { return cols_; }
   // Go maps of scans along rows towards +x (east) and -x (west), and along
@@ -147,24 +190,28 @@ class JpsMap {
   // step back along the scan is blocked (a forced neighbour).
   static void BuildGo(const BitLines& open, int32_t lines, int32_t length,
                       BitLines& forward, BitLines& backward) {
+    for (int32_t l = 0; l < lines; ++l)
+      BuildGoLine(open, l, length, forward, backward);
+  }
+  // Line l of both go maps, from lines l - 1 .. l + 1 of `open`.
+  static void BuildGoLine(const BitLines& open, int32_t l, int32_t length,
+                          BitLines& forward, BitLines& backward) {
     const int32_t words = (length + 63) / 64;
-    for (int32_t l = 0; l < lines; ++l) {
-      const uint64_t* c = open.Line(l);
-      const uint64_t* u = open.Line(l - 1);
-      const uint64_t* d = open.Line(l + 1);
-      uint64_t* fwd = forward.MutableLine(l);
-      uint64_t* bwd = backward.MutableLine(l);
-      // Word 0 and word words + 1 are the blocked padding.
-      for (int32_t k = 1; k <= words; ++k) {
-        // Bit i of *_before = the side cell one position lower, of *_after
-        // one higher, carried across word boundaries.
-        const uint64_t u_before = (u[k] << 1) | (u[k - 1] >> 63);
-        const uint64_t d_before = (d[k] << 1) | (d[k - 1] >> 63);
-        const uint64_t u_after = (u[k] >> 1) | (u[k + 1] << 63);
-        const uint64_t d_after = (d[k] >> 1) | (d[k + 1] << 63);
-        fwd[k] = c[k] & ~((u[k] & ~u_before) | (d[k] & ~d_before));
-        bwd[k] = c[k] & ~((u[k] & ~u_after) | (d[k] & ~d_after));
-      }
+    const uint64_t* c = open.Line(l);
+    const uint64_t* u = open.Line(l - 1);
+    const uint64_t* d = open.Line(l + 1);
+    uint64_t* fwd = forward.MutableLine(l);
+    uint64_t* bwd = backward.MutableLine(l);
+    // Word 0 and word words + 1 are the blocked padding.
+    for (int32_t k = 1; k <= words; ++k) {
+      // Bit i of *_before = the side cell one position lower, of *_after
+      // one higher, carried across word boundaries.
+      const uint64_t u_before = (u[k] << 1) | (u[k - 1] >> 63);
+      const uint64_t d_before = (d[k] << 1) | (d[k - 1] >> 63);
+      const uint64_t u_after = (u[k] >> 1) | (u[k + 1] << 63);
+      const uint64_t d_after = (d[k] >> 1) | (d[k + 1] << 63);
+      fwd[k] = c[k] & ~((u[k] & ~u_before) | (d[k] & ~d_before));
+      bwd[k] = c[k] & ~((u[k] & ~u_after) | (d[k] & ~d_after));
     }
   }
 
@@ -189,9 +236,12 @@ struct ScanStop {
 };
 
 // Scans forward from `from` (exclusive) along a line with go map `go` and
-// passability `open` to the first cell that stops it.
-inline ScanStop ScanForward(const uint64_t* go, const uint64_t* open,
-                            int32_t from) {
+// passability `open` to the first cell that stops it. Always inlined: with
+// two BitScans instantiations the compiler stopped inlining the scans into
+// the diagonal loop, which cost JPS 8-17% per query.
+ABSL_ATTRIBUTE_ALWAYS_INLINE inline ScanStop ScanForward(const uint64_t* go,
+                                                         const uint64_t* open,
+                                                         int32_t from) {
   for (int32_t p = from + 1;; p += 64) {
     const uint64_t stop = ~BitLines::From(go, p);
     if (stop != 0) {
@@ -202,8 +252,9 @@ inline ScanStop ScanForward(const uint64_t* go, const uint64_t* open,
 }
 
 // ScanForward towards decreasing positions.
-inline ScanStop ScanBackward(const uint64_t* go, const uint64_t* open,
-                             int32_t from) {
+ABSL_ATTRIBUTE_ALWAYS_INLINE inline ScanStop ScanBackward(const uint64_t* go,
+                                                          const uint64_t* open,
+                                                          int32_t from) {
   for (int32_t p = from - 1;; p -= 64) {
     const uint64_t stop = ~BitLines::To(go, p);
     if (stop != 0) {
@@ -306,34 +357,72 @@ struct JpsScratch final : public SearchScratch::Extension {
   }
 };
 
+// Bit c of word c / 64: some traversable cell among `cells` has effective
+// cost c (unknown cells traversed as free count as kFreeCost).
+void AddCosts(const Grid& grid, absl::Span<const Cell> cells,
+              bool unknown_is_free, std::array<uint64_t, 4>& costs) {
+  for (const Cell& cell : cells) {
+    const uint8_t c = grid.cost(cell);
+    if (!Traversable(c, unknown_is_free)) continue;
+    const int effective = c == kUnknownCost ? kFreeCost : c;
+    costs[effective / 64] |= uint64_t{1} << (effective % 64);
+  }
+}
+
+// The same for every cell of `grid`.
+std::array<uint64_t, 4> CostsOf(const Grid& grid, bool unknown_is_free) {
+  std::array<bool, 256> seen{};
+  for (const uint8_t c : grid.cells()) seen[c] = true;
+  std::array<uint64_t, 4> costs{};
+  for (int c = 0; c < 256; ++c) {
+    if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
+      continue;
+    const int effective = c == kUnknownCost ? kFreeCost : c;
+    costs[effective / 64] |= uint64_t{1} << (effective % 64);
+  }
+  return costs;
+}
+
 // The map as JPS reads it for one map version, shared by every query on that
 // version through the derived store (core/search/derived.h): packed once per
 // version instead of re-read on every query, which cost 2.4 us on a 512 x 512
 // game map and up to 8 us on open ones, most of a short query. A new version
-// starts from a copy of the previous one's bits; JpsMap::Update re-derives
-// only the 64 x 64 tiles whose rows changed.
+// shares the previous one's bands of lines and re-derives only the bits
+// around its changed cells (JpsMap::Advance): on a 16384 x 16384 map the
+// first query of each version copied all 192 MiB of bit planes before.
 struct JpsVersion {
   JpsMap map;
   // Bit c of word c / 64: some traversable cell has effective cost c
   // (unknown cells traversed as free count as kFreeCost), so a query checks
-  // the uniform-cost precondition in O(1).
+  // the uniform-cost precondition in O(1). An advance only adds the costs
+  // of the changed cells, so this may keep a cost no cell has any more: a
+  // superset, which can only send a query to the full check
+  // (ValidateRequest), never let a non-uniform map through.
   std::array<uint64_t, 4> costs{};
 
   static std::shared_ptr<const JpsVersion> Build(const Grid& grid,
-                                                 bool unknown_is_free,
-                                                 const JpsVersion* previous) {
-    auto version = previous != nullptr ? std::make_shared<JpsVersion>(*previous)
-                                       : std::make_shared<JpsVersion>();
+                                                 bool unknown_is_free) {
+    auto version = std::make_shared<JpsVersion>();
     version->map.Update(grid, PackRule{.unknown_is_free = unknown_is_free});
-    std::array<bool, 256> seen{};
-    for (const uint8_t c : grid.cells()) seen[c] = true;
-    version->costs = {};
-    for (int c = 0; c < 256; ++c) {
-      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
-        continue;
-      const int effective = c == kUnknownCost ? kFreeCost : c;
-      version->costs[effective / 64] |= uint64_t{1} << (effective % 64);
+    version->costs = CostsOf(grid, unknown_is_free);
+    return version;
+  }
+
+  // The version of `grid` from the one of an older version whose cells
+  // differ only in `changed`: sharing every band of lines the change does
+  // not write. A change of more than a sixteenth of the map is packed
+  // again in full (what the per-cell advance would cost more than).
+  static std::shared_ptr<const JpsVersion> Advance(
+      const JpsVersion& previous, const Grid& grid,
+      absl::Span<const Cell> changed, bool unknown_is_free) {
+    if (grid.width() != previous.map.width() ||
+        grid.height() != previous.map.height() ||
+        changed.size() > grid.size() / 16) {
+      return Build(grid, unknown_is_free);
     }
+    auto version = std::make_shared<JpsVersion>(previous);
+    version->map.Advance(grid, changed);
+    AddCosts(grid, changed, unknown_is_free, version->costs);
     return version;
   }
 
@@ -353,24 +442,55 @@ std::shared_ptr<const JpsVersion> SharedJpsVersion(DerivedStore* store,
       store, grid,
       std::string("jps_map unknown_is_free=") + (unknown_is_free ? "1" : "0"),
       [unknown_is_free](const Grid& g) {
-        return JpsVersion::Build(g, unknown_is_free, nullptr);
+        return JpsVersion::Build(g, unknown_is_free);
       },
       [unknown_is_free](const JpsVersion& previous, const Grid& g,
-                        absl::Span<const Cell>) {
-        return JpsVersion::Build(g, unknown_is_free, &previous);
+                        absl::Span<const Cell> changed) {
+        return JpsVersion::Advance(previous, g, changed, unknown_is_free);
       },
       [](const JpsVersion& v) {
         return sizeof(JpsVersion) + v.map.MemoryBytes();
       });
 }
 
+// One plane of a JpsMap as the scans read it: with kOneBand (the map's
+// lines are one band, BitLines::one_band()) at base + (line + 1) * stride,
+// which the compiler keeps in registers across a scan, else through the
+// band lookup.
+template <bool kOneBand>
+class PlaneLines {
+ public:
+  explicit PlaneLines(const BitLines& lines)
+      : lines_(lines), base_(lines.one_band()), stride_(lines.stride()) {}
+  const uint64_t* Line(int32_t line) const {
+    if constexpr (kOneBand) {
+      return base_ + static_cast<size_t>(line + 1) * stride_;
+    } else {
+      return lines_.Line(line);
+    }
+  }
+
+ private:
+  const BitLines& lines_;
+  const uint64_t* base_;
+  size_t stride_;
+};
+
 // Scans of the online search: straight scans read the go maps 64 cells at a
 // time, diagonal ones step cell by cell and scan straight at every step.
 // Successors reach `relax(x, y, g)`. Single use; not thread-safe.
+// Precondition: kOneBand == (map.rows().one_band() != nullptr).
+template <bool kOneBand>
 class BitScans {
  public:
   BitScans(const JpsMap& map, Cell goal)
-      : map_(map), rows_(map.rows()), goal_(goal) {}
+      : rows_(map.rows()),
+        cols_(map.cols()),
+        east_(map.east()),
+        west_(map.west()),
+        south_(map.south()),
+        north_(map.north()),
+        goal_(goal) {}
 
   bool Free(int32_t x, int32_t y) const {
     return BitLines::Get(rows_.Line(y), x);
@@ -379,12 +499,13 @@ class BitScans {
   // Scans from (x, y) in the straight direction (dx, dy) and offers the goal
   // or the jump point found; (x, y) is reached at cost g.
   template <typename Relax>
-  void Straight(int32_t x, int32_t y, int dx, int dy, double g,
-                Relax& relax) const {
+  ABSL_ATTRIBUTE_ALWAYS_INLINE void Straight(int32_t x, int32_t y, int dx,
+                                             int dy, double g,
+                                             Relax& relax) const {
     if (dx != 0) {
-      const uint64_t* open = map_.rows().Line(y);
-      const ScanStop stop = dx > 0 ? ScanForward(map_.east().Line(y), open, x)
-                                   : ScanBackward(map_.west().Line(y), open, x);
+      const uint64_t* open = rows_.Line(y);
+      const ScanStop stop = dx > 0 ? ScanForward(east_.Line(y), open, x)
+                                   : ScanBackward(west_.Line(y), open, x);
       if (goal_.y == y && (goal_.x - x) * dx > 0 &&
           (stop.pos - goal_.x) * dx >= 0) {
         relax(goal_.x, y, g + std::abs(goal_.x - x));
@@ -392,10 +513,9 @@ class BitScans {
         relax(stop.pos, y, g + std::abs(stop.pos - x));
       }
     } else {
-      const uint64_t* open = map_.cols().Line(x);
-      const ScanStop stop = dy > 0
-                                ? ScanForward(map_.south().Line(x), open, y)
-                                : ScanBackward(map_.north().Line(x), open, y);
+      const uint64_t* open = cols_.Line(x);
+      const ScanStop stop = dy > 0 ? ScanForward(south_.Line(x), open, y)
+                                   : ScanBackward(north_.Line(x), open, y);
       if (goal_.x == x && (goal_.y - y) * dy > 0 &&
           (stop.pos - goal_.y) * dy >= 0) {
         relax(x, goal_.y, g + std::abs(goal_.y - y));
@@ -409,8 +529,8 @@ class BitScans {
   // along both axes at every step; jump points found that way get the
   // expanded node as their parent.
   template <typename Relax>
-  void Diagonal(int32_t x, int32_t y, int dx, int dy, double g,
-                Relax& relax) const {
+  ABSL_ATTRIBUTE_NOINLINE void Diagonal(int32_t x, int32_t y, int dx, int dy,
+                                        double g, Relax& relax) const {
     for (int32_t k = 1;; ++k) {
       if (!Free(x + dx, y) || !Free(x, y + dy) || !Free(x + dx, y + dy)) return;
       x += dx;
@@ -426,8 +546,7 @@ class BitScans {
   }
 
  private:
-  const JpsMap& map_;
-  const BitLines& rows_;
+  const PlaneLines<kOneBand> rows_, cols_, east_, west_, south_, north_;
   const Cell goal_;
 };
 
@@ -714,27 +833,22 @@ class JpsPlanner final : public JumpPlannerBase {
     if (request.derived != nullptr) {
       version = SharedJpsVersion(request.derived, grid, rule.unknown_is_free);
       if (rule.check_uniform && !version->OnlyCost(rule.uniform_cost)) {
-        return ValidateRequest(grid, request, name(), traits());
+        // The costs may be a stale superset: only the full check decides.
+        absl::Status status = ValidateRequest(grid, request, name(), traits());
+        if (!status.ok()) return status;
       }
     } else if (!state.map.Update(grid, rule)) {
       return ValidateRequest(grid, request, name(), traits());
     }
     const JpsMap& map = version != nullptr ? version->map : state.map;
-    return SearchJumpPoints(BitScans(map, request.goal), q, state.points);
+    if (map.rows().one_band() != nullptr) {
+      return SearchJumpPoints(BitScans<true>(map, request.goal), q,
+                              state.points);
+    }
+    return SearchJumpPoints(BitScans<false>(map, request.goal), q,
+                            state.points);
   }
 };
-
-// Bit c of word c / 64: some traversable cell among `cells` has effective
-// cost c (unknown cells traversed as free count as kFreeCost).
-void AddCosts(const Grid& grid, absl::Span<const Cell> cells,
-              bool unknown_is_free, std::array<uint64_t, 4>& costs) {
-  for (const Cell& cell : cells) {
-    const uint8_t c = grid.cost(cell);
-    if (!Traversable(c, unknown_is_free)) continue;
-    const int effective = c == kUnknownCost ? kFreeCost : c;
-    costs[effective / 64] |= uint64_t{1} << (effective % 64);
-  }
-}
 
 // The jump table of one map version with the costs its traversable cells
 // have. An advance only adds the costs of the changed cells, so `costs` may
@@ -751,14 +865,7 @@ struct JpsPlusVersion {
     auto version = std::make_shared<JpsPlusVersion>();
     version->table = internal::JumpTable::Build(grid, unknown_is_free, &stop);
     if (version->table == nullptr) return nullptr;
-    std::array<bool, 256> seen{};
-    for (const uint8_t c : grid.cells()) seen[c] = true;
-    for (int c = 0; c < 256; ++c) {
-      if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
-        continue;
-      const int effective = c == kUnknownCost ? kFreeCost : c;
-      version->costs[effective / 64] |= uint64_t{1} << (effective % 64);
-    }
+    version->costs = CostsOf(grid, unknown_is_free);
     return version;
   }
 
