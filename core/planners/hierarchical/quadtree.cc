@@ -203,15 +203,30 @@ std::shared_ptr<const Quadtree> Quadtree::Advance(const Grid& grid,
   });
   std::shared_ptr<Quadtree> next(new Quadtree(*this));
   std::vector<Cell> cells;
+  // Summarise() without reading every tile: the node count of tile t moves
+  // base_[t + 1 ..] by its change, accumulated over the changed tiles in
+  // order; leaves_ and bytes_ move by each tile's change.
+  int64_t shift = 0;
+  size_t shifted = 0;  // base_[0 .. shifted] are final
   for (size_t i = 0; i < by_tile.size();) {
     const int32_t t = by_tile[i].first;
     cells.clear();
     for (; i < by_tile.size() && by_tile[i].first == t; ++i) cells.push_back(by_tile[i].second);
-    auto tile = std::make_shared<Tile>(*tiles_[t]);
+    const Tile& old_tile = *tiles_[t];
+    auto tile = std::make_shared<Tile>(old_tile);
     AdvanceTile(grid, *tile, cells);
+    for (; shifted < static_cast<size_t>(t); ++shifted) {
+      next->base_[shifted + 1] = static_cast<uint32_t>(next->base_[shifted + 1] + shift);
+    }
+    shift += static_cast<int64_t>(tile->nodes.size()) - static_cast<int64_t>(old_tile.nodes.size());
+    next->leaves_ = next->leaves_ + tile->leaves - old_tile.leaves;
+    next->bytes_ = next->bytes_ + tile->nodes.capacity() * sizeof(Node) -
+                   old_tile.nodes.capacity() * sizeof(Node);
     next->tiles_[t] = std::move(tile);
   }
-  next->Summarise();
+  for (; shifted + 1 < next->base_.size(); ++shifted) {
+    next->base_[shifted + 1] = static_cast<uint32_t>(next->base_[shifted + 1] + shift);
+  }
   return next;
 }
 
@@ -236,6 +251,18 @@ const Quadtree::Node& Quadtree::node(int32_t id) const {
 
 std::string Quadtree::FirstDifference(const Quadtree& a, const Quadtree& b) {
   if (a.width_ != b.width_ || a.height_ != b.height_) return "different grid sizes";
+  // Each tree's node numbering (kept incrementally by Advance) must be the
+  // prefix sums of its tiles' node counts.
+  for (const Quadtree* tree : {&a, &b}) {
+    if (tree->base_.size() != tree->tiles_.size() + 1) return "node bases of another tile count";
+    for (size_t t = 0; t < tree->tiles_.size(); ++t) {
+      if (tree->base_[t + 1] != tree->base_[t] + tree->tiles_[t]->nodes.size()) {
+        return absl::StrFormat("%s tree: node base of tile %d is %d, its tiles sum to %d",
+                               tree == &a ? "first" : "second", t + 1, tree->base_[t + 1],
+                               tree->base_[t] + tree->tiles_[t]->nodes.size());
+      }
+    }
+  }
   std::vector<Node> la, lb;
   for (const auto& tile : a.tiles_) Leaves(tile->nodes, 0, la);
   for (const auto& tile : b.tiles_) Leaves(tile->nodes, 0, lb);
