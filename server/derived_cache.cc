@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -128,17 +129,22 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
     base_grid = base->grid.lock();
     std::vector<Cell> changed;
     bool known = false;
-    if (base_grid != nullptr) {
+    // A value of the stored grid advances with the changed cells the map's
+    // history lists since its version (a superset where a cell changed back,
+    // which every recipe allows); else, while its grid lives, with the two
+    // grids compared.
+    std::optional<std::vector<Cell>> since;
+    if (base->stored_grid) since = ChangesSince(snapshot, base->version);
+    if (since.has_value()) {
+      changed = *std::move(since);
+      known = true;
+    } else if (base_grid != nullptr) {
       absl::StatusOr<std::vector<Cell>> between =
           ChangesBetween(*base_grid, base->version, *grid, snapshot);
       if (between.ok()) {
         changed = *std::move(between);
         known = true;
       }
-    } else if (base->stored_grid && snapshot.version == base->version + 1 &&
-               snapshot.changes_known) {
-      changed = snapshot.changed_cells;
-      known = true;
     }
     if (known) {
       value = recipe.advance(base->value.get(), *grid, changed, stop);
@@ -157,6 +163,8 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
   }
   const size_t bytes = recipe.bytes ? recipe.bytes(value.get()) : 0;
 
+  // Declared before the lock: released after it.
+  Graveyard dropped;
   absl::MutexLock lock(&mu_);
   entry->value = value;
   entry->bytes = bytes;
@@ -167,8 +175,22 @@ std::shared_ptr<const void> DerivedCache::Get(const MapSnapshot& snapshot,
   done_cv_.SignalAll();
   bytes_ += bytes;
   ++(advanced ? advances_ : builds_);
-  EvictLocked();
+  EvictLocked(dropped);
   return value;
+}
+
+void DerivedCache::Follow(MapStore& store) {
+  store.AddListener([this](std::string_view name,
+                           const std::shared_ptr<const MapSnapshot>& snapshot) {
+    Graveyard dropped;
+    absl::MutexLock lock(&mu_);
+    for (auto it = entries_.begin(); it != entries_.end();) {
+      const Entry& e = **it;
+      it = e.done && e.map == name && (snapshot == nullptr || e.map_id != snapshot->map_id)
+               ? DropLocked(it, dropped)
+               : std::next(it);
+    }
+  });
 }
 
 bool DerivedCache::AwaitLocked(Entry* entry, const DerivedStop& stop) {
@@ -195,14 +217,32 @@ void DerivedCache::AbandonLocked(const std::shared_ptr<Entry>& entry) {
 }
 
 std::list<std::shared_ptr<DerivedCache::Entry>>::iterator DerivedCache::DropLocked(
-    std::list<std::shared_ptr<Entry>>::iterator it) {
+    std::list<std::shared_ptr<Entry>>::iterator it, Graveyard& dropped) {
   bytes_ -= (*it)->bytes;
+  dropped.push_back(*it);
   return entries_.erase(it);
 }
 
-void DerivedCache::EvictLocked() {
+void DerivedCache::EvictLocked(Graveyard& dropped) {
+  // An entry whose grid is freed serves no query of its own version any
+  // more, but the newest one of its map and key made on the stored grid is
+  // what the next version advances from (with the map's change history):
+  // it stays until a newer one of its kind exists, or the budget, a delete
+  // or a replace drops it. Others go (an inflated grid's changes are only
+  // known while both grids live).
+  auto superseded = [this](const Entry& e) {
+    if (!e.stored_grid) return true;
+    for (const std::shared_ptr<Entry>& other : entries_) {
+      if (other->done && other->value != nullptr && other->key == e.key &&
+          other->map_id == e.map_id && other->stored_grid && other->version > e.version) {
+        return true;
+      }
+    }
+    return false;
+  };
   for (auto it = entries_.begin(); it != entries_.end();) {
-    it = (*it)->done && (*it)->grid.expired() ? DropLocked(it) : std::next(it);
+    const Entry& e = **it;
+    it = e.done && e.grid.expired() && superseded(e) ? DropLocked(it, dropped) : std::next(it);
   }
   // Least recently used first, never one being made, never the newest.
   while (bytes_ > max_bytes_ && entries_.size() > 1) {
@@ -211,7 +251,7 @@ void DerivedCache::EvictLocked() {
       if ((*it)->done) victim = it;
     }
     if (victim == entries_.end()) break;
-    DropLocked(victim);
+    DropLocked(victim, dropped);
     ++evictions_;
   }
 }

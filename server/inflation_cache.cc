@@ -69,14 +69,15 @@ absl::StatusOr<std::shared_ptr<const Grid>> InflationCache::Get(
   if (compute) {
     std::optional<absl::StatusOr<ShapedGridAdvance>> advanced;
     if (base_shaped != nullptr) {
-      if (base_source != nullptr) {
-        // One step of the stored grid: its recorded cells; otherwise the
-        // two stored grids compared.
+      if (std::optional<std::vector<Cell>> since = ChangesSince(snapshot, base_version)) {
+        // The cells the map's history lists since the base's version (a
+        // cell changed back is listed too: more is harmless to the advance).
+        advanced = advance_(*base_shaped, *source, *since, shape);
+      } else if (base_source != nullptr) {
+        // Beyond the history: the two stored grids compared.
         absl::StatusOr<std::vector<Cell>> changed =
             ChangesBetween(*base_source, base_version, *source, snapshot);
         if (changed.ok()) advanced = advance_(*base_shaped, *source, *changed, shape);
-      } else if (snapshot.changes_known && snapshot.version == base_version + 1) {
-        advanced = advance_(*base_shaped, *source, snapshot.changed_cells, shape);
       }
     }
     bool was_advanced = false;

@@ -94,6 +94,63 @@ std::vector<RowSpan> CoveredSpans(absl::Span<const MapChange> changes,
 
 }  // namespace
 
+std::shared_ptr<const ChangeHistory> ExtendHistory(
+    const std::shared_ptr<const ChangeHistory>& previous, uint64_t version,
+    std::vector<Cell> cells) {
+  std::shared_ptr<const ChangeHistory> below =
+      previous != nullptr && previous->version + 1 == version ? previous : nullptr;
+  if (below != nullptr && (below->versions + 1 > ChangeHistory::kMaxVersions ||
+                           below->total_cells + cells.size() > ChangeHistory::kMaxCells)) {
+    // Keep the newest links within half the bounds, copied oldest first.
+    std::vector<const ChangeHistory*> kept;
+    size_t kept_cells = 0;
+    for (const ChangeHistory* h = below.get(); h != nullptr; h = h->previous.get()) {
+      if (kept.size() + 1 > ChangeHistory::kMaxVersions / 2 ||
+          kept_cells + h->cells.size() + cells.size() > ChangeHistory::kMaxCells / 2) {
+        break;
+      }
+      kept.push_back(h);
+      kept_cells += h->cells.size();
+    }
+    std::shared_ptr<const ChangeHistory> copy;
+    for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+      auto link = std::make_shared<ChangeHistory>();
+      link->version = (*it)->version;
+      link->cells = (*it)->cells;
+      link->versions = copy != nullptr ? copy->versions + 1 : 1;
+      link->total_cells = (copy != nullptr ? copy->total_cells : 0) + link->cells.size();
+      link->previous = std::move(copy);
+      copy = std::move(link);
+    }
+    below = std::move(copy);
+  }
+  auto link = std::make_shared<ChangeHistory>();
+  link->version = version;
+  link->cells = std::move(cells);
+  link->versions = below != nullptr ? below->versions + 1 : 1;
+  link->total_cells = (below != nullptr ? below->total_cells : 0) + link->cells.size();
+  link->previous = std::move(below);
+  return link;
+}
+
+std::optional<std::vector<Cell>> ChangesSince(const MapSnapshot& snapshot, uint64_t from) {
+  if (from >= snapshot.version) return std::nullopt;
+  // A snapshot made without a history (tests, restores) still knows its own
+  // step.
+  if (snapshot.history == nullptr) {
+    if (snapshot.changes_known && from + 1 == snapshot.version) return snapshot.changed_cells;
+    return std::nullopt;
+  }
+  std::vector<Cell> cells;
+  uint64_t expect = snapshot.version;
+  for (const ChangeHistory* h = snapshot.history.get(); h != nullptr; h = h->previous.get()) {
+    if (h->version != expect) return std::nullopt;
+    cells.insert(cells.end(), h->cells.begin(), h->cells.end());
+    if (--expect == from) return cells;
+  }
+  return std::nullopt;
+}
+
 // Every check runs before the copy is made, which is what makes a batch
 // all-or-nothing.
 absl::Status MapStore::ValidateChange(const MapChange& change, size_t index,
@@ -534,6 +591,10 @@ absl::StatusOr<MapStore::PreparedUpdate> MapStore::PrepareUpdate(
     snapshot->name = base->name;
     snapshot->map_id = base->map_id;
     snapshot->version = base->version + 1;
+    if (snapshot->changes_known) {
+      snapshot->history =
+          ExtendHistory(base->history, snapshot->version, snapshot->changed_cells);
+    }
     snapshot->grid = GridPool::Publish(pool, std::move(grid), snapshot->version);
     std::string record;
     if (journal_ != nullptr) record = journal_->EncodeUpdate(name, snapshot->version, changes);

@@ -24,6 +24,31 @@
 
 namespace pathd::server {
 
+// The changed cells of a run of consecutive updates of one map, newest
+// first: one version's cells and a link to the version before it, back to
+// where the run starts (a create, a replace, an update whose changes were
+// not tracked) or to the bounds below. Immutable; shared by the snapshots of
+// the run. Caches whose value was made on an older version than the
+// previous one (several updates arrived between two queries, and its grid
+// buffer went back to the pool) advance with the union (ChangesSince)
+// instead of building again.
+struct ChangeHistory {
+  // At most this many versions and this many cells in all are linked; a
+  // longer run keeps its newest half.
+  static constexpr size_t kMaxVersions = 64;
+  static constexpr size_t kMaxCells = size_t{1} << 20;
+
+  uint64_t version = 0;
+  // The cells version - 1 and version differ in (MapSnapshot::changed_cells).
+  std::vector<Cell> cells;
+  // version - 1's link; null where the run starts.
+  std::shared_ptr<const ChangeHistory> previous;
+  // Links from this one back to the start, this one included, and their
+  // cells.
+  size_t versions = 1;
+  size_t total_cells = 0;
+};
+
 // One version of one map. Immutable once published.
 struct MapSnapshot {
   std::string name;
@@ -44,7 +69,24 @@ struct MapSnapshot {
   // then compare grids).
   std::vector<Cell> changed_cells;
   bool changes_known = false;
+  // With changes_known: this version's link of the run of updates that led
+  // to it (null otherwise).
+  std::shared_ptr<const ChangeHistory> history;
 };
+
+// The history of `version` whose changed cells are `cells`, on top of
+// `previous` when that is version - 1's (a new run otherwise); when the
+// run would pass ChangeHistory's bounds, its newest half is copied first.
+std::shared_ptr<const ChangeHistory> ExtendHistory(
+    const std::shared_ptr<const ChangeHistory>& previous, uint64_t version,
+    std::vector<Cell> cells);
+
+// The cells in which version `from` of the snapshot's map may differ from
+// the snapshot: the union of the changed cells of the versions after it,
+// newest first, a cell possibly listed more than once or changed and then
+// changed back. Nullopt when the snapshot's history does not reach back to
+// version from + 1 (or from is not older than the snapshot).
+std::optional<std::vector<Cell>> ChangesSince(const MapSnapshot& snapshot, uint64_t from);
 
 // One change of an update batch: every cell of the inclusive rectangle
 // [x_min, x_max] x [y_min, y_max] gets `cost`. A single cell is a 1x1

@@ -173,6 +173,7 @@ absl::Status PathdServer::Start() {
   budget_ = std::make_unique<MemoryBudget>(std::move(budget));
   // Before any service exists, as MapStore::AddListener requires.
   cache_.Follow(store_, *pool_);
+  derived_.Follow(store_);
   map_service_ = std::make_unique<MapServiceImpl>(
       store_, options_.map_dir,
       MapWatchers::Options{options_.watch_queue_events, max_message_bytes(),

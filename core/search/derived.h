@@ -89,7 +89,9 @@ struct DerivedRecipe {
   std::function<std::shared_ptr<const void>(const Grid& grid, DerivedStop& stop)>
       build;
   // The value for `grid` from `previous`, the value of an older version of
-  // the same map, whose cells differ from `grid` exactly in `changed`;
+  // the same map, whose cells differ from `grid` only in `changed` (which
+  // may also list cells that did not change: a server store passes the
+  // union of several updates' cells, one changed back among them);
   // null: rebuild (build then returns null at once if `stop` fired). May be
   // empty (always rebuild).
   std::function<std::shared_ptr<const void>(const void* previous,

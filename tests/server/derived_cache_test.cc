@@ -7,6 +7,7 @@
 #include <chrono>
 #include <memory>
 #include <new>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -139,6 +140,47 @@ TEST(DerivedCacheTest, ANewVersionAdvancesWithItsChangedCells) {
   EXPECT_EQ(entries[0].changed_cells, 2);
 }
 
+// Several updates between two queries, the older grid's buffer gone: the
+// value advances with the cells of every update since its version, taken
+// from the newest snapshot's history, instead of building again; a history
+// that does not reach back (a new run) builds.
+TEST(DerivedCacheTest, AVersionSeveralUpdatesOnAdvancesWithTheirCellsFromTheHistory) {
+  DerivedCache cache(1 << 20);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  Grid grid = *Grid::Create(4, 4);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(grid));
+  Get(cache, v1, "k", recipe);
+  v1.reset();  // the buffer goes back to the pool: no grids to compare
+  std::shared_ptr<const ChangeHistory> history;
+  std::shared_ptr<const MapSnapshot> latest;
+  for (uint64_t version = 2; version <= 4; ++version) {
+    const Cell cell{static_cast<int32_t>(version) - 2, 1};
+    grid.set_cost(cell, kLethalCost);
+    auto s = std::make_shared<MapSnapshot>(
+        *Snapshot(1, version, std::make_shared<const Grid>(grid), {cell}));
+    history = ExtendHistory(history, version, {cell});
+    s->history = history;
+    latest = s;
+  }
+  auto advanced = Get(cache, latest, "k", recipe);
+  EXPECT_EQ(counters.builds, 1);
+  EXPECT_EQ(counters.advances, 1);
+  ASSERT_EQ(advanced->changed.size(), 3u);  // versions 4, 3, 2
+  EXPECT_EQ(advanced->changed[0], (Cell{2, 1}));
+  EXPECT_EQ(advanced->changed[2], (Cell{0, 1}));
+  // Version 7 of a new run (a replace between): nothing reaches back to 4.
+  grid.set_cost(3, 3, kLethalCost);
+  auto s7 = std::make_shared<MapSnapshot>(
+      *Snapshot(1, 7, std::make_shared<const Grid>(grid), {{3, 3}}));
+  s7->history = ExtendHistory(nullptr, 7, {{3, 3}});
+  latest.reset();
+  advanced.reset();
+  Get(cache, s7, "k", recipe);
+  EXPECT_EQ(counters.builds, 2);
+  EXPECT_EQ(counters.advances, 1);
+}
+
 TEST(DerivedCacheTest, AnotherMapIdOrRadiusBuildsAfresh) {
   DerivedCache cache(1 << 20);
   Counters counters;
@@ -186,16 +228,59 @@ TEST(DerivedCacheTest, ABuildThatThrowsLeavesNoEntryBehind) {
   EXPECT_EQ(counters.builds, 1);
 }
 
-TEST(DerivedCacheTest, EntriesOfFreedVersionsAreDropped) {
+// An entry whose grid is freed stays while it is the newest of its map and
+// key (the next version advances from it), and goes once a newer one
+// exists; an entry of another key is not what supersedes it.
+TEST(DerivedCacheTest, EntriesOfFreedVersionsStayUntilANewerOneExists) {
   DerivedCache cache(1 << 20);
   Counters counters;
   const DerivedRecipe recipe = Recipe(&counters);
-  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
-  Get(cache, v1, "k", recipe);
+  Grid grid = *Grid::Create(4, 4);
+  auto v1 = Snapshot(1, 1, std::make_shared<const Grid>(grid));
+  Get(cache, v1, "a", recipe);
+  Get(cache, v1, "b", recipe);
   v1.reset();
-  auto v2 = Snapshot(3, 1, std::make_shared<const Grid>(*Grid::Create(4, 4)));
-  Get(cache, v2, "k", recipe);
+  grid.set_cost(1, 1, kLethalCost);
+  auto v2 = Snapshot(1, 2, std::make_shared<const Grid>(grid), {{1, 1}});
+  // a advances and its v1 entry goes; b's v1 entry is still the newest b.
+  Get(cache, v2, "a", recipe);
+  EXPECT_EQ(cache.stats().entries, 2u);
+  v2.reset();
+  grid.set_cost(2, 2, kLethalCost);
+  auto v3 = std::make_shared<MapSnapshot>(
+      *Snapshot(1, 3, std::make_shared<const Grid>(grid), {{2, 2}}));
+  v3->history = ExtendHistory(ExtendHistory(nullptr, 2, {{1, 1}}), 3, {{2, 2}});
+  Get(cache, v3, "a", recipe);
+  EXPECT_EQ(cache.stats().entries, 2u);  // a@3, b@1
+  // b advances from its v1 entry across both updates.
+  auto b = Get(cache, v3, "b", recipe);
+  EXPECT_EQ(b->changed.size(), 2u);
+  EXPECT_EQ(cache.stats().entries, 2u);  // a@3, b@3
+  EXPECT_EQ(counters.builds, 2);
+  EXPECT_EQ(counters.advances, 3);
+}
+
+// Through a real store: a deleted or replaced map's entries go at once,
+// whatever the budget; another map's stay.
+TEST(DerivedCacheTest, ADeletedOrReplacedMapsEntriesAreDropped) {
+  MapStore store(1 << 20);
+  DerivedCache cache(1 << 20);
+  cache.Follow(store);
+  Counters counters;
+  const DerivedRecipe recipe = Recipe(&counters);
+  ASSERT_TRUE(store.Create("m", *Grid::Create(8, 8), false).ok());
+  ASSERT_TRUE(store.Create("other", *Grid::Create(8, 8), false).ok());
+  Get(cache, *store.Get("m"), "k", recipe);
+  Get(cache, *store.Get("other"), "k", recipe);
+  ASSERT_TRUE(store.Update("m", {MapChange::ForCell(1, 1, kLethalCost)}, std::nullopt).ok());
+  EXPECT_EQ(cache.stats().entries, 2u);  // m's v1 stays: its next version advances from it
+  ASSERT_TRUE(store.Create("m", *Grid::Create(8, 8), /*replace=*/true).ok());
   EXPECT_EQ(cache.stats().entries, 1u);
+  Get(cache, *store.Get("m"), "k", recipe);
+  EXPECT_EQ(cache.stats().entries, 2u);
+  ASSERT_TRUE(store.Delete("m").ok());
+  EXPECT_EQ(cache.stats().entries, 1u);
+  EXPECT_EQ(cache.Entries("other").size(), 1u);
 }
 
 // A build that ignores its stop: it notifies `started`, then returns a

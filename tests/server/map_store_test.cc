@@ -3,7 +3,11 @@
 // and the recycling of grid buffers behind O(changed) updates.
 #include "server/map_store.h"
 
+#include <optional>
+#include <random>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -126,6 +130,64 @@ TEST(MapStoreTest, RejectsBadChanges) {
   auto negative = store.Update("m", {MapChange::ForCell(-1, 0, 1)}, std::nullopt);
   EXPECT_EQ(negative.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_EQ((*store.Get("m"))->version, 1u);
+}
+
+// Each version's history reaches back over the run of updates before it:
+// from every older version still reachable, the union it gives covers every
+// cell in which that version's grid differs (the grids themselves, held
+// here, are the check), at least the newest half of ChangeHistory's bound
+// is always reachable, never more than the bound, and a replace starts a
+// new run.
+TEST(MapStoreTest, ChangesSinceCoversEveryCellAnOlderVersionDiffersIn) {
+  MapStore store(1 << 20);
+  ASSERT_TRUE(store.Create("m", FreeGrid(40, 30), false).ok());
+  std::vector<std::shared_ptr<const MapSnapshot>> held{*store.Get("m")};
+  std::mt19937 rng(5);
+  const uint8_t costs[] = {kFreeCost, 100, kLethalCost};
+  int reached = 0;
+  for (int step = 0; step < 150; ++step) {
+    std::vector<MapChange> changes;
+    const int n = 1 + static_cast<int>(rng() % 4);
+    for (int k = 0; k < n; ++k) {
+      const int32_t x = static_cast<int32_t>(rng() % 38);
+      const int32_t y = static_cast<int32_t>(rng() % 28);
+      const uint8_t cost = costs[rng() % 3];
+      changes.push_back(k % 2 == 0 ? MapChange::ForCell(x, y, cost)
+                                   : MapChange::ForRect(x, y, x + 2, y + 2, cost));
+    }
+    auto result = store.Update("m", changes, std::nullopt);
+    ASSERT_TRUE(result.ok()) << result.status();
+    held.push_back(result->snapshot);
+    const MapSnapshot& now = *held.back();
+    for (size_t i = 0; i + 1 < held.size(); ++i) {
+      const uint64_t back = now.version - held[i]->version;
+      const std::optional<std::vector<Cell>> since = ChangesSince(now, held[i]->version);
+      if (!since.has_value()) {
+        EXPECT_GT(back, ChangeHistory::kMaxVersions / 2) << "step " << step;
+        continue;
+      }
+      EXPECT_LE(back, ChangeHistory::kMaxVersions);
+      ++reached;
+      std::set<std::pair<int32_t, int32_t>> listed;
+      for (const Cell& c : *since) listed.insert({c.x, c.y});
+      for (const Cell& c : Differences(*held[i]->grid, *now.grid)) {
+        ASSERT_TRUE(listed.count({c.x, c.y})) << "step " << step << ": version "
+                                               << held[i]->version << " differs at "
+                                               << CellToString(c) << ", not listed";
+      }
+    }
+  }
+  EXPECT_GT(reached, 150 * 25);
+  const uint64_t last = held.back()->version;
+  auto replaced = store.Create("m", FreeGrid(40, 30), true);
+  ASSERT_TRUE(replaced.ok());
+  EXPECT_FALSE(ChangesSince(**replaced, last).has_value());
+  auto after = store.Update("m", {MapChange::ForCell(1, 1, kLethalCost)}, std::nullopt);
+  ASSERT_TRUE(after.ok());
+  const std::optional<std::vector<Cell>> one = ChangesSince(*after->snapshot, last + 1);
+  ASSERT_TRUE(one.has_value());
+  EXPECT_EQ(*one, std::vector<Cell>{(Cell{1, 1})});
+  EXPECT_FALSE(ChangesSince(*after->snapshot, last).has_value());
 }
 
 TEST(MapStoreTest, UnknownMapsAreNotFound) {
