@@ -119,6 +119,31 @@ void ExpectSamePath(v1::PlanResponse packed, v1::PlanResponse readable) {
       << readable.DebugString();
 }
 
+// The final plan of a PlanStream call, read to its end; the call's status.
+template <typename Reader>
+grpc::Status StreamedPlan(Reader& reader, v1::PlanResponse* plan) {
+  v1::PlanStreamEvent event;
+  while (reader.Read(&event)) {
+    if (event.has_result()) *plan = event.result();
+  }
+  return reader.Finish();
+}
+
+// One item sent on a PlanBatch stream and its answer; the stream's status.
+template <typename Stream>
+grpc::Status BatchedPlan(Stream& stream, const v1::PlanRequest& request,
+                         v1::PlanResponse* plan) {
+  v1::PlanBatchRequest item;
+  item.set_request_id("a");
+  *item.mutable_request() = request;
+  v1::PlanBatchResponse answer;
+  if (!stream.Write(item))
+    return grpc::Status(grpc::StatusCode::INTERNAL, "write failed");
+  stream.WritesDone();
+  if (stream.Read(&answer)) *plan = answer.result();
+  return stream.Finish();
+}
+
 TEST_F(PackedPathTest, PackedDecodesToTheReadablePath) {
   int any_angle = 0;
   int partial = 0;
@@ -200,25 +225,15 @@ TEST_F(PackedPathTest, StreamsAndBatchesCarryThePackedPath) {
 
   auto context = Context();
   auto reader = server_->planner().PlanStream(context.get(), packed);
-  v1::PlanStreamEvent event;
   v1::PlanResponse streamed;
-  while (reader->Read(&event)) {
-    if (event.has_result()) streamed = event.result();
-  }
-  ASSERT_TRUE(reader->Finish().ok());
+  ASSERT_TRUE(StreamedPlan(*reader, &streamed).ok());
   ExpectSamePath(streamed, readable);
 
   auto batch_context = Context();
   auto batch = server_->planner().PlanBatch(batch_context.get());
-  v1::PlanBatchRequest item;
-  item.set_request_id("a");
-  *item.mutable_request() = packed;
-  ASSERT_TRUE(batch->Write(item));
-  batch->WritesDone();
-  v1::PlanBatchResponse answer;
-  ASSERT_TRUE(batch->Read(&answer));
-  ASSERT_TRUE(batch->Finish().ok());
-  ExpectSamePath(answer.result(), readable);
+  v1::PlanResponse batched;
+  ASSERT_TRUE(BatchedPlan(*batch, packed, &batched).ok());
+  ExpectSamePath(batched, readable);
 }
 
 TEST_F(PackedPathTest, NavigatePushesPackedPlans) {
@@ -267,27 +282,17 @@ TEST_F(PackedPathTest, TheClientAsksForPackedAndAnswersReadable) {
   request.mutable_options()->clear_path_encoding();
   auto context = Context();
   auto reader = client.PlanStream(context.get(), request);
-  v1::PlanStreamEvent event;
   v1::PlanResponse streamed;
-  while (reader->Read(&event)) {
-    if (event.has_result()) streamed = event.result();
-  }
-  ASSERT_TRUE(reader->Finish().ok());
+  ASSERT_TRUE(StreamedPlan(*reader, &streamed).ok());
   EXPECT_EQ(streamed.path_size(), readable.path_size());
   EXPECT_THAT(streamed.packed_path(), IsEmpty());
   auto batch_context = Context();
   auto batch = client.PlanBatch(batch_context.get(), "rooms");
-  v1::PlanBatchRequest item;
-  item.set_request_id("a");
-  *item.mutable_request() = request;
-  ASSERT_TRUE(batch->Write(item));
-  batch->WritesDone();
-  v1::PlanBatchResponse answer;
-  ASSERT_TRUE(batch->Read(&answer));
-  ASSERT_TRUE(batch->Finish().ok());
-  EXPECT_EQ(answer.result().path_size(), readable.path_size());
-  EXPECT_EQ(answer.result().world_path(3).x(), readable.world_path(3).x());
-  EXPECT_THAT(answer.result().packed_path(), IsEmpty());
+  v1::PlanResponse batched;
+  ASSERT_TRUE(BatchedPlan(*batch, request, &batched).ok());
+  EXPECT_EQ(batched.path_size(), readable.path_size());
+  EXPECT_EQ(batched.world_path(3).x(), readable.world_path(3).x());
+  EXPECT_THAT(batched.packed_path(), IsEmpty());
 }
 
 }  // namespace
