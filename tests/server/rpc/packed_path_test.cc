@@ -248,6 +248,16 @@ TEST_F(PackedPathTest, NavigatePushesPackedPlans) {
   ASSERT_TRUE(stream->Write(open));
   v1::NavigateResponse first;
   ASSERT_TRUE(stream->Read(&first));
+  // ListSessions (what the viewer draws) lists the path readable.
+  v1::ListSessionsRequest list;
+  list.set_map("rooms");
+  v1::ListSessionsResponse sessions;
+  ASSERT_TRUE(server_->planner().ListSessions(Context().get(), list, &sessions).ok());
+  ASSERT_EQ(sessions.sessions_size(), 1);
+  const v1::PlanResponse& listed = sessions.sessions(0).last().plan();
+  EXPECT_THAT(listed.packed_path(), IsEmpty());
+  EXPECT_GT(listed.path_size(), 1);
+  EXPECT_EQ(listed.world_path_size(), listed.path_size());
   stream->WritesDone();
   context->TryCancel();
   stream->Finish();
