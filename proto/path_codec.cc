@@ -227,18 +227,37 @@ absl::StatusOr<std::vector<PackedCell>> DecodePackedPath(
   return cells;
 }
 
+namespace {
+
+// Cell centres in the world under one frame, its cosine and sine taken once.
+class FrameTransform {
+ public:
+  explicit FrameTransform(const v1::PathFrame& frame)
+      : resolution_(frame.resolution()),
+        x_(frame.origin().x()),
+        y_(frame.origin().y()),
+        cs_(std::cos(frame.origin().yaw())),
+        sn_(std::sin(frame.origin().yaw())) {}
+
+  // Grid::CellCenter -> Grid::CellPointToWorld, the same operations in the
+  // same order (so the same doubles).
+  void CellCenter(int32_t x, int32_t y, v1::WorldPoint* w) const {
+    const double lx = (x + 0.5) * resolution_;
+    const double ly = (y + 0.5) * resolution_;
+    w->set_x(x_ + cs_ * lx - sn_ * ly);
+    w->set_y(y_ + sn_ * lx + cs_ * ly);
+  }
+
+ private:
+  double resolution_, x_, y_, cs_, sn_;
+};
+
+}  // namespace
+
 v1::WorldPoint PathFrameCellCenter(const v1::PathFrame& frame, int32_t x,
                                    int32_t y) {
-  // Grid::CellCenter -> Grid::CellPointToWorld, the same operations in the
-  // same order.
-  const double lx = (x + 0.5) * frame.resolution();
-  const double ly = (y + 0.5) * frame.resolution();
-  const double yaw = frame.origin().yaw();
-  const double cs = std::cos(yaw);
-  const double sn = std::sin(yaw);
   v1::WorldPoint w;
-  w.set_x(frame.origin().x() + cs * lx - sn * ly);
-  w.set_y(frame.origin().y() + sn * lx + cs * ly);
+  FrameTransform(frame).CellCenter(x, y, &w);
   return w;
 }
 
@@ -257,11 +276,12 @@ absl::Status UnpackPlanPath(v1::PlanResponse* response) {
   const int n = static_cast<int>(cells->size());
   response->mutable_path()->Reserve(n);
   response->mutable_world_path()->Reserve(n);
+  const FrameTransform transform(frame);
   for (const PackedCell& c : *cells) {
     v1::Cell* cell = response->add_path();
     cell->set_x(c.x);
     cell->set_y(c.y);
-    *response->add_world_path() = PathFrameCellCenter(frame, c.x, c.y);
+    transform.CellCenter(c.x, c.y, response->add_world_path());
   }
   response->clear_packed_path();
   response->clear_path_frame();
