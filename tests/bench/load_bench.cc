@@ -154,7 +154,7 @@ struct MapFigures {
   std::vector<RemoteFigures> remote;
 };
 
-// --path_encodings, parsed once.
+// --path_encodings as values (exits with 2 on a name that is none).
 std::vector<pathd::v1::PathEncoding> PathEncodings() {
   std::vector<pathd::v1::PathEncoding> out;
   for (const absl::string_view name :

@@ -225,6 +225,9 @@ class PlanResult:
             # A packed answer (the client asks for one unless options chose):
             # the same cells and world points a readable one holds.
             path = decode_packed_path(plan.packed_path)
+            if not 0 < plan.path_frame.resolution < math.inf:
+                raise ValueError("path_frame.resolution must be finite and > 0 "
+                                 "beside packed_path")
             world_path = [path_frame_cell_center(plan.path_frame, c.x, c.y)
                           for c in path]
         else:
