@@ -252,7 +252,8 @@ TEST_F(PackedPathTest, NavigatePushesPackedPlans) {
   v1::ListSessionsRequest list;
   list.set_map("rooms");
   v1::ListSessionsResponse sessions;
-  ASSERT_TRUE(server_->planner().ListSessions(Context().get(), list, &sessions).ok());
+  ASSERT_TRUE(
+      server_->planner().ListSessions(Context().get(), list, &sessions).ok());
   ASSERT_EQ(sessions.sessions_size(), 1);
   const v1::PlanResponse& listed = sessions.sessions(0).last().plan();
   EXPECT_THAT(listed.packed_path(), IsEmpty());
@@ -269,6 +270,31 @@ TEST_F(PackedPathTest, NavigatePushesPackedPlans) {
   EXPECT_EQ(plan.path(0).x(), 0);
   EXPECT_EQ(plan.path(plan.path_size() - 1).x(), 31);
   EXPECT_EQ(plan.world_path_size(), plan.path_size());
+}
+
+TEST_F(PackedPathTest, TripsPlanIsPackedAndTheClientUnpacksIt) {
+  v1::TripRequest trip;
+  trip.set_map("rooms");
+  *trip.add_waypoints() = CellPos(0, 0);
+  *trip.add_waypoints() = CellPos(31, 9);
+  *trip.add_waypoints() = CellPos(20, 9);
+  trip.mutable_options()->set_path_encoding(v1::PATH_ENCODING_READABLE);
+  v1::TripResponse readable;
+  ASSERT_TRUE(server_->planner().Trip(Context().get(), trip, &readable).ok());
+  ASSERT_GT(readable.plan().path_size(), 1);
+  trip.mutable_options()->set_path_encoding(v1::PATH_ENCODING_PACKED);
+  v1::TripResponse packed;
+  ASSERT_TRUE(server_->planner().Trip(Context().get(), trip, &packed).ok());
+  ExpectSamePath(packed.plan(), readable.plan());
+
+  trip.mutable_options()->clear_path_encoding();
+  const client::PathdClient client(server_->channel());
+  absl::StatusOr<v1::TripResponse> answer = client.Trip(trip);
+  ASSERT_TRUE(answer.ok()) << answer.status();
+  EXPECT_THAT(answer->plan().packed_path(), IsEmpty());
+  EXPECT_EQ(answer->plan().path_size(), readable.plan().path_size());
+  EXPECT_EQ(answer->plan().world_path(1).y(),
+            readable.plan().world_path(1).y());
 }
 
 TEST_F(PackedPathTest, TheClientAsksForPackedAndAnswersReadable) {
