@@ -16,6 +16,7 @@
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
 #include "grpcpp/support/client_interceptor.h"
+#include "proto/path_codec.h"
 
 namespace pathd::client {
 namespace {
@@ -32,6 +33,103 @@ absl::StatusOr<Response> InvokeOnMap(absl::Duration timeout,
   if (!status.ok()) return FromGrpcStatus(status);
   return response;
 }
+
+// Requests that leave options.path_encoding unset ask for the packed path
+// (the client unpacks it); a caller's explicit choice stands. False when
+// the request was left as it is.
+bool AskForPackedPath(v1::PlanOptions* options) {
+  if (options->path_encoding() != v1::PATH_ENCODING_UNSPECIFIED) return false;
+  options->set_path_encoding(v1::PATH_ENCODING_PACKED);
+  return true;
+}
+bool AskForPackedPath(v1::PlanRequest* request) {
+  return AskForPackedPath(request->mutable_options());
+}
+bool AskForPackedPath(v1::TripRequest* request) {
+  return AskForPackedPath(request->mutable_options());
+}
+bool AskForPackedPath(v1::PlanBatchRequest* item) {
+  return AskForPackedPath(item->mutable_request()->mutable_options());
+}
+bool AskForPackedPath(v1::NavigateRequest* request) {
+  return request->has_open() && AskForPackedPath(request->mutable_open()->mutable_options());
+}
+
+// The readable path of a packed-only plan (UnpackPlanPath); DATA_LOSS when
+// the server's bytes do not decode.
+absl::Status UnpackPath(v1::PlanResponse* plan) {
+  const absl::Status s = UnpackPlanPath(plan);
+  if (s.ok()) return s;
+  return absl::DataLossError(absl::StrCat("the server's packed path: ", s.message()));
+}
+absl::Status UnpackPath(v1::PlanStreamEvent* event) {
+  return event->has_result() ? UnpackPath(event->mutable_result()) : absl::OkStatus();
+}
+absl::Status UnpackPath(v1::PlanBatchResponse* response) {
+  return response->has_result() ? UnpackPath(response->mutable_result()) : absl::OkStatus();
+}
+absl::Status UnpackPath(v1::NavigateResponse* response) {
+  return response->has_plan() ? UnpackPath(response->mutable_plan()) : absl::OkStatus();
+}
+absl::Status UnpackPath(v1::TripResponse* response) {
+  return response->has_plan() ? UnpackPath(response->mutable_plan()) : absl::OkStatus();
+}
+
+// InvokeOnMap for a unary call whose answer carries a plan (Plan, Trip):
+// `call` gets the request asking for a packed path, the answer comes back
+// readable.
+template <typename Response, typename Request, typename Call>
+absl::StatusOr<Response> InvokePacked(absl::Duration timeout, Request request, Call&& call) {
+  AskForPackedPath(&request);
+  absl::StatusOr<Response> response = InvokeOnMap<Response>(
+      timeout, request.map(), [&](grpc::ClientContext* context, Response* out) {
+        return call(context, request, out);
+      });
+  if (!response.ok()) return response;
+  if (absl::Status s = UnpackPath(&*response); !s.ok()) return s;
+  return response;
+}
+
+// A stream whose plans go out asking for packed paths and come back
+// readable: writes pass through AskForPackedPath, reads through UnpackPath.
+// A read whose path does not decode is handed over packed, and Finish()
+// then answers DATA_LOSS in place of an OK status.
+template <typename Inner, typename Out>
+class UnpackingStream : public Inner {
+ public:
+  explicit UnpackingStream(std::unique_ptr<Inner> inner) : inner_(std::move(inner)) {}
+
+  void WaitForInitialMetadata() override { inner_->WaitForInitialMetadata(); }
+  bool NextMessageSize(uint32_t* sz) override { return inner_->NextMessageSize(sz); }
+  bool Read(Out* msg) override {
+    if (!inner_->Read(msg)) return false;
+    if (absl::Status s = UnpackPath(msg); !s.ok() && unpack_error_.ok()) unpack_error_ = s;
+    return true;
+  }
+  grpc::Status Finish() override {
+    grpc::Status status = inner_->Finish();
+    if (!status.ok() || unpack_error_.ok()) return status;
+    return grpc::Status(grpc::StatusCode::DATA_LOSS, std::string(unpack_error_.message()));
+  }
+
+ protected:
+  std::unique_ptr<Inner> inner_;
+  absl::Status unpack_error_;
+};
+
+template <typename In, typename Out>
+class UnpackingBidiStream final
+    : public UnpackingStream<grpc::ClientReaderWriterInterface<In, Out>, Out> {
+ public:
+  using UnpackingStream<grpc::ClientReaderWriterInterface<In, Out>, Out>::UnpackingStream;
+
+  bool WritesDone() override { return this->inner_->WritesDone(); }
+  bool Write(const In& msg, grpc::WriteOptions options) override {
+    In packed = msg;
+    if (!AskForPackedPath(&packed)) return this->inner_->Write(msg, options);
+    return this->inner_->Write(packed, options);
+  }
+};
 
 // Adds "authorization: Bearer <token>" to the initial metadata of every call
 // on its channel, unary and streaming alike.
@@ -404,11 +502,10 @@ absl::StatusOr<v1::UpdateMapResponse> PathdClient::UpdateMap(
 
 absl::StatusOr<v1::PlanResponse> PathdClient::Plan(
     const v1::PlanRequest& request) const {
-  return InvokeOnMap<v1::PlanResponse>(
-      timeout_, request.map(),
-      [&](grpc::ClientContext* context, v1::PlanResponse* response) {
-        return planner_->Plan(context, request, response);
-      });
+  return InvokePacked<v1::PlanResponse>(
+      timeout_, request,
+      [&](grpc::ClientContext* context, const v1::PlanRequest& packed,
+          v1::PlanResponse* response) { return planner_->Plan(context, packed, response); });
 }
 
 absl::StatusOr<v1::CostToGoResponse> PathdClient::CostToGo(
@@ -437,11 +534,10 @@ absl::StatusOr<v1::NearestResponse> PathdClient::Nearest(const v1::NearestReques
 }
 
 absl::StatusOr<v1::TripResponse> PathdClient::Trip(const v1::TripRequest& request) const {
-  return InvokeOnMap<v1::TripResponse>(
-      timeout_, request.map(),
-      [&](grpc::ClientContext* context, v1::TripResponse* response) {
-        return planner_->Trip(context, request, response);
-      });
+  return InvokePacked<v1::TripResponse>(
+      timeout_, request,
+      [&](grpc::ClientContext* context, const v1::TripRequest& packed,
+          v1::TripResponse* response) { return planner_->Trip(context, packed, response); });
 }
 
 absl::StatusOr<v1::IsochroneResponse> PathdClient::Isochrone(const v1::IsochroneRequest& request) const {
@@ -494,14 +590,19 @@ std::unique_ptr<
 PathdClient::Navigate(grpc::ClientContext* context,
                       const std::string& map) const {
   SetMapHeader(*context, map);
-  return planner_->Navigate(context);
+  return std::make_unique<UnpackingBidiStream<v1::NavigateRequest, v1::NavigateResponse>>(
+      planner_->Navigate(context));
 }
 
 std::unique_ptr<grpc::ClientReaderInterface<v1::PlanStreamEvent>>
 PathdClient::PlanStream(grpc::ClientContext* context,
                         const v1::PlanRequest& request) const {
   SetMapHeader(*context, request.map());
-  return planner_->PlanStream(context, request);
+  v1::PlanRequest packed = request;
+  AskForPackedPath(&packed);
+  return std::make_unique<
+      UnpackingStream<grpc::ClientReaderInterface<v1::PlanStreamEvent>, v1::PlanStreamEvent>>(
+      planner_->PlanStream(context, packed));
 }
 
 std::unique_ptr<grpc::ClientReaderWriterInterface<v1::PlanBatchRequest,
@@ -509,7 +610,8 @@ std::unique_ptr<grpc::ClientReaderWriterInterface<v1::PlanBatchRequest,
 PathdClient::PlanBatch(grpc::ClientContext* context,
                        const std::string& map) const {
   SetMapHeader(*context, map);
-  return planner_->PlanBatch(context);
+  return std::make_unique<UnpackingBidiStream<v1::PlanBatchRequest, v1::PlanBatchResponse>>(
+      planner_->PlanBatch(context));
 }
 
 std::unique_ptr<grpc::ClientReaderInterface<v1::MapEvent>>

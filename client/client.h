@@ -156,6 +156,14 @@ class PathdClient {
   static constexpr int64_t kTransferBytesPerSecond = int64_t{16} << 20;
 
   // PlannerService. "No path" is an OK response with found = false.
+  //
+  // Packed paths: every call here whose answer carries a plan (Plan, Trip,
+  // PlanStream, PlanBatch, Navigate) sends requests that leave
+  // options.path_encoding unset as PATH_ENCODING_PACKED, and answers come
+  // back with path and world_path filled from packed_path (UnpackPlanPath in
+  // proto/path_codec.h), so callers see what a readable answer holds. A
+  // request's explicit encoding stands (READABLE, BOTH: nothing to unpack).
+  // A packed path that does not decode is DATA_LOSS (streams: from Finish()).
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) const;
   absl::StatusOr<v1::CostToGoResponse> CostToGo(
       const v1::CostToGoRequest& request) const;

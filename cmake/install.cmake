@@ -63,12 +63,15 @@ install(CODE "
 # grpc/health/v1 headers; nothing of pathd::core (client/CMakeLists.txt).
 set_target_properties(pathd_client PROPERTIES EXPORT_NAME client)
 set_target_properties(pathd_proto PROPERTIES EXPORT_NAME proto)
+set_target_properties(pathd_path_codec PROPERTIES EXPORT_NAME path_codec)
 set(PATHD_INCLUDE_DIR ${CMAKE_INSTALL_INCLUDEDIR}/pathd)
-install(TARGETS pathd_client pathd_proto EXPORT pathdTargets
+install(TARGETS pathd_client pathd_proto pathd_path_codec EXPORT pathdTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT dev
         INCLUDES DESTINATION ${PATHD_INCLUDE_DIR})
 install(FILES ${PROJECT_SOURCE_DIR}/client/client.h
         DESTINATION ${PATHD_INCLUDE_DIR}/client COMPONENT dev)
+install(FILES ${PROJECT_SOURCE_DIR}/proto/path_codec.h
+        DESTINATION ${PATHD_INCLUDE_DIR}/proto COMPONENT dev)
 foreach(name common map_service planner_service)
   install(FILES ${PROJECT_BINARY_DIR}/proto/pathd/v1/${name}.pb.h
                 ${PROJECT_BINARY_DIR}/proto/pathd/v1/${name}.grpc.pb.h

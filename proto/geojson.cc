@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "proto/path_codec.h"
 
 namespace pathd {
 namespace {
@@ -31,7 +32,16 @@ std::string Number(double value) {
 
 }  // namespace
 
-std::string PlanGeoJson(const v1::PlanResponse& plan, std::string_view map) {
+std::string PlanGeoJson(const v1::PlanResponse& answer, std::string_view map) {
+  // A packed-only answer (options.path_encoding PACKED) draws the same line;
+  // bytes that do not decode draw none.
+  v1::PlanResponse unpacked;
+  const bool packed_only = answer.path_size() == 0 && !answer.packed_path().empty();
+  if (packed_only) {
+    unpacked = answer;
+    UnpackPlanPath(&unpacked).IgnoreError();
+  }
+  const v1::PlanResponse& plan = packed_only ? unpacked : answer;
   std::vector<std::string> coords;
   if (plan.world_polyline_size() > 0) {
     for (const v1::WorldPoint& p : plan.world_polyline()) coords.push_back(Position(p));

@@ -17,7 +17,7 @@ namespace pathd {
 // A FeatureCollection with one Feature: a LineString of the path in world
 // metres (the any-angle polyline when there is one, else the cells' centres)
 // or a null geometry when nothing was found, and the plan's figures as
-// properties. `map`: the map's name (A-Z a-z 0-9 . _ -, so no escaping).
+// properties. A packed-only answer (PATH_ENCODING_PACKED) is decoded first. `map`: the map's name (A-Z a-z 0-9 . _ -, so no escaping).
 std::string PlanGeoJson(const v1::PlanResponse& plan, std::string_view map);
 
 // A FeatureCollection with one MultiPolygon Feature: exteriors

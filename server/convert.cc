@@ -15,6 +15,7 @@
 #include "core/postprocess/plan_through.h"
 #include "core/search/endpoints.h"
 #include "core/status_macros.h"
+#include "proto/path_codec.h"
 #include "proto/planner_names.h"
 
 namespace pathd::server {
@@ -461,6 +462,11 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
     PATHD_ASSIGN_OR_RETURN(request.goal, CellFromPosition(*wire.goal, grid, "goal"));
   }
   query.requested_goal = request.goal;
+  if (!v1::PathEncoding_IsValid(options.path_encoding())) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "options.path_encoding: unknown value %d", options.path_encoding()));
+  }
+  decoded.path_encoding = options.path_encoding();
   if (wire.search_options) {
     PATHD_RETURN_IF_ERROR(PlanOptionsToRequest(options, &request));
     query.simplify = options.simplify();
@@ -565,7 +571,7 @@ namespace {
 // planned to.
 void FillResult(const PlanResult& result, const PlanRequest& request,
                 const Grid& grid, int64_t max_expansions,
-                v1::PlanResponse* response) {
+                v1::PathEncoding path_encoding, v1::PlanResponse* response) {
   response->set_found(result.found());
   response->set_outcome(ToProto(result.outcome));
   *response->mutable_start() = ToProto(request.start);
@@ -641,14 +647,28 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
   response->set_length_m(result.length * grid.resolution());
   response->set_frame_id(kFrameId);
   FillPoses(result, grid, response);
-  response->mutable_path()->Reserve(static_cast<int>(result.path.size()));
-  response->mutable_world_path()->Reserve(static_cast<int>(result.path.size()));
-  for (const Cell& c : result.path) {
-    *response->add_path() = ToProto(c);
-    const WorldPoint p = grid.CellCenter(c);
-    v1::WorldPoint* w = response->add_world_path();
-    w->set_x(p.x);
-    w->set_y(p.y);
+  if (path_encoding != v1::PATH_ENCODING_PACKED) {
+    response->mutable_path()->Reserve(static_cast<int>(result.path.size()));
+    response->mutable_world_path()->Reserve(static_cast<int>(result.path.size()));
+    for (const Cell& c : result.path) {
+      *response->add_path() = ToProto(c);
+      const WorldPoint p = grid.CellCenter(c);
+      v1::WorldPoint* w = response->add_world_path();
+      w->set_x(p.x);
+      w->set_y(p.y);
+    }
+  }
+  if (path_encoding == v1::PATH_ENCODING_PACKED || path_encoding == v1::PATH_ENCODING_BOTH) {
+    const std::vector<Cell>& path = result.path;
+    response->set_packed_path(EncodePackedPath(
+        static_cast<int64_t>(path.size()),
+        [&path](int64_t i) { return PackedCell{path[i].x, path[i].y}; }));
+    // What PathFrameCellCenter needs to redo grid.CellCenter.
+    v1::PathFrame* frame = response->mutable_path_frame();
+    frame->set_resolution(grid.resolution());
+    frame->mutable_origin()->set_x(grid.origin().x);
+    frame->mutable_origin()->set_y(grid.origin().y);
+    frame->mutable_origin()->set_yaw(grid.frame_yaw());
   }
   if (result.min_clearance >= 0.0) {
     response->set_has_clearance(true);
@@ -673,20 +693,20 @@ void FillResult(const PlanResult& result, const PlanRequest& request,
 
 void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
                       const Grid& grid, int64_t max_expansions,
-                      v1::PlanResponse* response) {
-  FillResult(result, request, grid, max_expansions, response);
+                      v1::PathEncoding path_encoding, v1::PlanResponse* response) {
+  FillResult(result, request, grid, max_expansions, path_encoding, response);
 }
 
 void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
                        std::string_view expansion_limit_source,
-                       v1::PlanResponse* response) {
+                       v1::PathEncoding path_encoding, v1::PlanResponse* response) {
   const PlanResult& result = answer.result;
   const Grid& grid = *answer.source.grid;
   // answer.start is RunPlanQuery's; callers that build an answer themselves
   // (Navigate sessions) plan from the query's start and never snap.
   const Cell start = query.snap_start ? answer.start : query.request.start;
   PlanRequest planned = PlanRequest::Between(start, answer.goal);
-  FillResult(result, planned, grid, query.max_expansions, response);
+  FillResult(result, planned, grid, query.max_expansions, path_encoding, response);
   if (answer.cost_to_go_field != nullptr && query.request.want_cost_to_go) {
     // Widened float -> double once, into the message (the wire type).
     const absl::Span<const float> field = answer.cost_to_go_field->field();

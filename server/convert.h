@@ -215,6 +215,8 @@ struct DecodedQuery {
   const char* expansion_limit_source = "";
   // options.return_expansions (search_options only).
   bool return_expansions = false;
+  // options.path_encoding, checked (BuildPlanResponse's).
+  v1::PathEncoding path_encoding = v1::PATH_ENCODING_UNSPECIFIED;
 };
 
 // The one decoding of a planning request (Plan, PlanStream, PlanBatch,
@@ -238,10 +240,12 @@ absl::StatusOr<DecodedQuery> DecodePlanQuery(const WireQuery& wire,
 // expanded cells from query.request.expansion_recorder, and where the plan
 // came from (map version, planner, radius, cache hit, repaired cells,
 // requested goal). `expansion_limit_source` (empty: none) is appended to an
-// expansion-limit reason.
+// expansion-limit reason. `path_encoding` (DecodedQuery::path_encoding)
+// says whether the path goes out as path and world_path, as packed_path and
+// path_frame (proto/path_codec.h), or both.
 void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
                        std::string_view expansion_limit_source,
-                       v1::PlanResponse* response);
+                       v1::PathEncoding path_encoding, v1::PlanResponse* response);
 
 // The result part of BuildPlanResponse for callers without a query (the
 // request fuzzer): path cells and their world centres, cost, length,
@@ -249,7 +253,7 @@ void BuildPlanResponse(const PlanQuery& query, const PlanAnswer& answer,
 // `max_expansions` is the budget that applied, for the reason text.
 void FillPlanResponse(const PlanResult& result, const PlanRequest& request,
                       const Grid& grid, int64_t max_expansions,
-                      v1::PlanResponse* response);
+                      v1::PathEncoding path_encoding, v1::PlanResponse* response);
 
 v1::PlanOutcome ToProto(PlanOutcome outcome);
 

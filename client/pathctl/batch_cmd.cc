@@ -100,6 +100,9 @@ int Batch(CommandEnv& env, Args args) {
   }
   shared.set_simplify(options.simplify);
   shared.set_lookahead(options.lookahead);
+  if (absl::Status s = SetPathEncoding(options.path_encoding, &shared); !s.ok()) {
+    return env.Usage(s.message());
+  }
   {
     // The robot's shape and motion apply to every line (headings do not:
     // the lines have none).
@@ -263,7 +266,7 @@ constexpr absl::string_view kBatchFlags[] = {
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",
     "min_turning_radius_cells", "motion_model", "reverse_penalty", "change_penalty",
     "non_straight_penalty", "cost_penalty", "goal_yaw_tolerance", "lattice", "no_smooth", "smooth", "inflation_radius", "inflation_radius_cells",
-    "cost_scaling_factor"};
+    "cost_scaling_factor", "path_encoding"};
 
 const Command kBatchCommand = {
     .name = "batch",

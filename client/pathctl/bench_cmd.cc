@@ -120,6 +120,7 @@ absl::StatusOr<v1::PlanRequest> BenchBaseRequest(const PlanFlags& options,
     base.set_planner(planner);
   }
   PATHD_RETURN_IF_ERROR(SetCostOptions(cost, base.mutable_options()));
+  PATHD_RETURN_IF_ERROR(SetPathEncoding(options.path_encoding, base.mutable_options()));
   base.mutable_options()->set_max_expansions(options.max_expansions);
   if (options.heuristic_weight.has_value()) {
     base.mutable_options()->set_heuristic_weight(*options.heuristic_weight);
@@ -383,7 +384,7 @@ constexpr absl::string_view kBenchFlags[] = {
     "planner", "max_expansions", "heuristic_weight", "connectivity", "cost_weight",
     "unknown_is_free", "robot_radius", "robot_radius_cells", "min_clearance",
     "min_clearance_cells", "inflation_radius",
-    "inflation_radius_cells", "cost_scaling_factor"};
+    "inflation_radius_cells", "cost_scaling_factor", "path_encoding"};
 
 }  // namespace
 

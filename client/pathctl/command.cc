@@ -206,6 +206,7 @@ CompletionSpec PathctlCompletionSpec() {
   spec.flag_values["output"] = {"table", "json", "csv"};
   spec.flag_values["connectivity"] = {"4", "8"};
   spec.flag_values["pf_attractive"] = {"quadratic", "conic"};
+  spec.flag_values["path_encoding"] = {"packed", "readable", "both"};
   spec.flag_values["solver"] = {"lacam", "pibt", "prioritized", "cbs"};
   spec.file_flags = {"from",     "path_file", "script", "cost_to_go_file",
                      "movingai", "out",       "o",      "robots"};

@@ -124,6 +124,20 @@ absl::Status SetDistance(std::string_view name, std::optional<double> metres,
 
 }  // namespace
 
+absl::Status SetPathEncoding(absl::string_view flag, v1::PlanOptions* plan_options) {
+  if (flag.empty() || flag == "packed") {
+    plan_options->set_path_encoding(v1::PATH_ENCODING_PACKED);
+  } else if (flag == "readable") {
+    plan_options->set_path_encoding(v1::PATH_ENCODING_READABLE);
+  } else if (flag == "both") {
+    plan_options->set_path_encoding(v1::PATH_ENCODING_BOTH);
+  } else {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--path_encoding must be readable, packed or both, not '", flag, "'"));
+  }
+  return absl::OkStatus();
+}
+
 absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_options) {
   switch (options.connectivity) {
     case 0:

@@ -96,6 +96,11 @@ absl::StatusOr<v1::Planner> PlannerFromName(absl::string_view name);
 // INVALID_ARGUMENT (a usage error) for a bad combination.
 absl::Status SetCostOptions(const CostOptions& options, v1::PlanOptions* plan_options);
 
+// Sets options.path_encoding from --path_encoding: "" or "packed" PACKED
+// (what the client unpacks, the default), "readable" READABLE, "both" BOTH;
+// INVALID_ARGUMENT naming the flag otherwise.
+absl::Status SetPathEncoding(absl::string_view flag, v1::PlanOptions* plan_options);
+
 // Sets the robot's footprint, turning radius, motion model, penalties, goal
 // heading tolerance, lattice and smoothing on request->options, and turns
 // the start and goal into poses when --start_yaw / --goal_yaw give their

@@ -185,6 +185,9 @@ ABSL_FLAG(std::optional<double>, snap_start_max_cells, std::nullopt,
           "plan --snap_start: farthest move, cells");
 ABSL_FLAG(std::string, metrics_address, pathd::pathctl::kDefaultMetricsAddress,
           "metrics: pathd's --metrics_address (HOST:PORT)");
+ABSL_FLAG(std::string, path_encoding, "packed",
+          "plan, batch, bench: how the server sends paths: packed (decoded by "
+          "pathctl), readable (repeated cells and points) or both");
 ABSL_FLAG(bool, progress, false,
           "plan: stream the search's progress to stderr (PlanStream)");
 ABSL_FLAG(int, concurrency, 4, "bench: requests in flight (closed-loop workers)");
@@ -321,6 +324,7 @@ int main(int argc, char** argv) {
   plan.heuristic_weight = absl::GetFlag(FLAGS_heuristic_weight);
   plan.simplify = absl::GetFlag(FLAGS_simplify);
   plan.lookahead = absl::GetFlag(FLAGS_lookahead);
+  plan.path_encoding = absl::GetFlag(FLAGS_path_encoding);
   plan.via = absl::GetFlag(FLAGS_via);
   plan.allow_partial = absl::GetFlag(FLAGS_allow_partial);
   plan.expansions = absl::GetFlag(FLAGS_expansions);

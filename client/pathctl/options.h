@@ -105,6 +105,8 @@ struct PlanFlags {
   std::optional<double> heuristic_weight;
   bool simplify = false;
   int lookahead = 0;
+  // --path_encoding: readable, packed or both (empty: packed).
+  std::string path_encoding;
   // Via points "X,Y;X,Y..." visited in order before the goal; empty: none.
   std::string via;
   bool allow_partial = false;

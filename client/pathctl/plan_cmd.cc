@@ -239,6 +239,9 @@ int Plan(CommandEnv& env, Args args) {
   }
   plan_options->set_return_expansions(options.expansions);
   plan_options->set_simplify(options.simplify);
+  if (absl::Status s = SetPathEncoding(options.path_encoding, plan_options); !s.ok()) {
+    return env.Usage(s.message());
+  }
   plan_options->set_lookahead(options.lookahead);
   plan_options->set_return_cost_to_go(!options.cost_to_go_file.empty());
   v1::PotentialFieldOptions* pf = plan_options->mutable_potential_field();
@@ -457,7 +460,7 @@ constexpr absl::string_view kPlanFlagNames[] = {
     "snap_start", "snap_start_max", "snap_start_max_cells",
     "cost_to_go_file", "pf_attractive", "pf_attractive_gain", "pf_switch_distance",
     "pf_repulsive_gain", "pf_influence", "pf_step", "pf_max_steps", "ant_colony",
-    "reaction_diffusion", "progress",
+    "reaction_diffusion", "progress", "path_encoding",
     "connectivity", "cost_weight", "unknown_is_free", "robot_radius",
     "robot_radius_cells", "min_clearance",
     "min_clearance_cells", "footprint", "footprint_cells", "min_turning_radius",

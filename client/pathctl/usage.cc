@@ -151,6 +151,9 @@ a usage error naming the flag (e.g. plan ... -o x.png):
   --world              plan, cost-to-go, check: coordinates are world metres, not cells
   --simplify           plan: keep only the turning points (ray-shooting line of
                        sight); the path becomes any-angle, never longer
+  --path_encoding E    plan, batch, bench: how the server sends paths: packed
+                       (default; pathctl decodes it, the output is the same),
+                       readable (repeated cells and world points) or both
   --heuristic_weight W plan: weighted_astar's w >= 1 (default 1.5)
   --lookahead N        plan: rtaa_star / lrta_star expansions per episode (64)
   --cost_to_go_file F  plan (distance_transform*), cost-to-go: write the

@@ -360,7 +360,8 @@ absl::Status AnswerTrip(TripCall& call, InflationCache& inflation, IncrementalCa
       answer.result.outcome == PlanOutcome::kTimeout) {
     return StoppedStatus(answer.result.outcome, "trip's legs", 0, "");
   }
-  BuildPlanResponse(legs, answer, q.decoded.expansion_limit_source, out.mutable_plan());
+  BuildPlanResponse(legs, answer, q.decoded.expansion_limit_source, q.decoded.path_encoding,
+                    out.mutable_plan());
   out.set_legs_time_us(absl::ToInt64Microseconds(absl::Now() - t0));
   out.set_found(answer.result.found());
   if (!answer.result.found()) out.set_reason(out.plan().reason());

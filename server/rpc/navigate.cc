@@ -33,6 +33,7 @@
 #include "core/planning/plan_query.h"
 #include "core/search/planner.h"
 #include "core/status_macros.h"
+#include "proto/path_codec.h"
 #include "server/convert.h"
 #include "server/grpc_status.h"
 #include "server/incremental_cache.h"
@@ -93,7 +94,15 @@ class NavigationSession final : public NavigateReactor {
     if (!map.empty() && map_name_ != map) return false;
     info.set_session_id(id_);
     info.set_map(map_name_);
-    if (last_sent_.has_value()) *info.mutable_last() = *last_sent_;
+    if (last_sent_.has_value()) {
+      *info.mutable_last() = *last_sent_;
+      // Listed readable whatever the session asked for (its path_encoding
+      // shapes its own stream, not what observers such as the viewer read);
+      // the server's own bytes always decode.
+      if (info.last().has_plan()) {
+        UnpackPlanPath(info.mutable_last()->mutable_plan()).IgnoreError();
+      }
+    }
     info.set_age_seconds(absl::ToDoubleSeconds(now - opened_at_));
     info.set_idle_seconds(absl::ToDoubleSeconds(now - last_activity_));
     return true;

@@ -47,10 +47,12 @@ class KinematicNavigation::PrivateStore final : public DerivedStore {
 };
 
 KinematicNavigation::KinematicNavigation(PlanQuery query, const Planner* planner,
-                                         int64_t budget, const std::atomic<bool>* cancelled)
+                                         int64_t budget, v1::PathEncoding path_encoding,
+                                         const std::atomic<bool>* cancelled)
     : query_(std::move(query)),
       planner_(planner),
       budget_(budget),
+      path_encoding_(path_encoding),
       cancelled_(cancelled),
       robot_(query_.request.kinematic->start) {}
 
@@ -193,7 +195,7 @@ absl::Status KinematicNavigation::Replan(const KinematicView& view, bool opening
   }
   SetSingleLeg(&answer);
   v1::PlanResponse* plan = response->mutable_plan();
-  BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
+  BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", path_encoding_, plan);
   if (!reason.empty()) plan->set_reason(reason);
   if (answer.result.outcome == PlanOutcome::kExpansionLimit) {
     plan->set_reason(absl::StrFormat(

@@ -54,9 +54,10 @@ class KinematicNavigation {
 
   // `query` passed CheckPlanQuery and names a kinematic planner (its
   // request.kinematic is the open message's robot and goal); `budget` > 0
-  // is the expansion budget of each replan; `cancelled` must outlive this.
+  // is the expansion budget of each replan; `path_encoding` is how its
+  // plans carry their path; `cancelled` must outlive this.
   KinematicNavigation(PlanQuery query, const Planner* planner, int64_t budget,
-                      const std::atomic<bool>* cancelled);
+                      v1::PathEncoding path_encoding, const std::atomic<bool>* cancelled);
   ~KinematicNavigation();
   KinematicNavigation(const KinematicNavigation&) = delete;
   KinematicNavigation& operator=(const KinematicNavigation&) = delete;
@@ -109,6 +110,7 @@ class KinematicNavigation {
   PlanQuery query_;
   const Planner* planner_;
   const int64_t budget_;
+  const v1::PathEncoding path_encoding_;
   const std::atomic<bool>* cancelled_;
   Pose robot_;
   std::vector<PathPose> path_;

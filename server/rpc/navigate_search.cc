@@ -252,6 +252,7 @@ absl::Status NavigationSearch::OpenFleet(const v1::NavigateOpen& open,
   PATHD_RETURN_IF_ERROR(
       CheckPlanQuery(*decoded.snapshot->grid, /*stateful=*/true, &decoded.query));
   snapshot_ = decoded.snapshot;
+  path_encoding_ = decoded.path_encoding;
   start_ = decoded.query.request.start;
   goal_ = decoded.query.request.goal;
   cost_ = decoded.query.request.cost;
@@ -338,6 +339,7 @@ absl::Status NavigationSearch::Open(const v1::NavigateOpen& open) {
         "kinematic planner (hybrid_astar, state_lattice), not %s",
         std::string(decoded.query.planner)));
   }
+  path_encoding_ = decoded.path_encoding;
   snapshot_ = std::move(decoded.snapshot);
   const Grid& stored = *snapshot_->grid;
   // The session's search is its own D* Lite; the façade's rules still apply
@@ -392,6 +394,7 @@ absl::Status NavigationSearch::OpenKinematic(const v1::NavigateOpen& open,
         "open.replan_max_expansions %d must be >= 0 (0: options.max_expansions, else %d)",
         open.replan_max_expansions(), KinematicNavigation::kDefaultReplanExpansions));
   }
+  path_encoding_ = decoded.path_encoding;
   snapshot_ = std::move(decoded.snapshot);
   const Grid& stored = *snapshot_->grid;
   PATHD_RETURN_IF_ERROR(CheckPlanQuery(stored, /*stateful=*/false, &decoded.query));
@@ -414,7 +417,7 @@ absl::Status NavigationSearch::OpenKinematic(const v1::NavigateOpen& open,
   PATHD_RETURN_IF_ERROR(ReserveMemory(stored));
   PATHD_ASSIGN_OR_RETURN(grid_, EffectiveGrid(*snapshot_));
   kinematic_ = std::make_unique<KinematicNavigation>(std::move(decoded.query), planner, budget,
-                                                     cancelled_);
+                                                     decoded.path_encoding, cancelled_);
   on_open_(snapshot_->name);
   return absl::OkStatus();
 }
@@ -629,7 +632,7 @@ absl::Status NavigationSearch::PlanInto(v1::PlanResponse* plan, bool* changed,
   if (outcome != nullptr) *outcome = result.ok() ? answer.result.outcome : PlanOutcome::kNoPath;
   ReportClearance(query, &answer);
   SetSingleLeg(&answer);
-  BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", plan);
+  BuildPlanResponse(query, answer, /*expansion_limit_source=*/"", path_encoding_, plan);
   if (!result.ok()) plan->set_reason(std::string(result.status().message()));
   repaired_cells_ = 0;
   ++plans_;

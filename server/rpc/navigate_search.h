@@ -172,6 +172,8 @@ class NavigationSearch {
   // inflation and clearance costs).
   GridShape shape_;
   int64_t max_expansions_ = 0;
+  // options.path_encoding of the open message: how pushed plans carry their path.
+  v1::PathEncoding path_encoding_ = v1::PATH_ENCODING_UNSPECIFIED;
   int64_t repaired_cells_ = 0;
   int64_t plans_ = 0;
   std::vector<Cell> last_path_;

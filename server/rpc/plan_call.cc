@@ -164,7 +164,7 @@ Verdict RunPlanAndAnswer(PlanCall& call, SearchScratch& scratch,
     return {s, outcome};
   }
   BuildPlanResponse(query, *answer, call.decoded.expansion_limit_source,
-                    call.response);
+                    call.decoded.path_encoding, call.response);
   if (absl::Status s =
           CheckResponseSize(*call.response, "plan response", max_message_bytes);
       !s.ok()) {

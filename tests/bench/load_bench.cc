@@ -14,11 +14,19 @@
 // --inline_max_job_time=0), --baseline_pathd a second binary (e.g. a build
 // of the previous commit), and each round's gRPC load goes to both, so a
 // change is compared with what it replaces in one run.
+//
+// --path_encodings=readable,packed sends the gRPC load once per listed
+// PlanOptions.path_encoding in every round (the first is the main columns,
+// the others get their own), and before the rounds plans every query once
+// per encoding to print the mean response bytes and, for packed answers,
+// the client's decode time per plan (UnpackPlanPath; the load generator
+// itself parses answers but does not decode them).
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -32,17 +40,22 @@
 #include "absl/flags/usage.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/strip.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/client.h"
 #include "client/pathctl/load_generator.h"
 #include "client/pathctl/map_source.h"
 #include "client/pathctl/pathctl.h"
+#include "grpcpp/create_channel.h"
+#include "pathd/v1/planner_service.grpc.pb.h"
+#include "proto/path_codec.h"
 #include "core/search/registry.h"
 #include "core/map_io/map_io.h"
 #include "core/search/planner.h"
@@ -76,6 +89,9 @@ ABSL_FLAG(int, rounds, 3,
 ABSL_FLAG(absl::Duration, warmup, absl::Milliseconds(500),
           "unmeasured load before each measured run");
 ABSL_FLAG(absl::Duration, timeout, absl::Seconds(60), "deadline of each gRPC call");
+ABSL_FLAG(std::string, path_encodings, "readable",
+          "comma-separated PlanOptions.path_encoding values (readable, packed, both, "
+          "unspecified) the gRPC load is sent with, each in every round");
 
 namespace fs = std::filesystem;
 
@@ -118,16 +134,78 @@ struct RemoteFigures {
   double client_cpu_us = 0;
 };
 
+// One path encoding's answers, each query planned once.
+struct EncodingSize {
+  double response_bytes = 0;  // mean serialized PlanResponse
+  double unpack_us = 0;       // mean UnpackPlanPath time (packed answers)
+};
+
 struct MapFigures {
   int queries = 0;
+  double path_cells = 0;  // mean cells per path (readable answers)
+  std::vector<EncodingSize> sizes;  // per --path_encodings entry
   pathd::client::LoadReport in_process;
   // CPU microseconds per query, the least over the rounds: in-process, and
   // for gRPC the daemon's and the client's (this process). Other processes
   // slow the wall clock down far more than they change these.
   double in_process_cpu_us = 0;
-  // The daemon under test, then the baseline daemon when there is one.
+  // The daemon under test with each encoding, then the baseline daemon
+  // (first encoding) when there is one.
   std::vector<RemoteFigures> remote;
 };
+
+// --path_encodings as values (exits with 2 on a name that is none).
+std::vector<pathd::v1::PathEncoding> PathEncodings() {
+  std::vector<pathd::v1::PathEncoding> out;
+  for (const absl::string_view name :
+       absl::StrSplit(absl::GetFlag(FLAGS_path_encodings), ',', absl::SkipEmpty())) {
+    pathd::v1::PathEncoding e;
+    if (!pathd::v1::PathEncoding_Parse(absl::StrCat("PATH_ENCODING_", absl::AsciiStrToUpper(name)),
+                                       &e)) {
+      std::fprintf(stderr, "unknown path encoding '%s'\n", std::string(name).c_str());
+      std::exit(2);
+    }
+    out.push_back(e);
+  }
+  if (out.empty()) out.push_back(pathd::v1::PATH_ENCODING_READABLE);
+  return out;
+}
+
+std::string EncodingName(pathd::v1::PathEncoding e) {
+  return absl::AsciiStrToLower(
+      absl::StripPrefix(pathd::v1::PathEncoding_Name(e), "PATH_ENCODING_"));
+}
+
+// Plans every query once with each encoding on `address`: the mean
+// response bytes and packed answers' decode time, and the mean path length.
+absl::Status MeasureSizes(const std::string& address,
+                          const std::vector<std::vector<pathd::v1::PlanRequest>>& wire,
+                          MapFigures* figures) {
+  auto stub = pathd::v1::PlannerService::NewStub(
+      grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+  for (const std::vector<pathd::v1::PlanRequest>& requests : wire) {
+    EncodingSize& size = figures->sizes.emplace_back();
+    int64_t cells = 0;
+    for (const pathd::v1::PlanRequest& request : requests) {
+      grpc::ClientContext context;
+      context.set_deadline(absl::ToChronoTime(absl::Now() + absl::GetFlag(FLAGS_timeout)));
+      pathd::v1::PlanResponse response;
+      if (grpc::Status s = stub->Plan(&context, request, &response); !s.ok()) {
+        return absl::Status(static_cast<absl::StatusCode>(s.error_code()), s.error_message());
+      }
+      size.response_bytes += static_cast<double>(response.ByteSizeLong());
+      const absl::Time t0 = absl::Now();
+      if (absl::Status s = pathd::UnpackPlanPath(&response); !s.ok()) return s;
+      size.unpack_us += absl::ToDoubleMicroseconds(absl::Now() - t0);
+      cells += response.path_size();
+    }
+    const auto n = static_cast<double>(std::max<size_t>(requests.size(), 1));
+    size.response_bytes /= n;
+    size.unpack_us /= n;
+    figures->path_cells = static_cast<double>(cells) / n;
+  }
+  return absl::OkStatus();
+}
 
 // Keeps the smaller of `*best` (0: none yet) and `value`.
 void KeepLeast(double value, double* best) {
@@ -175,6 +253,12 @@ absl::StatusOr<MapFigures> MeasureMap(
     }
     core.push_back(c);
   }
+  const std::vector<pathd::v1::PathEncoding> encodings = PathEncodings();
+  std::vector<std::vector<pathd::v1::PlanRequest>> encoded;
+  for (const pathd::v1::PathEncoding e : encodings) {
+    std::vector<pathd::v1::PlanRequest>& requests = encoded.emplace_back(wire);
+    for (pathd::v1::PlanRequest& r : requests) r.mutable_options()->set_path_encoding(e);
+  }
   MapFigures figures;
   figures.queries = static_cast<int>(core.size());
   const int64_t measured = int64_t{absl::GetFlag(FLAGS_passes)} * figures.queries;
@@ -190,7 +274,11 @@ absl::StatusOr<MapFigures> MeasureMap(
     pathd::client::PathdClient client(daemon->address(), absl::Seconds(60));
     if (auto created = client.CreateMap(create); !created.ok()) return created.status();
   }
-  figures.remote.resize(daemons.size());
+  // Daemon 0 with each encoding, then the baseline with the first.
+  figures.remote.resize(encodings.size() + daemons.size() - 1);
+  if (absl::Status s = MeasureSizes(daemons.front()->address(), encoded, &figures); !s.ok()) {
+    return s;
+  }
 
   pathd::client::LoadOptions in_process;
   in_process.concurrency = threads;
@@ -233,14 +321,16 @@ absl::StatusOr<MapFigures> MeasureMap(
     if (local->requests_per_second > figures.in_process.requests_per_second) {
       figures.in_process = *local;
     }
-    for (size_t d = 0; d < daemons.size(); ++d) {
+    for (size_t r = 0; r < figures.remote.size(); ++r) {
+      const size_t d = r < encodings.size() ? 0 : r - encodings.size() + 1;
+      const size_t e = r < encodings.size() ? r : 0;
       const pathd::testing::PathdProcess& daemon = *daemons[d];
-      RemoteFigures& out = figures.remote[d];
+      RemoteFigures& out = figures.remote[r];
       cpu = OwnCpuSeconds();
       const double server_cpu = ProcessCpuSeconds(daemon.pid());
       absl::StatusOr<pathd::client::LoadReport> grpc = pathd::client::RunPlanLoad(
           daemon.address(), absl::GetFlag(FLAGS_channels), absl::GetFlag(FLAGS_timeout),
-          wire, remote);
+          encoded[e], remote);
       if (!grpc.ok()) return grpc.status();
       const int64_t sent = grpc->requests + grpc->warmup_requests;
       KeepLeast(per_query(ProcessCpuSeconds(daemon.pid()) - server_cpu, sent),
@@ -266,7 +356,7 @@ int main(int argc, char** argv) {
       "load_bench [--pathd BIN] [--movingai_dir DIR] [--maps a.map,...] "
       "[--planner astar] [--threads W] [--concurrency C] [--channels K] "
       "[--sample N] [--passes P] [--rounds R] [--baseline_flags F,...] "
-      "[--baseline_pathd BIN]\n"
+      "[--baseline_pathd BIN] [--path_encodings readable,packed]\n"
       "Starts pathd --threads=W and prints per map: in-process throughput on W "
       "threads, gRPC Plan throughput at 2W concurrency on the same queries, "
       "their ratio, and the gRPC latency p50/p99.");
@@ -328,6 +418,17 @@ int main(int argc, char** argv) {
               "map", "queries", "local_q/s", "grpc_q/s", "grpc/loc", "local_p99",
               "grpc_p50", "grpc_p95", "grpc_p99", "loc_cpu", "srv_cpu", "cli_cpu",
               "loc/srv", "loc/all", "errors");
+  const std::vector<pathd::v1::PathEncoding> encodings = PathEncodings();
+  std::printf(" %7s", "cells");
+  for (const pathd::v1::PathEncoding e : encodings) {
+    std::printf(" %9s", absl::StrCat("B_", EncodingName(e)).c_str());
+  }
+  for (size_t e = 1; e < encodings.size(); ++e) {
+    const std::string n = EncodingName(encodings[e]);
+    std::printf(" %9s %8s %8s %8s %8s", absl::StrCat(n, "_q/s").c_str(),
+                absl::StrCat(n, "/loc").c_str(), absl::StrCat(n, "_srv").c_str(),
+                absl::StrCat(n, "_cli").c_str(), absl::StrCat(n, "_dec").c_str());
+  }
   if (daemons.size() > 1) {
     std::printf(" %9s %8s %8s %9s %8s", "base_q/s", "base/loc", "base_srv", "base_p50",
                 "grpc/base");
@@ -367,8 +468,16 @@ int main(int argc, char** argv) {
         fraction(f->in_process_cpu_us, g.server_cpu_us),
         fraction(f->in_process_cpu_us, g.server_cpu_us + g.client_cpu_us),
         static_cast<long long>(g.load.errors() + f->in_process.errors()));
-    if (f->remote.size() > 1) {
-      const RemoteFigures& b = f->remote[1];
+    std::printf(" %7.0f", f->path_cells);
+    for (const EncodingSize& size : f->sizes) std::printf(" %9.0f", size.response_bytes);
+    for (size_t e = 1; e < encodings.size(); ++e) {
+      const RemoteFigures& x = f->remote[e];
+      std::printf(" %9.1f %8.3f %8.0f %8.0f %8.1f", x.load.requests_per_second,
+                  fraction(x.load.requests_per_second, f->in_process.requests_per_second),
+                  x.server_cpu_us, x.client_cpu_us, f->sizes[e].unpack_us);
+    }
+    if (daemons.size() > 1) {
+      const RemoteFigures& b = f->remote.back();
       std::printf(" %9.1f %8.3f %8.0f %9.2f %8.3f", b.load.requests_per_second,
                   fraction(b.load.requests_per_second, f->in_process.requests_per_second),
                   b.server_cpu_us, Ms(b.load.latency.p50),

@@ -716,6 +716,7 @@ class RealServerTest(unittest.TestCase, PathChecks):
             dict(reaction_diffusion={"diffusion": 2.0, "reaction_rate": 0.3,
                                      "threshold": 0.2, "time_step": 0.1, "max_steps": 500}),
         ]
+        settings.insert(0, dict(path_encoding="both"))
         covered = set()
         for keywords in settings:
             options = pathd_client.plan_options(**keywords)
@@ -732,7 +733,7 @@ class RealServerTest(unittest.TestCase, PathChecks):
                                           non_straight_penalty=1.1,
                                           cost_penalty=1.5).penalties.ListFields()), 4)
         self.assertEqual(len(pathd_client.plan_options(
-            potential_field=settings[10]["potential_field"]).potential_field.ListFields()), 7)
+            potential_field=settings[11]["potential_field"]).potential_field.ListFields()), 7)
         # Every field set, a zero (q0 0, stall_iterations 0) included: they are
         # optional on the wire, so 0 is a value, not "unset".
         self.assertEqual(len(pathd_client.plan_options(
@@ -748,6 +749,40 @@ class RealServerTest(unittest.TestCase, PathChecks):
                              (dict(motion_model="hover"), "motion model 'hover'")):
             with self.assertRaisesRegex(ValueError, message):
                 pathd_client.plan_options(**bad)
+
+    def test_packed_paths_decode_to_the_readable_form(self):
+        # The client asks for packed paths unless the options chose; the
+        # decoder in values.py gives the cells and world points a readable
+        # answer holds, world points bit for bit (a resolution and an origin
+        # that make them unlike cells).
+        self.client.create_map("packed", ROWS, resolution=0.05, origin=(-3.3, 1.7, 0.0),
+                               replace=True)
+        self.addCleanup(self._delete_quietly, "packed")
+        cases = [dict(planner="astar"), dict(planner="jps"), dict(planner="theta_star"),
+                 dict(planner="astar", connectivity=4), dict(planner="astar", simplify=True)]
+        for keywords in cases:
+            with self.subTest(**keywords):
+                packed = self.client.plan("packed", (0, 0), (13, 7), **keywords)
+                readable = self.client.plan("packed", (0, 0), (13, 7),
+                                            path_encoding="readable", **keywords)
+                self.assertTrue(packed.raw.packed_path)
+                self.assertEqual(len(packed.raw.path), 0)
+                self.assertFalse(readable.raw.packed_path)
+                self.assertGreater(len(readable.path), 1)
+                self.assertEqual(packed.path, readable.path)
+                self.assertEqual(packed.world_path, readable.world_path)
+                self.assertEqual(packed.poses, readable.poses)
+                both = self.client.plan("packed", (0, 0), (13, 7), path_encoding="both",
+                                        **keywords)
+                self.assertEqual(pathd_client.decode_packed_path(both.raw.packed_path),
+                                 readable.path)
+        for bad, message in ((b"\x05\x01\x00\x00", "unknown format byte 0x05"),
+                             (b"\x01\x03\x00\x00", "truncated"),
+                             (b"\x01\x01\x00\x00\x00", "1 bytes after the last cell"),
+                             (b"\x01\x02\x00\x00\x0b", "invalid move code 11")):
+            with self.assertRaisesRegex(ValueError, message):
+                pathd_client.decode_packed_path(bad)
+        self.assertEqual(pathd_client.decode_packed_path(b""), [])
 
     def test_plan_via_points_and_option_keywords(self):
         self.make_map("via")

@@ -37,6 +37,7 @@
 #include "core/search/search_scratch.h"
 #include "pathd/v1/map_service.pb.h"
 #include "pathd/v1/planner_service.pb.h"
+#include "proto/path_codec.h"
 #include "server/convert.h"
 #include "server/storage/map_dir.h"
 #include "server/map_store.h"
@@ -137,11 +138,17 @@ void CheckPlanResult(const Grid& grid, const PlanRequest& request,
     PATHD_FUZZ_CHECK(m.valid, "found path is legal");
   }
   v1::PlanResponse response;
-  FillPlanResponse(result, request, grid, max_expansions, &response);
+  FillPlanResponse(result, request, grid, max_expansions, v1::PATH_ENCODING_BOTH, &response);
   PATHD_FUZZ_CHECK(response.path_size() == static_cast<int>(result.path.size()),
                    "response carries the path");
   PATHD_FUZZ_CHECK(response.world_path_size() == response.path_size(),
                    "a world point per cell");
+  const absl::StatusOr<std::vector<PackedCell>> packed = DecodePackedPath(response.packed_path());
+  PATHD_FUZZ_CHECK(packed.ok() && packed->size() == result.path.size(), "packed path decodes");
+  for (size_t i = 0; i < packed->size(); ++i) {
+    PATHD_FUZZ_CHECK((*packed)[i] == (PackedCell{result.path[i].x, result.path[i].y}),
+                     "packed path equals the path");
+  }
 }
 
 // What a Plan runs (server/rpc/plan_call.cc): DecodePlanQuery, the façade's
@@ -195,7 +202,9 @@ void Plan(const MapStore& store, const v1::PlanRequest& request) {
   planned.goal = answer->goal;
   CheckPlanResult(*answer->source.grid, planned, answer->result, query.max_expansions);
   v1::PlanResponse response;
-  BuildPlanResponse(query, *answer, decoded->expansion_limit_source, &response);
+  BuildPlanResponse(query, *answer, decoded->expansion_limit_source, decoded->path_encoding,
+                    &response);
+  PATHD_FUZZ_CHECK(UnpackPlanPath(&response).ok(), "a packed path decodes");
   PATHD_FUZZ_CHECK(response.path_size() == static_cast<int>(answer->result.path.size()),
                    "the built response carries the path");
 }

@@ -67,6 +67,8 @@ from pathd_client.values import (
     TableResult,
     TripResult,
     UpdateResult,
+    decode_packed_path,
+    path_frame_cell_center,
     plan_options,
     plan_request,
 )
@@ -83,5 +85,6 @@ __all__ = [
     "FleetPlanResult", "FleetSessionState", "BatchAnswer", "CacheStats", "CacheStatsResult", "CellPose",
     "CostToGoResult", "Origin", "PathCheck", "PermissionDeniedError", "PlanBatch",
     "PlanProgress", "PlanStream", "UnauthenticatedError", "WorldPoint",
-    "make_channel", "plan_request", "SessionInfo",
+    "make_channel", "plan_request", "SessionInfo", "decode_packed_path",
+    "path_frame_cell_center",
 ]

@@ -29,7 +29,7 @@ from pathd_client.values import (DEFAULT_TIMEOUT, MAP_HEADER, CacheStatsResult, 
                                  CostToGoResult, FleetPlanResult, IsochroneResult,
                                  MapCells, MapInfo, NearestResult, PathCheck,
                                  PlanResult, PositionLike, SessionInfo, TableResult, TripResult,
-                                 UpdateResult, _change_proto, _options, _planner,
+                                 UpdateResult, _change_proto, _options, _plan_options, _planner,
                                  _position, plan_request)
 
 # A CreateMap request over this goes through UploadMap instead: gRPC's
@@ -425,7 +425,7 @@ class PathdClient:
         request = planner_service_pb2.TripRequest(
             map=map_name, waypoints=[_position(p) for p in waypoints],
             end=planner_service_pb2.TripEnd.Value("TRIP_END_" + end.upper()),
-            planner=_planner(planner), options=_options(options, option_keywords))
+            planner=_planner(planner), options=_plan_options(options, option_keywords))
         return TripResult.from_proto(
             self._call(self._planner.Trip, request, map_name, timeout))
 
@@ -527,7 +527,7 @@ class PathdClient:
         """
         open_request = planner_service_pb2.NavigateOpen(
             map=map_name, start=_position(start), goal=_position(goal),
-            options=_options(options, option_keywords), planner=_planner(planner),
+            options=_plan_options(options, option_keywords), planner=_planner(planner),
             replan_max_expansions=replan_max_expansions)
         if control is not None:
             open_request.control.CopyFrom(_control_options(control))

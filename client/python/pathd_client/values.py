@@ -221,12 +221,24 @@ class PlanResult:
 
     @classmethod
     def from_proto(cls, plan: planner_service_pb2.PlanResponse) -> PlanResult:
+        if plan.packed_path and not plan.path:
+            # A packed answer (the client asks for one unless options chose):
+            # the same cells and world points a readable one holds.
+            path = decode_packed_path(plan.packed_path)
+            if not 0 < plan.path_frame.resolution < math.inf:
+                raise ValueError("path_frame.resolution must be finite and > 0 "
+                                 "beside packed_path")
+            world_path = [path_frame_cell_center(plan.path_frame, c.x, c.y)
+                          for c in path]
+        else:
+            path = [Cell(c.x, c.y) for c in plan.path]
+            world_path = [(p.x, p.y) for p in plan.world_path]
         return cls(
             found=plan.found,
             outcome=_enum_name(planner_service_pb2.PlanOutcome, plan.outcome,
                                "PLAN_OUTCOME_"),
             reason=plan.reason,
-            path=[Cell(c.x, c.y) for c in plan.path],
+            path=path,
             cost=plan.cost,
             length=plan.length,
             expansions=plan.expansions,
@@ -244,7 +256,7 @@ class PlanResult:
             goal=Cell(plan.goal.x, plan.goal.y) if plan.HasField("goal") else None,
             start_snapped=plan.start_snapped,
             goal_substituted=plan.goal_substituted,
-            world_path=[(p.x, p.y) for p in plan.world_path],
+            world_path=world_path,
             polyline=[(p.x, p.y) for p in plan.polyline],
             world_polyline=[(p.x, p.y) for p in plan.world_polyline],
             expanded=[Cell(c.x, c.y) for c in plan.expanded],
@@ -253,6 +265,105 @@ class PlanResult:
             leg_end_indices=list(plan.leg_end_indices),
             min_clearance_m=plan.min_clearance_m if plan.has_clearance else None,
             planning_time_ms=plan.planning_time_us / 1000.0)
+
+
+# PlanResponse.packed_path (proto/pathd/v1/planner_service.proto documents
+# the bytes; proto/path_codec.cc is the server's encoder and the C++ decoder).
+_PACKED_MOVES = 0x01
+_PACKED_DELTAS = 0x02
+# MOVES direction codes as (dx, dy); the index is the code.
+_MOVE_STEPS = ((1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1))
+_INT32_MIN, _INT32_MAX = -(1 << 31), (1 << 31) - 1
+
+
+def decode_packed_path(data: bytes) -> list[Cell]:
+    """The cells of a PlanResponse.packed_path (none for empty bytes). A
+    ValueError naming packed_path and the byte or cell for truncated bytes,
+    an unknown format byte, an invalid move code or padding nibble, a
+    coordinate outside int32 or bytes after the last cell."""
+    data = bytes(data)
+    if not data:
+        return []
+    pos = 1
+
+    def varint() -> int:
+        nonlocal pos
+        start, value, shift = pos, 0, 0
+        while True:
+            if pos >= len(data):
+                raise ValueError(f"packed_path: truncated varint at byte {start}")
+            b = data[pos]
+            pos += 1
+            if shift == 63 and b > 1:
+                raise ValueError(f"packed_path: varint at byte {start} is longer than 64 bits")
+            value |= (b & 0x7F) << shift
+            if not b & 0x80:
+                return value
+            shift += 7
+
+    def zigzag() -> int:
+        v = varint()
+        return (v >> 1) ^ -(v & 1)
+
+    def coordinate(v: int, cell: int, axis: str) -> int:
+        if not _INT32_MIN <= v <= _INT32_MAX:
+            raise ValueError(f"packed_path: cell {cell}: {axis} outside the int32 range")
+        return v
+
+    fmt = data[0]
+    if fmt not in (_PACKED_MOVES, _PACKED_DELTAS):
+        raise ValueError(f"packed_path: unknown format byte 0x{fmt:02x} "
+                         "(0x01 MOVES or 0x02 DELTAS)")
+    count = varint()
+    if count == 0:
+        raise ValueError("packed_path: a cell count of 0 (an empty path is empty bytes)")
+    x = coordinate(zigzag(), 0, "x")
+    y = coordinate(zigzag(), 0, "y")
+    steps = count - 1
+    remaining = len(data) - pos
+    if fmt == _PACKED_MOVES:
+        needed, room = (steps + 1) // 2, remaining
+    else:
+        needed, room = steps, remaining // 2
+    if needed > room:
+        raise ValueError(f"packed_path: truncated: {count} cells need more than the "
+                         f"{remaining} bytes after byte {pos}")
+    cells = [Cell(x, y)]
+    for i in range(steps):
+        if fmt == _PACKED_MOVES:
+            byte = data[pos + i // 2]
+            code = byte & 0x0F if i % 2 == 0 else byte >> 4
+            if code >= 8:
+                raise ValueError(f"packed_path: invalid move code {code} at move {i} "
+                                 f"(byte {pos + i // 2})")
+            dx, dy = _MOVE_STEPS[code]
+        else:
+            dx = zigzag()
+            dy = zigzag()
+        x = coordinate(x + dx, i + 1, "x")
+        y = coordinate(y + dy, i + 1, "y")
+        cells.append(Cell(x, y))
+    if fmt == _PACKED_MOVES:
+        if steps % 2 == 1 and data[pos + steps // 2] >> 4:
+            raise ValueError(f"packed_path: the padding nibble of byte {pos + steps // 2} "
+                             "is not 0")
+        pos += needed
+    if pos != len(data):
+        raise ValueError(f"packed_path: {len(data) - pos} bytes after the last cell "
+                         f"(byte {pos})")
+    return cells
+
+
+def path_frame_cell_center(frame: planner_service_pb2.PathFrame, x: int,
+                           y: int) -> tuple[float, float]:
+    """The world point of cell (x, y)'s centre under a PlanResponse's
+    path_frame: the server's computation, operation for operation, so equal
+    to a readable world_path's point."""
+    lx = (x + 0.5) * frame.resolution
+    ly = (y + 0.5) * frame.resolution
+    cs = math.cos(frame.origin.yaw)
+    sn = math.sin(frame.origin.yaw)
+    return (frame.origin.x + cs * lx - sn * ly, frame.origin.y + sn * lx + cs * ly)
 
 
 class PlanProgress(NamedTuple):
@@ -800,6 +911,7 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
                  snap_start_max_cells: float | None = None,
                  ant_colony: dict | None = None,
                  reaction_diffusion: dict | None = None,
+                 path_encoding: str | None = None,
                  ) -> planner_service_pb2.PlanOptions:
     """A PlanOptions message from keyword arguments, one per field of
     proto/pathd/v1/planner_service.proto's PlanOptions (docs/python.md lists
@@ -829,7 +941,9 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
     "iterations", "stall_iterations", "alpha", "beta", "rho", "xi", "q0",
     "tau0", "max_steps", "seed"); reaction_diffusion: a dict of
     ReactionDiffusionOptions fields ("diffusion", "reaction_rate",
-    "threshold", "time_step", "max_steps"). Unknown keys are a ValueError;
+    "threshold", "time_step", "max_steps"); path_encoding ("packed",
+    "readable", "both"; unset: the client asks for "packed" and decodes it,
+    so PlanResult is the same either way). Unknown keys are a ValueError;
     the server checks the ranges.
     """
     if connectivity not in (4, 8):
@@ -903,7 +1017,25 @@ def plan_options(*, connectivity: int = 8, cost_weight: float | None = None,
         options.goal_yaw_tolerance = goal_yaw_tolerance
     if smooth is not None:
         options.smooth = smooth
+    if path_encoding is not None:
+        options.path_encoding = _enum_value(planner_service_pb2.PathEncoding,
+                                            "PATH_ENCODING_", path_encoding, "path encoding")
     return options
+
+
+def _plan_options(options: planner_service_pb2.PlanOptions | None,
+                  keywords: dict) -> planner_service_pb2.PlanOptions:
+    """_options for a call whose answer carries a plan: unless the options
+    chose a path_encoding, they ask for the packed path (PlanResult decodes
+    it), a fraction of the readable form's bytes."""
+    chosen = _options(options, keywords)
+    packed = planner_service_pb2.PlanOptions()
+    if chosen is not None:
+        if chosen.path_encoding != planner_service_pb2.PATH_ENCODING_UNSPECIFIED:
+            return chosen
+        packed.CopyFrom(chosen)
+    packed.path_encoding = planner_service_pb2.PATH_ENCODING_PACKED
+    return packed
 
 
 def _options(options: planner_service_pb2.PlanOptions | None,
@@ -926,8 +1058,8 @@ def plan_request(map_name: str, start: PositionLike, goal: PositionLike, *,
     """A PlanRequest, as PathdClient.plan sends it: for plan_batch, or to
     keep and send again. `via`: intermediate goals visited in order;
     `allow_partial`: a failed leg answers the path to the last goal
-    reached."""
+    reached. The options ask for the packed path unless they chose."""
     return planner_service_pb2.PlanRequest(
         map=map_name, start=_position(start), goal=_position(goal),
-        planner=_planner(planner), options=_options(options, option_keywords),
+        planner=_planner(planner), options=_plan_options(options, option_keywords),
         via=[_position(v) for v in via], allow_partial=allow_partial)
