@@ -230,19 +230,22 @@ void DerivedCache::EvictLocked(Graveyard& dropped) {
   // it stays until a newer one of its kind exists, or the budget, a delete
   // or a replace drops it. Others go (an inflated grid's changes are only
   // known while both grids live).
-  auto superseded = [this](const Entry& e) {
-    if (!e.stored_grid) return true;
-    for (const std::shared_ptr<Entry>& other : entries_) {
-      if (other->done && other->value != nullptr && other->key == e.key &&
-          other->map_id == e.map_id && other->stored_grid && other->version > e.version) {
-        return true;
-      }
-    }
-    return false;
-  };
+  // (A loop, not a lambda: the thread-safety analysis does not see mu_
+  // held inside one.)
   for (auto it = entries_.begin(); it != entries_.end();) {
     const Entry& e = **it;
-    it = e.done && e.grid.expired() && superseded(e) ? DropLocked(it, dropped) : std::next(it);
+    bool drop = e.done && e.grid.expired();
+    if (drop && e.stored_grid) {
+      drop = false;
+      for (const std::shared_ptr<Entry>& other : entries_) {
+        if (other->done && other->value != nullptr && other->key == e.key &&
+            other->map_id == e.map_id && other->stored_grid && other->version > e.version) {
+          drop = true;
+          break;
+        }
+      }
+    }
+    it = drop ? DropLocked(it, dropped) : std::next(it);
   }
   // Least recently used first, never one being made, never the newest.
   while (bytes_ > max_bytes_ && entries_.size() > 1) {
