@@ -370,6 +370,22 @@ void AddCosts(const Grid& grid, absl::Span<const Cell> cells,
 }
 
 // The same for every cell of `grid`.
+std::array<uint64_t, 4> CostsOf(const Grid& grid, bool unknown_is_free);
+
+// The cost set of a version advanced from one whose set was `previous`:
+// the changed cells' costs added (a superset: a cost no cell has any more
+// stays), except that a set of more than one cost is counted again from
+// the grid, once for the version. A map that became uniform again would
+// otherwise send every later query to the full check, O(map) each time.
+std::array<uint64_t, 4> AdvancedCosts(std::array<uint64_t, 4> previous, const Grid& grid,
+                                      absl::Span<const Cell> changed,
+                                      bool unknown_is_free) {
+  AddCosts(grid, changed, unknown_is_free, previous);
+  int costs = 0;
+  for (const uint64_t word : previous) costs += std::popcount(word);
+  return costs > 1 ? CostsOf(grid, unknown_is_free) : previous;
+}
+
 std::array<uint64_t, 4> CostsOf(const Grid& grid, bool unknown_is_free) {
   std::array<bool, 256> seen{};
   for (const uint8_t c : grid.cells()) seen[c] = true;
@@ -394,9 +410,9 @@ struct JpsVersion {
   JpsMap map;
   // Bit c of word c / 64: some traversable cell has effective cost c
   // (unknown cells traversed as free count as kFreeCost), so a query checks
-  // the uniform-cost precondition in O(1). An advance only adds the costs
-  // of the changed cells, so this may keep a cost no cell has any more: a
-  // superset, which can only send a query to the full check
+  // the uniform-cost precondition in O(1). An advance adds the costs of the
+  // changed cells (AdvancedCosts), so a one-cost set may keep a cost no cell
+  // has any more: a superset, which can only send a query to the full check
   // (ValidateRequest), never let a non-uniform map through.
   std::array<uint64_t, 4> costs{};
 
@@ -422,7 +438,7 @@ struct JpsVersion {
     }
     auto version = std::make_shared<JpsVersion>(previous);
     version->map.Advance(grid, changed);
-    AddCosts(grid, changed, unknown_is_free, version->costs);
+    version->costs = AdvancedCosts(previous.costs, grid, changed, unknown_is_free);
     return version;
   }
 
@@ -851,9 +867,9 @@ class JpsPlanner final : public JumpPlannerBase {
 };
 
 // The jump table of one map version with the costs its traversable cells
-// have. An advance only adds the costs of the changed cells, so `costs` may
-// keep a cost no cell has any more: a superset, which can only send a query
-// to the full check (ValidateRequest), never let a non-uniform map through.
+// have; an advance keeps them as JpsVersion does (AdvancedCosts): a
+// one-cost set may be a superset, which can only send a query to the full
+// check (ValidateRequest), never let a non-uniform map through.
 struct JpsPlusVersion {
   std::shared_ptr<const internal::JumpTable> table;
   std::array<uint64_t, 4> costs{};
@@ -875,8 +891,8 @@ struct JpsPlusVersion {
     auto version = std::make_shared<JpsPlusVersion>();
     version->table =
         internal::JumpTable::Advance(*previous.table, grid, changed);
-    version->costs = previous.costs;
-    AddCosts(grid, changed, previous.table->unknown_is_free(), version->costs);
+    version->costs = AdvancedCosts(previous.costs, grid, changed,
+                                   previous.table->unknown_is_free());
     return version;
   }
 
