@@ -94,6 +94,22 @@ std::vector<RowSpan> CoveredSpans(absl::Span<const MapChange> changes,
 
 }  // namespace
 
+namespace {
+
+// One link of a history on top of `below` (null: a run's first).
+std::shared_ptr<const ChangeHistory> Link(uint64_t version, std::vector<Cell> cells,
+                                          std::shared_ptr<const ChangeHistory> below) {
+  auto link = std::make_shared<ChangeHistory>();
+  link->version = version;
+  link->cells = std::move(cells);
+  link->versions = below != nullptr ? below->versions + 1 : 1;
+  link->total_cells = (below != nullptr ? below->total_cells : 0) + link->cells.size();
+  link->previous = std::move(below);
+  return link;
+}
+
+}  // namespace
+
 std::shared_ptr<const ChangeHistory> ExtendHistory(
     const std::shared_ptr<const ChangeHistory>& previous, uint64_t version,
     std::vector<Cell> cells) {
@@ -114,23 +130,11 @@ std::shared_ptr<const ChangeHistory> ExtendHistory(
     }
     std::shared_ptr<const ChangeHistory> copy;
     for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
-      auto link = std::make_shared<ChangeHistory>();
-      link->version = (*it)->version;
-      link->cells = (*it)->cells;
-      link->versions = copy != nullptr ? copy->versions + 1 : 1;
-      link->total_cells = (copy != nullptr ? copy->total_cells : 0) + link->cells.size();
-      link->previous = std::move(copy);
-      copy = std::move(link);
+      copy = Link((*it)->version, (*it)->cells, std::move(copy));
     }
     below = std::move(copy);
   }
-  auto link = std::make_shared<ChangeHistory>();
-  link->version = version;
-  link->cells = std::move(cells);
-  link->versions = below != nullptr ? below->versions + 1 : 1;
-  link->total_cells = (below != nullptr ? below->total_cells : 0) + link->cells.size();
-  link->previous = std::move(below);
-  return link;
+  return Link(version, std::move(cells), std::move(below));
 }
 
 std::optional<std::vector<Cell>> ChangesSince(const MapSnapshot& snapshot, uint64_t from) {

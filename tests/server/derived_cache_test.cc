@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "absl/synchronization/notification.h"
@@ -52,8 +53,10 @@ DerivedRecipe Recipe(Counters* counters, size_t bytes = 100) {
 
 std::shared_ptr<const MapSnapshot> Snapshot(uint64_t map_id, uint64_t version,
                                             std::shared_ptr<const Grid> grid,
-                                            std::vector<Cell> changed = {}) {
+                                            std::vector<Cell> changed = {},
+                                            std::shared_ptr<const ChangeHistory> history = nullptr) {
   auto s = std::make_shared<MapSnapshot>();
+  s->history = std::move(history);
   s->name = "m";
   s->map_id = map_id;
   s->version = version;
@@ -157,11 +160,8 @@ TEST(DerivedCacheTest, AVersionSeveralUpdatesOnAdvancesWithTheirCellsFromTheHist
   for (uint64_t version = 2; version <= 4; ++version) {
     const Cell cell{static_cast<int32_t>(version) - 2, 1};
     grid.set_cost(cell, kLethalCost);
-    auto s = std::make_shared<MapSnapshot>(
-        *Snapshot(1, version, std::make_shared<const Grid>(grid), {cell}));
     history = ExtendHistory(history, version, {cell});
-    s->history = history;
-    latest = s;
+    latest = Snapshot(1, version, std::make_shared<const Grid>(grid), {cell}, history);
   }
   auto advanced = Get(cache, latest, "k", recipe);
   EXPECT_EQ(counters.builds, 1);
@@ -171,9 +171,8 @@ TEST(DerivedCacheTest, AVersionSeveralUpdatesOnAdvancesWithTheirCellsFromTheHist
   EXPECT_EQ(advanced->changed[2], (Cell{0, 1}));
   // Version 7 of a new run (a replace between): nothing reaches back to 4.
   grid.set_cost(3, 3, kLethalCost);
-  auto s7 = std::make_shared<MapSnapshot>(
-      *Snapshot(1, 7, std::make_shared<const Grid>(grid), {{3, 3}}));
-  s7->history = ExtendHistory(nullptr, 7, {{3, 3}});
+  auto s7 = Snapshot(1, 7, std::make_shared<const Grid>(grid), {{3, 3}},
+                     ExtendHistory(nullptr, 7, {{3, 3}}));
   latest.reset();
   advanced.reset();
   Get(cache, s7, "k", recipe);
@@ -247,9 +246,8 @@ TEST(DerivedCacheTest, EntriesOfFreedVersionsStayUntilANewerOneExists) {
   EXPECT_EQ(cache.stats().entries, 2u);
   v2.reset();
   grid.set_cost(2, 2, kLethalCost);
-  auto v3 = std::make_shared<MapSnapshot>(
-      *Snapshot(1, 3, std::make_shared<const Grid>(grid), {{2, 2}}));
-  v3->history = ExtendHistory(ExtendHistory(nullptr, 2, {{1, 1}}), 3, {{2, 2}});
+  auto v3 = Snapshot(1, 3, std::make_shared<const Grid>(grid), {{2, 2}},
+                     ExtendHistory(ExtendHistory(nullptr, 2, {{1, 1}}), 3, {{2, 2}}));
   Get(cache, v3, "a", recipe);
   EXPECT_EQ(cache.stats().entries, 2u);  // a@3, b@1
   // b advances from its v1 entry across both updates.

@@ -370,7 +370,18 @@ void AddCosts(const Grid& grid, absl::Span<const Cell> cells,
 }
 
 // The same for every cell of `grid`.
-std::array<uint64_t, 4> CostsOf(const Grid& grid, bool unknown_is_free);
+std::array<uint64_t, 4> CostsOf(const Grid& grid, bool unknown_is_free) {
+  std::array<bool, 256> seen{};
+  for (const uint8_t c : grid.cells()) seen[c] = true;
+  std::array<uint64_t, 4> costs{};
+  for (int c = 0; c < 256; ++c) {
+    if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
+      continue;
+    const int effective = c == kUnknownCost ? kFreeCost : c;
+    costs[effective / 64] |= uint64_t{1} << (effective % 64);
+  }
+  return costs;
+}
 
 // The cost set of a version advanced from one whose set was `previous`:
 // the changed cells' costs added (a superset: a cost no cell has any more
@@ -384,19 +395,6 @@ std::array<uint64_t, 4> AdvancedCosts(std::array<uint64_t, 4> previous, const Gr
   int costs = 0;
   for (const uint64_t word : previous) costs += std::popcount(word);
   return costs > 1 ? CostsOf(grid, unknown_is_free) : previous;
-}
-
-std::array<uint64_t, 4> CostsOf(const Grid& grid, bool unknown_is_free) {
-  std::array<bool, 256> seen{};
-  for (const uint8_t c : grid.cells()) seen[c] = true;
-  std::array<uint64_t, 4> costs{};
-  for (int c = 0; c < 256; ++c) {
-    if (!seen[c] || !Traversable(static_cast<uint8_t>(c), unknown_is_free))
-      continue;
-    const int effective = c == kUnknownCost ? kFreeCost : c;
-    costs[effective / 64] |= uint64_t{1} << (effective % 64);
-  }
-  return costs;
 }
 
 // The map as JPS reads it for one map version, shared by every query on that
